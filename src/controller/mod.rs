@@ -1,0 +1,171 @@
+//! Finite-state controllers (FSCs): the paper's `C_* = (G_*, mu_*)` with
+//! `mu_*(g', u | g, o)`, a distribution over (next node, action) for each
+//! (node, observation) pair, and an initial node distribution.
+//!
+//! [`Fsc`] holds a controller's probabilities on its support (the paper's
+//! indicator `I_*(g', u | g, o)`); [`file`] reads and writes `*.fsc.json`
+//! (formats.md section 2) and the `uniform:K` shorthand.
+
+pub mod file;
+
+use crate::game::ModelError;
+
+/// Which player a controller belongs to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Role {
+    /// The maximising player.
+    Defender,
+    /// The minimising player.
+    Adversary,
+}
+
+/// One supported choice `(g', u)` of a (node, observation) block with its
+/// probability `mu(g', u | g, o) > 0` and, optionally, the softmax logit it came from.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Choice {
+    /// `g'`, the next node.
+    pub next: usize,
+    /// `u`, the action (index into the player's actions).
+    pub action: usize,
+    /// `mu(g', u | g, o)`.
+    pub probability: f64,
+    /// The softmax parameter `phi_{g',u|g,o}`, if recorded.
+    pub logit: Option<f64>,
+}
+
+/// A finite-state controller for one player of a game with `num_observations`
+/// observations: blocks `(g, o)` in order `g * num_observations + o`, each a
+/// non-empty list of [`Choice`]s with distinct `(next, action)` whose
+/// probabilities sum to 1.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Fsc {
+    pub(crate) role: Role,
+    pub(crate) num_nodes: usize,
+    pub(crate) num_observations: usize,
+    pub(crate) num_actions: usize,
+    pub(crate) initial: Vec<f64>,
+    pub(crate) blocks: Vec<Vec<Choice>>,
+}
+
+impl Fsc {
+    /// Builds a controller after checking that every block is a distribution
+    /// over valid `(next, action)` pairs; `blocks[g * num_observations + o]`.
+    pub fn new(
+        role: Role,
+        num_nodes: usize,
+        num_observations: usize,
+        num_actions: usize,
+        initial: Vec<f64>,
+        blocks: Vec<Vec<Choice>>,
+    ) -> Result<Self, ModelError> {
+        let fsc = Self { role, num_nodes, num_observations, num_actions, initial, blocks };
+        fsc.check()?;
+        Ok(fsc)
+    }
+
+    /// The controller with `num_nodes` nodes that starts in node 0 and is
+    /// uniform over all `(next node, action)` pairs in every block (`uniform:K`).
+    pub fn uniform(role: Role, num_nodes: usize, num_observations: usize, num_actions: usize) -> Self {
+        let pairs = num_nodes * num_actions;
+        let block: Vec<Choice> = (0..num_nodes)
+            .flat_map(|next| {
+                (0..num_actions).map(move |action| Choice {
+                    next,
+                    action,
+                    probability: 1.0 / pairs as f64,
+                    logit: None,
+                })
+            })
+            .collect();
+        let mut initial = vec![0.0; num_nodes];
+        initial[0] = 1.0;
+        Self {
+            role,
+            num_nodes,
+            num_observations,
+            num_actions,
+            initial,
+            blocks: vec![block; num_nodes * num_observations],
+        }
+    }
+
+    fn check(&self) -> Result<(), ModelError> {
+        let here = |what: String| ModelError::new(format!("{:?} controller", self.role), what);
+        if self.num_nodes == 0 {
+            return Err(here("a controller needs at least one node".into()));
+        }
+        if self.initial.len() != self.num_nodes {
+            return Err(here(format!("initial has {} entries for {} nodes", self.initial.len(), self.num_nodes)));
+        }
+        check_distribution(self.initial.iter().copied()).map_err(|m| here(format!("initial: {m}")))?;
+        if self.blocks.len() != self.num_nodes * self.num_observations {
+            return Err(here("one block per (node, observation) is required".into()));
+        }
+        for (b, block) in self.blocks.iter().enumerate() {
+            let (g, o) = (b / self.num_observations, b % self.num_observations);
+            let at = |m: String| here(format!("node {g}, observation {o}: {m}"));
+            if block.is_empty() {
+                return Err(at("no choice has positive probability".into()));
+            }
+            for (i, c) in block.iter().enumerate() {
+                if c.next >= self.num_nodes || c.action >= self.num_actions {
+                    return Err(at(format!("choice ({}, {}) out of range", c.next, c.action)));
+                }
+                if !(c.probability > 0.0) {
+                    return Err(at(format!("choice ({}, {}) has probability {}", c.next, c.action, c.probability)));
+                }
+                if block[..i].iter().any(|d| (d.next, d.action) == (c.next, c.action)) {
+                    return Err(at(format!("choice ({}, {}) listed twice", c.next, c.action)));
+                }
+            }
+            check_distribution(block.iter().map(|c| c.probability)).map_err(at)?;
+        }
+        Ok(())
+    }
+
+    /// The player this controller is for.
+    pub fn role(&self) -> Role {
+        self.role
+    }
+
+    /// `|G_*|`.
+    pub fn num_nodes(&self) -> usize {
+        self.num_nodes
+    }
+
+    /// The number of observations of the player.
+    pub fn num_observations(&self) -> usize {
+        self.num_observations
+    }
+
+    /// The number of actions of the player.
+    pub fn num_actions(&self) -> usize {
+        self.num_actions
+    }
+
+    /// The initial node distribution.
+    pub fn initial(&self) -> &[f64] {
+        &self.initial
+    }
+
+    /// The supported choices of block `(g, o)`: `mu(. | g, o)`.
+    pub fn choices(&self, g: usize, o: usize) -> &[Choice] {
+        &self.blocks[g * self.num_observations + o]
+    }
+}
+
+/// Checks that finite, non-negative weights sum to 1 within 1e-6 (formats.md section 1).
+pub(crate) fn check_distribution(weights: impl Iterator<Item = f64>) -> Result<(), String> {
+    let mut total = 0.0;
+    for w in weights {
+        if !w.is_finite() || !(0.0..=1.0).contains(&w) {
+            return Err(format!("probability {w} is not in [0, 1]"));
+        }
+        total += w;
+    }
+    if (total - 1.0).abs() > 1e-6 {
+        return Err(format!("probabilities sum to {total}, not 1 (tolerance 1e-6)"));
+    }
+    Ok(())
+}

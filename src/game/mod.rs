@@ -1,0 +1,160 @@
+//! The partially observable stochastic game (POSG) with labelled states:
+//! the paper's `SG = (S, U_def, U_adv, T, O_def, O_adv, O_def, O_adv, AP, L)`.
+//!
+//! [`Posg`] is the validated in-memory model; [`file`] reads and writes it as
+//! `*.posg.json` (formats.md section 1) and [`grid`] builds the seed paper's
+//! grid family. Every distribution held here has positive entries only (a zero
+//! is "no edge") that sum to one exactly up to rounding.
+
+pub mod file;
+pub mod grid;
+
+use thiserror::Error;
+
+/// Index of a game state in `0..num_states()`.
+pub type StateId = usize;
+
+/// Why a game or controller could not be built.
+#[derive(Debug, Error, Clone, PartialEq)]
+#[error("{path}: {message}")]
+pub struct ModelError {
+    /// Where the problem is: a file name and JSON path (e.g.
+    /// `grid.posg.json: transitions[17].next.s9`) or a description.
+    pub path: String,
+    /// What is wrong.
+    pub message: String,
+}
+
+impl ModelError {
+    /// An error at `path` saying `message`.
+    pub fn new(path: impl Into<String>, message: impl Into<String>) -> Self {
+        Self { path: path.into(), message: message.into() }
+    }
+}
+
+/// A sparse probability distribution: `(outcome, probability)` pairs with
+/// distinct outcomes and positive probabilities summing to 1.
+pub type Distribution = Vec<(usize, f64)>;
+
+/// One player's side of the game: actions `U_*`, observations `O_*` and the
+/// observation function `O_*(o | s)`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Player {
+    pub(crate) actions: Vec<String>,
+    pub(crate) observations: Vec<String>,
+    pub(crate) full_observation: bool,
+    pub(crate) observe: Vec<Distribution>,
+}
+
+impl Player {
+    /// The action names `U_*`.
+    pub fn actions(&self) -> &[String] {
+        &self.actions
+    }
+
+    /// The observation names `O_*`.
+    pub fn observations(&self) -> &[String] {
+        &self.observations
+    }
+
+    /// `|U_*|`.
+    pub fn num_actions(&self) -> usize {
+        self.actions.len()
+    }
+
+    /// `|O_*|`.
+    pub fn num_observations(&self) -> usize {
+        self.observations.len()
+    }
+
+    /// Whether the player observes the state exactly (`"observe": "full"`).
+    pub fn observes_fully(&self) -> bool {
+        self.full_observation
+    }
+
+    /// `O_*(. | s)` as `(observation, probability)` pairs with positive probability.
+    pub fn observation_distribution(&self, s: StateId) -> &[(usize, f64)] {
+        &self.observe[s]
+    }
+}
+
+/// A POSG with labelled states and an initial distribution.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Posg {
+    pub(crate) name: Option<String>,
+    pub(crate) states: Vec<String>,
+    pub(crate) initial: Distribution,
+    pub(crate) propositions: Vec<String>,
+    pub(crate) labels: Vec<Vec<usize>>,
+    pub(crate) defender: Player,
+    pub(crate) adversary: Player,
+    pub(crate) has_adversary: bool,
+    /// `T(. | s, u, v)` for triple index `(s * |U_def| + u) * |U_adv| + v`:
+    /// entries `transition_offsets[t]..transition_offsets[t + 1]` of `transition_entries`.
+    pub(crate) transition_offsets: Vec<usize>,
+    pub(crate) transition_entries: Vec<(StateId, f64)>,
+}
+
+impl Posg {
+    /// The game's name, if any.
+    pub fn name(&self) -> Option<&str> {
+        self.name.as_deref()
+    }
+
+    /// `|S|`.
+    pub fn num_states(&self) -> usize {
+        self.states.len()
+    }
+
+    /// The state names.
+    pub fn states(&self) -> &[String] {
+        &self.states
+    }
+
+    /// The index of the state named `name`.
+    pub fn state_index(&self, name: &str) -> Option<StateId> {
+        self.states.iter().position(|s| s == name)
+    }
+
+    /// The initial distribution over states, positive entries only.
+    pub fn initial(&self) -> &[(StateId, f64)] {
+        &self.initial
+    }
+
+    /// The atomic propositions `AP` (sorted, the union of all labels).
+    pub fn propositions(&self) -> &[String] {
+        &self.propositions
+    }
+
+    /// `L(s)` as indices into [`Posg::propositions`].
+    pub fn label(&self, s: StateId) -> &[usize] {
+        &self.labels[s]
+    }
+
+    /// `L(s)` as names.
+    pub fn label_names(&self, s: StateId) -> impl Iterator<Item = &str> {
+        self.labels[s].iter().map(|&p| self.propositions[p].as_str())
+    }
+
+    /// The defender.
+    pub fn defender(&self) -> &Player {
+        &self.defender
+    }
+
+    /// The adversary; for a POMDP (no adversary in the file) a player with one
+    /// action `_` and one observation `_`.
+    pub fn adversary(&self) -> &Player {
+        &self.adversary
+    }
+
+    /// Whether the file named an adversary (false: the game is a POMDP).
+    pub fn has_adversary(&self) -> bool {
+        self.has_adversary
+    }
+
+    /// `T(. | s, u, v)` as `(successor, probability)` pairs with positive probability.
+    pub fn transition(&self, s: StateId, u: usize, v: usize) -> &[(StateId, f64)] {
+        let t = (s * self.defender.num_actions() + u) * self.adversary.num_actions() + v;
+        &self.transition_entries[self.transition_offsets[t]..self.transition_offsets[t + 1]]
+    }
+}

@@ -1,0 +1,40 @@
+//! # posg-fsc
+//!
+//! Secure control under partial observability: tune a defender's finite-state
+//! controller (FSC) so that a partially observable stochastic game (POSG)
+//! satisfies an LTL formula `phi` with the highest probability against a
+//! worst-case adversary FSC,
+//!
+//! ```text
+//!     max over mu_def   min over mu_adv   P(trace |= phi | mu_def, mu_adv).
+//! ```
+//!
+//! The method is that of Ramasubramanian, Clark, Bushnell and Poovendran,
+//! "Secure Control under Partial Observability with Temporal Logic
+//! Constraints": the game is composed with a deterministic Rabin automaton for
+//! `phi` and with both controllers into a finite Markov chain, the global
+//! Markov chain (GMC) on `(s, q, g, h)`; the satisfaction probability is the
+//! probability of reaching its phi-feasible bottom strongly connected
+//! components.
+//!
+//! Data flows one way:
+//!
+//! * [`game`] and [`controller`]: the model and its files;
+//! * [`ltl`] and [`automaton`]: formulas, their translation to deterministic
+//!   Rabin automata, and HOA input/output;
+//! * [`product`]: the GMC in compressed sparse row form, built once per
+//!   support structure and refilled in place for new probabilities;
+//! * [`graph`]: strongly connected components, BSCCs, phi-feasibility and the
+//!   target sets `B`, `Z`, `T` (method.md section 1);
+//! * [`solver`]: sparse LU solves of `(I - Q) x = b` and its transpose;
+//! * [`value`]: the exact value and its adjoint gradient (method.md sections 1-2).
+#![warn(missing_docs)]
+
+pub mod automaton;
+pub mod controller;
+pub mod game;
+pub mod graph;
+pub mod ltl;
+pub mod product;
+pub mod solver;
+pub mod value;
