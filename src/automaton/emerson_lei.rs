@@ -41,7 +41,9 @@ impl Acceptance {
     /// carry the mark sets `recurring` (a non-empty list).
     pub fn holds_on(&self, recurring: &[MarkSet]) -> bool {
         let taken = |mark: u32, complemented: bool| {
-            recurring.iter().any(|&marks| ((marks >> mark) & 1 == 1) != complemented)
+            recurring
+                .iter()
+                .any(|&marks| ((marks >> mark) & 1 == 1) != complemented)
         };
         match self {
             Acceptance::Constant(value) => *value,
@@ -87,7 +89,9 @@ impl EmersonLeiAutomaton {
         acceptance: Acceptance,
     ) -> Result<Self, AutomatonError> {
         if propositions.len() > MAX_PROPOSITIONS {
-            return Err(AutomatonError::TooManyPropositions { count: propositions.len() });
+            return Err(AutomatonError::TooManyPropositions {
+                count: propositions.len(),
+            });
         }
         if num_marks > MarkSet::BITS {
             return Err(AutomatonError::Malformed(format!(
@@ -112,13 +116,23 @@ impl EmersonLeiAutomaton {
         if edges.iter().any(|e| e.target as usize >= num_states) {
             return Err(AutomatonError::Malformed("successor out of range".into()));
         }
-        let used = if num_marks == MarkSet::BITS { MarkSet::MAX } else { (1 << num_marks) - 1 };
+        let used = if num_marks == MarkSet::BITS {
+            MarkSet::MAX
+        } else {
+            (1 << num_marks) - 1
+        };
         if edges.iter().any(|e| e.marks & !used != 0) {
             return Err(AutomatonError::Malformed(format!(
                 "a transition carries a mark >= {num_marks}"
             )));
         }
-        Ok(Self { propositions, initial, edges, num_marks, acceptance })
+        Ok(Self {
+            propositions,
+            initial,
+            edges,
+            num_marks,
+            acceptance,
+        })
     }
 
     /// The atomic propositions, in the bit order of [`Letter`].
@@ -153,8 +167,13 @@ impl EmersonLeiAutomaton {
 
     /// Whether the automaton accepts `prefix cycle^omega` (`cycle` non-empty).
     pub fn accepts_lasso(&self, prefix: &[Letter], cycle: &[Letter]) -> bool {
-        assert!(!cycle.is_empty(), "the cycle of a lasso word must be non-empty");
-        let mut q = prefix.iter().fold(self.initial, |q, &a| self.edge(q, a).target as usize);
+        assert!(
+            !cycle.is_empty(),
+            "the cycle of a lasso word must be non-empty"
+        );
+        let mut q = prefix
+            .iter()
+            .fold(self.initial, |q, &a| self.edge(q, a).target as usize);
         let mut first_seen = vec![usize::MAX; self.num_states() * cycle.len()];
         let mut marks = Vec::new();
         let loop_start = loop {

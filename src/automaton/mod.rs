@@ -77,7 +77,9 @@ impl Dra {
         pairs: Vec<RabinPair>,
     ) -> Result<Self, AutomatonError> {
         if propositions.len() > MAX_PROPOSITIONS {
-            return Err(AutomatonError::TooManyPropositions { count: propositions.len() });
+            return Err(AutomatonError::TooManyPropositions {
+                count: propositions.len(),
+            });
         }
         if num_states == 0 || initial >= num_states {
             return Err(AutomatonError::Malformed(format!(
@@ -94,7 +96,9 @@ impl Dra {
             )));
         }
         if let Some(bad) = successors.iter().find(|&&t| t as usize >= num_states) {
-            return Err(AutomatonError::Malformed(format!("successor {bad} out of range")));
+            return Err(AutomatonError::Malformed(format!(
+                "successor {bad} out of range"
+            )));
         }
         for (i, pair) in pairs.iter().enumerate() {
             if pair.fin.len() != num_states || pair.inf.len() != num_states {
@@ -103,7 +107,12 @@ impl Dra {
                 )));
             }
         }
-        Ok(Self { propositions, initial, successors, pairs })
+        Ok(Self {
+            propositions,
+            initial,
+            successors,
+            pairs,
+        })
     }
 
     /// The atomic propositions, in the bit order of [`Letter`].
@@ -145,8 +154,13 @@ impl Dra {
     /// (state, cycle position) pair repeats, then checks the Rabin pairs on the
     /// states visited on the repeating part.
     pub fn accepts_lasso(&self, prefix: &[Letter], cycle: &[Letter]) -> bool {
-        assert!(!cycle.is_empty(), "the cycle of a lasso word must be non-empty");
-        let mut q = prefix.iter().fold(self.initial, |q, &a| self.successor(q, a));
+        assert!(
+            !cycle.is_empty(),
+            "the cycle of a lasso word must be non-empty"
+        );
+        let mut q = prefix
+            .iter()
+            .fold(self.initial, |q, &a| self.successor(q, a));
         let mut first_seen = vec![usize::MAX; self.num_states() * cycle.len()];
         let mut visited = Vec::new();
         let loop_start = loop {

@@ -59,14 +59,26 @@ impl Fsc {
         initial: Vec<f64>,
         blocks: Vec<Vec<Choice>>,
     ) -> Result<Self, ModelError> {
-        let fsc = Self { role, num_nodes, num_observations, num_actions, initial, blocks };
+        let fsc = Self {
+            role,
+            num_nodes,
+            num_observations,
+            num_actions,
+            initial,
+            blocks,
+        };
         fsc.check()?;
         Ok(fsc)
     }
 
     /// The controller with `num_nodes` nodes that starts in node 0 and is
     /// uniform over all `(next node, action)` pairs in every block (`uniform:K`).
-    pub fn uniform(role: Role, num_nodes: usize, num_observations: usize, num_actions: usize) -> Self {
+    pub fn uniform(
+        role: Role,
+        num_nodes: usize,
+        num_observations: usize,
+        num_actions: usize,
+    ) -> Self {
         let pairs = num_nodes * num_actions;
         let block: Vec<Choice> = (0..num_nodes)
             .flat_map(|next| {
@@ -96,9 +108,14 @@ impl Fsc {
             return Err(here("a controller needs at least one node".into()));
         }
         if self.initial.len() != self.num_nodes {
-            return Err(here(format!("initial has {} entries for {} nodes", self.initial.len(), self.num_nodes)));
+            return Err(here(format!(
+                "initial has {} entries for {} nodes",
+                self.initial.len(),
+                self.num_nodes
+            )));
         }
-        check_distribution(self.initial.iter().copied()).map_err(|m| here(format!("initial: {m}")))?;
+        check_distribution(self.initial.iter().copied())
+            .map_err(|m| here(format!("initial: {m}")))?;
         if self.blocks.len() != self.num_nodes * self.num_observations {
             return Err(here("one block per (node, observation) is required".into()));
         }
@@ -110,13 +127,25 @@ impl Fsc {
             }
             for (i, c) in block.iter().enumerate() {
                 if c.next >= self.num_nodes || c.action >= self.num_actions {
-                    return Err(at(format!("choice ({}, {}) out of range", c.next, c.action)));
+                    return Err(at(format!(
+                        "choice ({}, {}) out of range",
+                        c.next, c.action
+                    )));
                 }
                 if !(c.probability > 0.0) {
-                    return Err(at(format!("choice ({}, {}) has probability {}", c.next, c.action, c.probability)));
+                    return Err(at(format!(
+                        "choice ({}, {}) has probability {}",
+                        c.next, c.action, c.probability
+                    )));
                 }
-                if block[..i].iter().any(|d| (d.next, d.action) == (c.next, c.action)) {
-                    return Err(at(format!("choice ({}, {}) listed twice", c.next, c.action)));
+                if block[..i]
+                    .iter()
+                    .any(|d| (d.next, d.action) == (c.next, c.action))
+                {
+                    return Err(at(format!(
+                        "choice ({}, {}) listed twice",
+                        c.next, c.action
+                    )));
                 }
             }
             check_distribution(block.iter().map(|c| c.probability)).map_err(at)?;
@@ -165,7 +194,9 @@ pub(crate) fn check_distribution(weights: impl Iterator<Item = f64>) -> Result<(
         total += w;
     }
     if (total - 1.0).abs() > 1e-6 {
-        return Err(format!("probabilities sum to {total}, not 1 (tolerance 1e-6)"));
+        return Err(format!(
+            "probabilities sum to {total}, not 1 (tolerance 1e-6)"
+        ));
     }
     Ok(())
 }

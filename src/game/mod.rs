@@ -28,7 +28,10 @@ pub struct ModelError {
 impl ModelError {
     /// An error at `path` saying `message`.
     pub fn new(path: impl Into<String>, message: impl Into<String>) -> Self {
-        Self { path: path.into(), message: message.into() }
+        Self {
+            path: path.into(),
+            message: message.into(),
+        }
     }
 }
 
@@ -133,7 +136,9 @@ impl Posg {
 
     /// `L(s)` as names.
     pub fn label_names(&self, s: StateId) -> impl Iterator<Item = &str> {
-        self.labels[s].iter().map(|&p| self.propositions[p].as_str())
+        self.labels[s]
+            .iter()
+            .map(|&p| self.propositions[p].as_str())
     }
 
     /// The defender.
