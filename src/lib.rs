@@ -30,6 +30,7 @@
 //! * [`value`]: the exact value and its adjoint gradient (method.md sections 1-2).
 #![warn(missing_docs)]
 
+pub mod analysis;
 pub mod automaton;
 pub mod controller;
 pub mod game;
