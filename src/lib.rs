@@ -37,5 +37,6 @@ pub mod game;
 pub mod graph;
 pub mod ltl;
 pub mod product;
+pub mod simulate;
 pub mod solver;
 pub mod value;
