@@ -36,6 +36,8 @@ pub mod controller;
 pub mod game;
 pub mod graph;
 pub mod ltl;
+pub mod optimise;
+pub mod output;
 pub mod product;
 pub mod simulate;
 pub mod solver;

@@ -1,0 +1,134 @@
+//! The adversary's best response to a fixed defender (method.md section 4):
+//! `min over phi_adv of V(phi_def, phi_adv)` by L-BFGS from several starts.
+//!
+//! argmin's gradient solvers have no box constraints, so the minimisation
+//! runs in unconstrained coordinates `z` with the smooth reparametrisation
+//! `phi = c tanh(z)`, which maps `R^n` onto the open box `(-c, c)^n`, and the
+//! chain rule `dV/dz = c (1 - tanh(z)^2) dV/dphi`. The solver is
+//! `LBFGS::new(MoreThuenteLineSearch::new(), m)`. The lowest value found over
+//! all starts is the defender's worst-case estimate: an upper bound on the
+//! true minimum over adversaries of this size and support.
+
+use std::cell::RefCell;
+
+use argmin::core::{CostFunction, Error, Executor, Gradient, State};
+use argmin::solver::linesearch::MoreThuenteLineSearch;
+use argmin::solver::quasinewton::LBFGS;
+use rand::Rng;
+use rand_chacha::ChaCha8Rng;
+
+use super::objective::Objective;
+use super::{OptimiseError, Settings};
+
+/// The outcome of one best-response check.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BestResponse {
+    /// The lowest value found: the defender's worst-case estimate.
+    pub value: f64,
+    /// The adversary logits that reach it.
+    pub adversary: Vec<f64>,
+}
+
+/// Random starts draw `z` uniformly from `[-START_RANGE, START_RANGE]`,
+/// that is `phi` in `(-0.76 c, 0.76 c)`.
+const START_RANGE: f64 = 1.0;
+
+/// The start at a given adversary keeps `|phi| <= START_CLAMP c`, where
+/// `tanh` still has slope `1 - START_CLAMP^2`.
+const START_CLAMP: f64 = 0.99;
+
+/// Minimises `V` over the adversary's logits with the defender's fixed at
+/// `defender`: from the logits `current` and from `settings.restarts` random
+/// starts, each with at most `settings.best_response_iterations` L-BFGS iterations.
+pub fn best_response(
+    objective: &mut Objective,
+    defender: &[f64],
+    current: &[f64],
+    settings: &Settings,
+    rng: &mut ChaCha8Rng,
+) -> Result<BestResponse, OptimiseError> {
+    let bound = settings.logit_bound;
+    let at_current = current.iter().map(|&phi| (phi / bound).clamp(-START_CLAMP, START_CLAMP).atanh()).collect();
+    let mut best = minimise_from(objective, defender, at_current, settings)?;
+    for _ in 0..settings.restarts {
+        let start = (0..current.len()).map(|_| rng.random_range(-START_RANGE..=START_RANGE)).collect();
+        let found = minimise_from(objective, defender, start, settings)?;
+        if found.value < best.value {
+            best = found;
+        }
+    }
+    Ok(best)
+}
+
+fn minimise_from(
+    objective: &mut Objective,
+    defender: &[f64],
+    start: Vec<f64>,
+    settings: &Settings,
+) -> Result<BestResponse, OptimiseError> {
+    let bound = settings.logit_bound;
+    let start_value = objective.value(defender, &squash(&start, bound))?;
+    if start.is_empty() {
+        return Ok(BestResponse { value: start_value, adversary: Vec::new() });
+    }
+    let problem = AdversaryProblem {
+        objective: RefCell::new(objective),
+        defender,
+        bound,
+    };
+    let solver = LBFGS::new(MoreThuenteLineSearch::new(), settings.lbfgs_memory);
+    let result = Executor::new(problem, solver)
+        .configure(|state| state.param(start.clone()).max_iters(settings.best_response_iterations))
+        .run()
+        .map_err(|e| match e.downcast::<crate::value::ValueError>() {
+            Ok(value_error) => OptimiseError::Value(value_error),
+            Err(other) => OptimiseError::BestResponse(other.to_string()),
+        })?;
+    let state = result.state();
+    match state.get_best_param() {
+        Some(z) if state.get_best_cost() < start_value => Ok(BestResponse {
+            value: state.get_best_cost(),
+            adversary: squash(z, bound),
+        }),
+        _ => Ok(BestResponse {
+            value: start_value,
+            adversary: squash(&start, bound),
+        }),
+    }
+}
+
+/// `phi = c tanh(z)`, componentwise.
+fn squash(z: &[f64], bound: f64) -> Vec<f64> {
+    z.iter().map(|&zi| bound * zi.tanh()).collect()
+}
+
+/// argmin's view of `z -> V(phi_def, c tanh(z))`.
+struct AdversaryProblem<'a> {
+    objective: RefCell<&'a mut Objective>,
+    defender: &'a [f64],
+    bound: f64,
+}
+
+impl CostFunction for AdversaryProblem<'_> {
+    type Param = Vec<f64>;
+    type Output = f64;
+
+    fn cost(&self, z: &Vec<f64>) -> Result<f64, Error> {
+        let phi = squash(z, self.bound);
+        Ok(self.objective.borrow_mut().point(self.defender, &phi)?.value)
+    }
+}
+
+impl Gradient for AdversaryProblem<'_> {
+    type Param = Vec<f64>;
+    type Gradient = Vec<f64>;
+
+    fn gradient(&self, z: &Vec<f64>) -> Result<Vec<f64>, Error> {
+        let phi = squash(z, self.bound);
+        let point = self.objective.borrow_mut().point(self.defender, &phi)?;
+        Ok(z.iter()
+            .zip(&point.adversary)
+            .map(|(&zi, &d)| self.bound * (1.0 - zi.tanh().powi(2)) * d)
+            .collect())
+    }
+}

@@ -1,0 +1,126 @@
+//! [`Objective`]: the value `V(phi_def, phi_adv)` and its logit gradients for
+//! one support structure, with the last evaluation cached.
+//!
+//! One [`Evaluator`] per structure is built once (GMC, recurrence classes,
+//! symbolic LU) and reused for every evaluation; each evaluation is the
+//! adjoint computation of method.md section 2 followed by the softmax chain
+//! rule of section 3. argmin asks for the cost and the gradient of the same
+//! point in separate calls: the cache answers the second.
+
+use crate::analysis::StateClass;
+use crate::automaton::Dra;
+use crate::controller::Support;
+use crate::game::Posg;
+use crate::value::{Evaluator, ValueError};
+
+use super::softmax::Softmax;
+
+/// The value and both players' logit gradients at one point.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Point {
+    /// `V`.
+    pub value: f64,
+    /// `dV/dphi_def`.
+    pub defender: Vec<f64>,
+    /// `dV/dphi_adv`.
+    pub adversary: Vec<f64>,
+}
+
+/// The value as a function of both players' logits on one structure.
+pub struct Objective {
+    evaluator: Evaluator,
+    defender: Softmax,
+    adversary: Softmax,
+    cache: Option<(Vec<f64>, Vec<f64>, Point)>,
+}
+
+/// The size of a structure's GMC.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub struct GmcSize {
+    /// Reachable GMC states.
+    pub states: usize,
+    /// Nonzero transitions.
+    pub transitions: usize,
+    /// Transient states `|T|`: the order of the linear system.
+    pub transient: usize,
+    /// States in phi-feasible BSCCs `|B|`.
+    pub target: usize,
+}
+
+impl Objective {
+    /// Builds the evaluator for the supports of the two softmax maps.
+    pub fn new(
+        game: &Posg,
+        dra: &Dra,
+        defender: Softmax,
+        adversary: Softmax,
+        tolerance: f64,
+    ) -> Result<Self, ValueError> {
+        let evaluator = Evaluator::new(
+            game,
+            dra,
+            &Support::of(defender.template()),
+            &Support::of(adversary.template()),
+            tolerance,
+        )?;
+        Ok(Self {
+            evaluator,
+            defender,
+            adversary,
+            cache: None,
+        })
+    }
+
+    /// The defender's softmax map.
+    pub fn defender(&self) -> &Softmax {
+        &self.defender
+    }
+
+    /// The adversary's softmax map.
+    pub fn adversary(&self) -> &Softmax {
+        &self.adversary
+    }
+
+    /// The size of the GMC and of its linear system.
+    pub fn gmc_size(&self) -> GmcSize {
+        let classes = &self.evaluator.recurrence().classes;
+        GmcSize {
+            states: self.evaluator.gmc().num_states(),
+            transitions: self.evaluator.gmc().num_transitions(),
+            transient: self.evaluator.recurrence().transient.len(),
+            target: classes.iter().filter(|&&c| c == StateClass::Target).count(),
+        }
+    }
+
+    /// `V` alone (one factorisation, one solve); does not touch the cache.
+    pub fn value(&mut self, defender: &[f64], adversary: &[f64]) -> Result<f64, ValueError> {
+        if let Some((d, a, point)) = &self.cache {
+            if d == defender && a == adversary {
+                return Ok(point.value);
+            }
+        }
+        let mu_def = self.defender.probabilities(defender);
+        let mu_adv = self.adversary.probabilities(adversary);
+        Ok(self.evaluator.evaluate(&mu_def, &mu_adv)?.value)
+    }
+
+    /// `V` and both logit gradients (one factorisation, two solves, one pass
+    /// over the GMC, the chain rule), from the cache when the point is the last one.
+    pub fn point(&mut self, defender: &[f64], adversary: &[f64]) -> Result<Point, ValueError> {
+        if let Some((d, a, point)) = &self.cache {
+            if d == defender && a == adversary {
+                return Ok(point.clone());
+            }
+        }
+        let mu_def = self.defender.probabilities(defender);
+        let mu_adv = self.adversary.probabilities(adversary);
+        let (evaluation, gradient) = self.evaluator.evaluate_with_gradient(&mu_def, &mu_adv)?;
+        let point = Point {
+            value: evaluation.value,
+            defender: self.defender.chain_rule(&mu_def, &gradient.defender, &gradient.defender_initial),
+            adversary: self.adversary.chain_rule(&mu_adv, &gradient.adversary, &gradient.adversary_initial),
+        };
+        self.cache = Some((defender.to_vec(), adversary.to_vec(), point.clone()));
+        Ok(point)
+    }
+}

@@ -1,0 +1,59 @@
+//! What the optimiser reports while it runs: one [`IterationRecord`] per
+//! outer iteration, handed to an [`Observer`]. Writers of output (the CSV
+//! curve, a progress bar) are observers; the loop itself writes nothing.
+
+use serde::Serialize;
+
+/// One outer iteration of the max-min optimiser (method.md section 4).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct IterationRecord {
+    /// The outer iteration `t`, from 0.
+    pub iteration: usize,
+    /// Wall-clock seconds since the structure's optimisation started.
+    pub seconds: f64,
+    /// `V(phi_def(t), phi_adv)` after the adversary's steps of iteration `t`.
+    pub value: f64,
+    /// `|dV/dphi_def|_2` at that point.
+    pub defender_gradient_norm: f64,
+    /// `|dV/dphi_adv|_2` before the adversary's last step of iteration `t`.
+    pub adversary_gradient_norm: f64,
+    /// The defender's step size `eta_def(t)`.
+    pub defender_step: f64,
+    /// The adversary's step size `eta_adv`.
+    pub adversary_step: f64,
+    /// The best-response value of `phi_def(t)`, when a check ran at `t`.
+    pub worst_case: Option<f64>,
+}
+
+/// An observer's failure (an output file could not be written, say).
+pub type ObserverError = Box<dyn std::error::Error + Send + Sync>;
+
+/// Receives the optimiser's records in iteration order.
+pub trait Observer {
+    /// Called once per outer iteration.
+    fn observe(&mut self, record: &IterationRecord);
+
+    /// Called once after the last record: flushes output and reports the
+    /// first failure, which fails the run.
+    fn finish(&mut self) -> Result<(), ObserverError> {
+        Ok(())
+    }
+}
+
+/// The observer that ignores everything.
+impl Observer for () {
+    fn observe(&mut self, _record: &IterationRecord) {}
+}
+
+/// Every observer of a list sees every record.
+impl Observer for Vec<Box<dyn Observer + Send>> {
+    fn observe(&mut self, record: &IterationRecord) {
+        for observer in self {
+            observer.observe(record);
+        }
+    }
+
+    fn finish(&mut self) -> Result<(), ObserverError> {
+        self.iter_mut().try_for_each(|observer| observer.finish())
+    }
+}

@@ -1,0 +1,231 @@
+//! The max-min optimiser: softmax gradients against central differences,
+//! single-player optimisation against exhaustive enumeration, matching
+//! pennies, and reproducibility of `curve.csv`.
+
+mod common;
+
+use posg_fsc::automaton::Dra;
+use posg_fsc::controller::{Choice, Fsc, Role, Support};
+use posg_fsc::game::Posg;
+use posg_fsc::game::file::from_json_str;
+use posg_fsc::optimise::{Objective, Settings, Softmax, Structure, optimise_structure, solve};
+use posg_fsc::output::CurveCsv;
+use posg_fsc::solver::DEFAULT_TOLERANCE;
+use posg_fsc::value::Evaluator;
+use proptest::prelude::*;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use serde_json::{Map, Value, json};
+
+fn game(text: &str) -> Posg {
+    from_json_str(text, "test.posg.json").unwrap()
+}
+
+fn random_logits(rng: &mut ChaCha8Rng, n: usize) -> Vec<f64> {
+    (0..n).map(|_| rng.random_range(-2.0..2.0)).collect()
+}
+
+/// Central differences of `V` in every logit of one player.
+fn central_differences(objective: &mut Objective, def: &[f64], adv: &[f64], player: Role) -> Vec<f64> {
+    let h = 1e-5;
+    let n = if player == Role::Defender { def.len() } else { adv.len() };
+    (0..n)
+        .map(|k| {
+            let shifted = |delta: f64| {
+                let (mut d, mut a) = (def.to_vec(), adv.to_vec());
+                if player == Role::Defender { d[k] += delta } else { a[k] += delta }
+                (d, a)
+            };
+            let (dp, ap) = shifted(h);
+            let (dm, am) = shifted(-h);
+            (objective.value(&dp, &ap).unwrap() - objective.value(&dm, &am).unwrap()) / (2.0 * h)
+        })
+        .collect()
+}
+
+fn assert_close(adjoint: &[f64], fd: &[f64], who: &str) -> Result<(), TestCaseError> {
+    let scale = adjoint.iter().chain(fd).fold(0.0f64, |m, g| m.max(g.abs()));
+    for (k, (a, f)) in adjoint.iter().zip(fd).enumerate() {
+        let error = (a - f).abs() / scale.max(1e-3);
+        prop_assert!(error < 1e-6, "{} logit {}: adjoint {} vs differences {} (relative error {})", who, k, a, f, error);
+    }
+    Ok(())
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(48))]
+
+    /// dV/dphi by adjoint + softmax chain rule against central differences,
+    /// both players, with and without initial-distribution logits.
+    #[test]
+    fn logit_gradient_matches_central_differences(seed in any::<u64>(), with_initial in any::<bool>()) {
+        let g = game(&common::random::game_json(seed));
+        let dra = common::random::dra(seed);
+        let def = common::random::controller(seed, &g, Role::Defender);
+        let adv = common::random::controller(seed, &g, Role::Adversary);
+        let mut objective = Objective::new(&g, &dra, Softmax::new(&def, with_initial), Softmax::new(&adv, with_initial), DEFAULT_TOLERANCE).unwrap();
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let phi_def = random_logits(&mut rng, objective.defender().num_parameters());
+        let phi_adv = random_logits(&mut rng, objective.adversary().num_parameters());
+        let point = objective.point(&phi_def, &phi_adv).unwrap();
+        let fd_def = central_differences(&mut objective, &phi_def, &phi_adv, Role::Defender);
+        let fd_adv = central_differences(&mut objective, &phi_def, &phi_adv, Role::Adversary);
+        assert_close(&point.defender, &fd_def, "defender")?;
+        assert_close(&point.adversary, &fd_adv, "adversary")?;
+    }
+}
+
+/// A random single-player game (no adversary) as JSON: `states` states, the
+/// defender observes `observations` noisy observations (0: the state), two
+/// or three actions, `goal` and `unsafe` absorbing.
+fn single_player_json(seed: u64, states: usize, observations: usize) -> String {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let names: Vec<String> = (0..states).map(|i| format!("s{i}")).collect();
+    let actions: Vec<String> = (0..rng.random_range(2..=3)).map(|i| format!("u{i}")).collect();
+    let mut transitions = Vec::new();
+    for (i, s) in names.iter().enumerate() {
+        if i >= states - 2 {
+            transitions.push(json!({"state": s, "defender": "*", "next": {s.clone(): 1.0}}));
+            continue;
+        }
+        for u in &actions {
+            let mut next = Map::new();
+            let targets: Vec<&String> = names.iter().filter(|_| rng.random_bool(0.4)).collect();
+            let targets = if targets.is_empty() { vec![&names[0]] } else { targets };
+            let weights: Vec<f64> = targets.iter().map(|_| rng.random_range(0.1..1.0)).collect();
+            let total: f64 = weights.iter().sum();
+            for (t, w) in targets.into_iter().zip(weights) {
+                next.insert(t.clone(), json!(w / total));
+            }
+            transitions.push(json!({"state": s, "defender": u, "next": next}));
+        }
+    }
+    let defender = if observations == 0 {
+        json!({"actions": actions, "observe": "full"})
+    } else {
+        let obs: Vec<String> = (0..observations).map(|i| format!("o{i}")).collect();
+        let observe: Map<String, Value> = names
+            .iter()
+            .map(|s| (s.clone(), json!({obs[rng.random_range(0..observations)].clone(): 1.0})))
+            .collect();
+        json!({"actions": actions, "observations": obs, "observe": observe})
+    };
+    json!({
+        "posg": 1, "states": names, "initial": {"s0": 1.0},
+        "labels": {names[states - 2].clone(): ["goal"], names[states - 1].clone(): ["unsafe"]},
+        "defender": defender, "transitions": transitions,
+    })
+    .to_string()
+}
+
+/// The best value over all deterministic 1-node defenders (one action per
+/// observation), by exhaustive enumeration.
+fn best_deterministic(g: &Posg, dra: &Dra) -> f64 {
+    let (no, na) = (g.defender().num_observations(), g.defender().num_actions());
+    let adversary = Fsc::uniform(Role::Adversary, 1, 1, 1);
+    let adv = Support::probabilities_of(&adversary);
+    let mut best = 0.0f64;
+    for code in 0..na.pow(no as u32) {
+        let blocks = (0..no)
+            .map(|o| vec![Choice { next: 0, action: code / na.pow(o as u32) % na, probability: 1.0, logit: None }])
+            .collect();
+        let fsc = Fsc::new(Role::Defender, 1, no, na, vec![1.0], blocks).unwrap();
+        let mut ev = Evaluator::new(g, dra, &Support::of(&fsc), &Support::of(&adversary), DEFAULT_TOLERANCE).unwrap();
+        best = best.max(ev.evaluate(&Support::probabilities_of(&fsc), &adv).unwrap().value);
+    }
+    best
+}
+
+/// Settings for single-player runs: logit bound c = 10, so a deterministic
+/// choice is approximated within exp(-20) per entry, far below 1e-3.
+fn single_player_settings() -> Settings {
+    Settings { logit_bound: 10.0, max_iterations: 300, defender_step: 0.3, check_every: 25, restarts: 0, ..Settings::default() }
+}
+
+#[test]
+fn single_player_reach_avoid_matches_the_best_deterministic_controller() {
+    let dra = common::safe_until_goal();
+    for seed in 0..8 {
+        let g = game(&single_player_json(seed, 6, 0));
+        let optimum = best_deterministic(&g, &dra);
+        let found = solve(&g, &dra, 1, 1, &single_player_settings(), |_, _| Box::new(())).unwrap();
+        let value = found.best().report.worst_case;
+        assert!((value - optimum).abs() < 1e-3, "seed {seed}: optimised {value}, best deterministic {optimum}");
+    }
+}
+
+#[test]
+fn partially_observed_single_player_is_at_least_the_best_deterministic_controller() {
+    // Under partial observation a mixed 1-node controller may beat every
+    // deterministic one, never the other way round.
+    let dra = common::safe_until_goal();
+    for seed in 0..8 {
+        let g = game(&single_player_json(100 + seed, 6, 2));
+        let optimum = best_deterministic(&g, &dra);
+        let found = solve(&g, &dra, 1, 1, &single_player_settings(), |_, _| Box::new(())).unwrap();
+        let value = found.best().report.worst_case;
+        assert!(value > optimum - 1e-3, "seed {seed}: optimised {value}, best deterministic {optimum}");
+    }
+}
+
+const MATCHING_PENNIES: &str = r#"{
+  "posg": 1, "states": ["s", "goal", "trap"], "initial": {"s": 1.0},
+  "labels": {"goal": ["goal"]},
+  "defender": {"actions": ["H", "T"], "observe": "full"},
+  "adversary": {"actions": ["H", "T"], "observe": "full"},
+  "transitions": [
+    {"state": "s", "defender": "H", "adversary": "H", "next": {"goal": 1.0}},
+    {"state": "s", "defender": "T", "adversary": "T", "next": {"goal": 1.0}},
+    {"state": "s", "defender": "H", "adversary": "T", "next": {"trap": 1.0}},
+    {"state": "s", "defender": "T", "adversary": "H", "next": {"trap": 1.0}},
+    {"state": "goal", "defender": "*", "adversary": "*", "next": {"goal": 1.0}},
+    {"state": "trap", "defender": "*", "adversary": "*", "next": {"trap": 1.0}}
+  ]
+}"#;
+
+#[test]
+fn matching_pennies_has_max_min_value_one_half_with_both_mixing() {
+    let g = game(MATCHING_PENNIES);
+    let dra = common::eventually_goal();
+    for seed in 0..3 {
+        let settings = Settings { seed, ..Settings::default() };
+        let found = solve(&g, &dra, 1, 1, &settings, |_, _| Box::new(())).unwrap();
+        let best = found.best();
+        assert!((best.report.worst_case - 0.5).abs() < 1e-3, "seed {seed}: worst case {}", best.report.worst_case);
+        let s = g.state_index("s").unwrap();
+        let heads = best.defender.choices(0, s).iter().find(|c| c.action == 0).unwrap().probability;
+        assert!((heads - 0.5).abs() < 1e-3, "seed {seed}: defender plays H with {heads}");
+    }
+}
+
+fn curve_without_seconds(path: &std::path::Path) -> Vec<String> {
+    let text = std::fs::read_to_string(path).unwrap();
+    text.lines()
+        .map(|line| {
+            let mut fields: Vec<&str> = line.split(',').collect();
+            fields.remove(1);
+            fields.join(",")
+        })
+        .collect()
+}
+
+#[test]
+fn same_seed_and_settings_give_the_same_curve_except_wall_clock_seconds() {
+    let g = game(&common::random::game_json(7));
+    let dra = common::recurrent_goal_safe();
+    let settings = Settings { seed: 11, max_iterations: 40, check_every: 7, ..Settings::default() };
+    let structure = Structure::full(&g, 2, 1, false);
+    let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR"));
+    let curves: Vec<Vec<String>> = ["curve-a.csv", "curve-b.csv"]
+        .iter()
+        .map(|name| {
+            let path = dir.join(name);
+            let mut writer = CurveCsv::create(&path).unwrap();
+            optimise_structure(&g, &dra, &structure, &settings, 0, &mut writer).unwrap();
+            curve_without_seconds(&path)
+        })
+        .collect();
+    assert_eq!(curves[0][0], "iteration,value,defender_gradient_norm,adversary_gradient_norm,defender_step,adversary_step,worst_case");
+    assert_eq!(curves[0].len(), 41);
+    assert_eq!(curves[0], curves[1]);
+}
