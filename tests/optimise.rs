@@ -26,14 +26,27 @@ fn random_logits(rng: &mut ChaCha8Rng, n: usize) -> Vec<f64> {
 }
 
 /// Central differences of `V` in every logit of one player.
-fn central_differences(objective: &mut Objective, def: &[f64], adv: &[f64], player: Role) -> Vec<f64> {
+fn central_differences(
+    objective: &mut Objective,
+    def: &[f64],
+    adv: &[f64],
+    player: Role,
+) -> Vec<f64> {
     let h = 1e-5;
-    let n = if player == Role::Defender { def.len() } else { adv.len() };
+    let n = if player == Role::Defender {
+        def.len()
+    } else {
+        adv.len()
+    };
     (0..n)
         .map(|k| {
             let shifted = |delta: f64| {
                 let (mut d, mut a) = (def.to_vec(), adv.to_vec());
-                if player == Role::Defender { d[k] += delta } else { a[k] += delta }
+                if player == Role::Defender {
+                    d[k] += delta
+                } else {
+                    a[k] += delta
+                }
                 (d, a)
             };
             let (dp, ap) = shifted(h);
@@ -47,7 +60,15 @@ fn assert_close(adjoint: &[f64], fd: &[f64], who: &str) -> Result<(), TestCaseEr
     let scale = adjoint.iter().chain(fd).fold(0.0f64, |m, g| m.max(g.abs()));
     for (k, (a, f)) in adjoint.iter().zip(fd).enumerate() {
         let error = (a - f).abs() / scale.max(1e-3);
-        prop_assert!(error < 1e-6, "{} logit {}: adjoint {} vs differences {} (relative error {})", who, k, a, f, error);
+        prop_assert!(
+            error < 1e-6,
+            "{} logit {}: adjoint {} vs differences {} (relative error {})",
+            who,
+            k,
+            a,
+            f,
+            error
+        );
     }
     Ok(())
 }
@@ -81,7 +102,9 @@ proptest! {
 fn single_player_json(seed: u64, states: usize, observations: usize) -> String {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let names: Vec<String> = (0..states).map(|i| format!("s{i}")).collect();
-    let actions: Vec<String> = (0..rng.random_range(2..=3)).map(|i| format!("u{i}")).collect();
+    let actions: Vec<String> = (0..rng.random_range(2..=3))
+        .map(|i| format!("u{i}"))
+        .collect();
     let mut transitions = Vec::new();
     for (i, s) in names.iter().enumerate() {
         if i >= states - 2 {
@@ -91,7 +114,11 @@ fn single_player_json(seed: u64, states: usize, observations: usize) -> String {
         for u in &actions {
             let mut next = Map::new();
             let targets: Vec<&String> = names.iter().filter(|_| rng.random_bool(0.4)).collect();
-            let targets = if targets.is_empty() { vec![&names[0]] } else { targets };
+            let targets = if targets.is_empty() {
+                vec![&names[0]]
+            } else {
+                targets
+            };
             let weights: Vec<f64> = targets.iter().map(|_| rng.random_range(0.1..1.0)).collect();
             let total: f64 = weights.iter().sum();
             for (t, w) in targets.into_iter().zip(weights) {
@@ -106,7 +133,12 @@ fn single_player_json(seed: u64, states: usize, observations: usize) -> String {
         let obs: Vec<String> = (0..observations).map(|i| format!("o{i}")).collect();
         let observe: Map<String, Value> = names
             .iter()
-            .map(|s| (s.clone(), json!({obs[rng.random_range(0..observations)].clone(): 1.0})))
+            .map(|s| {
+                (
+                    s.clone(),
+                    json!({obs[rng.random_range(0..observations)].clone(): 1.0}),
+                )
+            })
             .collect();
         json!({"actions": actions, "observations": obs, "observe": observe})
     };
@@ -127,11 +159,29 @@ fn best_deterministic(g: &Posg, dra: &Dra) -> f64 {
     let mut best = 0.0f64;
     for code in 0..na.pow(no as u32) {
         let blocks = (0..no)
-            .map(|o| vec![Choice { next: 0, action: code / na.pow(o as u32) % na, probability: 1.0, logit: None }])
+            .map(|o| {
+                vec![Choice {
+                    next: 0,
+                    action: code / na.pow(o as u32) % na,
+                    probability: 1.0,
+                    logit: None,
+                }]
+            })
             .collect();
         let fsc = Fsc::new(Role::Defender, 1, no, na, vec![1.0], blocks).unwrap();
-        let mut ev = Evaluator::new(g, dra, &Support::of(&fsc), &Support::of(&adversary), DEFAULT_TOLERANCE).unwrap();
-        best = best.max(ev.evaluate(&Support::probabilities_of(&fsc), &adv).unwrap().value);
+        let mut ev = Evaluator::new(
+            g,
+            dra,
+            &Support::of(&fsc),
+            &Support::of(&adversary),
+            DEFAULT_TOLERANCE,
+        )
+        .unwrap();
+        best = best.max(
+            ev.evaluate(&Support::probabilities_of(&fsc), &adv)
+                .unwrap()
+                .value,
+        );
     }
     best
 }
@@ -139,7 +189,14 @@ fn best_deterministic(g: &Posg, dra: &Dra) -> f64 {
 /// Settings for single-player runs: logit bound c = 10, so a deterministic
 /// choice is approximated within exp(-20) per entry, far below 1e-3.
 fn single_player_settings() -> Settings {
-    Settings { logit_bound: 10.0, max_iterations: 300, defender_step: 0.3, check_every: 25, restarts: 0, ..Settings::default() }
+    Settings {
+        logit_bound: 10.0,
+        max_iterations: 300,
+        defender_step: 0.3,
+        check_every: 25,
+        restarts: 0,
+        ..Settings::default()
+    }
 }
 
 #[test]
@@ -148,9 +205,15 @@ fn single_player_reach_avoid_matches_the_best_deterministic_controller() {
     for seed in 0..8 {
         let g = game(&single_player_json(seed, 6, 0));
         let optimum = best_deterministic(&g, &dra);
-        let found = solve(&g, &dra, 1, 1, &single_player_settings(), |_, _| Box::new(())).unwrap();
+        let found = solve(&g, &dra, 1, 1, &single_player_settings(), |_, _| {
+            Box::new(())
+        })
+        .unwrap();
         let value = found.best().report.worst_case;
-        assert!((value - optimum).abs() < 1e-3, "seed {seed}: optimised {value}, best deterministic {optimum}");
+        assert!(
+            (value - optimum).abs() < 1e-3,
+            "seed {seed}: optimised {value}, best deterministic {optimum}"
+        );
     }
 }
 
@@ -162,9 +225,15 @@ fn partially_observed_single_player_is_at_least_the_best_deterministic_controlle
     for seed in 0..8 {
         let g = game(&single_player_json(100 + seed, 6, 2));
         let optimum = best_deterministic(&g, &dra);
-        let found = solve(&g, &dra, 1, 1, &single_player_settings(), |_, _| Box::new(())).unwrap();
+        let found = solve(&g, &dra, 1, 1, &single_player_settings(), |_, _| {
+            Box::new(())
+        })
+        .unwrap();
         let value = found.best().report.worst_case;
-        assert!(value > optimum - 1e-3, "seed {seed}: optimised {value}, best deterministic {optimum}");
+        assert!(
+            value > optimum - 1e-3,
+            "seed {seed}: optimised {value}, best deterministic {optimum}"
+        );
     }
 }
 
@@ -188,13 +257,29 @@ fn matching_pennies_has_max_min_value_one_half_with_both_mixing() {
     let g = game(MATCHING_PENNIES);
     let dra = common::eventually_goal();
     for seed in 0..3 {
-        let settings = Settings { seed, ..Settings::default() };
+        let settings = Settings {
+            seed,
+            ..Settings::default()
+        };
         let found = solve(&g, &dra, 1, 1, &settings, |_, _| Box::new(())).unwrap();
         let best = found.best();
-        assert!((best.report.worst_case - 0.5).abs() < 1e-3, "seed {seed}: worst case {}", best.report.worst_case);
+        assert!(
+            (best.report.worst_case - 0.5).abs() < 1e-3,
+            "seed {seed}: worst case {}",
+            best.report.worst_case
+        );
         let s = g.state_index("s").unwrap();
-        let heads = best.defender.choices(0, s).iter().find(|c| c.action == 0).unwrap().probability;
-        assert!((heads - 0.5).abs() < 1e-3, "seed {seed}: defender plays H with {heads}");
+        let heads = best
+            .defender
+            .choices(0, s)
+            .iter()
+            .find(|c| c.action == 0)
+            .unwrap()
+            .probability;
+        assert!(
+            (heads - 0.5).abs() < 1e-3,
+            "seed {seed}: defender plays H with {heads}"
+        );
     }
 }
 
@@ -213,7 +298,12 @@ fn curve_without_seconds(path: &std::path::Path) -> Vec<String> {
 fn same_seed_and_settings_give_the_same_curve_except_wall_clock_seconds() {
     let g = game(&common::random::game_json(7));
     let dra = common::recurrent_goal_safe();
-    let settings = Settings { seed: 11, max_iterations: 40, check_every: 7, ..Settings::default() };
+    let settings = Settings {
+        seed: 11,
+        max_iterations: 40,
+        check_every: 7,
+        ..Settings::default()
+    };
     let structure = Structure::full(&g, 2, 1, false);
     let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR"));
     let curves: Vec<Vec<String>> = ["curve-a.csv", "curve-b.csv"]
@@ -225,7 +315,10 @@ fn same_seed_and_settings_give_the_same_curve_except_wall_clock_seconds() {
             curve_without_seconds(&path)
         })
         .collect();
-    assert_eq!(curves[0][0], "iteration,value,defender_gradient_norm,adversary_gradient_norm,defender_step,adversary_step,worst_case");
+    assert_eq!(
+        curves[0][0],
+        "iteration,value,defender_gradient_norm,adversary_gradient_norm,defender_step,adversary_step,worst_case"
+    );
     assert_eq!(curves[0].len(), 41);
     assert_eq!(curves[0], curves[1]);
 }

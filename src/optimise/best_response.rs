@@ -48,10 +48,15 @@ pub fn best_response(
     rng: &mut ChaCha8Rng,
 ) -> Result<BestResponse, OptimiseError> {
     let bound = settings.logit_bound;
-    let at_current = current.iter().map(|&phi| (phi / bound).clamp(-START_CLAMP, START_CLAMP).atanh()).collect();
+    let at_current = current
+        .iter()
+        .map(|&phi| (phi / bound).clamp(-START_CLAMP, START_CLAMP).atanh())
+        .collect();
     let mut best = minimise_from(objective, defender, at_current, settings)?;
     for _ in 0..settings.restarts {
-        let start = (0..current.len()).map(|_| rng.random_range(-START_RANGE..=START_RANGE)).collect();
+        let start = (0..current.len())
+            .map(|_| rng.random_range(-START_RANGE..=START_RANGE))
+            .collect();
         let found = minimise_from(objective, defender, start, settings)?;
         if found.value < best.value {
             best = found;
@@ -69,7 +74,10 @@ fn minimise_from(
     let bound = settings.logit_bound;
     let start_value = objective.value(defender, &squash(&start, bound))?;
     if start.is_empty() {
-        return Ok(BestResponse { value: start_value, adversary: Vec::new() });
+        return Ok(BestResponse {
+            value: start_value,
+            adversary: Vec::new(),
+        });
     }
     let problem = AdversaryProblem {
         objective: RefCell::new(objective),
@@ -78,7 +86,11 @@ fn minimise_from(
     };
     let solver = LBFGS::new(MoreThuenteLineSearch::new(), settings.lbfgs_memory);
     let result = Executor::new(problem, solver)
-        .configure(|state| state.param(start.clone()).max_iters(settings.best_response_iterations))
+        .configure(|state| {
+            state
+                .param(start.clone())
+                .max_iters(settings.best_response_iterations)
+        })
         .run()
         .map_err(|e| match e.downcast::<crate::value::ValueError>() {
             Ok(value_error) => OptimiseError::Value(value_error),
@@ -115,7 +127,11 @@ impl CostFunction for AdversaryProblem<'_> {
 
     fn cost(&self, z: &Vec<f64>) -> Result<f64, Error> {
         let phi = squash(z, self.bound);
-        Ok(self.objective.borrow_mut().point(self.defender, &phi)?.value)
+        Ok(self
+            .objective
+            .borrow_mut()
+            .point(self.defender, &phi)?
+            .value)
     }
 }
 

@@ -102,13 +102,19 @@ impl Structure {
     /// The full support structure: every `(g', u)` in every block, both
     /// players uniform; each starts in node 0, or (when the initial
     /// distribution is optimised) uniformly over its nodes.
-    pub fn full(game: &Posg, defender_nodes: usize, adversary_nodes: usize, optimise_initial: bool) -> Self {
+    pub fn full(
+        game: &Posg,
+        defender_nodes: usize,
+        adversary_nodes: usize,
+        optimise_initial: bool,
+    ) -> Self {
         let make = |role: Role, nodes: usize| {
             let player = match role {
                 Role::Defender => game.defender(),
                 Role::Adversary => game.adversary(),
             };
-            let mut fsc = Fsc::uniform(role, nodes, player.num_observations(), player.num_actions());
+            let mut fsc =
+                Fsc::uniform(role, nodes, player.num_observations(), player.num_actions());
             if optimise_initial {
                 fsc.initial = vec![1.0 / nodes as f64; nodes];
             }
@@ -198,12 +204,27 @@ where
         .enumerate()
         .map(|(index, structure)| {
             let mut watcher = observer(index, structure);
-            optimise_structure(game, dra, structure, settings, index as u64, watcher.as_mut())
+            optimise_structure(
+                game,
+                dra,
+                structure,
+                settings,
+                index as u64,
+                watcher.as_mut(),
+            )
         })
         .collect::<Result<Vec<_>, _>>()?;
     let best = (0..outcomes.len())
-        .reduce(|b, i| if outcomes[i].report.worst_case > outcomes[b].report.worst_case { i } else { b })
-        .ok_or(OptimiseError::BestResponse("no structure to optimise".into()))?;
+        .reduce(|b, i| {
+            if outcomes[i].report.worst_case > outcomes[b].report.worst_case {
+                i
+            } else {
+                b
+            }
+        })
+        .ok_or(OptimiseError::BestResponse(
+            "no structure to optimise".into(),
+        ))?;
     Ok(Solution {
         structures: outcomes,
         best,
@@ -265,8 +286,15 @@ where
     F: Fn(usize, &Structure) -> Box<dyn Observer + Send> + Sync,
 {
     if defender_nodes == 0 || adversary_nodes == 0 {
-        return Err(ModelError::new("controller sizes", "a controller needs at least one node").into());
+        return Err(
+            ModelError::new("controller sizes", "a controller needs at least one node").into(),
+        );
     }
-    let structures = [Structure::full(game, defender_nodes, adversary_nodes, settings.optimise_initial)];
+    let structures = [Structure::full(
+        game,
+        defender_nodes,
+        adversary_nodes,
+        settings.optimise_initial,
+    )];
     optimise_structures(game, dra, &structures, settings, observer)
 }

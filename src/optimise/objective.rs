@@ -117,8 +117,16 @@ impl Objective {
         let (evaluation, gradient) = self.evaluator.evaluate_with_gradient(&mu_def, &mu_adv)?;
         let point = Point {
             value: evaluation.value,
-            defender: self.defender.chain_rule(&mu_def, &gradient.defender, &gradient.defender_initial),
-            adversary: self.adversary.chain_rule(&mu_adv, &gradient.adversary, &gradient.adversary_initial),
+            defender: self.defender.chain_rule(
+                &mu_def,
+                &gradient.defender,
+                &gradient.defender_initial,
+            ),
+            adversary: self.adversary.chain_rule(
+                &mu_adv,
+                &gradient.adversary,
+                &gradient.adversary_initial,
+            ),
         };
         self.cache = Some((defender.to_vec(), adversary.to_vec(), point.clone()));
         Ok(point)

@@ -13,7 +13,11 @@
 //! gradient play cycles around the saddle of bilinear games such as matching
 //! pennies; what converges is the *best defender seen*, ranked by its
 //! best-response value, helped by the fast adversary time scale and the
-//! decaying defender steps. The result is that defender, not the last iterate.
+//! decaying defender steps. Each check ranks two candidates: the current
+//! defender and the suffix average of its probabilities (the average over
+//! iterations `2^k..=t`, `2^k <= t` the last power of two; the average of
+//! cycling play approaches the saddle point where the iterates circle it).
+//! The result is the best candidate seen, not the last iterate.
 
 use std::time::Instant;
 
@@ -77,8 +81,16 @@ impl Optimiser {
             clip(&mut perturbed, settings.logit_bound);
             perturbed
         };
-        let defender = start(objective.defender().logits_of_template(settings.logit_bound));
-        let adversary = start(objective.adversary().logits_of_template(settings.logit_bound));
+        let defender = start(
+            objective
+                .defender()
+                .logits_of_template(settings.logit_bound),
+        );
+        let adversary = start(
+            objective
+                .adversary()
+                .logits_of_template(settings.logit_bound),
+        );
         Self {
             objective,
             settings: settings.clone(),
@@ -102,13 +114,19 @@ impl Optimiser {
         let mut adversary_update = Update::new(s.update, self.adversary.len());
         let mut best: Option<Incumbent> = None;
         let mut history = Vec::new();
+        let mut average = SuffixAverage::new(self.defender.len());
         let mut t = 0;
         let (status, last_value) = loop {
             let mut adversary_norm = 0.0;
             for _ in 0..s.adversary_steps {
                 let point = self.objective.point(&self.defender, &self.adversary)?;
                 adversary_norm = norm(&point.adversary);
-                adversary_update.step(&mut self.adversary, &point.adversary, -s.adversary_step, s.logit_bound);
+                adversary_update.step(
+                    &mut self.adversary,
+                    &point.adversary,
+                    -s.adversary_step,
+                    s.logit_bound,
+                );
             }
             let point = self.objective.point(&self.defender, &self.adversary)?;
             let seconds = clock.elapsed().as_secs_f64();
@@ -119,21 +137,21 @@ impl Optimiser {
             } else {
                 None
             };
+            average.add(
+                t,
+                &self
+                    .objective
+                    .defender()
+                    .probabilities(&self.defender)
+                    .entries,
+            );
             let worst_case = if t % s.check_every == 0 || status.is_some() {
-                let found = best_response(&mut self.objective, &self.defender, &self.adversary, &s, &mut self.rng)?;
-                if best.as_ref().is_none_or(|b| found.value > b.worst_case) {
-                    best = Some(Incumbent {
-                        defender: self.defender.clone(),
-                        adversary: found.adversary,
-                        worst_case: found.value,
-                        iteration: t,
-                    });
-                }
-                history.push(best.as_ref().map_or(found.value, |b| b.worst_case));
+                let found = self.check(&mut best, t, &average)?;
+                history.push(best.as_ref().map_or(found, |b| b.worst_case));
                 if status.is_none() && stalled(&history, &s) {
                     status = Some(Status::Stalled);
                 }
-                Some(found.value)
+                Some(found)
             } else {
                 None
             };
@@ -151,10 +169,17 @@ impl Optimiser {
             if let Some(status) = status {
                 break (status, point.value);
             }
-            defender_update.step(&mut self.defender, &point.defender, defender_step, s.logit_bound);
+            defender_update.step(
+                &mut self.defender,
+                &point.defender,
+                defender_step,
+                s.logit_bound,
+            );
             t += 1;
         };
-        let best = best.ok_or(OptimiseError::BestResponse("no best-response check ran".into()))?;
+        let best = best.ok_or(OptimiseError::BestResponse(
+            "no best-response check ran".into(),
+        ))?;
         Ok(RunOutcome {
             best,
             last_value,
@@ -166,12 +191,82 @@ impl Optimiser {
     }
 }
 
+impl Optimiser {
+    /// The best-response check at iteration `t`: the worst-case estimates of
+    /// the current defender (returned) and of the suffix average; either
+    /// replaces the incumbent when it is better.
+    fn check(
+        &mut self,
+        best: &mut Option<Incumbent>,
+        t: usize,
+        average: &SuffixAverage,
+    ) -> Result<f64, OptimiseError> {
+        let s = &self.settings;
+        let mut averaged = self.objective.defender().probabilities(&self.defender);
+        averaged.entries.clone_from(&average.mean);
+        let averaged = self
+            .objective
+            .defender()
+            .logits_of(&averaged, s.logit_bound);
+        let mut current_value = f64::NAN;
+        for (i, candidate) in [self.defender.clone(), averaged].into_iter().enumerate() {
+            let found = best_response(
+                &mut self.objective,
+                &candidate,
+                &self.adversary,
+                s,
+                &mut self.rng,
+            )?;
+            if i == 0 {
+                current_value = found.value;
+            }
+            if best.as_ref().is_none_or(|b| found.value > b.worst_case) {
+                *best = Some(Incumbent {
+                    defender: candidate,
+                    adversary: found.adversary,
+                    worst_case: found.value,
+                    iteration: t,
+                });
+            }
+        }
+        Ok(current_value)
+    }
+}
+
+/// The mean of the defender's probabilities over iterations `2^k..=t`.
+struct SuffixAverage {
+    mean: Vec<f64>,
+    count: usize,
+}
+
+impl SuffixAverage {
+    fn new(n: usize) -> Self {
+        Self {
+            mean: vec![0.0; n],
+            count: 0,
+        }
+    }
+
+    /// Adds iteration `t`'s probabilities, first restarting at powers of two.
+    fn add(&mut self, t: usize, mu: &[f64]) {
+        if t.is_power_of_two() {
+            self.count = 0;
+        }
+        self.count += 1;
+        let weight = 1.0 / self.count as f64;
+        for (m, &x) in self.mean.iter_mut().zip(mu) {
+            *m += weight * (x - *m);
+        }
+    }
+}
+
 /// Whether the best worst-case estimate improved by less than
 /// `stall_tolerance` over the last `stall_checks` checks.
 fn stalled(history: &[f64], s: &Settings) -> bool {
     s.stall_checks > 0
         && history.len() > s.stall_checks
-        && history[history.len() - 1] - history[history.len() - 1 - s.stall_checks] < s.stall_tolerance
+        && history[history.len() - 1] - history[history.len() - 1 - s.stall_checks]
+            < s.stall_tolerance
 }
 
 fn norm(v: &[f64]) -> f64 {
@@ -216,7 +311,8 @@ impl Update {
                 for (k, (p, &g)) in phi.iter_mut().zip(gradient).enumerate() {
                     self.first[k] = ADAM_BETA1 * self.first[k] + (1.0 - ADAM_BETA1) * g;
                     self.second[k] = ADAM_BETA2 * self.second[k] + (1.0 - ADAM_BETA2) * g * g;
-                    *p += eta * (self.first[k] / c1) / ((self.second[k] / c2).sqrt() + ADAM_EPSILON);
+                    *p +=
+                        eta * (self.first[k] / c1) / ((self.second[k] / c2).sqrt() + ADAM_EPSILON);
                 }
             }
         }

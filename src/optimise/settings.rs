@@ -66,17 +66,17 @@ impl Default for Settings {
     fn default() -> Self {
         Self {
             seed: 0,
-            logit_bound: 10.0,
+            logit_bound: 4.0,
             initial_spread: 1.0,
             optimise_initial: false,
             max_iterations: 500,
             time_budget: 0.0,
-            adversary_steps: 5,
-            defender_step: 0.1,
-            adversary_step: 0.3,
+            adversary_steps: 10,
+            defender_step: 0.05,
+            adversary_step: 0.5,
             defender_decay: 0.05,
             update: UpdateRule::Adam,
-            check_every: 10,
+            check_every: 5,
             restarts: 4,
             best_response_iterations: 100,
             lbfgs_memory: 7,
@@ -98,7 +98,10 @@ impl Settings {
         ];
         for (name, value) in positive {
             if !(value.is_finite() && value > 0.0) {
-                return Err(invalid(name, format!("must be positive and finite, got {value}")));
+                return Err(invalid(
+                    name,
+                    format!("must be positive and finite, got {value}"),
+                ));
             }
         }
         let non_negative = [
@@ -109,11 +112,17 @@ impl Settings {
         ];
         for (name, value) in non_negative {
             if !(value.is_finite() && value >= 0.0) {
-                return Err(invalid(name, format!("must be non-negative and finite, got {value}")));
+                return Err(invalid(
+                    name,
+                    format!("must be non-negative and finite, got {value}"),
+                ));
             }
         }
         if self.initial_spread > self.logit_bound {
-            return Err(invalid("initial_spread", "must not exceed logit_bound".into()));
+            return Err(invalid(
+                "initial_spread",
+                "must not exceed logit_bound".into(),
+            ));
         }
         let at_least_one = [
             ("max_iterations", self.max_iterations),

@@ -32,7 +32,9 @@ impl Softmax {
     /// stays `template`'s.
     pub fn new(template: &Fsc, optimise_initial: bool) -> Self {
         let support = Support::of(template);
-        let blocks = (0..support.num_blocks()).map(|b| support.block_by_index(b)).collect();
+        let blocks = (0..support.num_blocks())
+            .map(|b| support.block_by_index(b))
+            .collect();
         let initial_nodes = optimise_initial.then(|| support.initial_nodes().collect());
         Self {
             template: template.clone(),
@@ -79,7 +81,11 @@ impl Softmax {
     pub fn chain_rule(&self, mu: &Probabilities, d_entries: &[f64], d_initial: &[f64]) -> Vec<f64> {
         let mut gradient = vec![0.0; self.num_parameters()];
         for block in &self.blocks {
-            chain_rule_into(&mu.entries[block.clone()], &d_entries[block.clone()], &mut gradient[block.clone()]);
+            chain_rule_into(
+                &mu.entries[block.clone()],
+                &d_entries[block.clone()],
+                &mut gradient[block.clone()],
+            );
         }
         if let Some(nodes) = &self.initial_nodes {
             let weights: Vec<f64> = nodes.iter().map(|&g| mu.initial[g]).collect();
@@ -90,20 +96,33 @@ impl Softmax {
     }
 
     /// The logits of the template's own probabilities: its recorded logits
-    /// where every entry of a block has one, else `ln mu` centred per block;
-    /// clipped to `[-c, c]`.
+    /// where every entry of a block has one, else those of [`Softmax::logits_of`].
     pub fn logits_of_template(&self, bound: f64) -> Vec<f64> {
-        let mut logits: Vec<f64> = Vec::with_capacity(self.num_parameters());
-        for (b, _) in self.blocks.iter().enumerate() {
-            let (g, o) = (b / self.template.num_observations(), b % self.template.num_observations());
-            let choices = self.template.choices(g, o);
-            match choices.iter().map(|c| c.logit).collect::<Option<Vec<f64>>>() {
-                Some(recorded) => logits.extend(recorded),
-                None => logits.extend(centred_logs(choices.iter().map(|c| c.probability))),
+        let t = &self.template;
+        let mut logits = self.logits_of(&Support::probabilities_of(t), bound);
+        for (b, block) in self.blocks.iter().enumerate() {
+            let choices = t.choices(b / t.num_observations(), b % t.num_observations());
+            if let Some(recorded) = choices
+                .iter()
+                .map(|c| c.logit)
+                .collect::<Option<Vec<f64>>>()
+            {
+                logits[block.clone()].copy_from_slice(&recorded);
             }
         }
+        clip(&mut logits, bound);
+        logits
+    }
+
+    /// Logits whose softmax is `mu` where the bound allows: `ln mu` centred
+    /// per block (and for the initial distribution), clipped to `[-c, c]`.
+    pub fn logits_of(&self, mu: &Probabilities, bound: f64) -> Vec<f64> {
+        let mut logits: Vec<f64> = Vec::with_capacity(self.num_parameters());
+        for block in &self.blocks {
+            logits.extend(centred_logs(mu.entries[block.clone()].iter().copied()));
+        }
         if let Some(nodes) = &self.initial_nodes {
-            logits.extend(centred_logs(nodes.iter().map(|&g| self.template.initial()[g])));
+            logits.extend(centred_logs(nodes.iter().map(|&g| mu.initial[g])));
         }
         clip(&mut logits, bound);
         logits
@@ -121,11 +140,22 @@ impl Softmax {
                 let old = t.choices(b / t.num_observations(), b % t.num_observations());
                 old.iter()
                     .zip(range.clone())
-                    .map(|(c, k)| Choice { probability: mu.entries[k], logit: Some(logits[k]), ..*c })
+                    .map(|(c, k)| Choice {
+                        probability: mu.entries[k],
+                        logit: Some(logits[k]),
+                        ..*c
+                    })
                     .collect()
             })
             .collect();
-        Fsc::new(t.role(), t.num_nodes(), t.num_observations(), t.num_actions(), mu.initial, blocks)
+        Fsc::new(
+            t.role(),
+            t.num_nodes(),
+            t.num_observations(),
+            t.num_actions(),
+            mu.initial,
+            blocks,
+        )
     }
 }
 

@@ -64,21 +64,28 @@ impl Progress {
     /// A bar of `iterations` steps labelled `label`, drawn on stderr.
     pub fn new(label: &str, iterations: usize) -> Self {
         let bar = ProgressBar::new(iterations as u64);
-        let style = ProgressStyle::with_template("{prefix} [{bar:30}] {pos}/{len} {msg} ({elapsed})")
-            .unwrap_or_else(|_| ProgressStyle::default_bar())
-            .progress_chars("=> ");
+        let style =
+            ProgressStyle::with_template("{prefix} [{bar:30}] {pos}/{len} {msg} ({elapsed})")
+                .unwrap_or_else(|_| ProgressStyle::default_bar())
+                .progress_chars("=> ");
         bar.set_style(style);
         bar.set_prefix(label.to_string());
-        Self { bar, worst_case: None }
+        Self {
+            bar,
+            worst_case: None,
+        }
     }
 }
 
 impl Observer for Progress {
     fn observe(&mut self, record: &IterationRecord) {
         self.worst_case = record.worst_case.or(self.worst_case);
-        let worst = self.worst_case.map_or("-".to_string(), |w| format!("{w:.6}"));
+        let worst = self
+            .worst_case
+            .map_or("-".to_string(), |w| format!("{w:.6}"));
         self.bar.set_position(record.iteration as u64 + 1);
-        self.bar.set_message(format!("value {:.6}, worst case {worst}", record.value));
+        self.bar
+            .set_message(format!("value {:.6}, worst case {worst}", record.value));
     }
 
     fn finish(&mut self) -> Result<(), ObserverError> {

@@ -44,14 +44,24 @@ impl Observer for CurvePlot {
     }
 
     fn finish(&mut self) -> Result<(), ObserverError> {
-        let values: Vec<(f64, f64)> = self.records.iter().map(|r| (r.iteration as f64, r.value)).collect();
+        let values: Vec<(f64, f64)> = self
+            .records
+            .iter()
+            .map(|r| (r.iteration as f64, r.value))
+            .collect();
         let worst: Vec<(f64, f64)> = self
             .records
             .iter()
             .filter_map(|r| r.worst_case.map(|w| (r.iteration as f64, w)))
             .collect();
         let series = [("value", values), ("worst-case estimate", worst)];
-        draw_lines(&self.path, &self.title, "iteration", "probability of phi", &series)
+        draw_lines(
+            &self.path,
+            &self.title,
+            "iteration",
+            "probability of phi",
+            &series,
+        )
     }
 }
 
@@ -84,7 +94,13 @@ pub fn plot_sweep(path: &Path, title: &str, points: &[SweepPoint]) -> Result<(),
             (format!("adversary nodes = {m}"), line)
         })
         .collect();
-    draw_lines(path, title, "defender nodes", "worst-case estimate", &series)
+    draw_lines(
+        path,
+        title,
+        "defender nodes",
+        "worst-case estimate",
+        &series,
+    )
 }
 
 fn draw_lines<S: AsRef<str>>(
@@ -95,10 +111,15 @@ fn draw_lines<S: AsRef<str>>(
     series: &[(S, Vec<(f64, f64)>)],
 ) -> Result<(), ObserverError> {
     let all = series.iter().flat_map(|(_, line)| line.iter());
-    let (x_max, y_min, y_max) = all.fold((1.0f64, f64::INFINITY, f64::NEG_INFINITY), |(x, lo, hi), &(px, py)| {
-        (x.max(px), lo.min(py), hi.max(py))
-    });
-    let (y_min, y_max) = if y_min.is_finite() { (y_min, y_max) } else { (0.0, 1.0) };
+    let (x_max, y_min, y_max) = all.fold(
+        (1.0f64, f64::INFINITY, f64::NEG_INFINITY),
+        |(x, lo, hi), &(px, py)| (x.max(px), lo.min(py), hi.max(py)),
+    );
+    let (y_min, y_max) = if y_min.is_finite() {
+        (y_min, y_max)
+    } else {
+        (0.0, 1.0)
+    };
     let margin = ((y_max - y_min) * 0.05).max(1e-3);
     let root = SVGBackend::new(path, SIZE).into_drawing_area();
     root.fill(&WHITE)?;
@@ -108,13 +129,19 @@ fn draw_lines<S: AsRef<str>>(
         .x_label_area_size(40)
         .y_label_area_size(60)
         .build_cartesian_2d(0.0..x_max, (y_min - margin)..(y_max + margin))?;
-    chart.configure_mesh().x_desc(x_label).y_desc(y_label).draw()?;
+    chart
+        .configure_mesh()
+        .x_desc(x_label)
+        .y_desc(y_label)
+        .draw()?;
     for (i, (name, line)) in series.iter().enumerate() {
         let color = PALETTE[i % PALETTE.len()];
         chart
             .draw_series(LineSeries::new(line.iter().copied(), color.stroke_width(2)))?
             .label(name.as_ref())
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));
+            .legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
+            });
         if line.len() <= MAX_MARKED_POINTS {
             chart.draw_series(line.iter().map(|&p| Circle::new(p, 3, color.filled())))?;
         }

@@ -1,0 +1,295 @@
+//! `posg-fsc solve`: the max-min optimiser on one game, formula and pair of
+//! controller sizes, with its output files.
+//!
+//! [`SettingsArgs`] is what the user typed for [`Settings`] (shared with
+//! `sweep`); [`SolveJob`] is the built objects; [`run_job`] optimises and
+//! writes `curve.csv`, `curve.svg`, `defender.fsc.json`, `adversary.fsc.json`
+//! and `summary.json` into the output directory.
+
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::Context;
+use clap::Args;
+use serde::Serialize;
+
+use posg_fsc::automaton::Dra;
+use posg_fsc::controller::{self, Role};
+use posg_fsc::game::{self, Posg};
+use posg_fsc::ltl;
+use posg_fsc::optimise::{self, Observer, Settings, Solution, Structure, StructureReport, UpdateRule};
+use posg_fsc::output::{CurveCsv, CurvePlot, Progress};
+
+/// Arguments of `solve`.
+#[derive(Debug, Args)]
+pub struct SolveArgs {
+    /// The game, a `*.posg.json` file (formats.md section 1).
+    game: PathBuf,
+    /// The LTL objective phi, e.g. `F goal & G !unsafe`.
+    #[arg(long)]
+    ltl: String,
+    /// Defender FSC size (nodes).
+    #[arg(long, default_value_t = 1)]
+    def_nodes: usize,
+    /// Adversary FSC size (nodes).
+    #[arg(long, default_value_t = 1)]
+    adv_nodes: usize,
+    /// Directory for the output files (created if missing).
+    #[arg(long)]
+    out: PathBuf,
+    /// Start the defender from this `*.fsc.json` (its support and logits)
+    /// instead of the full uniform structure; use with `--initial-spread 0` to resume.
+    #[arg(long)]
+    defender: Option<PathBuf>,
+    /// Start the adversary from this `*.fsc.json` (see `--defender`).
+    #[arg(long)]
+    adversary: Option<PathBuf>,
+    #[command(flatten)]
+    settings: SettingsArgs,
+}
+
+/// The optimiser's settings as command-line options (defaults: [`Settings::default`]).
+#[derive(Debug, Clone, Args)]
+pub struct SettingsArgs {
+    /// Seed of every random choice (initial logits, best-response restarts).
+    #[arg(long, default_value_t = Settings::default().seed)]
+    seed: u64,
+    /// Logit bound c: logits stay in [-c, c], so every supported choice keeps
+    /// probability >= exp(-2c)/|block| and the GMC graph never changes.
+    #[arg(long, default_value_t = Settings::default().logit_bound)]
+    logit_bound: f64,
+    /// Initial logits are uniform in [-spread, spread] around the start (0: exactly the start).
+    #[arg(long, default_value_t = Settings::default().initial_spread)]
+    initial_spread: f64,
+    /// Also optimise the initial node distributions.
+    #[arg(long)]
+    optimise_initial: bool,
+    /// Outer iterations (one defender step each) at most.
+    #[arg(long, default_value_t = Settings::default().max_iterations)]
+    max_iterations: usize,
+    /// Wall-clock budget per structure in seconds (0: none).
+    #[arg(long, default_value_t = Settings::default().time_budget)]
+    time_budget: f64,
+    /// Adversary descent steps per defender ascent step (the fast time scale).
+    #[arg(long, default_value_t = Settings::default().adversary_steps)]
+    adversary_steps: usize,
+    /// Defender step size at iteration 0.
+    #[arg(long, default_value_t = Settings::default().defender_step)]
+    defender_step: f64,
+    /// Adversary step size (constant).
+    #[arg(long, default_value_t = Settings::default().adversary_step)]
+    adversary_step: f64,
+    /// Defender step decay d: step(t) = defender_step / sqrt(1 + d t).
+    #[arg(long, default_value_t = Settings::default().defender_decay)]
+    defender_decay: f64,
+    /// Update rule of both players: plain gradient steps or Adam.
+    #[arg(long, value_enum, default_value = "adam")]
+    update: UpdateArg,
+    /// A best-response check every this many iterations (and at the end).
+    #[arg(long, default_value_t = Settings::default().check_every)]
+    check_every: usize,
+    /// Random restarts of each best-response minimisation (besides the current adversary).
+    #[arg(long, default_value_t = Settings::default().restarts)]
+    restarts: usize,
+    /// L-BFGS iterations per best-response start.
+    #[arg(long, default_value_t = Settings::default().best_response_iterations)]
+    best_response_iterations: u64,
+    /// L-BFGS memory.
+    #[arg(long, default_value_t = Settings::default().lbfgs_memory)]
+    lbfgs_memory: usize,
+    /// Stop when the best worst-case estimate gained less than --stall-tolerance
+    /// over this many checks (0: never).
+    #[arg(long, default_value_t = Settings::default().stall_checks)]
+    stall_checks: usize,
+    /// See --stall-checks.
+    #[arg(long, default_value_t = Settings::default().stall_tolerance)]
+    stall_tolerance: f64,
+    /// Largest residual accepted from a linear solve.
+    #[arg(long, default_value_t = Settings::default().solver_tolerance)]
+    solver_tolerance: f64,
+}
+
+/// `--update`.
+#[derive(Debug, Clone, Copy, clap::ValueEnum)]
+pub enum UpdateArg {
+    /// phi <- phi +/- eta grad.
+    Plain,
+    /// Adam with beta1 = 0.9, beta2 = 0.999, epsilon = 1e-8.
+    Adam,
+}
+
+impl SettingsArgs {
+    /// The settings, validated.
+    pub fn settings(&self) -> anyhow::Result<Settings> {
+        let settings = Settings {
+            seed: self.seed,
+            logit_bound: self.logit_bound,
+            initial_spread: self.initial_spread,
+            optimise_initial: self.optimise_initial,
+            max_iterations: self.max_iterations,
+            time_budget: self.time_budget,
+            adversary_steps: self.adversary_steps,
+            defender_step: self.defender_step,
+            adversary_step: self.adversary_step,
+            defender_decay: self.defender_decay,
+            update: match self.update {
+                UpdateArg::Plain => UpdateRule::Plain,
+                UpdateArg::Adam => UpdateRule::Adam,
+            },
+            check_every: self.check_every,
+            restarts: self.restarts,
+            best_response_iterations: self.best_response_iterations,
+            lbfgs_memory: self.lbfgs_memory,
+            stall_checks: self.stall_checks,
+            stall_tolerance: self.stall_tolerance,
+            solver_tolerance: self.solver_tolerance,
+        };
+        settings.validate()?;
+        Ok(settings)
+    }
+}
+
+/// Everything one solve needs, built from the arguments.
+pub struct SolveJob<'a> {
+    /// The game.
+    pub game: &'a Posg,
+    /// The DRA of the objective.
+    pub dra: &'a Dra,
+    /// The objective as the user wrote it.
+    pub ltl: &'a str,
+    /// The structures to optimise on.
+    pub structures: Vec<Structure>,
+    /// The optimiser's settings.
+    pub settings: &'a Settings,
+    /// The output directory.
+    pub out: &'a Path,
+    /// Whether to draw progress bars (stderr is a terminal and nothing else draws).
+    pub progress: bool,
+}
+
+/// `summary.json`.
+#[derive(Debug, Serialize)]
+struct Summary<'a> {
+    command_line: Vec<String>,
+    crate_version: &'static str,
+    game: Option<&'a str>,
+    ltl: &'a str,
+    defender_nodes: usize,
+    adversary_nodes: usize,
+    settings: &'a Settings,
+    structure_used: &'a str,
+    worst_case: f64,
+    last_value: f64,
+    seconds: f64,
+    structures: Vec<&'a StructureReport>,
+    files: [&'static str; 5],
+}
+
+/// Reads the game and translates the formula.
+pub fn load(game: &Path, formula: &str) -> anyhow::Result<(Posg, Dra)> {
+    let game = game::file::read(game)?;
+    let formula = ltl::parse(formula).with_context(|| format!("cannot parse the formula `{formula}`"))?;
+    let dra = ltl::translate(&formula).context("cannot translate the formula to a Rabin automaton")?;
+    Ok((game, dra))
+}
+
+/// Optimises on the job's structures and writes the five output files
+/// (the best structure's curve as `curve.csv`/`curve.svg`, the others' as
+/// `curve-<name>.csv`/`.svg`). Returns the solution.
+pub fn run_job(job: &SolveJob) -> anyhow::Result<Solution> {
+    std::fs::create_dir_all(job.out).with_context(|| format!("cannot create {}", job.out.display()))?;
+    let clock = Instant::now();
+    let title = format!("{}: {}", job.game.name().unwrap_or("game"), job.ltl);
+    let iterations = job.settings.max_iterations;
+    let multiple = job.structures.len() > 1;
+    let out = job.out.to_path_buf();
+    let progress = job.progress;
+    let solution = optimise::optimise_structures(job.game, job.dra, &job.structures, job.settings, |_, structure| {
+        let stem = if multiple { format!("curve-{}", structure.name) } else { "curve".to_string() };
+        observers(&out, &stem, &title, progress.then(|| (structure.name.as_str(), iterations)))
+    })?;
+    if multiple {
+        let best = &solution.best().report.name;
+        for ext in ["csv", "svg"] {
+            std::fs::copy(out.join(format!("curve-{best}.{ext}")), out.join(format!("curve.{ext}")))?;
+        }
+    }
+    let best = solution.best();
+    controller::file::write(&out.join("defender.fsc.json"), &best.defender, job.game)?;
+    controller::file::write(&out.join("adversary.fsc.json"), &best.adversary, job.game)?;
+    let summary = Summary {
+        command_line: std::env::args().collect(),
+        crate_version: env!("CARGO_PKG_VERSION"),
+        game: job.game.name(),
+        ltl: job.ltl,
+        defender_nodes: best.defender.num_nodes(),
+        adversary_nodes: best.adversary.num_nodes(),
+        settings: job.settings,
+        structure_used: &best.report.name,
+        worst_case: best.report.worst_case,
+        last_value: best.report.last_value,
+        seconds: clock.elapsed().as_secs_f64(),
+        structures: solution.structures.iter().map(|s| &s.report).collect(),
+        files: ["curve.csv", "curve.svg", "defender.fsc.json", "adversary.fsc.json", "summary.json"],
+    };
+    std::fs::write(out.join("summary.json"), serde_json::to_string_pretty(&summary)? + "\n")?;
+    Ok(solution)
+}
+
+/// The CSV writer and the plot for `stem`, and a progress bar when asked.
+fn observers(out: &Path, stem: &str, title: &str, progress: Option<(&str, usize)>) -> Box<dyn Observer + Send> {
+    let mut list: Vec<Box<dyn Observer + Send>> = Vec::new();
+    match CurveCsv::create(&out.join(format!("{stem}.csv"))) {
+        Ok(csv) => list.push(Box::new(csv)),
+        Err(error) => list.push(Box::new(Failed(Some(error.into())))),
+    }
+    list.push(Box::new(CurvePlot::new(&out.join(format!("{stem}.svg")), title)));
+    if let Some((label, iterations)) = progress {
+        list.push(Box::new(Progress::new(label, iterations)));
+    }
+    Box::new(list)
+}
+
+/// An observer that could not be created: reports its error at the end.
+struct Failed(Option<optimise::ObserverError>);
+
+impl Observer for Failed {
+    fn observe(&mut self, _record: &optimise::IterationRecord) {}
+
+    fn finish(&mut self) -> Result<(), optimise::ObserverError> {
+        self.0.take().map_or(Ok(()), Err)
+    }
+}
+
+/// Runs `solve`.
+pub fn run(args: SolveArgs) -> anyhow::Result<()> {
+    let settings = args.settings.settings()?;
+    let (game, dra) = load(&args.game, &args.ltl)?;
+    let mut structure = Structure::full(&game, args.def_nodes, args.adv_nodes, settings.optimise_initial);
+    if let Some(path) = &args.defender {
+        structure.defender = controller::file::read(path, &game, Role::Defender)?;
+        structure.name = "from-files".into();
+    }
+    if let Some(path) = &args.adversary {
+        structure.adversary = controller::file::read(path, &game, Role::Adversary)?;
+        structure.name = "from-files".into();
+    }
+    let job = SolveJob {
+        game: &game,
+        dra: &dra,
+        ltl: &args.ltl,
+        structures: vec![structure],
+        settings: &settings,
+        out: &args.out,
+        progress: std::io::stderr().is_terminal(),
+    };
+    let solution = run_job(&job)?;
+    let best = solution.best();
+    println!(
+        "worst-case estimate {:.6} (last iterate value {:.6}) after {} iterations, {:.1} s; GMC {} states",
+        best.report.worst_case, best.report.last_value, best.report.iterations, best.report.seconds, best.report.gmc.states
+    );
+    println!("wrote curve.csv, curve.svg, defender.fsc.json, adversary.fsc.json, summary.json to {}", args.out.display());
+    Ok(())
+}
