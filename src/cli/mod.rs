@@ -3,6 +3,8 @@
 //! objects from those arguments and prints or writes the results.
 
 mod demo;
+pub(crate) mod solve;
+mod sweep;
 
 use clap::{Parser, Subcommand};
 
@@ -19,11 +21,21 @@ pub struct Cli {
 enum Command {
     /// Run the main job on the seed paper's 3x2 grid and explain the output.
     Demo(demo::DemoArgs),
+    /// Optimise a defender FSC against a worst-case adversary FSC (max-min by
+    /// alternating projected gradient ascent-descent with best-response
+    /// checks) and write curve.csv, curve.svg, defender.fsc.json,
+    /// adversary.fsc.json and summary.json.
+    Solve(solve::SolveArgs),
+    /// Run `solve` for every pair of controller sizes in parallel and write
+    /// sweep.csv and sweep.svg.
+    Sweep(sweep::SweepArgs),
 }
 
 /// Runs the subcommand the user chose.
 pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Demo(args) => demo::run(args),
+        Command::Solve(args) => solve::run(args),
+        Command::Sweep(args) => sweep::run(args),
     }
 }

@@ -18,7 +18,9 @@ use posg_fsc::automaton::Dra;
 use posg_fsc::controller::{self, Role};
 use posg_fsc::game::{self, Posg};
 use posg_fsc::ltl;
-use posg_fsc::optimise::{self, Observer, Settings, Solution, Structure, StructureReport, UpdateRule};
+use posg_fsc::optimise::{
+    self, Observer, Settings, Solution, Structure, StructureReport, UpdateRule,
+};
 use posg_fsc::output::{CurveCsv, CurvePlot, Progress};
 
 /// Arguments of `solve`.
@@ -189,8 +191,10 @@ struct Summary<'a> {
 /// Reads the game and translates the formula.
 pub fn load(game: &Path, formula: &str) -> anyhow::Result<(Posg, Dra)> {
     let game = game::file::read(game)?;
-    let formula = ltl::parse(formula).with_context(|| format!("cannot parse the formula `{formula}`"))?;
-    let dra = ltl::translate(&formula).context("cannot translate the formula to a Rabin automaton")?;
+    let formula =
+        ltl::parse(formula).with_context(|| format!("cannot parse the formula `{formula}`"))?;
+    let dra =
+        ltl::translate(&formula).context("cannot translate the formula to a Rabin automaton")?;
     Ok((game, dra))
 }
 
@@ -198,21 +202,40 @@ pub fn load(game: &Path, formula: &str) -> anyhow::Result<(Posg, Dra)> {
 /// (the best structure's curve as `curve.csv`/`curve.svg`, the others' as
 /// `curve-<name>.csv`/`.svg`). Returns the solution.
 pub fn run_job(job: &SolveJob) -> anyhow::Result<Solution> {
-    std::fs::create_dir_all(job.out).with_context(|| format!("cannot create {}", job.out.display()))?;
+    std::fs::create_dir_all(job.out)
+        .with_context(|| format!("cannot create {}", job.out.display()))?;
     let clock = Instant::now();
     let title = format!("{}: {}", job.game.name().unwrap_or("game"), job.ltl);
     let iterations = job.settings.max_iterations;
     let multiple = job.structures.len() > 1;
     let out = job.out.to_path_buf();
     let progress = job.progress;
-    let solution = optimise::optimise_structures(job.game, job.dra, &job.structures, job.settings, |_, structure| {
-        let stem = if multiple { format!("curve-{}", structure.name) } else { "curve".to_string() };
-        observers(&out, &stem, &title, progress.then(|| (structure.name.as_str(), iterations)))
-    })?;
+    let solution = optimise::optimise_structures(
+        job.game,
+        job.dra,
+        &job.structures,
+        job.settings,
+        |_, structure| {
+            let stem = if multiple {
+                format!("curve-{}", structure.name)
+            } else {
+                "curve".to_string()
+            };
+            observers(
+                &out,
+                &stem,
+                &title,
+                progress.then(|| (structure.name.as_str(), iterations)),
+            )
+        },
+    )?;
     if multiple {
         let best = &solution.best().report.name;
         for ext in ["csv", "svg"] {
-            std::fs::copy(out.join(format!("curve-{best}.{ext}")), out.join(format!("curve.{ext}")))?;
+            std::fs::copy(
+                out.join(format!("curve-{best}.{ext}")),
+                out.join(format!("curve.{ext}")),
+            )?;
         }
     }
     let best = solution.best();
@@ -231,20 +254,37 @@ pub fn run_job(job: &SolveJob) -> anyhow::Result<Solution> {
         last_value: best.report.last_value,
         seconds: clock.elapsed().as_secs_f64(),
         structures: solution.structures.iter().map(|s| &s.report).collect(),
-        files: ["curve.csv", "curve.svg", "defender.fsc.json", "adversary.fsc.json", "summary.json"],
+        files: [
+            "curve.csv",
+            "curve.svg",
+            "defender.fsc.json",
+            "adversary.fsc.json",
+            "summary.json",
+        ],
     };
-    std::fs::write(out.join("summary.json"), serde_json::to_string_pretty(&summary)? + "\n")?;
+    std::fs::write(
+        out.join("summary.json"),
+        serde_json::to_string_pretty(&summary)? + "\n",
+    )?;
     Ok(solution)
 }
 
 /// The CSV writer and the plot for `stem`, and a progress bar when asked.
-fn observers(out: &Path, stem: &str, title: &str, progress: Option<(&str, usize)>) -> Box<dyn Observer + Send> {
+fn observers(
+    out: &Path,
+    stem: &str,
+    title: &str,
+    progress: Option<(&str, usize)>,
+) -> Box<dyn Observer + Send> {
     let mut list: Vec<Box<dyn Observer + Send>> = Vec::new();
     match CurveCsv::create(&out.join(format!("{stem}.csv"))) {
         Ok(csv) => list.push(Box::new(csv)),
         Err(error) => list.push(Box::new(Failed(Some(error.into())))),
     }
-    list.push(Box::new(CurvePlot::new(&out.join(format!("{stem}.svg")), title)));
+    list.push(Box::new(CurvePlot::new(
+        &out.join(format!("{stem}.svg")),
+        title,
+    )));
     if let Some((label, iterations)) = progress {
         list.push(Box::new(Progress::new(label, iterations)));
     }
@@ -266,7 +306,12 @@ impl Observer for Failed {
 pub fn run(args: SolveArgs) -> anyhow::Result<()> {
     let settings = args.settings.settings()?;
     let (game, dra) = load(&args.game, &args.ltl)?;
-    let mut structure = Structure::full(&game, args.def_nodes, args.adv_nodes, settings.optimise_initial);
+    let mut structure = Structure::full(
+        &game,
+        args.def_nodes,
+        args.adv_nodes,
+        settings.optimise_initial,
+    );
     if let Some(path) = &args.defender {
         structure.defender = controller::file::read(path, &game, Role::Defender)?;
         structure.name = "from-files".into();
@@ -288,8 +333,15 @@ pub fn run(args: SolveArgs) -> anyhow::Result<()> {
     let best = solution.best();
     println!(
         "worst-case estimate {:.6} (last iterate value {:.6}) after {} iterations, {:.1} s; GMC {} states",
-        best.report.worst_case, best.report.last_value, best.report.iterations, best.report.seconds, best.report.gmc.states
+        best.report.worst_case,
+        best.report.last_value,
+        best.report.iterations,
+        best.report.seconds,
+        best.report.gmc.states
     );
-    println!("wrote curve.csv, curve.svg, defender.fsc.json, adversary.fsc.json, summary.json to {}", args.out.display());
+    println!(
+        "wrote curve.csv, curve.svg, defender.fsc.json, adversary.fsc.json, summary.json to {}",
+        args.out.display()
+    );
     Ok(())
 }

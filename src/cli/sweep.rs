@@ -46,7 +46,10 @@ fn parse_sizes(text: &str) -> Result<Sizes, String> {
     };
     let sizes = match text.split_once("..") {
         Some((a, b)) => (positive(a)?..=positive(b)?).collect(),
-        None => text.split(',').map(positive).collect::<Result<Vec<_>, _>>()?,
+        None => text
+            .split(',')
+            .map(positive)
+            .collect::<Result<Vec<_>, _>>()?,
     };
     if sizes.is_empty() {
         return Err(format!("`{text}` is an empty range"));
@@ -73,9 +76,14 @@ struct Row {
 pub fn run(args: SweepArgs) -> anyhow::Result<()> {
     let settings = args.settings.settings()?;
     let (game, dra) = load(&args.game, &args.ltl)?;
-    std::fs::create_dir_all(&args.out).with_context(|| format!("cannot create {}", args.out.display()))?;
-    let pairs: Vec<(usize, usize)> =
-        args.def_nodes.0.iter().flat_map(|&n| args.adv_nodes.0.iter().map(move |&m| (n, m))).collect();
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("cannot create {}", args.out.display()))?;
+    let pairs: Vec<(usize, usize)> = args
+        .def_nodes
+        .0
+        .iter()
+        .flat_map(|&n| args.adv_nodes.0.iter().map(move |&m| (n, m)))
+        .collect();
     let rows = pairs
         .par_iter()
         .map(|&(n, m)| {
@@ -89,9 +97,13 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
                 out: &out,
                 progress: false,
             };
-            let solution = run_job(&job).with_context(|| format!("defender {n} nodes, adversary {m} nodes"))?;
+            let solution = run_job(&job)
+                .with_context(|| format!("defender {n} nodes, adversary {m} nodes"))?;
             let report = &solution.best().report;
-            eprintln!("defender {n}, adversary {m}: worst-case estimate {:.6}", report.worst_case);
+            eprintln!(
+                "defender {n}, adversary {m}: worst-case estimate {:.6}",
+                report.worst_case
+            );
             Ok(Row {
                 defender_nodes: n,
                 adversary_nodes: m,
@@ -121,6 +133,10 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
         .collect();
     let title = format!("{}: {}", game.name().unwrap_or("game"), args.ltl);
     plot_sweep(&args.out.join("sweep.svg"), &title, &points).map_err(|e| anyhow::anyhow!(e))?;
-    println!("wrote sweep.csv and sweep.svg ({} size pairs) to {}", rows.len(), args.out.display());
+    println!(
+        "wrote sweep.csv and sweep.svg ({} size pairs) to {}",
+        rows.len(),
+        args.out.display()
+    );
     Ok(())
 }

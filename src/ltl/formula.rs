@@ -289,11 +289,7 @@ fn merge_temporal(parts: Vec<Formula>, conjunction: bool) -> Vec<Formula> {
         });
     } else if !modal_parts.is_empty() {
         let g = combine(modal_parts);
-        rest.push(if conjunction {
-            globally(g)
-        } else {
-            finally(g)
-        });
+        rest.push(if conjunction { globally(g) } else { finally(g) });
     }
     rest
 }

@@ -90,7 +90,10 @@ pub(crate) fn to_dra(tgr: &Tgr, propositions: Vec<String>) -> Result<Dra, Transl
         .map(|(i, d)| {
             let counter = counted.iter().position(|&j| j == i);
             RabinPair {
-                fin: states.iter().map(|(_, label, _)| label & d.fin != 0).collect(),
+                fin: states
+                    .iter()
+                    .map(|(_, label, _)| label & d.fin != 0)
+                    .collect(),
                 inf: states
                     .iter()
                     .map(|(_, label, counters)| match (d.inf.last(), counter) {
@@ -118,12 +121,8 @@ fn minimise(
     pairs: &[RabinPair],
     propositions: Vec<String>,
 ) -> Result<Dra, TranslateError> {
-    let signature = |q: usize| -> Vec<bool> {
-        pairs
-            .iter()
-            .flat_map(|p| [p.fin[q], p.inf[q]])
-            .collect()
-    };
+    let signature =
+        |q: usize| -> Vec<bool> { pairs.iter().flat_map(|p| [p.fin[q], p.inf[q]]).collect() };
     let mut block = renumber((0..n).map(signature).collect::<Vec<_>>());
     loop {
         let keys: Vec<Vec<u32>> = (0..n)
