@@ -81,6 +81,15 @@ def grid_json(width, height, unsafe, goal, labels, p_na, p_a, p_def, p_adv):
     }
 
 
+def solve(game, formula, out, def_nodes, adv_nodes, *settings):
+    """Runs `posg-fsc solve` and returns its summary.json as a dict."""
+    subprocess.run([BINARY, "solve", game, "--ltl", formula, "--def-nodes", str(def_nodes),
+                    "--adv-nodes", str(adv_nodes), "--out", out, *map(str, settings)],
+                   check=True, stdout=subprocess.DEVNULL)
+    with open(os.path.join(out, "summary.json")) as handle:
+        return json.load(handle)
+
+
 def unsafe_cells(width, height, count, seed, keep):
     """`count` cells chosen reproducibly, avoiding the cells in `keep`."""
     free = [c for c in range(width * height) if c not in keep]
