@@ -27,7 +27,10 @@
 //! * [`graph`]: strongly connected components, BSCCs, phi-feasibility and the
 //!   target sets `B`, `Z`, `T` (method.md section 1);
 //! * [`solver`]: sparse LU solves of `(I - Q) x = b` and its transpose;
-//! * [`value`]: the exact value and its adjoint gradient (method.md sections 1-2).
+//! * [`value`]: the exact value and its adjoint gradient (method.md sections 1-2);
+//! * [`optimise`]: softmax parameters, alternating projected gradient
+//!   ascent-descent and best-response checks (method.md sections 3-4);
+//! * [`output`]: observers and plots that write the optimiser's results.
 #![warn(missing_docs)]
 
 pub mod analysis;

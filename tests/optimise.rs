@@ -322,3 +322,66 @@ fn same_seed_and_settings_give_the_same_curve_except_wall_clock_seconds() {
     assert_eq!(curves[0].len(), 41);
     assert_eq!(curves[0], curves[1]);
 }
+
+#[test]
+fn settings_out_of_range_are_rejected_before_any_work() {
+    let g = game(MATCHING_PENNIES);
+    let dra = common::eventually_goal();
+    let bad = [
+        Settings {
+            logit_bound: 0.0,
+            ..Settings::default()
+        },
+        Settings {
+            defender_step: f64::NAN,
+            ..Settings::default()
+        },
+        Settings {
+            check_every: 0,
+            ..Settings::default()
+        },
+        Settings {
+            initial_spread: 5.0,
+            logit_bound: 4.0,
+            ..Settings::default()
+        },
+    ];
+    for settings in bad {
+        assert!(settings.validate().is_err(), "{settings:?}");
+        assert!(solve(&g, &dra, 1, 1, &settings, |_, _| Box::new(())).is_err());
+    }
+    assert!(Settings::default().validate().is_ok());
+}
+
+#[test]
+fn a_run_resumes_from_the_logits_it_wrote() {
+    let g = game(MATCHING_PENNIES);
+    let dra = common::eventually_goal();
+    let settings = Settings {
+        max_iterations: 20,
+        ..Settings::default()
+    };
+    let first = solve(&g, &dra, 1, 1, &settings, |_, _| Box::new(())).unwrap();
+    let best = first.best();
+    let resumed = Structure {
+        name: "resumed".into(),
+        defender: best.defender.clone(),
+        adversary: best.adversary.clone(),
+    };
+    let still = Settings {
+        initial_spread: 0.0,
+        max_iterations: 1,
+        restarts: 0,
+        ..Settings::default()
+    };
+    let again = optimise_structure(&g, &dra, &resumed, &still, 0, &mut ()).unwrap();
+    let heads = |f: &Fsc| {
+        f.choices(0, 0)
+            .iter()
+            .find(|c| c.action == 0)
+            .unwrap()
+            .probability
+    };
+    assert!((heads(&again.defender) - heads(&best.defender)).abs() < 1e-12);
+    assert!((again.report.worst_case - best.report.worst_case).abs() < 1e-3);
+}

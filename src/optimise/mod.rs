@@ -69,6 +69,9 @@ pub enum OptimiseError {
     /// An observer failed (its output could not be written).
     #[error("output: {0}")]
     Observer(ObserverError),
+    /// [`optimise_structures`] was given no structure.
+    #[error("no structure to optimise")]
+    NoStructure,
     /// The best-response minimisation failed for another reason.
     #[error("best response: {0}")]
     BestResponse(String),
