@@ -13,20 +13,12 @@ use rand_chacha::ChaCha8Rng;
 const SHARED: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/ltl/");
 
 /// Random lasso words over `propositions.len()` propositions, `|u|, |v| <= 6`.
-fn random_lassos(
-    rng: &mut ChaCha8Rng,
-    propositions: usize,
-    count: usize,
-) -> Vec<(Vec<Letter>, Vec<Letter>)> {
+fn random_lassos(rng: &mut ChaCha8Rng, propositions: usize, count: usize) -> Vec<(Vec<Letter>, Vec<Letter>)> {
     let letters = 1u32 << propositions;
     (0..count)
         .map(|_| {
-            let u = (0..rng.random_range(0..=6))
-                .map(|_| rng.random_range(0..letters))
-                .collect();
-            let v = (0..rng.random_range(1..=6))
-                .map(|_| rng.random_range(0..letters))
-                .collect();
+            let u = (0..rng.random_range(0..=6)).map(|_| rng.random_range(0..letters)).collect();
+            let v = (0..rng.random_range(1..=6)).map(|_| rng.random_range(0..letters)).collect();
             (u, v)
         })
         .collect()
@@ -131,13 +123,27 @@ fn robotics_formulas_agree_with_the_evaluator() {
 }
 
 #[test]
+fn obligation_shapes_agree_with_the_evaluator() {
+    let formulas: Vec<String> = [
+        "!a U (a & G b)",
+        "(!a & F c) U (a & (b W G c))",
+        "a M (!a | G b)",
+        "(a | G c) R (!a | F b)",
+        "(!a & F b) W (a & (b U c))",
+        "!a U (a & X G b & F c)",
+        "(G a) U b",
+        "a W (G b | F c)",
+        "G (a | X G b)",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    check_all(&formulas, 2000);
+}
+
+#[test]
 fn formula_without_propositions_gives_an_automaton_over_no_propositions() {
-    for (text, expected) in [
-        ("true", true),
-        ("G F true", true),
-        ("X false", false),
-        ("F G 0 | 1 U 0", false),
-    ] {
+    for (text, expected) in [("true", true), ("G F true", true), ("X false", false), ("F G 0 | 1 U 0", false)] {
         let dra = ltl::translate(&ltl::parse(text).unwrap()).unwrap();
         assert!(dra.propositions().is_empty());
         assert_eq!(dra.num_states(), 1, "{text}");
@@ -158,12 +164,7 @@ fn too_many_propositions_is_an_error() {
 #[test]
 fn emerson_lei_automaton_agrees_with_the_evaluator() {
     let mut rng = ChaCha8Rng::seed_from_u64(7);
-    for text in [
-        "GF a & GF b & G !c",
-        "FG a | GF b",
-        "(GF a -> GF b) & G !c",
-        "a U (b R F c)",
-    ] {
+    for text in ["GF a & GF b & G !c", "FG a | GF b", "(GF a -> GF b) & G !c", "a U (b R F c)"] {
         let formula = ltl::parse(text).unwrap();
         let automaton = ltl::translate_to_emerson_lei(&formula).unwrap();
         let propositions = formula.propositions();

@@ -218,8 +218,8 @@ pub(crate) fn master(
     formula: &Formula,
     letters: usize,
 ) -> Result<Tgr, TranslateError> {
-    let mu = af::subformulas_of_kind(formula, Kind::Mu);
-    let nu = af::subformulas_of_kind(formula, Kind::Nu);
+    let mu = af::guess_candidates(formula, Kind::Mu);
+    let nu = af::guess_candidates(formula, Kind::Nu);
     if mu.len() + nu.len() > MAX_GUESS_BITS {
         return Err(TranslateError::TooManyFixpoints {
             count: mu.len() + nu.len(),
@@ -315,10 +315,7 @@ pub(crate) fn master(
         .flat_map(|d| d.inf.iter())
         .fold(0, |m, &bit| m | (1 << bit));
 
-    let safety_x: Vec<Vec<Formula>> = used_safety
-        .iter()
-        .map(|&i| safety_sets[i].clone())
-        .collect();
+    let safety_x: Vec<Vec<Formula>> = used_safety.iter().map(|&i| safety_sets[i].clone()).collect();
     let mut initial = vec![root];
     initial.extend(used_safety.iter().map(|&i| safety_initial[i]));
     initial.extend(used_recurrent.iter().map(|&i| recurrent[i]));
