@@ -11,6 +11,8 @@
 //! 3. States are merged by partition refinement (Moore): two states are
 //!    merged iff they agree on membership in every `L_i` and `K_i` and, for
 //!    every letter, their successors are merged; this preserves the language.
+//!    A transient initial state is then replaced by a state with the same
+//!    successors, if there is one (its own labels are seen only once).
 
 use rustc_hash::FxHashMap;
 
@@ -140,15 +142,33 @@ fn minimise(
         }
         block = refined;
     }
-    // Renumber blocks so that the initial state's block is 0, in BFS order.
+    // Renumber the blocks reachable from the initial one in BFS order.
     let blocks = block.iter().max().map_or(0, |&m| m as usize + 1);
     let mut representative = vec![usize::MAX; blocks];
     for q in (0..n).rev() {
         representative[block[q] as usize] = q;
     }
+    let row = |b: u32| -> Vec<u32> {
+        let q = representative[b as usize];
+        (0..letters)
+            .map(|a| block[successors[q * letters + a] as usize])
+            .collect()
+    };
+    // The initial state is visited once if no transition enters its block:
+    // then its own acceptance labels do not matter, and any state with the
+    // same successors can start the run instead.
+    let initial_row = row(block[0]);
+    let entered = (0..blocks as u32).any(|b| row(b).contains(&block[0]));
+    let start = if entered {
+        block[0]
+    } else {
+        (0..blocks as u32)
+            .find(|&b| b != block[0] && row(b) == initial_row)
+            .unwrap_or(block[0])
+    };
     let mut order = vec![u32::MAX; blocks];
-    let mut queue = vec![block[0]];
-    order[block[0] as usize] = 0;
+    let mut queue = vec![start];
+    order[start as usize] = 0;
     let mut head = 0;
     while head < queue.len() {
         let q = representative[queue[head] as usize];
