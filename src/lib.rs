@@ -30,11 +30,14 @@
 //! * [`value`]: the exact value and its adjoint gradient (method.md sections 1-2).
 #![warn(missing_docs)]
 
+pub mod analysis;
 pub mod automaton;
 pub mod controller;
+pub mod export;
 pub mod game;
 pub mod graph;
 pub mod ltl;
 pub mod product;
+pub mod simulate;
 pub mod solver;
 pub mod value;

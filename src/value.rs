@@ -1,1 +1,269 @@
-//! (in progress)
+//! The exact value of a controller pair and its gradient (method.md
+//! sections 1 and 2).
+//!
+//! With `B`, `Z`, `T` from [`crate::analysis`], `Q = P` restricted to
+//! `T x T` and `b(m) = P(B | m)`:
+//!
+//! ```text
+//! x = 1 on B,  x = 0 on Z,  (I - Q) x_T = b,        V = sum_m p0(m) x(m),
+//! (I - Q)^T y = p0 restricted to T,
+//! dV/dtheta = sum_{m in T} y(m) sum_m' dP(m'|m)/dtheta x(m') + sum_m dp0(m)/dtheta x(m).
+//! ```
+//!
+//! [`Evaluator`] builds the GMC, its analysis and the LU's symbolic
+//! factorisation once per support structure; each evaluation then refills
+//! the numbers, factorises once and solves once (value) or twice (value and
+//! gradient), followed by one pass over the GMC for the gradient of all
+//! parameters of both players.
+
+use thiserror::Error;
+
+use crate::analysis::{Recurrence, StateClass};
+use crate::automaton::Dra;
+use crate::controller::{Probabilities, Support};
+use crate::game::Posg;
+use crate::product::{Gmc, ProductError};
+use crate::solver::{LuSolver, SolverError, SparsePattern};
+
+/// Why a value could not be computed.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum ValueError {
+    /// The GMC could not be built.
+    #[error(transparent)]
+    Product(#[from] ProductError),
+    /// The linear system could not be solved accurately.
+    #[error(transparent)]
+    Solver(#[from] SolverError),
+}
+
+/// The value `V` of a controller pair and the accuracy of its linear solve.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Evaluation {
+    /// `V = P(trace |= phi)`.
+    pub value: f64,
+    /// `max_i |((I - Q) x - b)_i|` (0 when `T` is empty).
+    pub residual: f64,
+}
+
+/// Partial derivatives of `V` with respect to every controller probability,
+/// aligned with the players' [`Support`]s.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Gradient {
+    /// `dV/d mu_def(g', u | g, o)` per defender support entry.
+    pub defender: Vec<f64>,
+    /// `dV/d mu_adv(h', v | h, o')` per adversary support entry.
+    pub adversary: Vec<f64>,
+    /// `dV/d init_def(g)` per defender node.
+    pub defender_initial: Vec<f64>,
+    /// `dV/d init_adv(h)` per adversary node.
+    pub adversary_initial: Vec<f64>,
+    /// The residual of the adjoint solve `(I - Q)^T y = p0`.
+    pub adjoint_residual: f64,
+}
+
+/// The linear system on `T`: the pattern of `I - Q` and where each entry's
+/// number comes from in the GMC, plus `b`'s sources.
+struct TransientSystem {
+    solver: LuSolver,
+    sources: Vec<u32>,
+    diagonal: Vec<bool>,
+    matrix_values: Vec<f64>,
+    target_offsets: Vec<usize>,
+    target_sources: Vec<u32>,
+}
+
+const NO_SOURCE: u32 = u32::MAX;
+
+impl TransientSystem {
+    fn build(gmc: &Gmc, recurrence: &Recurrence, tolerance: f64) -> Result<Self, SolverError> {
+        let mut row_offsets = vec![0];
+        let mut columns = Vec::new();
+        let mut sources = Vec::new();
+        let mut diagonal = Vec::new();
+        let mut target_offsets = vec![0];
+        let mut target_sources = Vec::new();
+        for (i, &m) in recurrence.transient.iter().enumerate() {
+            let mut entries: Vec<(usize, u32)> = Vec::new();
+            let (row_columns, _) = gmc.row(m);
+            for (k, &c) in gmc.row_range(m).zip(row_columns) {
+                match recurrence.classes[c as usize] {
+                    StateClass::Transient => {
+                        entries.push((recurrence.transient_index[c as usize] as usize, k as u32))
+                    }
+                    StateClass::Target => target_sources.push(k as u32),
+                    StateClass::Zero => {}
+                }
+            }
+            if !entries.iter().any(|&(c, _)| c == i) {
+                entries.push((i, NO_SOURCE));
+                entries.sort_unstable();
+            }
+            for (c, source) in entries {
+                columns.push(c);
+                sources.push(source);
+                diagonal.push(c == i);
+            }
+            row_offsets.push(columns.len());
+            target_offsets.push(target_sources.len());
+        }
+        let n = recurrence.transient.len();
+        let matrix_values = vec![0.0; columns.len()];
+        let solver = LuSolver::new(
+            SparsePattern {
+                n,
+                row_offsets,
+                columns,
+            },
+            tolerance,
+        )?;
+        Ok(Self {
+            solver,
+            sources,
+            diagonal,
+            matrix_values,
+            target_offsets,
+            target_sources,
+        })
+    }
+
+    /// Writes `I - Q` from the GMC's numbers, factorises, and returns `b`.
+    fn factorize(&mut self, gmc: &Gmc) -> Result<Vec<f64>, SolverError> {
+        let p = gmc.values();
+        for (k, value) in self.matrix_values.iter_mut().enumerate() {
+            let q = if self.sources[k] == NO_SOURCE {
+                0.0
+            } else {
+                p[self.sources[k] as usize]
+            };
+            *value = if self.diagonal[k] { 1.0 - q } else { -q };
+        }
+        self.solver.factorize(&self.matrix_values)?;
+        Ok(self
+            .target_offsets
+            .windows(2)
+            .map(|w| {
+                self.target_sources[w[0]..w[1]]
+                    .iter()
+                    .map(|&k| p[k as usize])
+                    .sum()
+            })
+            .collect())
+    }
+}
+
+/// Exact values and gradients for one support structure.
+pub struct Evaluator {
+    gmc: Gmc,
+    recurrence: Recurrence,
+    system: TransientSystem,
+    values: Vec<f64>,
+}
+
+impl Evaluator {
+    /// Builds the GMC under the supports, analyses its recurrence classes and
+    /// prepares the sparse LU of `I - Q`; solves must reach `tolerance`.
+    pub fn new(
+        game: &Posg,
+        dra: &Dra,
+        defender: &Support,
+        adversary: &Support,
+        tolerance: f64,
+    ) -> Result<Self, ValueError> {
+        let gmc = Gmc::build(game, dra, defender, adversary)?;
+        let recurrence = Recurrence::analyse(&gmc, dra);
+        let system = TransientSystem::build(&gmc, &recurrence, tolerance)?;
+        let values = recurrence
+            .classes
+            .iter()
+            .map(|&c| f64::from(c == StateClass::Target))
+            .collect();
+        Ok(Self {
+            gmc,
+            recurrence,
+            system,
+            values,
+        })
+    }
+
+    /// The GMC (numbers as of the last evaluation).
+    pub fn gmc(&self) -> &Gmc {
+        &self.gmc
+    }
+
+    /// The recurrence classes and the partition `B`, `Z`, `T`.
+    pub fn recurrence(&self) -> &Recurrence {
+        &self.recurrence
+    }
+
+    /// `x(m)`, the probability of phi from each GMC state, as of the last evaluation.
+    pub fn state_values(&self) -> &[f64] {
+        &self.values
+    }
+
+    /// The value `V` for the given probabilities (one factorisation, one solve).
+    pub fn evaluate(
+        &mut self,
+        defender: &Probabilities,
+        adversary: &Probabilities,
+    ) -> Result<Evaluation, ValueError> {
+        self.gmc.refill(defender, adversary);
+        let mut x = self.system.factorize(&self.gmc)?;
+        let residual = if x.is_empty() {
+            0.0
+        } else {
+            self.system.solver.solve(&mut x)?
+        };
+        for (&m, &xm) in self.recurrence.transient.iter().zip(&x) {
+            self.values[m] = xm;
+        }
+        let value = self.gmc.initial().map(|(m, p)| p * self.values[m]).sum();
+        Ok(Evaluation { value, residual })
+    }
+
+    /// The value and its gradient with respect to every probability of both
+    /// controllers (adjoint method: one factorisation, two solves, one pass).
+    pub fn evaluate_with_gradient(
+        &mut self,
+        defender: &Probabilities,
+        adversary: &Probabilities,
+    ) -> Result<(Evaluation, Gradient), ValueError> {
+        let evaluation = self.evaluate(defender, adversary)?;
+        let mut p0 = vec![0.0; self.recurrence.transient.len()];
+        for (m, p) in self.gmc.initial() {
+            let i = self.recurrence.transient_index[m];
+            if i != u32::MAX {
+                p0[i as usize] += p;
+            }
+        }
+        let adjoint_residual = if p0.is_empty() {
+            0.0
+        } else {
+            self.system.solver.solve_transpose(&mut p0)?
+        };
+        let mut y = vec![0.0; self.gmc.num_states()];
+        for (&m, &ym) in self.recurrence.transient.iter().zip(&p0) {
+            y[m] = ym;
+        }
+        let mut gradient = Gradient {
+            defender: vec![0.0; defender.entries.len()],
+            adversary: vec![0.0; adversary.entries.len()],
+            defender_initial: vec![0.0; defender.initial.len()],
+            adversary_initial: vec![0.0; adversary.initial.len()],
+            adjoint_residual,
+        };
+        self.gmc.add_adjoint_gradient(
+            &self.values,
+            &y,
+            &mut gradient.defender,
+            &mut gradient.adversary,
+        );
+        self.gmc.add_initial_gradient(
+            &self.values,
+            defender,
+            adversary,
+            &mut gradient.defender_initial,
+            &mut gradient.adversary_initial,
+        );
+        Ok((evaluation, gradient))
+    }
+}

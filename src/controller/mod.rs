@@ -7,6 +7,9 @@
 //! (formats.md section 2) and the `uniform:K` shorthand.
 
 pub mod file;
+mod support;
+
+pub use support::{Probabilities, Support};
 
 use crate::game::ModelError;
 
