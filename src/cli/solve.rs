@@ -16,21 +16,21 @@ use serde::Serialize;
 
 use posg_fsc::automaton::Dra;
 use posg_fsc::controller::{self, Role};
-use posg_fsc::game::{self, Posg};
-use posg_fsc::ltl;
+use posg_fsc::game::Posg;
 use posg_fsc::optimise::{
     self, Observer, Settings, Solution, Structure, StructureReport, UpdateRule,
 };
 use posg_fsc::output::{CurveCsv, CurvePlot, Progress};
+
+use super::common::{ObjectiveArgs, objective, read_game};
 
 /// Arguments of `solve`.
 #[derive(Debug, Args)]
 pub struct SolveArgs {
     /// The game, a `*.posg.json` file (formats.md section 1).
     game: PathBuf,
-    /// The LTL objective phi, e.g. `F goal & G !unsafe`.
-    #[arg(long)]
-    ltl: String,
+    #[command(flatten)]
+    objective: ObjectiveArgs,
     /// Defender FSC size (nodes).
     #[arg(long, default_value_t = 1)]
     def_nodes: usize,
@@ -158,8 +158,8 @@ pub struct SolveJob<'a> {
     pub game: &'a Posg,
     /// The DRA of the objective.
     pub dra: &'a Dra,
-    /// The objective as the user wrote it.
-    pub ltl: &'a str,
+    /// The objective as the user gave it (formula or automaton file).
+    pub objective: &'a str,
     /// The structures to optimise on.
     pub structures: Vec<Structure>,
     /// The optimiser's settings.
@@ -176,7 +176,7 @@ struct Summary<'a> {
     command_line: Vec<String>,
     crate_version: &'static str,
     game: Option<&'a str>,
-    ltl: &'a str,
+    objective: &'a str,
     defender_nodes: usize,
     adversary_nodes: usize,
     settings: &'a Settings,
@@ -188,14 +188,12 @@ struct Summary<'a> {
     files: [&'static str; 5],
 }
 
-/// Reads the game and translates the formula.
-pub fn load(game: &Path, formula: &str) -> anyhow::Result<(Posg, Dra)> {
-    let game = game::file::read(game)?;
-    let formula =
-        ltl::parse(formula).with_context(|| format!("cannot parse the formula `{formula}`"))?;
-    let dra =
-        ltl::translate(&formula).context("cannot translate the formula to a Rabin automaton")?;
-    Ok((game, dra))
+/// Reads the game and builds the objective's automaton; returns them with
+/// the objective's description.
+pub fn load(game: &Path, args: &ObjectiveArgs) -> anyhow::Result<(Posg, Dra, String)> {
+    let game = read_game(game)?;
+    let (dra, description) = objective(args, &game)?;
+    Ok((game, dra, description))
 }
 
 /// Optimises on the job's structures and writes the five output files
@@ -205,7 +203,7 @@ pub fn run_job(job: &SolveJob) -> anyhow::Result<Solution> {
     std::fs::create_dir_all(job.out)
         .with_context(|| format!("cannot create {}", job.out.display()))?;
     let clock = Instant::now();
-    let title = format!("{}: {}", job.game.name().unwrap_or("game"), job.ltl);
+    let title = format!("{}: {}", job.game.name().unwrap_or("game"), job.objective);
     let iterations = job.settings.max_iterations;
     let multiple = job.structures.len() > 1;
     let out = job.out.to_path_buf();
@@ -245,7 +243,7 @@ pub fn run_job(job: &SolveJob) -> anyhow::Result<Solution> {
         command_line: std::env::args().collect(),
         crate_version: env!("CARGO_PKG_VERSION"),
         game: job.game.name(),
-        ltl: job.ltl,
+        objective: job.objective,
         defender_nodes: best.defender.num_nodes(),
         adversary_nodes: best.adversary.num_nodes(),
         settings: job.settings,
@@ -305,7 +303,7 @@ impl Observer for Failed {
 /// Runs `solve`.
 pub fn run(args: SolveArgs) -> anyhow::Result<()> {
     let settings = args.settings.settings()?;
-    let (game, dra) = load(&args.game, &args.ltl)?;
+    let (game, dra, description) = load(&args.game, &args.objective)?;
     let mut structure = Structure::full(
         &game,
         args.def_nodes,
@@ -323,7 +321,7 @@ pub fn run(args: SolveArgs) -> anyhow::Result<()> {
     let job = SolveJob {
         game: &game,
         dra: &dra,
-        ltl: &args.ltl,
+        objective: &description,
         structures: vec![structure],
         settings: &settings,
         out: &args.out,

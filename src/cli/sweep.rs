@@ -11,6 +11,7 @@ use serde::Serialize;
 use posg_fsc::optimise::Structure;
 use posg_fsc::output::{SweepPoint, plot_sweep};
 
+use super::common::ObjectiveArgs;
 use super::solve::{SettingsArgs, SolveJob, load, run_job};
 
 /// Arguments of `sweep`.
@@ -18,9 +19,8 @@ use super::solve::{SettingsArgs, SolveJob, load, run_job};
 pub struct SweepArgs {
     /// The game, a `*.posg.json` file (formats.md section 1).
     game: PathBuf,
-    /// The LTL objective phi, e.g. `GF goal & G !unsafe`.
-    #[arg(long)]
-    ltl: String,
+    #[command(flatten)]
+    objective: ObjectiveArgs,
     /// Defender FSC sizes: `A..B` (inclusive), `A,B,C` or `A`.
     #[arg(long, default_value = "1..3", value_parser = parse_sizes)]
     def_nodes: Sizes,
@@ -75,7 +75,7 @@ struct Row {
 /// Runs `sweep`.
 pub fn run(args: SweepArgs) -> anyhow::Result<()> {
     let settings = args.settings.settings()?;
-    let (game, dra) = load(&args.game, &args.ltl)?;
+    let (game, dra, description) = load(&args.game, &args.objective)?;
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create {}", args.out.display()))?;
     let pairs: Vec<(usize, usize)> = args
@@ -91,7 +91,7 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
             let job = SolveJob {
                 game: &game,
                 dra: &dra,
-                ltl: &args.ltl,
+                objective: &description,
                 structures: vec![Structure::full(&game, n, m, settings.optimise_initial)],
                 settings: &settings,
                 out: &out,
@@ -131,7 +131,7 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
             worst_case: r.worst_case,
         })
         .collect();
-    let title = format!("{}: {}", game.name().unwrap_or("game"), args.ltl);
+    let title = format!("{}: {}", game.name().unwrap_or("game"), description);
     plot_sweep(&args.out.join("sweep.svg"), &title, &points).map_err(|e| anyhow::anyhow!(e))?;
     println!(
         "wrote sweep.csv and sweep.svg ({} size pairs) to {}",
