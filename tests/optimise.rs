@@ -8,7 +8,9 @@ use posg_fsc::automaton::Dra;
 use posg_fsc::controller::{Choice, Fsc, Role, Support};
 use posg_fsc::game::Posg;
 use posg_fsc::game::file::from_json_str;
-use posg_fsc::optimise::{Objective, Settings, Softmax, Structure, optimise_structure, solve};
+use posg_fsc::optimise::{
+    Objective, Settings, Softmax, Status, Structure, optimise_structure, solve,
+};
 use posg_fsc::output::CurveCsv;
 use posg_fsc::solver::DEFAULT_TOLERANCE;
 use posg_fsc::value::Evaluator;
@@ -384,4 +386,38 @@ fn a_run_resumes_from_the_logits_it_wrote() {
     };
     assert!((heads(&again.defender) - heads(&best.defender)).abs() < 1e-12);
     assert!((again.report.worst_case - best.report.worst_case).abs() < 1e-3);
+}
+
+#[test]
+fn runs_stop_on_the_time_budget_and_on_stalled_progress() {
+    let g = game(MATCHING_PENNIES);
+    let dra = common::eventually_goal();
+    let timed = Settings {
+        time_budget: 1e-9,
+        ..Settings::default()
+    };
+    let report = solve(&g, &dra, 1, 1, &timed, |_, _| Box::new(()))
+        .unwrap()
+        .best()
+        .report
+        .clone();
+    assert_eq!(
+        (report.status, report.iterations, report.checks),
+        (Status::TimeBudget, 1, 1)
+    );
+    let stalling = Settings {
+        stall_checks: 1,
+        stall_tolerance: 1.0,
+        check_every: 3,
+        ..Settings::default()
+    };
+    let report = solve(&g, &dra, 1, 1, &stalling, |_, _| Box::new(()))
+        .unwrap()
+        .best()
+        .report
+        .clone();
+    assert_eq!(
+        (report.status, report.iterations, report.checks),
+        (Status::Stalled, 4, 2)
+    );
 }

@@ -223,7 +223,7 @@ pub fn run_job(job: &SolveJob) -> anyhow::Result<Solution> {
                 &out,
                 &stem,
                 &title,
-                progress.then(|| (structure.name.as_str(), iterations)),
+                progress.then_some((structure.name.as_str(), iterations)),
             )
         },
     )?;
