@@ -37,6 +37,7 @@ pub mod game;
 pub mod graph;
 pub mod ltl;
 pub mod product;
+pub mod prune;
 pub mod simulate;
 pub mod solver;
 pub mod value;
