@@ -4,7 +4,7 @@
 use posg_fsc::automaton::{Dra, RabinPair};
 use posg_fsc::controller::{Choice, Fsc, Role};
 use posg_fsc::game::Posg;
-use rand::seq::SliceRandom;
+use rand::seq::IndexedRandom;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde_json::{Map, Value, json};
