@@ -33,6 +33,7 @@
 pub mod analysis;
 pub mod automaton;
 pub mod controller;
+pub mod export;
 pub mod game;
 pub mod graph;
 pub mod ltl;

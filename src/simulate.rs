@@ -61,7 +61,13 @@ impl Estimate {
         let z = 1.959_963_984_540_054_f64;
         let centre = (p + z * z / (2.0 * n)) / (1.0 + z * z / n);
         let half = z * (p * (1.0 - p) / n + z * z / (4.0 * n * n)).sqrt() / (1.0 + z * z / n);
-        Self { runs, successes, mean: p, lower: (centre - half).max(0.0), upper: (centre + half).min(1.0) }
+        Self {
+            runs,
+            successes,
+            mean: p,
+            lower: (centre - half).max(0.0),
+            upper: (centre + half).min(1.0),
+        }
     }
 }
 
@@ -95,7 +101,9 @@ pub fn simulate(
             bscc_of[m] = Some(bscc.is_feasible());
         }
     }
-    let letters: Vec<_> = (0..game.num_states()).map(|s| dra.letter_of(game.label_names(s))).collect();
+    let letters: Vec<_> = (0..game.num_states())
+        .map(|s| dra.letter_of(game.label_names(s)))
+        .collect();
     let mut rng = ChaCha8Rng::seed_from_u64(settings.seed);
     let mut successes = 0;
     for run in 0..settings.runs {
@@ -103,16 +111,26 @@ pub fn simulate(
         let g = sample(&mut rng, defender.initial().iter().copied().enumerate());
         let h = sample(&mut rng, adversary.initial().iter().copied().enumerate());
         let q = dra.successor(dra.initial(), letters[s]);
-        let mut state = GmcState { s: s as u32, q: q as u32, g: g as u32, h: h as u32 };
+        let mut state = GmcState {
+            s: s as u32,
+            q: q as u32,
+            g: g as u32,
+            h: h as u32,
+        };
         let mut steps = 0;
         let feasible = loop {
-            let m = gmc.index_of(state).ok_or(SimulationError::OutsideChain { run })?;
+            let m = gmc
+                .index_of(state)
+                .ok_or(SimulationError::OutsideChain { run })?;
             if let Some(feasible) = bscc_of[m] {
                 break feasible;
             }
             steps += 1;
             if steps > STEP_LIMIT {
-                return Err(SimulationError::StepLimit { run, limit: STEP_LIMIT });
+                return Err(SimulationError::StepLimit {
+                    run,
+                    limit: STEP_LIMIT,
+                });
             }
             state = step(&mut rng, game, dra, defender, adversary, &letters, state);
         };
@@ -131,13 +149,27 @@ fn step(
     state: GmcState,
 ) -> GmcState {
     let s = state.s as usize;
-    let o = sample(rng, game.defender().observation_distribution(s).iter().copied());
-    let o_adv = sample(rng, game.adversary().observation_distribution(s).iter().copied());
+    let o = sample(
+        rng,
+        game.defender().observation_distribution(s).iter().copied(),
+    );
+    let o_adv = sample(
+        rng,
+        game.adversary().observation_distribution(s).iter().copied(),
+    );
     let def = choose(rng, defender.choices(state.g as usize, o));
     let adv = choose(rng, adversary.choices(state.h as usize, o_adv));
-    let next = sample(rng, game.transition(s, def.action, adv.action).iter().copied());
+    let next = sample(
+        rng,
+        game.transition(s, def.action, adv.action).iter().copied(),
+    );
     let q = dra.successor(state.q as usize, letters[next]);
-    GmcState { s: next as u32, q: q as u32, g: def.next as u32, h: adv.next as u32 }
+    GmcState {
+        s: next as u32,
+        q: q as u32,
+        g: def.next as u32,
+        h: adv.next as u32,
+    }
 }
 
 fn choose<'a>(rng: &mut ChaCha8Rng, choices: &'a [Choice]) -> &'a Choice {

@@ -16,28 +16,65 @@ fn game(text: &str) -> Posg {
 }
 
 fn evaluator(game: &Posg, dra: &Dra, def: &Fsc, adv: &Fsc) -> Evaluator {
-    Evaluator::new(game, dra, &Support::of(def), &Support::of(adv), DEFAULT_TOLERANCE).unwrap()
+    Evaluator::new(
+        game,
+        dra,
+        &Support::of(def),
+        &Support::of(adv),
+        DEFAULT_TOLERANCE,
+    )
+    .unwrap()
 }
 
 fn value(game: &Posg, dra: &Dra, def: &Fsc, adv: &Fsc) -> f64 {
     let mut ev = evaluator(game, dra, def, adv);
-    ev.evaluate(&Support::probabilities_of(def), &Support::probabilities_of(adv)).unwrap().value
+    ev.evaluate(
+        &Support::probabilities_of(def),
+        &Support::probabilities_of(adv),
+    )
+    .unwrap()
+    .value
 }
 
 fn uniform(game: &Posg, role: Role, nodes: usize) -> Fsc {
-    let player = if role == Role::Defender { game.defender() } else { game.adversary() };
+    let player = if role == Role::Defender {
+        game.defender()
+    } else {
+        game.adversary()
+    };
     Fsc::uniform(role, nodes, player.num_observations(), player.num_actions())
 }
 
 /// One-node controller of a fully observing player, deterministic or mixed
 /// per state: `rows[s]` lists `(action, probability)`.
 fn memoryless(game: &Posg, role: Role, rows: &[&[(usize, f64)]]) -> Fsc {
-    let player = if role == Role::Defender { game.defender() } else { game.adversary() };
+    let player = if role == Role::Defender {
+        game.defender()
+    } else {
+        game.adversary()
+    };
     let blocks = rows
         .iter()
-        .map(|row| row.iter().map(|&(action, probability)| Choice { next: 0, action, probability, logit: None }).collect())
+        .map(|row| {
+            row.iter()
+                .map(|&(action, probability)| Choice {
+                    next: 0,
+                    action,
+                    probability,
+                    logit: None,
+                })
+                .collect()
+        })
         .collect();
-    Fsc::new(role, 1, player.num_observations(), player.num_actions(), vec![1.0], blocks).unwrap()
+    Fsc::new(
+        role,
+        1,
+        player.num_observations(),
+        player.num_actions(),
+        vec![1.0],
+        blocks,
+    )
+    .unwrap()
 }
 
 const LOOP_THEN_SPLIT: &str = r#"{
@@ -55,7 +92,12 @@ const LOOP_THEN_SPLIT: &str = r#"{
 fn reachability_on_a_three_state_chain_is_two_thirds() {
     // x(a) = 0.25 x(a) + 0.5  =>  x(a) = 2/3.
     let g = game(LOOP_THEN_SPLIT);
-    let v = value(&g, &common::eventually_goal(), &uniform(&g, Role::Defender, 1), &uniform(&g, Role::Adversary, 1));
+    let v = value(
+        &g,
+        &common::eventually_goal(),
+        &uniform(&g, Role::Defender, 1),
+        &uniform(&g, Role::Adversary, 1),
+    );
     assert!((v - 2.0 / 3.0).abs() < 1e-12, "{v}");
 }
 
@@ -75,7 +117,12 @@ const LEAKY_START: &str = r#"{
 fn safety_on_a_four_state_chain_is_two_fifths() {
     // x(s0) = 0.5 x(s0) + 0.2  =>  x(s0) = 0.4; {s2, s3} is a safe recurrent class.
     let g = game(LEAKY_START);
-    let v = value(&g, &common::always_safe(), &uniform(&g, Role::Defender, 1), &uniform(&g, Role::Adversary, 1));
+    let v = value(
+        &g,
+        &common::always_safe(),
+        &uniform(&g, Role::Defender, 1),
+        &uniform(&g, Role::Adversary, 1),
+    );
     assert!((v - 0.4).abs() < 1e-12, "{v}");
 }
 
@@ -97,7 +144,11 @@ const ATTACKED_LOOP: &str = r#"{
 }"#;
 
 fn attacker(g: &Posg, p: f64) -> Fsc {
-    let mixed: &[(usize, f64)] = if p > 0.0 { &[(0, p), (1, 1.0 - p)] } else { &[(1, 1.0)] };
+    let mixed: &[(usize, f64)] = if p > 0.0 {
+        &[(0, p), (1, 1.0 - p)]
+    } else {
+        &[(1, 1.0)]
+    };
     let idle: &[(usize, f64)] = &[(1, 1.0)];
     memoryless(g, Role::Adversary, &[idle, idle, mixed, idle, idle])
 }
@@ -108,7 +159,12 @@ fn recurrence_under_attack_is_one_minus_the_attack_rate() {
     let g = game(ATTACKED_LOOP);
     let defender = uniform(&g, Role::Defender, 1);
     for p in [0.3, 0.75, 0.0] {
-        let v = value(&g, &common::recurrent_goal_safe(), &defender, &attacker(&g, p));
+        let v = value(
+            &g,
+            &common::recurrent_goal_safe(),
+            &defender,
+            &attacker(&g, p),
+        );
         assert!((v - (1.0 - p)).abs() < 1e-12, "p = {p}: {v}");
     }
 }
@@ -117,7 +173,12 @@ fn recurrence_under_attack_is_one_minus_the_attack_rate() {
 fn safe_until_goal_under_attack() {
     // From s2: reach goal unless the attack leads to s3: 1 - p/2; V = 1/2 + (1 - p/2)/2.
     let g = game(ATTACKED_LOOP);
-    let v = value(&g, &common::safe_until_goal(), &uniform(&g, Role::Defender, 1), &attacker(&g, 0.3));
+    let v = value(
+        &g,
+        &common::safe_until_goal(),
+        &uniform(&g, Role::Defender, 1),
+        &attacker(&g, 0.3),
+    );
     assert!((v - (1.0 - 0.25 * 0.3)).abs() < 1e-12, "{v}");
 }
 
@@ -125,7 +186,12 @@ fn safe_until_goal_under_attack() {
 fn a_chain_with_no_feasible_class_has_value_zero_and_no_system() {
     let g = game(LEAKY_START);
     let dra = common::eventually_goal();
-    let mut ev = evaluator(&g, &dra, &uniform(&g, Role::Defender, 1), &uniform(&g, Role::Adversary, 1));
+    let mut ev = evaluator(
+        &g,
+        &dra,
+        &uniform(&g, Role::Defender, 1),
+        &uniform(&g, Role::Adversary, 1),
+    );
     assert!(ev.recurrence().transient.is_empty());
     let def = Support::probabilities_of(&uniform(&g, Role::Defender, 1));
     let adv = Support::probabilities_of(&uniform(&g, Role::Adversary, 1));

@@ -10,9 +10,17 @@ use posg_fsc::controller::Fsc;
 use posg_fsc::game::Posg;
 
 /// A state-based DRA from a per-state transition function over the letters of `aps`.
-pub fn dra(aps: &[&str], states: usize, delta: impl Fn(usize, u32) -> usize, pairs: &[(&[usize], &[usize])]) -> Dra {
+pub fn dra(
+    aps: &[&str],
+    states: usize,
+    delta: impl Fn(usize, u32) -> usize,
+    pairs: &[(&[usize], &[usize])],
+) -> Dra {
     let letters = 1u32 << aps.len();
-    let successors = (0..states).flat_map(|q| (0..letters).map(move |a| (q, a))).map(|(q, a)| delta(q, a) as u32).collect();
+    let successors = (0..states)
+        .flat_map(|q| (0..letters).map(move |a| (q, a)))
+        .map(|(q, a)| delta(q, a) as u32)
+        .collect();
     let pairs = pairs
         .iter()
         .map(|(fin, inf)| RabinPair {
@@ -20,17 +28,34 @@ pub fn dra(aps: &[&str], states: usize, delta: impl Fn(usize, u32) -> usize, pai
             inf: (0..states).map(|q| inf.contains(&q)).collect(),
         })
         .collect();
-    Dra::new(aps.iter().map(|s| s.to_string()).collect(), states, 0, successors, pairs).unwrap()
+    Dra::new(
+        aps.iter().map(|s| s.to_string()).collect(),
+        states,
+        0,
+        successors,
+        pairs,
+    )
+    .unwrap()
 }
 
 /// `F goal`: 0 = not yet, 1 = goal seen (accepting sink).
 pub fn eventually_goal() -> Dra {
-    dra(&["goal"], 2, |q, a| if q == 1 || a & 1 == 1 { 1 } else { 0 }, &[(&[], &[1])])
+    dra(
+        &["goal"],
+        2,
+        |q, a| if q == 1 || a & 1 == 1 { 1 } else { 0 },
+        &[(&[], &[1])],
+    )
 }
 
 /// `G !unsafe`: 0 = safe so far (accepting), 1 = rejecting sink.
 pub fn always_safe() -> Dra {
-    dra(&["unsafe"], 2, |q, a| if q == 1 || a & 1 == 1 { 1 } else { 0 }, &[(&[1], &[0])])
+    dra(
+        &["unsafe"],
+        2,
+        |q, a| if q == 1 || a & 1 == 1 { 1 } else { 0 },
+        &[(&[1], &[0])],
+    )
 }
 
 /// `!unsafe U goal` over (goal, unsafe): 0 = waiting, 1 = accepted, 2 = rejected.
@@ -76,7 +101,12 @@ fn letter(game: &Posg, dra: &Dra, s: usize) -> u32 {
 }
 
 pub fn dense_product(game: &Posg, dra: &Dra, def: &Fsc, adv: &Fsc) -> DenseProduct {
-    let (ns, nq, ng, nh) = (game.num_states(), dra.num_states(), def.num_nodes(), adv.num_nodes());
+    let (ns, nq, ng, nh) = (
+        game.num_states(),
+        dra.num_states(),
+        def.num_nodes(),
+        adv.num_nodes(),
+    );
     let n = ns * nq * ng * nh;
     let idx = |s: usize, q: usize, g: usize, h: usize| ((s * nq + q) * ng + g) * nh + h;
     let mut p = DMatrix::zeros(n, n);
@@ -142,17 +172,22 @@ pub fn reference_value(game: &Posg, dra: &Dra, def: &Fsc, adv: &Fsc) -> f64 {
             }
         }
     }
-    let recurrent: Vec<bool> = (0..n).map(|a| (0..n).all(|b| !reach[a][b] || reach[b][a])).collect();
+    let recurrent: Vec<bool> = (0..n)
+        .map(|a| (0..n).all(|b| !reach[a][b] || reach[b][a]))
+        .collect();
     let feasible: Vec<bool> = (0..n)
         .map(|a| {
             recurrent[a]
                 && dra.pairs().iter().any(|pair| {
                     let class: Vec<usize> = (0..n).filter(|&b| reach[a][b]).collect();
-                    class.iter().any(|&b| pair.inf[product.q_of[b]]) && !class.iter().any(|&b| pair.fin[product.q_of[b]])
+                    class.iter().any(|&b| pair.inf[product.q_of[b]])
+                        && !class.iter().any(|&b| pair.fin[product.q_of[b]])
                 })
         })
         .collect();
-    let unknown: Vec<usize> = (0..n).filter(|&a| !feasible[a] && (0..n).any(|b| feasible[b] && reach[a][b])).collect();
+    let unknown: Vec<usize> = (0..n)
+        .filter(|&a| !feasible[a] && (0..n).any(|b| feasible[b] && reach[a][b]))
+        .collect();
     let mut x = DVector::from_iterator(n, feasible.iter().map(|&f| f64::from(f)));
     if !unknown.is_empty() {
         let k = unknown.len();
@@ -162,7 +197,10 @@ pub fn reference_value(game: &Posg, dra: &Dra, def: &Fsc, adv: &Fsc) -> f64 {
             for (j, &m2) in unknown.iter().enumerate() {
                 a[(i, j)] -= product.p[(m, m2)];
             }
-            rhs[i] = (0..n).filter(|&b| feasible[b]).map(|b| product.p[(m, b)]).sum();
+            rhs[i] = (0..n)
+                .filter(|&b| feasible[b])
+                .map(|b| product.p[(m, b)])
+                .sum();
         }
         let solution = a.lu().solve(&rhs).expect("transient system is nonsingular");
         for (i, &m) in unknown.iter().enumerate() {

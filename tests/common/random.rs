@@ -38,8 +38,10 @@ fn player(rng: &mut ChaCha8Rng, states: &[String], prefix: &str) -> Value {
         return json!({"actions": actions, "observe": "full"});
     }
     let observations = names(&format!("{prefix}o"), rng.random_range(1..=3));
-    let observe: Map<String, Value> =
-        states.iter().map(|s| (s.clone(), Value::Object(distribution(rng, &observations)))).collect();
+    let observe: Map<String, Value> = states
+        .iter()
+        .map(|s| (s.clone(), Value::Object(distribution(rng, &observations))))
+        .collect();
     json!({"actions": actions, "observations": observations, "observe": observe})
 }
 
@@ -53,7 +55,10 @@ pub fn game_json(seed: u64) -> String {
     let adversary = rng.random_bool(0.8).then(|| player(&mut rng, &states, "v"));
     let mut labels = Map::new();
     for s in &states {
-        let props: Vec<&str> = ["goal", "unsafe", "a"].into_iter().filter(|_| rng.random_bool(0.3)).collect();
+        let props: Vec<&str> = ["goal", "unsafe", "a"]
+            .into_iter()
+            .filter(|_| rng.random_bool(0.3))
+            .collect();
         labels.insert(s.clone(), json!(props));
     }
     let def_actions: Vec<String> = serde_json::from_value(defender["actions"].clone()).unwrap();
@@ -86,7 +91,9 @@ pub fn dra(seed: u64) -> Dra {
     let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5eed);
     let aps = vec!["goal".to_string(), "unsafe".to_string(), "a".to_string()];
     let states = rng.random_range(1..=4);
-    let successors = (0..states * 8).map(|_| rng.random_range(0..states) as u32).collect();
+    let successors = (0..states * 8)
+        .map(|_| rng.random_range(0..states) as u32)
+        .collect();
     let pairs = (0..rng.random_range(1..=2))
         .map(|_| RabinPair {
             fin: (0..states).map(|_| rng.random_bool(0.3)).collect(),
@@ -99,14 +106,21 @@ pub fn dra(seed: u64) -> Dra {
 /// A random controller with 1-2 nodes, random non-empty supports and
 /// random probabilities on them.
 pub fn controller(seed: u64, game: &Posg, role: Role) -> Fsc {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed ^ if role == Role::Defender { 0xdef } else { 0xad7 });
-    let player = if role == Role::Defender { game.defender() } else { game.adversary() };
+    let mut rng =
+        ChaCha8Rng::seed_from_u64(seed ^ if role == Role::Defender { 0xdef } else { 0xad7 });
+    let player = if role == Role::Defender {
+        game.defender()
+    } else {
+        game.adversary()
+    };
     let nodes = rng.random_range(1..=2);
     let (no, na) = (player.num_observations(), player.num_actions());
     let blocks = (0..nodes * no)
         .map(|_| {
-            let mut pairs: Vec<(usize, usize)> =
-                (0..nodes).flat_map(|g| (0..na).map(move |u| (g, u))).filter(|_| rng.random_bool(0.6)).collect();
+            let mut pairs: Vec<(usize, usize)> = (0..nodes)
+                .flat_map(|g| (0..na).map(move |u| (g, u)))
+                .filter(|_| rng.random_bool(0.6))
+                .collect();
             if pairs.is_empty() {
                 pairs.push((rng.random_range(0..nodes), rng.random_range(0..na)));
             }
@@ -115,7 +129,12 @@ pub fn controller(seed: u64, game: &Posg, role: Role) -> Fsc {
             pairs
                 .into_iter()
                 .zip(weights)
-                .map(|((next, action), w)| Choice { next, action, probability: w / total, logit: None })
+                .map(|((next, action), w)| Choice {
+                    next,
+                    action,
+                    probability: w / total,
+                    logit: None,
+                })
                 .collect()
         })
         .collect();
