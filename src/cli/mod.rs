@@ -3,6 +3,7 @@
 //! objects from those arguments and prints or writes the results.
 
 mod demo;
+mod prune;
 
 use clap::{Parser, Subcommand};
 
@@ -19,11 +20,14 @@ pub struct Cli {
 enum Command {
     /// Run the main job on the seed paper's 3x2 grid and explain the output.
     Demo(demo::DemoArgs),
+    /// Algorithm 1: prune FSC structures so that a phi-feasible recurrent set exists.
+    Prune(prune::PruneArgs),
 }
 
 /// Runs the subcommand the user chose.
 pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Demo(args) => demo::run(args),
+        Command::Prune(args) => prune::run(args),
     }
 }
