@@ -1,8 +1,6 @@
 //! `posg-fsc prune` end to end: the controller files it writes read back
 //! and evaluate to the value recorded in `structures.json`.
 
-mod common;
-
 use std::path::Path;
 use std::process::Command;
 
