@@ -250,6 +250,67 @@ fn good_sets_follow_algorithm_two() {
     assert_eq!(sets[0].describe(&g), vec!["(s0, q0, g0, h0)", "(s1, q0, g0, h0)", "(s2, q0, g0, h0)"]);
 }
 
+/// A random game with sparse transitions (one or two successors per action
+/// pair), where pruning often succeeds: 3-8 states, 2-4 defender actions,
+/// 1-2 adversary actions, full or random partial observation for each player.
+fn sparse_game_json(seed: u64) -> String {
+    use rand::{Rng, SeedableRng};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let states: Vec<String> = (0..rng.random_range(3..=8)).map(|i| format!("s{i}")).collect();
+    let player = |prefix: &str, actions: usize, rng: &mut rand_chacha::ChaCha8Rng| {
+        let actions: Vec<String> = (0..actions).map(|i| format!("{prefix}{i}")).collect();
+        if rng.random_bool(0.5) {
+            return serde_json::json!({"actions": actions, "observe": "full"});
+        }
+        let observations: Vec<String> = (0..rng.random_range(1..=3)).map(|i| format!("{prefix}o{i}")).collect();
+        let observe: serde_json::Map<String, serde_json::Value> = states
+            .iter()
+            .map(|s| {
+                let o = &observations[rng.random_range(0..observations.len())];
+                let o2 = &observations[rng.random_range(0..observations.len())];
+                let dist = if o == o2 { serde_json::json!({o: 1.0}) } else { serde_json::json!({o: 0.5, o2: 0.5}) };
+                (s.clone(), dist)
+            })
+            .collect();
+        serde_json::json!({"actions": actions, "observations": observations, "observe": observe})
+    };
+    let (nu, nv) = (rng.random_range(2..=4), rng.random_range(1..=2));
+    let defender = player("u", nu, &mut rng);
+    let adversary = player("v", nv, &mut rng);
+    let mut labels = serde_json::Map::new();
+    for s in &states {
+        let props: Vec<&str> = ["goal", "unsafe", "a"].into_iter().filter(|_| rng.random_bool(0.25)).collect();
+        labels.insert(s.clone(), serde_json::json!(props));
+    }
+    let mut transitions = Vec::new();
+    for s in &states {
+        for u in 0..nu {
+            for v in 0..nv {
+                let a = &states[rng.random_range(0..states.len())];
+                let b = if rng.random_bool(0.6) { a } else { &states[rng.random_range(0..states.len())] };
+                let next = if a == b { serde_json::json!({a: 1.0}) } else { serde_json::json!({a: 0.5, b: 0.5}) };
+                transitions.push(serde_json::json!({"state": s, "defender": format!("u{u}"), "adversary": format!("v{v}"), "next": next}));
+            }
+        }
+    }
+    serde_json::json!({
+        "posg": 1, "states": states, "initial": {"s0": 1.0}, "labels": labels,
+        "defender": defender, "adversary": adversary, "transitions": transitions,
+    })
+    .to_string()
+}
+
+/// One of the hand-built automata of tests/common, or a random one.
+fn some_dra(seed: u64) -> Dra {
+    match seed % 5 {
+        0 => common::always_safe(),
+        1 => common::recurrent_goal_safe(),
+        2 => common::eventually_goal(),
+        3 => common::safe_until_goal(),
+        _ => common::random::dra(seed),
+    }
+}
+
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(150))]
 
@@ -262,6 +323,15 @@ proptest! {
         } else {
             (common::random::controller(seed, &g, Role::Defender), common::random::controller(seed, &g, Role::Adversary))
         };
+        let report = run(&g, &dra, &def, &adv, PruneSettings { paper_literal: literal, prune_adversary: adversary });
+        check_sound(&g, &dra, &def, &adv, &report)?;
+    }
+
+    #[test]
+    fn kept_structures_of_sparse_random_games_have_a_feasible_recurrent_set(seed in any::<u64>(), literal in any::<bool>(), adversary in any::<bool>(), nodes in 1usize..=2) {
+        let g = game(&sparse_game_json(seed));
+        let dra = some_dra(seed);
+        let (def, adv) = (uniform(&g, Role::Defender, nodes), uniform(&g, Role::Adversary, 1));
         let report = run(&g, &dra, &def, &adv, PruneSettings { paper_literal: literal, prune_adversary: adversary });
         check_sound(&g, &dra, &def, &adv, &report)?;
     }
@@ -283,4 +353,25 @@ proptest! {
             prop_assert_eq!(&set.pairs, &bscc.feasible_pairs);
         }
     }
+}
+
+#[test]
+fn random_games_exercise_every_outcome() {
+    // Guards the property test above against vacuity: over fixed seeds, some
+    // structures are kept after removals, some attempts stop at line 9's guard,
+    // and some are rejected at line 29.
+    let (mut kept_after_removal, mut stopped, mut rejected) = (0, 0, 0);
+    for seed in 0..200 {
+        let g = game(&sparse_game_json(seed));
+        let dra = some_dra(seed);
+        let (def, adv) = (uniform(&g, Role::Defender, 1 + (seed % 2) as usize), uniform(&g, Role::Adversary, 1));
+        let report = run(&g, &dra, &def, &adv, PruneSettings::default());
+        for attempt in &report.attempts {
+            kept_after_removal += usize::from(attempt.structure.is_some() && attempt.removed_defender > 0);
+            stopped += usize::from(attempt.stop.is_some());
+            rejected += usize::from(attempt.structure.is_none());
+        }
+    }
+    println!("kept after removal {kept_after_removal}, stopped {stopped}, rejected {rejected}");
+    assert!(kept_after_removal >= 10 && stopped > 0 && rejected > 0);
 }
