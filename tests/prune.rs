@@ -215,24 +215,57 @@ fn check_sound(game: &Posg, dra: &Dra, def: &Fsc, adv: &Fsc, report: &PruneRepor
     Ok(())
 }
 
-fn grid(observation: ObservationModel) -> Posg {
-    GridSpec { observation, ..GridSpec::default() }.build().unwrap()
+fn grid(spec: GridSpec) -> Posg {
+    spec.build().unwrap()
 }
 
+/// The paper's grid (`GF goal & G !unsafe`) for N = 1..3, M = 1..2 under all
+/// three settings: every structure is sound, and with noisy observations
+/// there is none. Next to `s4` only moves off the grid are safe (`U` at `s1`,
+/// `L`/`D` at `s3`, `R`/`D` at `s5`), and some observation is shared by
+/// cells whose safe sets are disjoint, so a block loses its last option.
 #[test]
-fn grid_structures_are_sound_for_all_small_sizes() {
+fn paper_grid_yields_no_structure_and_stops_at_the_defender() {
     let dra = common::recurrent_goal_safe();
     for observation in [ObservationModel::Neighbourhood, ObservationModel::Blind] {
-        let g = grid(observation);
+        let g = grid(GridSpec { observation, ..GridSpec::default() });
         for nodes in 1..=3 {
             for adv_nodes in 1..=2 {
                 let (def, adv) = (uniform(&g, Role::Defender, nodes), uniform(&g, Role::Adversary, adv_nodes));
                 for (paper_literal, prune_adversary) in [(false, false), (true, false), (false, true)] {
                     let report = run(&g, &dra, &def, &adv, PruneSettings { paper_literal, prune_adversary });
                     check_sound(&g, &dra, &def, &adv, &report).unwrap();
+                    assert!(report.structures.is_empty(), "{observation:?} N={nodes} M={adv_nodes}");
+                    let stops: Vec<_> = report.stops().collect();
+                    assert_eq!(stops.len(), 1);
+                    assert_eq!(stops[0].1.player, Role::Defender);
                 }
             }
         }
+    }
+}
+
+/// With exact observations and moves that always succeed, removing the moves
+/// into `s4` leaves a recurrent class through the goal: one structure, value 1.
+#[test]
+fn noise_free_grid_yields_one_structure_of_value_one() {
+    let dra = common::recurrent_goal_safe();
+    let g = grid(GridSpec { defender_p_obs: 1.0, adversary_p_obs: 1.0, p_na: 1.0, p_a: 1.0, ..GridSpec::default() });
+    for nodes in 1..=2 {
+        let (def, adv) = (uniform(&g, Role::Defender, nodes), uniform(&g, Role::Adversary, 1));
+        let report = run(&g, &dra, &def, &adv, PruneSettings::default());
+        check_sound(&g, &dra, &def, &adv, &report).unwrap();
+        assert_eq!(report.structures.len(), 1);
+        let s = &report.structures[0];
+        assert!((value(&g, &dra, &s.defender, &s.adversary) - 1.0).abs() < 1e-12);
+        let names: Vec<(String, String)> = removed(&def, &s.defender)
+            .into_iter()
+            .map(|(_, o, _, u)| (g.defender().observations()[o].clone(), g.defender().actions()[u].clone()))
+            .collect();
+        for pair in [("s1", "D"), ("s3", "R"), ("s5", "L")] {
+            assert!(names.contains(&(pair.0.to_string(), pair.1.to_string())), "{pair:?} in {names:?}");
+        }
+        assert!(names.iter().all(|(o, u)| matches!((o.as_str(), u.as_str()), ("s1", "D") | ("s3", "R") | ("s5", "L"))), "{names:?}");
     }
 }
 
