@@ -37,8 +37,10 @@ use super::{Attempt, LastOptionStop, PruneError, PruneReport, PruneSettings, Str
 /// * Lines 27-30: the structure is kept iff some `Good_i` state, identified
 ///   by its `(s, q, g, h)`, lies in a BSCC of the new GMC that misses `L_i`
 ///   (so that BSCC is phi-feasible through pair `i`: the paper's Proposition).
-///   After a completed loop every recurrent good state satisfies this; after
-///   a [`LastOptionStop`] the extra condition matters.
+///   After a completed loop no edge leads from `C \ Bad_i` into `Bad_i`, so
+///   a recurrent good state outside `L_i` always satisfies this; the extra
+///   condition matters for good states inside `L_i` (when `K_i` meets `L_i`)
+///   and after a [`LastOptionStop`].
 pub fn prune(
     game: &Posg,
     dra: &Dra,

@@ -26,6 +26,10 @@
 //! * Line 9's guard is checked before every single removal: a removal that
 //!   would leave some block `(g, o)` without options is not made, the loop
 //!   ends there and the attempt records a [`LastOptionStop`].
+//! * Line 29 keeps a structure only if a recurrent `Good_i` state lies in a
+//!   BSCC that misses `L_i`: "recurrent" alone would keep structures without
+//!   a phi-feasible recurrent set when `K_i` meets `L_i` or the loop stopped
+//!   early, contradicting the paper's soundness Proposition.
 
 mod algorithm;
 mod equations;
