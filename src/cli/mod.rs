@@ -2,8 +2,14 @@
 //! by clap) and `run(XArgs) -> anyhow::Result<()>`, which builds the library's
 //! objects from those arguments and prints or writes the results.
 
+mod check;
+mod common;
 mod demo;
+mod eval;
+mod example;
+mod export_gmc;
 mod prune;
+mod simulate;
 
 use clap::{Parser, Subcommand};
 
@@ -20,6 +26,16 @@ pub struct Cli {
 enum Command {
     /// Run the main job on the seed paper's 3x2 grid and explain the output.
     Demo(demo::DemoArgs),
+    /// Write a built-in example game (*.posg.json).
+    Example(example::ExampleArgs),
+    /// Validate a game file and describe it.
+    Check(check::CheckArgs),
+    /// The exact value of a controller pair, as JSON.
+    Eval(eval::EvalArgs),
+    /// A Monte Carlo estimate of the value with a 95% confidence interval.
+    Simulate(simulate::SimulateArgs),
+    /// Export the Markov chain on (s, g, h) in PRISM's explicit format.
+    ExportGmc(export_gmc::ExportGmcArgs),
     /// Algorithm 1: prune FSC structures so that a phi-feasible recurrent set exists.
     Prune(prune::PruneArgs),
 }
@@ -28,6 +44,11 @@ enum Command {
 pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Demo(args) => demo::run(args),
+        Command::Example(args) => example::run(args),
+        Command::Check(args) => check::run(args),
+        Command::Eval(args) => eval::run(args),
+        Command::Simulate(args) => simulate::run(args),
+        Command::ExportGmc(args) => export_gmc::run(args),
         Command::Prune(args) => prune::run(args),
     }
 }

@@ -16,20 +16,20 @@ use serde_json::{Value, json};
 use posg_fsc::automaton::Dra;
 use posg_fsc::controller::{Fsc, Role, Support, file};
 use posg_fsc::game::Posg;
-use posg_fsc::ltl;
 use posg_fsc::product::GmcState;
 use posg_fsc::prune::{Attempt, LastOptionStop, PruneReport, PruneSettings, prune};
 use posg_fsc::solver::DEFAULT_TOLERANCE;
 use posg_fsc::value::Evaluator;
+
+use super::common::{ObjectiveArgs, Provenance, objective, read_game};
 
 /// Arguments of `prune`.
 #[derive(Debug, Args)]
 pub struct PruneArgs {
     /// The game (`*.posg.json`).
     game: PathBuf,
-    /// The LTL formula phi (Spot syntax), e.g. `GF goal & G !unsafe`.
-    #[arg(long)]
-    ltl: String,
+    #[command(flatten)]
+    objective: ObjectiveArgs,
     /// Defender FSC size; the initial structure is the full support.
     #[arg(long, default_value_t = 1, conflicts_with = "defender")]
     def_nodes: usize,
@@ -56,9 +56,8 @@ pub struct PruneArgs {
 
 /// Runs Algorithm 1 and writes the structures and `structures.json`.
 pub fn run(args: PruneArgs) -> anyhow::Result<()> {
-    let game = posg_fsc::game::file::read(&args.game)?;
-    let formula = ltl::parse(&args.ltl).with_context(|| format!("parsing `{}`", args.ltl))?;
-    let dra = ltl::translate(&formula).with_context(|| format!("translating `{}`", args.ltl))?;
+    let game = read_game(&args.game)?;
+    let (dra, objective_text) = objective(&args.objective, &game)?;
     let defender = initial_structure(
         &game,
         Role::Defender,
@@ -98,8 +97,9 @@ pub fn run(args: PruneArgs) -> anyhow::Result<()> {
         }));
     }
     let summary = json!({
+        "provenance": Provenance::current(),
         "game": args.game.display().to_string(),
-        "ltl": args.ltl,
+        "objective": objective_text,
         "automaton": {"states": dra.num_states(), "pairs": dra.pairs().len()},
         "defender_nodes": defender.num_nodes(),
         "adversary_nodes": adversary.num_nodes(),
