@@ -1278,3 +1278,42 @@ fn complete_table(
         ),
     )
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn label_of(letters: &[usize], props: usize) -> String {
+        let on: Vec<bool> = (0..1 << props).map(|a| letters.contains(&a)).collect();
+        label_text(&on, props)
+    }
+
+    #[test]
+    fn labels_are_compact_sums_of_cubes() {
+        assert_eq!(label_of(&[0, 1, 2, 3], 2), "t");
+        assert_eq!(label_of(&[], 2), "f");
+        assert_eq!(label_of(&[1, 3], 2), "0");
+        assert_eq!(label_of(&[0, 2], 2), "!0");
+        assert_eq!(label_of(&[1, 2], 2), "0&!1 | !0&1");
+        assert_eq!(label_of(&[1, 2, 3], 2), "1 | 0");
+        assert_eq!(label_of(&[0], 0), "t");
+    }
+
+    #[test]
+    fn comments_nest_and_strings_unescape() {
+        let tokens =
+            tokenize("/* a /* b */ c */ \"x\\\"y\\\\\" @al name: 12 --BODY--").expect("lexes");
+        let kinds: Vec<Token> = tokens.into_iter().map(|(t, _)| t).collect();
+        assert_eq!(
+            kinds,
+            [
+                Token::Str("x\"y\\".into()),
+                Token::Alias("al".into()),
+                Token::Header("name".into()),
+                Token::Int(12),
+                Token::Body,
+                Token::Eof,
+            ]
+        );
+    }
+}

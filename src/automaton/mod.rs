@@ -12,7 +12,7 @@
 //!   HOA input and the LTL translator produce it; its conversion to a `Dra`
 //!   lives in [`emerson_lei`].
 //!
-//! [`minimise`] shrinks a `Dra` by partition refinement, and [`hoa`] reads
+//! [`minimise()`] shrinks a `Dra` by partition refinement, and [`hoa`] reads
 //! and writes both kinds in the HOA v1 format.
 //!
 //! Letters are bit sets: bit `i` of a [`Letter`] is set iff the automaton's
