@@ -74,9 +74,9 @@ pub fn maximal_end_components(mdp: &Mdp, within: &[bool]) -> Vec<EndComponent> {
             for a in mdp.global_actions(s) {
                 let leaves = enabled[a]
                     && mdp
-                    .global_distribution(a)
-                    .iter()
-                    .any(|&(t, _)| component[t] != component[s]);
+                        .global_distribution(a)
+                        .iter()
+                        .any(|&(t, _)| component[t] != component[s]);
                 if leaves {
                     enabled[a] = false;
                     changed = true;
@@ -175,7 +175,10 @@ mod tests {
     #[test]
     fn a_transient_chain_has_no_end_component_but_its_sink() {
         let m = mdp(&[&[&[(1, 1.0)]], &[&[(2, 1.0)]], &[&[(2, 1.0)]]]);
-        assert_eq!(states(&maximal_end_components(&m, &[true; 3])), vec![vec![2]]);
+        assert_eq!(
+            states(&maximal_end_components(&m, &[true; 3])),
+            vec![vec![2]]
+        );
     }
 
     /// Whether `set` (a bit mask) is the state set of some end component:

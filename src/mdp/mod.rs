@@ -227,7 +227,10 @@ fn check_distribution(distribution: &[(usize, f64)], n: usize) -> Result<(), Str
     if let Some(&(t, _)) = distribution.iter().find(|&&(t, _)| t >= n) {
         return Err(format!("successor {t} is not a state"));
     }
-    if let Some(&(_, p)) = distribution.iter().find(|&&(_, p)| !(p > 0.0 && p.is_finite())) {
+    if let Some(&(_, p)) = distribution
+        .iter()
+        .find(|&&(_, p)| !(p > 0.0 && p.is_finite()))
+    {
         return Err(format!("probability {p} is not positive and finite"));
     }
     let total: f64 = distribution.iter().map(|&(_, p)| p).sum();
@@ -255,7 +258,10 @@ pub(crate) mod tests {
 
     #[test]
     fn repeated_successors_are_summed_and_zeros_dropped() {
-        let m = mdp(&[&[&[(1, 0.25), (0, 0.0), (1, 0.25), (0, 0.5)]], &[&[(1, 1.0)]]]);
+        let m = mdp(&[
+            &[&[(1, 0.25), (0, 0.0), (1, 0.25), (0, 0.5)]],
+            &[&[(1, 1.0)]],
+        ]);
         assert_eq!(m.distribution(0, 0), &[(0, 0.5), (1, 0.5)]);
         assert_eq!(m.num_state_actions(), 2);
     }

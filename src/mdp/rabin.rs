@@ -81,7 +81,14 @@ pub fn max_rabin_probability(mdp: &Mdp, pairs: &[RabinPair]) -> Result<Reachabil
     let mut position = vec![usize::MAX; mdp.num_states()];
     for c in &accepting {
         let inf = &pairs[c.pair].inf;
-        stay_and_visit(mdp, &c.component, inf, &mut position, &mut decided, &mut result.strategy);
+        stay_and_visit(
+            mdp,
+            &c.component,
+            inf,
+            &mut position,
+            &mut decided,
+            &mut result.strategy,
+        );
     }
     Ok(result)
 }
@@ -166,7 +173,10 @@ mod tests {
     fn buchi_inside_a_component_needs_the_right_action() {
         let pairs = [pair(&[4], &[2, 4], 5)];
         let accepting = accepting_end_components(&cycle_or_trap(), &pairs).unwrap();
-        let states: Vec<_> = accepting.iter().map(|c| c.component.states.clone()).collect();
+        let states: Vec<_> = accepting
+            .iter()
+            .map(|c| c.component.states.clone())
+            .collect();
         assert_eq!(states, vec![vec![1, 2]]);
         let result = max_rabin_probability(&cycle_or_trap(), &pairs).unwrap();
         assert_eq!(result.values, vec![0.5, 1.0, 1.0, 0.0, 0.0]);

@@ -179,7 +179,11 @@ fn improve(mdp: &Mdp, values: &[f64], maybe: &[usize], strategy: &mut [usize]) -
         let (best_action, best) = (0..mdp.num_actions(s))
             .map(|a| (a, mdp.expectation(s, a, values)))
             .fold((strategy[s], current), |best, candidate| {
-                if candidate.1 > best.1 { candidate } else { best }
+                if candidate.1 > best.1 {
+                    candidate
+                } else {
+                    best
+                }
             });
         gap = gap.max(best - current);
         if best > current + IMPROVEMENT_THRESHOLD {
