@@ -1,8 +1,11 @@
 //! Deterministic automata with transition-based marks and an Emerson-Lei
 //! acceptance condition (a positive Boolean formula over `Fin(m)` and
-//! `Inf(m)`), as in HOA v1.
+//! `Inf(m)`), as in HOA v1, and their conversion to state-based Rabin
+//! automata ([`to_state_based_rabin`]).
 
-use super::{AutomatonError, Letter, MAX_PROPOSITIONS};
+use rustc_hash::FxHashMap;
+
+use super::{AutomatonError, Dra, Letter, MAX_PROPOSITIONS, RabinPair};
 
 /// A set of acceptance marks `0..64`: bit `m` set iff mark `m` is present.
 pub type MarkSet = u64;
@@ -188,5 +191,288 @@ impl EmersonLeiAutomaton {
             q = edge.target as usize;
         };
         self.acceptance.holds_on(&marks[loop_start..])
+    }
+}
+
+/// The largest number of disjuncts [`to_state_based_rabin`] lets the
+/// disjunctive normal form of an acceptance condition (or of any of its
+/// subformulas) reach before simplification; past it the conversion fails
+/// rather than blow up.
+pub const MAX_DNF_DISJUNCTS: usize = 4096;
+
+/// The largest transition table (states times letters) that
+/// [`to_state_based_rabin`] builds.
+pub const MAX_TABLE_ENTRIES: usize = 1 << 26;
+
+/// Converts a transition-based Emerson-Lei automaton into an equivalent
+/// deterministic, complete, state-based Rabin automaton.
+///
+/// The construction:
+///
+/// 1. **Acceptance to generalised Rabin.** A set of transitions is named by
+///    mark literals: `m` (the transitions carrying mark `m`) or `!m` (those
+///    not carrying it). The formula is put in disjunctive normal form by
+///    distributing `&` over `|`; constants are folded, and so are atoms on
+///    marks no transition can carry (`Fin(m)` = `t`, `Inf(m)` = `f`,
+///    `Fin(!m)` = `f`, `Inf(!m)` = `t`). Each disjunct is a conjunction
+///    `Fin(F) & Inf(I_1) & ... & Inf(I_k)` where the `Fin` atoms are merged
+///    into one by `Fin(a) & Fin(b) = Fin(a | b)`, so `F` is a union of
+///    literals and each `I_j` is one literal: a generalised Rabin pair.
+///    Disjuncts that cannot hold (`Fin` of both `m` and `!m`, or `Inf(l)` with
+///    `l` inside `F`) and disjuncts implied by another one are dropped. If a
+///    normal form (of the whole formula or of a subformula) would exceed
+///    [`MAX_DNF_DISJUNCTS`] disjuncts, the conversion fails.
+/// 2. **Degeneralisation and state splitting.** The states of the result are
+///    the tuples `(q, c_1, s_1, ..., c_n, s_n)` reachable from
+///    `(q_0, 0, -, ..., 0, -)`, one counter `c_i` in `0..k_i` and one record
+///    `s_i` per generalised pair `i`. On a transition `q --a--> q'` the counter
+///    `c_i` advances while the transition lies in `I_{i, c_i}`; when it passes
+///    `k_i` it restarts at 0 and the pair has completed a round. The record
+///    `s_i` of the entered state says whether the entering transition lay in
+///    `F_i` and whether it completed a round of pair `i`.
+/// 3. **Rabin pairs on states.** `L_i` is the set of states entered through a
+///    transition in `F_i`; `K_i` is the set of states entered when pair `i`
+///    completed a round, or all states if `k_i = 0`. A run visits `L_i`
+///    infinitely often iff the original run takes `F_i` infinitely often, and
+///    `K_i` iff it takes every `I_{i, j}` infinitely often.
+///
+/// `Constant(true)` thus gives the single pair `(empty set, all states)` and
+/// `Constant(false)` no pair at all. States are numbered in breadth-first
+/// order from the initial state `0`, letters in increasing order. The result
+/// fails if its table would exceed [`MAX_TABLE_ENTRIES`] entries.
+pub fn to_state_based_rabin(aut: &EmersonLeiAutomaton) -> Result<Dra, AutomatonError> {
+    let pairs = generalised_pairs(aut.acceptance(), aut.num_marks())?;
+    let letters = 1usize << aut.propositions().len();
+    let mut initial = vec![aut.initial() as u32];
+    initial.extend(std::iter::repeat_n(0, 2 * pairs.len()));
+    let mut keys = vec![initial.clone()];
+    let mut index = FxHashMap::default();
+    index.insert(initial, 0u32);
+    let mut successors = Vec::new();
+    let mut next = 0;
+    while next < keys.len() {
+        for letter in 0..letters {
+            let key = step(aut, &pairs, &keys[next], letter as Letter);
+            let id = match index.get(&key) {
+                Some(&id) => id,
+                None => {
+                    if (keys.len() + 1) * letters > MAX_TABLE_ENTRIES {
+                        return Err(AutomatonError::Malformed(format!(
+                            "the state-based Rabin automaton would exceed {} states",
+                            MAX_TABLE_ENTRIES / letters
+                        )));
+                    }
+                    let id = keys.len() as u32;
+                    keys.push(key.clone());
+                    index.insert(key, id);
+                    id
+                }
+            };
+            successors.push(id);
+        }
+        next += 1;
+    }
+    let rabin_pairs = pairs
+        .iter()
+        .enumerate()
+        .map(|(i, pair)| state_pair(pair, i, &keys))
+        .collect();
+    Dra::new(
+        aut.propositions().to_vec(),
+        keys.len(),
+        0,
+        successors,
+        rabin_pairs,
+    )
+}
+
+/// A set of transitions named by mark literals: bit `2m` stands for the
+/// transitions carrying mark `m`, bit `2m + 1` for those not carrying it; a
+/// set of literals stands for the union of their transitions.
+type Literals = u128;
+
+/// The bits `2m` of [`Literals`] (the positive literals).
+const POSITIVE_LITERALS: Literals = 0x5555_5555_5555_5555_5555_5555_5555_5555;
+
+/// The literal for `m` (`complemented = false`) or `!m`.
+fn literal(mark: u32, complemented: bool) -> Literals {
+    1 << (2 * mark + u32::from(complemented))
+}
+
+/// The literals a transition carrying `marks` satisfies.
+fn literals_of(marks: MarkSet, num_marks: u32) -> Literals {
+    (0..num_marks).fold(0, |acc, m| acc | literal(m, (marks >> m) & 1 == 0))
+}
+
+/// One disjunct of an acceptance condition in normal form:
+/// `Fin(fin) & Inf(l_1) & ... & Inf(l_k)` over the literals `l_j` of `inf`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct Conjunct {
+    /// The union of the `Fin` literals.
+    fin: Literals,
+    /// The `Inf` literals, each its own atom.
+    inf: Literals,
+}
+
+impl Conjunct {
+    /// The empty conjunction, `t`.
+    const TRUE: Conjunct = Conjunct { fin: 0, inf: 0 };
+
+    /// The conjunction of both.
+    fn and(self, other: Conjunct) -> Conjunct {
+        Conjunct {
+            fin: self.fin | other.fin,
+            inf: self.inf | other.inf,
+        }
+    }
+
+    /// False iff the conjunct can hold on no run: `Fin` of all transitions
+    /// (`m` and `!m`), or `Inf` of a literal inside the `Fin` set.
+    fn satisfiable(self) -> bool {
+        let fin_of_all = self.fin & (self.fin >> 1) & POSITIVE_LITERALS;
+        fin_of_all == 0 && self.fin & self.inf == 0
+    }
+
+    /// Whether every run satisfying `self` satisfies `other`.
+    fn implies(self, other: Conjunct) -> bool {
+        other.fin & !self.fin == 0 && other.inf & !self.inf == 0
+    }
+}
+
+/// A generalised Rabin pair: `Fin(fin) & Inf(infs[0]) & ... `.
+#[derive(Debug, Clone, PartialEq, Eq)]
+struct GeneralisedPair {
+    fin: Literals,
+    infs: Vec<Literals>,
+}
+
+/// The generalised Rabin pairs of an acceptance condition (step 1 of
+/// [`to_state_based_rabin`]).
+fn generalised_pairs(
+    acceptance: &Acceptance,
+    num_marks: u32,
+) -> Result<Vec<GeneralisedPair>, AutomatonError> {
+    let pairs = to_dnf(acceptance, num_marks)?
+        .into_iter()
+        .map(|c| GeneralisedPair {
+            fin: c.fin,
+            infs: (0..Literals::BITS)
+                .map(|bit| 1 << bit)
+                .filter(|l| c.inf & l != 0)
+                .collect(),
+        })
+        .collect();
+    Ok(pairs)
+}
+
+/// `t` as `[TRUE]`, `f` as `[]`.
+fn constant(value: bool) -> Vec<Conjunct> {
+    if value { vec![Conjunct::TRUE] } else { vec![] }
+}
+
+/// The simplified disjunctive normal form of `acceptance`.
+fn to_dnf(acceptance: &Acceptance, num_marks: u32) -> Result<Vec<Conjunct>, AutomatonError> {
+    match acceptance {
+        Acceptance::Constant(value) => Ok(constant(*value)),
+        Acceptance::Fin { mark, complemented } if *mark >= num_marks => Ok(constant(!complemented)),
+        Acceptance::Inf { mark, complemented } if *mark >= num_marks => Ok(constant(*complemented)),
+        Acceptance::Fin { mark, complemented } => Ok(vec![Conjunct {
+            fin: literal(*mark, *complemented),
+            inf: 0,
+        }]),
+        Acceptance::Inf { mark, complemented } => Ok(vec![Conjunct {
+            fin: 0,
+            inf: literal(*mark, *complemented),
+        }]),
+        Acceptance::And(parts) => parts.iter().try_fold(constant(true), |acc, part| {
+            let other = to_dnf(part, num_marks)?;
+            check_dnf_size(acc.len() * other.len())?;
+            let product = acc
+                .iter()
+                .flat_map(|a| other.iter().map(move |b| a.and(*b)))
+                .collect();
+            Ok(simplify(product))
+        }),
+        Acceptance::Or(parts) => parts.iter().try_fold(constant(false), |mut acc, part| {
+            let other = to_dnf(part, num_marks)?;
+            check_dnf_size(acc.len() + other.len())?;
+            acc.extend(other);
+            Ok(simplify(acc))
+        }),
+    }
+}
+
+/// Fails past [`MAX_DNF_DISJUNCTS`].
+fn check_dnf_size(disjuncts: usize) -> Result<(), AutomatonError> {
+    if disjuncts > MAX_DNF_DISJUNCTS {
+        return Err(AutomatonError::Malformed(format!(
+            "the acceptance condition has more than {MAX_DNF_DISJUNCTS} disjuncts \
+             in disjunctive normal form"
+        )));
+    }
+    Ok(())
+}
+
+/// Drops unsatisfiable disjuncts and disjuncts implied by another one (of two
+/// equal disjuncts the first stays), keeping the order otherwise.
+fn simplify(disjuncts: Vec<Conjunct>) -> Vec<Conjunct> {
+    let candidates: Vec<Conjunct> = disjuncts.into_iter().filter(|c| c.satisfiable()).collect();
+    let redundant = |i: usize, c: Conjunct| {
+        candidates
+            .iter()
+            .enumerate()
+            .any(|(j, &d)| j != i && c.implies(d) && (j < i || !d.implies(c)))
+    };
+    candidates
+        .iter()
+        .enumerate()
+        .filter(|&(i, &c)| !redundant(i, c))
+        .map(|(_, &c)| c)
+        .collect()
+}
+
+/// Record bit: the entering transition lay in the pair's `Fin` set.
+const FIN_SEEN: u32 = 1;
+/// Record bit: the entering transition completed a round of the pair.
+const ROUND_DONE: u32 = 2;
+
+/// The successor of the product state `key = [q, c_1, s_1, ..., c_n, s_n]` on
+/// `letter` (step 2 of [`to_state_based_rabin`]).
+fn step(
+    aut: &EmersonLeiAutomaton,
+    pairs: &[GeneralisedPair],
+    key: &[u32],
+    letter: Letter,
+) -> Vec<u32> {
+    let edge = aut.edge(key[0] as usize, letter);
+    let seen = literals_of(edge.marks, aut.num_marks());
+    let mut next = Vec::with_capacity(key.len());
+    next.push(edge.target);
+    for (i, pair) in pairs.iter().enumerate() {
+        let mut counter = key[1 + 2 * i] as usize;
+        let mut record = if seen & pair.fin != 0 { FIN_SEEN } else { 0 };
+        while counter < pair.infs.len() && seen & pair.infs[counter] != 0 {
+            counter += 1;
+        }
+        if !pair.infs.is_empty() && counter == pair.infs.len() {
+            counter = 0;
+            record |= ROUND_DONE;
+        }
+        next.push(counter as u32);
+        next.push(record);
+    }
+    next
+}
+
+/// The Rabin pair on product states for generalised pair `i` (step 3 of
+/// [`to_state_based_rabin`]).
+fn state_pair(pair: &GeneralisedPair, i: usize, keys: &[Vec<u32>]) -> RabinPair {
+    let record = |key: &Vec<u32>| key[2 + 2 * i];
+    RabinPair {
+        fin: keys.iter().map(|k| record(k) & FIN_SEEN != 0).collect(),
+        inf: keys
+            .iter()
+            .map(|k| pair.infs.is_empty() || record(k) & ROUND_DONE != 0)
+            .collect(),
     }
 }

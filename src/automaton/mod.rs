@@ -18,8 +18,10 @@
 //! [`MAX_PROPOSITIONS`].
 
 pub mod emerson_lei;
+pub mod minimise;
 
-pub use emerson_lei::{Acceptance, EmersonLeiAutomaton, MarkSet};
+pub use emerson_lei::{Acceptance, EmersonLeiAutomaton, MarkSet, to_state_based_rabin};
+pub use minimise::minimise;
 
 use thiserror::Error;
 

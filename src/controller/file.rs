@@ -1,1 +1,314 @@
-//! (in progress)
+//! Reading and writing controllers as `*.fsc.json` (formats.md section 2),
+//! and the command-line shorthand `uniform:K`.
+//!
+//! A controller file names observations and actions; they are resolved
+//! against the player of the game it is used with, so reading needs the game
+//! and the [`Role`]. Errors are [`ModelError`]s at `FILE: JSON.path`, as for
+//! game files ([`crate::game::file`]).
+
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+
+use super::{Choice, Fsc, Role};
+use crate::game::file::{Located, check_probability, normalise, parse, read_text, write_text};
+use crate::game::{ModelError, Player, Posg};
+
+/// The only format version this crate reads and writes (`"fsc": 1`).
+pub const FORMAT_VERSION: u64 = 1;
+
+/// Reads and validates the controller file at `path` for `role` in `game`
+/// (formats.md section 2).
+pub fn read(path: &Path, game: &Posg, role: Role) -> Result<Fsc, ModelError> {
+    let file_name = path.display().to_string();
+    let text = read_text(path, &file_name)?;
+    from_json_str(&text, &file_name, game, role)
+}
+
+/// Parses and validates a controller for `role` in `game` from JSON `text`
+/// (formats.md section 2); `file_name` prefixes the path of every error.
+pub fn from_json_str(
+    text: &str,
+    file_name: &str,
+    game: &Posg,
+    role: Role,
+) -> Result<Fsc, ModelError> {
+    let raw: RawFsc = parse(text, file_name)?;
+    build(raw, &Located::new(file_name, ""), player(game, role), role)
+}
+
+/// The controller as pretty-printed JSON naming `game`'s observations and
+/// actions: one rule per (node, observation), `"default": "error"`, the
+/// `logit` of every choice that has one.
+pub fn to_json_string(fsc: &Fsc, game: &Posg) -> String {
+    let raw = RawFsc::from_fsc(fsc, player(game, fsc.role));
+    serde_json::to_string_pretty(&raw).expect("a controller always serialises")
+}
+
+/// Writes the controller to `path` as [`to_json_string`] does.
+pub fn write(path: &Path, fsc: &Fsc, game: &Posg) -> Result<(), ModelError> {
+    write_text(path, &to_json_string(fsc, game))
+}
+
+/// The controller a command-line argument names: `uniform:K` is
+/// [`Fsc::uniform`] with `K >= 1` nodes; anything else is a file path read
+/// with [`read`]. For a POMDP the adversary's `uniform:1` is the trivial controller.
+pub fn resolve(spec: &str, game: &Posg, role: Role) -> Result<Fsc, ModelError> {
+    let Some(size) = spec.strip_prefix("uniform:") else {
+        return read(Path::new(spec), game, role);
+    };
+    let nodes = size
+        .parse::<usize>()
+        .ok()
+        .filter(|&k| k >= 1)
+        .ok_or_else(|| {
+            ModelError::new(
+                spec,
+                format!("`uniform:K` needs a whole number K >= 1, not `{size}`"),
+            )
+        })?;
+    let p = player(game, role);
+    Ok(Fsc::uniform(
+        role,
+        nodes,
+        p.num_observations(),
+        p.num_actions(),
+    ))
+}
+
+fn player(game: &Posg, role: Role) -> &Player {
+    match role {
+        Role::Defender => game.defender(),
+        Role::Adversary => game.adversary(),
+    }
+}
+
+/// The top-level object of a `*.fsc.json` file.
+#[derive(Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+struct RawFsc {
+    fsc: u64,
+    player: Role,
+    nodes: usize,
+    initial: Vec<f64>,
+    rules: Vec<RawRule>,
+    #[serde(default)]
+    default: MissingRule,
+}
+
+/// What a (node, observation) pair without a rule means.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize, Serialize)]
+#[serde(rename_all = "lowercase")]
+enum MissingRule {
+    #[default]
+    Error,
+    Uniform,
+}
+
+/// One entry of `rules`.
+#[derive(Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+struct RawRule {
+    node: usize,
+    observation: String,
+    choices: Vec<RawChoice>,
+}
+
+/// One entry of a rule's `choices`.
+#[derive(Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+struct RawChoice {
+    next: usize,
+    action: String,
+    p: f64,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    logit: Option<f64>,
+}
+
+fn build(raw: RawFsc, at: &Located, player: &Player, role: Role) -> Result<Fsc, ModelError> {
+    if raw.fsc != FORMAT_VERSION {
+        return Err(at.key("fsc").error(format!(
+            "unsupported format version {} (expected {FORMAT_VERSION})",
+            raw.fsc
+        )));
+    }
+    if raw.player != role {
+        return Err(at.key("player").error(format!(
+            "the file's player is `{}`, but a controller for the `{}` is needed",
+            role_name(raw.player),
+            role_name(role)
+        )));
+    }
+    if raw.nodes == 0 {
+        return Err(at
+            .key("nodes")
+            .error("a controller needs at least one node"));
+    }
+    let initial = initial(&raw.initial, raw.nodes, &at.key("initial"))?;
+    let blocks = blocks(&raw, &at.key("rules"), player)?;
+    Fsc::new(
+        role,
+        raw.nodes,
+        player.num_observations(),
+        player.num_actions(),
+        initial,
+        blocks,
+    )
+}
+
+fn role_name(role: Role) -> &'static str {
+    match role {
+        Role::Defender => "defender",
+        Role::Adversary => "adversary",
+    }
+}
+
+fn initial(raw: &[f64], nodes: usize, at: &Located) -> Result<Vec<f64>, ModelError> {
+    if raw.len() != nodes {
+        return Err(at.error(format!(
+            "{} entries for {nodes} nodes (one probability per node is needed)",
+            raw.len()
+        )));
+    }
+    for (g, &p) in raw.iter().enumerate() {
+        check_probability(p, &at.index(g))?;
+    }
+    let mut initial = raw.to_vec();
+    normalise(&mut initial, at)?;
+    Ok(initial)
+}
+
+/// One block per (node, observation), in the order `g * |O| + o`.
+fn blocks(raw: &RawFsc, at: &Located, player: &Player) -> Result<Vec<Vec<Choice>>, ModelError> {
+    let num_obs = player.num_observations();
+    let mut blocks: Vec<Option<Vec<Choice>>> = vec![None; raw.nodes * num_obs];
+    for (i, rule) in raw.rules.iter().enumerate() {
+        let here = at.index(i);
+        let (g, o) = rule_key(rule, raw.nodes, &here, player)?;
+        if blocks[g * num_obs + o].is_some() {
+            return Err(here.error(format!(
+                "a second rule for node {g}, observation `{}`",
+                rule.observation
+            )));
+        }
+        blocks[g * num_obs + o] = Some(choices(rule, raw.nodes, &here.key("choices"), player)?);
+    }
+    let uniform = Fsc::uniform(Role::Defender, raw.nodes, 1, player.num_actions()).blocks;
+    blocks
+        .into_iter()
+        .enumerate()
+        .map(|(b, block)| match (block, raw.default) {
+            (Some(block), _) => Ok(block),
+            (None, MissingRule::Uniform) => Ok(uniform[0].clone()),
+            (None, MissingRule::Error) => Err(at.error(format!(
+                "no rule for node {}, observation `{}` (and \"default\" is \"error\")",
+                b / num_obs,
+                player.observations()[b % num_obs]
+            ))),
+        })
+        .collect()
+}
+
+/// `(node, observation index)` of a rule.
+fn rule_key(
+    rule: &RawRule,
+    nodes: usize,
+    at: &Located,
+    player: &Player,
+) -> Result<(usize, usize), ModelError> {
+    if rule.node >= nodes {
+        return Err(at.key("node").error(format!(
+            "node {} is out of range (the controller has {nodes} nodes)",
+            rule.node
+        )));
+    }
+    let o = index_of(player.observations(), &rule.observation).ok_or_else(|| {
+        at.key("observation").error(format!(
+            "unknown observation `{}` of the player",
+            rule.observation
+        ))
+    })?;
+    Ok((rule.node, o))
+}
+
+/// A rule's choices: checked, renormalised, zero-probability choices dropped.
+fn choices(
+    rule: &RawRule,
+    nodes: usize,
+    at: &Located,
+    player: &Player,
+) -> Result<Vec<Choice>, ModelError> {
+    let mut choices: Vec<Choice> = Vec::with_capacity(rule.choices.len());
+    for (j, c) in rule.choices.iter().enumerate() {
+        let here = at.index(j);
+        if c.next >= nodes {
+            return Err(here.key("next").error(format!(
+                "node {} is out of range (the controller has {nodes} nodes)",
+                c.next
+            )));
+        }
+        let action = index_of(player.actions(), &c.action).ok_or_else(|| {
+            here.key("action")
+                .error(format!("unknown action `{}` of the player", c.action))
+        })?;
+        if let Some(k) = choices
+            .iter()
+            .position(|d| (d.next, d.action) == (c.next, action))
+        {
+            return Err(here.error(format!(
+                "(next {}, action `{}`) is already listed at {}[{k}]",
+                c.next,
+                c.action,
+                at.path()
+            )));
+        }
+        check_probability(c.p, &here.key("p"))?;
+        choices.push(Choice {
+            next: c.next,
+            action,
+            probability: c.p,
+            logit: c.logit,
+        });
+    }
+    let mut weights: Vec<f64> = choices.iter().map(|c| c.probability).collect();
+    normalise(&mut weights, at)?;
+    for (c, w) in choices.iter_mut().zip(weights) {
+        c.probability = w;
+    }
+    choices.retain(|c| c.probability > 0.0);
+    Ok(choices)
+}
+
+fn index_of(names: &[String], name: &str) -> Option<usize> {
+    names.iter().position(|n| n == name)
+}
+
+impl RawFsc {
+    fn from_fsc(fsc: &Fsc, player: &Player) -> Self {
+        let rules = (0..fsc.num_nodes)
+            .flat_map(|g| (0..fsc.num_observations).map(move |o| (g, o)))
+            .map(|(g, o)| RawRule {
+                node: g,
+                observation: player.observations()[o].clone(),
+                choices: fsc
+                    .choices(g, o)
+                    .iter()
+                    .map(|c| RawChoice {
+                        next: c.next,
+                        action: player.actions()[c.action].clone(),
+                        p: c.probability,
+                        logit: c.logit,
+                    })
+                    .collect(),
+            })
+            .collect();
+        Self {
+            fsc: FORMAT_VERSION,
+            player: fsc.role,
+            nodes: fsc.num_nodes,
+            initial: fsc.initial.clone(),
+            rules,
+            default: MissingRule::Error,
+        }
+    }
+}

@@ -1,1 +1,157 @@
-//! (in progress)
+//! Linear temporal logic: parsing, simplification, evaluation on lasso words,
+//! and translation to deterministic Rabin automata.
+//!
+//! * [`Formula`] is the syntax tree; [`parse`] reads Spot's syntax and
+//!   `Display` prints it back.
+//! * [`holds_on_lasso`] evaluates a formula directly on an ultimately
+//!   periodic word `u v^omega`; it is the test oracle of the translation.
+//! * [`translate`] builds a deterministic, complete, state-based Rabin
+//!   automaton ([`Dra`]) over `2^AP` accepting exactly the words that satisfy
+//!   the formula; [`translate_to_emerson_lei`] gives the transition-based
+//!   generalised Rabin automaton it starts from.
+//!
+//! # Construction
+//!
+//! The formula is put in negation normal form and simplified with
+//! Spot-style rewriting rules. Then:
+//!
+//! * **obligation formulas** (Boolean combinations of syntactic safety and
+//!   co-safety formulas, which covers pure safety and co-safety) get the
+//!   *weak* automaton whose states are the propositional equivalence classes
+//!   `af(phi, u)` of the "after" function, with one verdict per strongly
+//!   connected component, found by evaluating the state's formula on the
+//!   word of one cycle;
+//! * **all other formulas** get the construction of Esparza, Křetínský and
+//!   Sickert, "A Unified Translation of Linear Temporal Logic to
+//!   ω-Automata", J. ACM 67(6), 2020 (the "Master Theorem"): the product of
+//!   the `af`-tracker with one co-Büchi or Büchi monitor per needed formula
+//!   and a transition-based generalised Rabin condition with one disjunct
+//!   per guess `(X, Y)` of the mu- and nu-subformulas that hold infinitely
+//!   often and almost always.
+//!
+//! Propositional equivalence classes are reduced ordered BDDs over the
+//! formula's temporal subformulas, so equivalent states coincide. The
+//! generalised Rabin automaton is turned into a state-based Rabin automaton
+//! (marks moved onto states, counters for generalised pairs) and minimised by
+//! partition refinement.
+
+mod af;
+mod bdd;
+mod construct;
+mod formula;
+mod lasso;
+mod parser;
+mod rabin;
+
+pub use formula::Formula;
+pub use lasso::{LassoError, holds_on_lasso};
+pub use parser::{ParseError, parse};
+
+use thiserror::Error;
+
+use crate::automaton::emerson_lei::Acceptance;
+use crate::automaton::{AutomatonError, Dra, EmersonLeiAutomaton, MAX_PROPOSITIONS};
+
+/// Why a formula could not be translated.
+#[derive(Debug, Error, Clone, PartialEq, Eq)]
+pub enum TranslateError {
+    /// The formula has more than [`MAX_PROPOSITIONS`] propositions.
+    #[error("{count} atomic propositions; at most {MAX_PROPOSITIONS} are supported")]
+    TooManyPropositions {
+        /// The number of distinct propositions.
+        count: usize,
+    },
+    /// The Master Theorem construction would enumerate too many guesses.
+    #[error("{count} temporal subformulas with fixpoints; at most {limit} are supported")]
+    TooManyFixpoints {
+        /// `|mu(phi)| + |nu(phi)|` after simplification.
+        count: usize,
+        /// The largest supported number.
+        limit: usize,
+    },
+    /// The acceptance condition would need more marks than a mark set holds.
+    #[error("{count} acceptance marks needed; at most {limit} are supported")]
+    TooManyMarks {
+        /// The number of marks needed.
+        count: usize,
+        /// The largest supported number.
+        limit: usize,
+    },
+    /// The automaton would have too many states.
+    #[error("the automaton exceeds {limit} states")]
+    TooLarge {
+        /// The largest number of states built.
+        limit: usize,
+    },
+    /// The automaton could not be assembled.
+    #[error(transparent)]
+    Automaton(#[from] AutomatonError),
+}
+
+/// The propositions of `formula`, checked against [`MAX_PROPOSITIONS`].
+fn checked_propositions(formula: &Formula) -> Result<Vec<String>, TranslateError> {
+    let propositions = formula.propositions();
+    if propositions.len() > MAX_PROPOSITIONS {
+        return Err(TranslateError::TooManyPropositions {
+            count: propositions.len(),
+        });
+    }
+    Ok(propositions)
+}
+
+/// The transition-based generalised Rabin automaton of `formula`.
+fn build(formula: &Formula, propositions: &[String]) -> Result<construct::Tgr, TranslateError> {
+    let nnf = formula::nnf(formula, true);
+    let letters = 1usize << propositions.len();
+    let mut context = af::Context::new(propositions);
+    if formula::is_obligation(&nnf) {
+        construct::weak(&mut context, &nnf, letters)
+    } else {
+        construct::master(&mut context, &nnf, letters)
+    }
+}
+
+/// A deterministic, complete, state-based Rabin automaton over `2^AP`, where
+/// `AP` is `formula.propositions()` (sorted; bit `i` of a letter is the
+/// `i`-th), accepting exactly the infinite words that satisfy `formula`.
+pub fn translate(formula: &Formula) -> Result<Dra, TranslateError> {
+    let propositions = checked_propositions(formula)?;
+    let tgr = build(formula, &propositions)?;
+    rabin::to_dra(&tgr, propositions)
+}
+
+/// A deterministic, complete automaton over `2^AP` (`AP` as in
+/// [`translate`]) with transition-based marks and a generalised Rabin
+/// condition `OR_i (Fin(m_i) & AND_j Inf(m_ij))`, accepting exactly the
+/// infinite words that satisfy `formula`.
+pub fn translate_to_emerson_lei(formula: &Formula) -> Result<EmersonLeiAutomaton, TranslateError> {
+    let propositions = checked_propositions(formula)?;
+    let tgr = build(formula, &propositions)?;
+    let acceptance = Acceptance::Or(
+        tgr.disjuncts
+            .iter()
+            .map(|d| {
+                let fin = (0..tgr.num_marks)
+                    .filter(|&m| (d.fin >> m) & 1 == 1)
+                    .map(|mark| Acceptance::Fin {
+                        mark,
+                        complemented: false,
+                    });
+                let inf = d.inf.iter().map(|&mark| Acceptance::Inf {
+                    mark,
+                    complemented: false,
+                });
+                Acceptance::And(fin.chain(inf).collect())
+            })
+            .collect(),
+    );
+    let num_states = tgr.num_states();
+    Ok(EmersonLeiAutomaton::new(
+        propositions,
+        num_states,
+        tgr.initial,
+        tgr.edges,
+        tgr.num_marks,
+        acceptance,
+    )?)
+}

@@ -1,0 +1,119 @@
+//! Export of the labelled Markov chain on `(s, g, h)` in PRISM's explicit
+//! format, so that Storm or PRISM can check a value independently.
+//!
+//! The chain is the GMC without the automaton: `P((s',g',h') | (s,g,h)) =
+//! sum_{u,v} A_def(g',u | s,g) A_adv(h',v | s,h) T(s' | s,u,v)` on the states
+//! reachable from the initial distribution, each labelled by `L(s)`.
+//! Explicit formats have one initial state, so state 0 is a fresh initial
+//! state, labelled `init` and with no proposition, whose transitions carry the
+//! initial distribution `init(s) init_def(g) init_adv(h)`. Its trace is
+//! `{} L(s_0) L(s_1) ...`: **check `X phi`** on the exported chain to get
+//! the value of `phi`.
+//!
+//! Files: `chain.tra` (`states transitions`, then `source target probability`
+//! lines), `chain.lab` (label declarations, then `state: labels` lines) and
+//! `chain.sta` (the `(s,g,h)` names of the states).
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use crate::automaton::{Dra, RabinPair};
+use crate::controller::{Fsc, Support};
+use crate::game::Posg;
+use crate::product::{Gmc, ProductError};
+
+/// Sizes of an exported chain.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub struct ExportSummary {
+    /// States, including the fresh initial state.
+    pub states: usize,
+    /// Transitions, including those of the fresh initial state.
+    pub transitions: usize,
+}
+
+/// The three files' contents: `(tra, lab, sta)`.
+pub struct ExplicitChain {
+    /// `chain.tra`.
+    pub tra: String,
+    /// `chain.lab`.
+    pub lab: String,
+    /// `chain.sta`.
+    pub sta: String,
+    /// Sizes.
+    pub summary: ExportSummary,
+}
+
+/// Builds the explicit chain of the game under the two controllers.
+pub fn explicit_chain(
+    game: &Posg,
+    defender: &Fsc,
+    adversary: &Fsc,
+) -> Result<ExplicitChain, ProductError> {
+    let trivial = Dra::new(
+        Vec::new(),
+        1,
+        0,
+        vec![0],
+        vec![RabinPair {
+            fin: vec![false],
+            inf: vec![true],
+        }],
+    )
+    .expect("a one-state automaton is well formed");
+    let mut gmc = Gmc::build(
+        game,
+        &trivial,
+        &Support::of(defender),
+        &Support::of(adversary),
+    )?;
+    gmc.refill(
+        &Support::probabilities_of(defender),
+        &Support::probabilities_of(adversary),
+    );
+    let initial: Vec<(usize, f64)> = gmc.initial().filter(|&(_, p)| p > 0.0).collect();
+    let transitions = initial.len() + gmc.num_transitions();
+    let states = gmc.num_states() + 1;
+    let mut tra = format!("{states} {transitions}\n");
+    for &(m, p) in &initial {
+        writeln!(tra, "0 {} {p:e}", m + 1).expect("writing to a String");
+    }
+    for m in 0..gmc.num_states() {
+        let (columns, values) = gmc.row(m);
+        for (&c, &p) in columns.iter().zip(values) {
+            writeln!(tra, "{} {} {p:e}", m + 1, c + 1).expect("writing to a String");
+        }
+    }
+    let mut lab = String::from("0=\"init\" 1=\"deadlock\"");
+    for (i, name) in game.propositions().iter().enumerate() {
+        write!(lab, " {}=\"{name}\"", i + 2).expect("writing to a String");
+    }
+    lab.push_str("\n0: 0\n");
+    let mut sta = String::from("(s,g,h)\n0:(init,-,-)\n");
+    for m in 0..gmc.num_states() {
+        let state = gmc.state(m);
+        let label = game.label(state.s as usize);
+        if !label.is_empty() {
+            let ids: Vec<String> = label.iter().map(|p| (p + 2).to_string()).collect();
+            writeln!(lab, "{}: {}", m + 1, ids.join(" ")).expect("writing to a String");
+        }
+        let name = &game.states()[state.s as usize];
+        writeln!(sta, "{}:({name},{},{})", m + 1, state.g, state.h).expect("writing to a String");
+    }
+    Ok(ExplicitChain {
+        tra,
+        lab,
+        sta,
+        summary: ExportSummary {
+            states,
+            transitions,
+        },
+    })
+}
+
+/// Writes `chain.tra`, `chain.lab` and `chain.sta` into `dir` (created if needed).
+pub fn write_explicit_chain(chain: &ExplicitChain, dir: &Path) -> std::io::Result<()> {
+    std::fs::create_dir_all(dir)?;
+    std::fs::write(dir.join("chain.tra"), &chain.tra)?;
+    std::fs::write(dir.join("chain.lab"), &chain.lab)?;
+    std::fs::write(dir.join("chain.sta"), &chain.sta)
+}

@@ -1,0 +1,390 @@
+//! The two constructions of deterministic automata from NNF formulas:
+//!
+//! * [`weak`]: for obligation formulas, the automaton of `af`-classes with a
+//!   verdict per strongly connected component;
+//! * [`master`]: for every formula, the product of the `af`-tracker with the
+//!   co-Büchi and Büchi monitors of the Master Theorem, with a transition-based
+//!   generalised Rabin condition (one disjunct per guess `(X, Y)`).
+
+use rustc_hash::FxHashMap;
+
+use super::TranslateError;
+use super::af::{self, Context, Kind};
+use super::bdd::{FALSE, Node, TRUE};
+use super::formula::Formula;
+use crate::automaton::emerson_lei::Edge;
+use crate::automaton::{Letter, MarkSet};
+use crate::graph::{self, Digraph};
+
+/// One disjunct of a generalised Rabin condition: the transitions carrying a
+/// mark of `fin` are taken finitely often and, for every mark of `inf`, the
+/// transitions carrying it infinitely often.
+#[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord)]
+pub(crate) struct Disjunct {
+    pub(crate) fin: MarkSet,
+    pub(crate) inf: Vec<u32>,
+}
+
+/// A deterministic complete automaton with transition-based generalised
+/// Rabin acceptance: a run is accepted iff it satisfies some disjunct.
+#[derive(Debug, Clone)]
+pub(crate) struct Tgr {
+    pub(crate) letters: usize,
+    pub(crate) initial: usize,
+    /// `edges[q * letters + a]`.
+    pub(crate) edges: Vec<Edge>,
+    pub(crate) num_marks: u32,
+    pub(crate) disjuncts: Vec<Disjunct>,
+}
+
+impl Tgr {
+    pub(crate) fn num_states(&self) -> usize {
+        self.edges.len() / self.letters
+    }
+}
+
+struct Successors<'a>(&'a Tgr);
+
+impl Digraph for Successors<'_> {
+    fn num_vertices(&self) -> usize {
+        self.0.num_states()
+    }
+
+    fn successors(&self, v: usize) -> impl Iterator<Item = usize> + '_ {
+        self.0.edges[v * self.0.letters..(v + 1) * self.0.letters]
+            .iter()
+            .map(|e| e.target as usize)
+    }
+}
+
+/// The largest number of product states built before giving up.
+pub(crate) const MAX_STATES: usize = 200_000;
+
+/// Explores the states reachable from `initial` under `step`, which gives the
+/// successor and the marks of a state on a letter.
+fn explore<S: Clone + Eq + std::hash::Hash>(
+    initial: S,
+    letters: usize,
+    mut step: impl FnMut(&S, Letter) -> (S, MarkSet),
+) -> Result<(Vec<S>, Vec<Edge>), TranslateError> {
+    let mut index = FxHashMap::default();
+    index.insert(initial.clone(), 0u32);
+    let mut states = vec![initial];
+    let mut edges = Vec::new();
+    let mut next = 0;
+    while next < states.len() {
+        let state = states[next].clone();
+        for letter in 0..letters as Letter {
+            let (target, marks) = step(&state, letter);
+            let fresh = states.len() as u32;
+            let target = *index.entry(target.clone()).or_insert_with(|| {
+                states.push(target);
+                fresh
+            });
+            edges.push(Edge { target, marks });
+        }
+        if states.len() > MAX_STATES {
+            return Err(TranslateError::TooLarge { limit: MAX_STATES });
+        }
+        next += 1;
+    }
+    Ok((states, edges))
+}
+
+/// A shortest non-empty word leading from `from` back to `from` inside the
+/// component `members` (`component[q] == comp`), if there is one.
+fn cycle_word(tgr: &Tgr, from: usize, component: &[u32]) -> Option<Vec<Letter>> {
+    let comp = component[from];
+    let mut parent: FxHashMap<usize, (usize, Letter)> = FxHashMap::default();
+    let mut queue = std::collections::VecDeque::from([from]);
+    while let Some(q) = queue.pop_front() {
+        for letter in 0..tgr.letters {
+            let target = tgr.edges[q * tgr.letters + letter].target as usize;
+            if component[target] != comp {
+                continue;
+            }
+            if target == from {
+                let mut word = vec![letter as Letter];
+                let mut at = q;
+                while at != from {
+                    let (before, a) = parent[&at];
+                    word.push(a);
+                    at = before;
+                }
+                word.reverse();
+                return Some(word);
+            }
+            if let std::collections::hash_map::Entry::Vacant(e) = parent.entry(target) {
+                e.insert((q, letter as Letter));
+                queue.push_back(target);
+            }
+        }
+    }
+    None
+}
+
+/// The weak automaton of an obligation formula: the states are the classes
+/// `af(phi, u)`; a strongly connected component is accepting iff the word
+/// `v^omega` of any cycle `v` through a state `psi` of it satisfies `psi`.
+///
+/// Correctness: the language of an obligation formula is recognised by a
+/// weak deterministic automaton, and then all cycles through one component
+/// of any deterministic automaton whose states determine the residual
+/// language agree (Maler and Staiger 1997): so one cycle decides.
+pub(crate) fn weak(
+    context: &mut Context,
+    formula: &Formula,
+    letters: usize,
+) -> Result<Tgr, TranslateError> {
+    let root = context.class(formula);
+    let (states, edges) = explore(root, letters, |&q, a| (context.after(q, a), 0))?;
+    let mut tgr = Tgr {
+        letters,
+        initial: 0,
+        edges,
+        num_marks: 1,
+        disjuncts: vec![Disjunct {
+            fin: 0,
+            inf: vec![0],
+        }],
+    };
+    let components = graph::strongly_connected_components(&Successors(&tgr));
+    let mut verdict: Vec<Option<bool>> = vec![None; components.count];
+    for (q, &class) in states.iter().enumerate() {
+        let comp = components.component[q] as usize;
+        if verdict[comp].is_none() {
+            verdict[comp] = cycle_word(&tgr, q, &components.component)
+                .map(|word| context.holds_on_cycle(class, &word));
+        }
+    }
+    for q in 0..states.len() {
+        if verdict[components.component[q] as usize] == Some(true) {
+            for edge in &mut tgr.edges[q * letters..(q + 1) * letters] {
+                edge.marks = 1;
+            }
+        }
+    }
+    Ok(tgr)
+}
+
+/// One guess `(X, Y)` of the Master Theorem, by the monitors it needs.
+#[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord)]
+struct Guess {
+    /// The co-Büchi monitor of condition (1), if not trivially satisfied.
+    safety: Option<usize>,
+    /// The Büchi monitors `GF (psi[Y]^mu)` for `psi` in `X` (condition 2).
+    recurrent: Vec<usize>,
+    /// The co-Büchi monitors `FG (psi[X]_nu)` for `psi` in `Y` (condition 3).
+    persistent: Vec<usize>,
+}
+
+impl Guess {
+    fn implies(&self, other: &Guess) -> bool {
+        (other.safety.is_none() || other.safety == self.safety)
+            && other.recurrent.iter().all(|m| self.recurrent.contains(m))
+            && other.persistent.iter().all(|m| self.persistent.contains(m))
+    }
+}
+
+/// The largest `|mu(phi)| + |nu(phi)|` for which all guesses are enumerated.
+const MAX_GUESS_BITS: usize = 16;
+
+fn index_of<T: PartialEq>(items: &mut Vec<T>, item: T) -> usize {
+    match items.iter().position(|i| *i == item) {
+        Some(i) => i,
+        None => {
+            items.push(item);
+            items.len() - 1
+        }
+    }
+}
+
+/// The automaton of Esparza, Křetínský and Sickert's Master Theorem for any
+/// NNF formula `phi`: `w |= phi` iff for some `X ⊆ mu(phi)`, `Y ⊆ nu(phi)`,
+/// (1) `w_i |= af(phi, w_0..w_{i-1})[X]_nu` for some `i`, (2) `w |= GF
+/// (psi[Y]^mu)` for all `psi` in `X`, and (3) `w |= FG (psi[X]_nu)` for all
+/// `psi` in `Y`.
+///
+/// The state is `(af(phi, u), s_X..., g_c..., f_s...)`:
+/// * `s_X` checks the safety formula of (1) and, when it becomes false
+///   (a `Fin` mark), restarts from `af(phi, u)[X]_nu`;
+/// * `g_c` is the disjunction of `af(c, ...)` over all start positions since
+///   the last success; it becomes true (an `Inf` mark) infinitely often iff
+///   `GF c`;
+/// * `f_s` is the conjunction of `af(s, ...)` over all start positions since
+///   the last failure; it fails (a `Fin` mark) finitely often iff `FG s`.
+pub(crate) fn master(
+    context: &mut Context,
+    formula: &Formula,
+    letters: usize,
+) -> Result<Tgr, TranslateError> {
+    let mu = af::subformulas_of_kind(formula, Kind::Mu);
+    let nu = af::subformulas_of_kind(formula, Kind::Nu);
+    if mu.len() + nu.len() > MAX_GUESS_BITS {
+        return Err(TranslateError::TooManyFixpoints {
+            count: mu.len() + nu.len(),
+            limit: MAX_GUESS_BITS,
+        });
+    }
+    let root = context.class(formula);
+    let mut safety_sets: Vec<Vec<Formula>> = Vec::new();
+    let mut safety_initial: Vec<Node> = Vec::new();
+    let mut recurrent: Vec<Node> = Vec::new();
+    let mut persistent: Vec<Node> = Vec::new();
+    let mut guesses = Vec::new();
+    for x_bits in 0u32..1 << mu.len() {
+        let x: Vec<Formula> = select(&mu, x_bits);
+        let start = context.substitute(root, &|f| af::nu_under(f, &x));
+        'guess: for y_bits in 0u32..1 << nu.len() {
+            let y: Vec<Formula> = select(&nu, y_bits);
+            let mut guess = Guess {
+                safety: None,
+                recurrent: Vec::new(),
+                persistent: Vec::new(),
+            };
+            for psi in &x {
+                match context.class(&af::mu_under(psi, &y)) {
+                    FALSE => continue 'guess,
+                    TRUE => {}
+                    c => guess.recurrent.push(index_of(&mut recurrent, c)),
+                }
+            }
+            for psi in &y {
+                match context.class(&af::nu_under(psi, &x)) {
+                    FALSE => continue 'guess,
+                    TRUE => {}
+                    s => guess.persistent.push(index_of(&mut persistent, s)),
+                }
+            }
+            if start != TRUE {
+                let i = index_of(&mut safety_sets, x.clone());
+                if i == safety_initial.len() {
+                    safety_initial.push(start);
+                }
+                guess.safety = Some(i);
+            }
+            guess.recurrent.sort_unstable();
+            guess.recurrent.dedup();
+            guess.persistent.sort_unstable();
+            guess.persistent.dedup();
+            guesses.push(guess);
+        }
+    }
+    guesses.sort();
+    guesses.dedup();
+    let strongest: Vec<Guess> = guesses
+        .iter()
+        .filter(|g| !guesses.iter().any(|h| h != *g && g.implies(h)))
+        .cloned()
+        .collect();
+    // Keep only the monitors some remaining guess needs, numbered densely.
+    let used_safety: Vec<usize> = used(strongest.iter().filter_map(|g| g.safety));
+    let used_recurrent = used(strongest.iter().flat_map(|g| g.recurrent.iter().copied()));
+    let used_persistent = used(strongest.iter().flat_map(|g| g.persistent.iter().copied()));
+    let num_marks = used_safety.len() + used_recurrent.len() + used_persistent.len();
+    if num_marks > MarkSet::BITS as usize {
+        return Err(TranslateError::TooManyMarks {
+            count: num_marks,
+            limit: MarkSet::BITS as usize,
+        });
+    }
+    let safety_mark = |i: usize| used_safety.iter().position(|&j| j == i).unwrap_or(0) as u32;
+    let recurrent_mark = |i: usize| {
+        (used_safety.len() + used_recurrent.iter().position(|&j| j == i).unwrap_or(0)) as u32
+    };
+    let persistent_mark = |i: usize| {
+        (used_safety.len()
+            + used_recurrent.len()
+            + used_persistent.iter().position(|&j| j == i).unwrap_or(0)) as u32
+    };
+    let disjuncts: Vec<Disjunct> = strongest
+        .iter()
+        .map(|g| Disjunct {
+            fin: g
+                .safety
+                .iter()
+                .map(|&i| safety_mark(i))
+                .chain(g.persistent.iter().map(|&i| persistent_mark(i)))
+                .fold(0, |m, bit| m | (1 << bit)),
+            inf: g.recurrent.iter().map(|&i| recurrent_mark(i)).collect(),
+        })
+        .collect();
+    let fin_all: MarkSet = disjuncts.iter().fold(0, |m, d| m | d.fin);
+    let inf_all: MarkSet = disjuncts
+        .iter()
+        .flat_map(|d| d.inf.iter())
+        .fold(0, |m, &bit| m | (1 << bit));
+
+    let safety_x: Vec<Vec<Formula>> = used_safety.iter().map(|&i| safety_sets[i].clone()).collect();
+    let mut initial = vec![root];
+    initial.extend(used_safety.iter().map(|&i| safety_initial[i]));
+    initial.extend(used_recurrent.iter().map(|&i| recurrent[i]));
+    initial.extend(used_persistent.iter().map(|&i| persistent[i]));
+    let (ns, nr) = (used_safety.len(), used_recurrent.len());
+    let goals: Vec<Node> = initial.clone();
+    let mut restart_memo: FxHashMap<(Node, usize), Node> = FxHashMap::default();
+    let (_, edges) = explore(initial, letters, |state: &Vec<Node>, letter| {
+        let main = context.after(state[0], letter);
+        if main == FALSE {
+            return (vec![FALSE; state.len()], fin_all);
+        }
+        if main == TRUE {
+            return (vec![TRUE; state.len()], inf_all);
+        }
+        let mut next = Vec::with_capacity(state.len());
+        next.push(main);
+        let mut marks: MarkSet = 0;
+        for (k, &s) in state.iter().enumerate().skip(1) {
+            let moved = context.after(s, letter);
+            let (value, marked) = if k <= ns {
+                if moved == FALSE {
+                    let x = &safety_x[k - 1];
+                    let restarted = *restart_memo
+                        .entry((main, k - 1))
+                        .or_insert_with(|| context.substitute(main, &|f| af::nu_under(f, x)));
+                    (restarted, true)
+                } else {
+                    (moved, false)
+                }
+            } else if k <= ns + nr {
+                if moved == TRUE {
+                    (goals[k], true)
+                } else {
+                    (context.bdd.or(moved, goals[k]), false)
+                }
+            } else if moved == FALSE {
+                (goals[k], true)
+            } else {
+                (context.bdd.and(moved, goals[k]), false)
+            };
+            next.push(value);
+            if marked {
+                marks |= 1 << (k - 1);
+            }
+        }
+        (next, marks)
+    })?;
+    Ok(Tgr {
+        letters,
+        initial: 0,
+        edges,
+        num_marks: num_marks as u32,
+        disjuncts,
+    })
+}
+
+fn select(items: &[Formula], bits: u32) -> Vec<Formula> {
+    items
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| (bits >> i) & 1 == 1)
+        .map(|(_, f)| f.clone())
+        .collect()
+}
+
+fn used(indices: impl Iterator<Item = usize>) -> Vec<usize> {
+    let mut v: Vec<usize> = indices.collect();
+    v.sort_unstable();
+    v.dedup();
+    v
+}

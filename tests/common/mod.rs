@@ -1,0 +1,213 @@
+//! Test support: hand-built automata and an independent reference
+//! computation of the value (dense product over all (s, q, g, h), reachability
+//! by transitive closure, BSCCs by mutual reachability, a dense LU solve with
+//! nalgebra). It shares no code with the crate's product, graph or solver.
+#![allow(dead_code)]
+
+use nalgebra::{DMatrix, DVector};
+use posg_fsc::automaton::{Dra, RabinPair};
+use posg_fsc::controller::Fsc;
+use posg_fsc::game::Posg;
+
+/// A state-based DRA from a per-state transition function over the letters of `aps`.
+pub fn dra(
+    aps: &[&str],
+    states: usize,
+    delta: impl Fn(usize, u32) -> usize,
+    pairs: &[(&[usize], &[usize])],
+) -> Dra {
+    let letters = 1u32 << aps.len();
+    let successors = (0..states)
+        .flat_map(|q| (0..letters).map(move |a| (q, a)))
+        .map(|(q, a)| delta(q, a) as u32)
+        .collect();
+    let pairs = pairs
+        .iter()
+        .map(|(fin, inf)| RabinPair {
+            fin: (0..states).map(|q| fin.contains(&q)).collect(),
+            inf: (0..states).map(|q| inf.contains(&q)).collect(),
+        })
+        .collect();
+    Dra::new(
+        aps.iter().map(|s| s.to_string()).collect(),
+        states,
+        0,
+        successors,
+        pairs,
+    )
+    .unwrap()
+}
+
+/// `F goal`: 0 = not yet, 1 = goal seen (accepting sink).
+pub fn eventually_goal() -> Dra {
+    dra(
+        &["goal"],
+        2,
+        |q, a| if q == 1 || a & 1 == 1 { 1 } else { 0 },
+        &[(&[], &[1])],
+    )
+}
+
+/// `G !unsafe`: 0 = safe so far (accepting), 1 = rejecting sink.
+pub fn always_safe() -> Dra {
+    dra(
+        &["unsafe"],
+        2,
+        |q, a| if q == 1 || a & 1 == 1 { 1 } else { 0 },
+        &[(&[1], &[0])],
+    )
+}
+
+/// `!unsafe U goal` over (goal, unsafe): 0 = waiting, 1 = accepted, 2 = rejected.
+pub fn safe_until_goal() -> Dra {
+    dra(
+        &["goal", "unsafe"],
+        3,
+        |q, a| match (q, a & 1 == 1, a & 2 == 2) {
+            (0, true, _) => 1,
+            (0, false, true) => 2,
+            (0, false, false) => 0,
+            (q, _, _) => q,
+        },
+        &[(&[], &[1])],
+    )
+}
+
+/// `GF goal & G !unsafe` over (goal, unsafe): 0 = safe, last letter not goal;
+/// 1 = safe, last letter goal; 2 = rejecting sink. Pair (L = {2}, K = {1}).
+pub fn recurrent_goal_safe() -> Dra {
+    dra(
+        &["goal", "unsafe"],
+        3,
+        |q, a| match (q, a & 1 == 1, a & 2 == 2) {
+            (2, _, _) | (_, _, true) => 2,
+            (_, true, false) => 1,
+            _ => 0,
+        },
+        &[(&[2], &[1])],
+    )
+}
+
+/// A dense description of the GMC over all (s, q, g, h), built directly from
+/// formats.md section 3.
+pub struct DenseProduct {
+    pub p: DMatrix<f64>,
+    pub p0: DVector<f64>,
+    pub q_of: Vec<usize>,
+}
+
+fn letter(game: &Posg, dra: &Dra, s: usize) -> u32 {
+    dra.letter_of(game.label_names(s))
+}
+
+pub fn dense_product(game: &Posg, dra: &Dra, def: &Fsc, adv: &Fsc) -> DenseProduct {
+    let (ns, nq, ng, nh) = (
+        game.num_states(),
+        dra.num_states(),
+        def.num_nodes(),
+        adv.num_nodes(),
+    );
+    let n = ns * nq * ng * nh;
+    let idx = |s: usize, q: usize, g: usize, h: usize| ((s * nq + q) * ng + g) * nh + h;
+    let mut p = DMatrix::zeros(n, n);
+    let mut q_of = vec![0; n];
+    for s in 0..ns {
+        for q in 0..nq {
+            for g in 0..ng {
+                for h in 0..nh {
+                    let from = idx(s, q, g, h);
+                    q_of[from] = q;
+                    for &(o, po) in game.defender().observation_distribution(s) {
+                        for &(o2, po2) in game.adversary().observation_distribution(s) {
+                            for cd in def.choices(g, o) {
+                                for ca in adv.choices(h, o2) {
+                                    for &(t, pt) in game.transition(s, cd.action, ca.action) {
+                                        let qt = dra.successor(q, letter(game, dra, t));
+                                        p[(from, idx(t, qt, cd.next, ca.next))] +=
+                                            po * po2 * cd.probability * ca.probability * pt;
+                                    }
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+    let mut p0 = DVector::zeros(n);
+    for &(s, ps) in game.initial() {
+        let q = dra.successor(dra.initial(), letter(game, dra, s));
+        for g in 0..ng {
+            for h in 0..nh {
+                p0[idx(s, q, g, h)] += ps * def.initial()[g] * adv.initial()[h];
+            }
+        }
+    }
+    DenseProduct { p, p0, q_of }
+}
+
+/// The probability of phi computed from the dense product: reachability by
+/// transitive closure, recurrent states as those that every reachable state
+/// can return to, feasible classes by the Rabin pairs, then a dense solve.
+pub fn reference_value(game: &Posg, dra: &Dra, def: &Fsc, adv: &Fsc) -> f64 {
+    let product = dense_product(game, dra, def, adv);
+    let n = product.p.nrows();
+    let mut reach = vec![vec![false; n]; n];
+    for a in 0..n {
+        reach[a][a] = true;
+        for b in 0..n {
+            if product.p[(a, b)] > 0.0 {
+                reach[a][b] = true;
+            }
+        }
+    }
+    for k in 0..n {
+        for a in 0..n {
+            if reach[a][k] {
+                for b in 0..n {
+                    if reach[k][b] {
+                        reach[a][b] = true;
+                    }
+                }
+            }
+        }
+    }
+    let recurrent: Vec<bool> = (0..n)
+        .map(|a| (0..n).all(|b| !reach[a][b] || reach[b][a]))
+        .collect();
+    let feasible: Vec<bool> = (0..n)
+        .map(|a| {
+            recurrent[a]
+                && dra.pairs().iter().any(|pair| {
+                    let class: Vec<usize> = (0..n).filter(|&b| reach[a][b]).collect();
+                    class.iter().any(|&b| pair.inf[product.q_of[b]])
+                        && !class.iter().any(|&b| pair.fin[product.q_of[b]])
+                })
+        })
+        .collect();
+    let unknown: Vec<usize> = (0..n)
+        .filter(|&a| !feasible[a] && (0..n).any(|b| feasible[b] && reach[a][b]))
+        .collect();
+    let mut x = DVector::from_iterator(n, feasible.iter().map(|&f| f64::from(f)));
+    if !unknown.is_empty() {
+        let k = unknown.len();
+        let mut a = DMatrix::identity(k, k);
+        let mut rhs = DVector::zeros(k);
+        for (i, &m) in unknown.iter().enumerate() {
+            for (j, &m2) in unknown.iter().enumerate() {
+                a[(i, j)] -= product.p[(m, m2)];
+            }
+            rhs[i] = (0..n)
+                .filter(|&b| feasible[b])
+                .map(|b| product.p[(m, b)])
+                .sum();
+        }
+        let solution = a.lu().solve(&rhs).expect("transient system is nonsingular");
+        for (i, &m) in unknown.iter().enumerate() {
+            x[m] = solution[i];
+        }
+    }
+    product.p0.dot(&x)
+}
+
+pub mod random;

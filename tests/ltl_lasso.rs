@@ -1,0 +1,160 @@
+//! The lasso oracle: the translated automata accept exactly the ultimately
+//! periodic words `u v^omega` on which the direct evaluator says the formula
+//! holds, for random formulas, the 55 Dwyer (DAC) specification patterns and
+//! the robotics formulas; and for every word exactly one of the automata for
+//! `phi` and `!phi` accepts.
+
+use posg_fsc::automaton::{Dra, Letter};
+use posg_fsc::ltl::{self, Formula};
+use proptest::prelude::*;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+const SHARED: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/ltl/");
+
+/// Random lasso words over `propositions.len()` propositions, `|u|, |v| <= 6`.
+fn random_lassos(rng: &mut ChaCha8Rng, propositions: usize, count: usize) -> Vec<(Vec<Letter>, Vec<Letter>)> {
+    let letters = 1u32 << propositions;
+    (0..count)
+        .map(|_| {
+            let u = (0..rng.random_range(0..=6)).map(|_| rng.random_range(0..letters)).collect();
+            let v = (0..rng.random_range(1..=6)).map(|_| rng.random_range(0..letters)).collect();
+            (u, v)
+        })
+        .collect()
+}
+
+/// Checks the automata of `formula` and its negation against the evaluator
+/// on `words`; returns a description of the first disagreement.
+fn check(formula: &Formula, words: &[(Vec<Letter>, Vec<Letter>)]) -> Result<(), String> {
+    let positive: Dra = ltl::translate(formula).map_err(|e| format!("{formula}: {e}"))?;
+    let negative: Dra =
+        ltl::translate(&formula.negate()).map_err(|e| format!("!({formula}): {e}"))?;
+    let propositions = formula.propositions();
+    assert_eq!(positive.propositions(), propositions.as_slice());
+    for (u, v) in words {
+        let expected = ltl::holds_on_lasso(formula, &propositions, u, v).unwrap();
+        let accepted = positive.accepts_lasso(u, v);
+        let rejected = negative.accepts_lasso(u, v);
+        if accepted != expected || rejected == expected {
+            return Err(format!(
+                "{formula} on {u:?} ({v:?})^omega: evaluator {expected}, automaton {accepted}, automaton of the negation {rejected}"
+            ));
+        }
+    }
+    Ok(())
+}
+
+fn formula_strategy() -> impl Strategy<Value = Formula> {
+    let leaf = prop_oneof![
+        1 => Just(Formula::True),
+        1 => Just(Formula::False),
+        6 => prop::sample::select(vec!["a", "b", "c"]).prop_map(Formula::prop),
+    ];
+    leaf.prop_recursive(5, 40, 2, |inner| {
+        let b = |f: Formula| Box::new(f);
+        prop_oneof![
+            inner.clone().prop_map(move |f| Formula::Not(b(f))),
+            inner.clone().prop_map(move |f| Formula::Next(b(f))),
+            inner.clone().prop_map(move |f| Formula::Finally(b(f))),
+            inner.clone().prop_map(move |f| Formula::Globally(b(f))),
+            (inner.clone(), inner.clone()).prop_map(|(f, g)| Formula::And(vec![f, g])),
+            (inner.clone(), inner.clone()).prop_map(|(f, g)| Formula::Or(vec![f, g])),
+            (inner.clone(), inner.clone()).prop_map(move |(f, g)| Formula::Implies(b(f), b(g))),
+            (inner.clone(), inner.clone()).prop_map(move |(f, g)| Formula::Equiv(b(f), b(g))),
+            (inner.clone(), inner.clone()).prop_map(move |(f, g)| Formula::Xor(b(f), b(g))),
+            (inner.clone(), inner.clone()).prop_map(move |(f, g)| Formula::Until(b(f), b(g))),
+            (inner.clone(), inner.clone()).prop_map(move |(f, g)| Formula::WeakUntil(b(f), b(g))),
+            (inner.clone(), inner.clone()).prop_map(move |(f, g)| Formula::Release(b(f), b(g))),
+            (inner.clone(), inner).prop_map(move |(f, g)| Formula::StrongRelease(b(f), b(g))),
+        ]
+    })
+}
+
+proptest! {
+    // 400 formulas x 30 lassos = 12,000 (formula, word) pairs, each checked on
+    // the automata of the formula and of its negation.
+    #![proptest_config(ProptestConfig { cases: 400, ..ProptestConfig::default() })]
+
+    #[test]
+    fn random_formulas_agree_with_the_evaluator(formula in formula_strategy(), seed in any::<u64>()) {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let propositions = formula.propositions().len();
+        let words = random_lassos(&mut rng, propositions, 30);
+        prop_assert_eq!(check(&formula, &words), Ok(()));
+    }
+}
+
+fn shared_formulas(file: &str) -> Vec<String> {
+    let path = format!("{SHARED}{file}");
+    std::fs::read_to_string(&path)
+        .unwrap_or_else(|e| panic!("{path}: {e}"))
+        .lines()
+        .filter(|l| !l.trim().is_empty() && !l.starts_with('#'))
+        .map(|l| l.split('\t').next().unwrap_or(l).to_string())
+        .collect()
+}
+
+fn check_all(formulas: &[String], words_per_formula: usize) {
+    let mut rng = ChaCha8Rng::seed_from_u64(2020);
+    let failures: Vec<String> = formulas
+        .iter()
+        .filter_map(|text| {
+            let formula = ltl::parse(text).unwrap_or_else(|e| panic!("{text}: {e}"));
+            let words = random_lassos(&mut rng, formula.propositions().len(), words_per_formula);
+            check(&formula, &words).err()
+        })
+        .collect();
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+#[test]
+fn dac_patterns_agree_with_the_evaluator() {
+    let patterns = shared_formulas("dac-patterns.ltl");
+    assert_eq!(patterns.len(), 55);
+    check_all(&patterns, 300);
+}
+
+#[test]
+fn robotics_formulas_agree_with_the_evaluator() {
+    let all = shared_formulas("reference-sizes.tsv");
+    let robotics = &all[all.len() - 11..];
+    check_all(robotics, 1000);
+}
+
+#[test]
+fn formula_without_propositions_gives_an_automaton_over_no_propositions() {
+    for (text, expected) in [("true", true), ("G F true", true), ("X false", false), ("F G 0 | 1 U 0", false)] {
+        let dra = ltl::translate(&ltl::parse(text).unwrap()).unwrap();
+        assert!(dra.propositions().is_empty());
+        assert_eq!(dra.num_states(), 1, "{text}");
+        assert_eq!(dra.accepts_lasso(&[], &[0]), expected, "{text}");
+    }
+}
+
+#[test]
+fn too_many_propositions_is_an_error() {
+    let text: Vec<String> = (0..17).map(|i| format!("F p{i}")).collect();
+    let formula = ltl::parse(&text.join(" & ")).unwrap();
+    assert!(matches!(
+        ltl::translate(&formula),
+        Err(ltl::TranslateError::TooManyPropositions { count: 17 })
+    ));
+}
+
+#[test]
+fn emerson_lei_automaton_agrees_with_the_evaluator() {
+    let mut rng = ChaCha8Rng::seed_from_u64(7);
+    for text in ["GF a & GF b & G !c", "FG a | GF b", "(GF a -> GF b) & G !c", "a U (b R F c)"] {
+        let formula = ltl::parse(text).unwrap();
+        let automaton = ltl::translate_to_emerson_lei(&formula).unwrap();
+        let propositions = formula.propositions();
+        for (u, v) in random_lassos(&mut rng, propositions.len(), 500) {
+            assert_eq!(
+                automaton.accepts_lasso(&u, &v),
+                ltl::holds_on_lasso(&formula, &propositions, &u, &v).unwrap(),
+                "{text} on {u:?} ({v:?})^omega"
+            );
+        }
+    }
+}

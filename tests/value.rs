@@ -1,0 +1,263 @@
+//! Exact values: hand-computed chains, random games against an independent
+//! dense computation, and the adjoint gradient against finite differences.
+
+mod common;
+
+use posg_fsc::automaton::Dra;
+use posg_fsc::controller::{Choice, Fsc, Probabilities, Role, Support};
+use posg_fsc::game::Posg;
+use posg_fsc::game::file::from_json_str;
+use posg_fsc::solver::DEFAULT_TOLERANCE;
+use posg_fsc::value::Evaluator;
+use proptest::prelude::*;
+
+fn game(text: &str) -> Posg {
+    from_json_str(text, "test.posg.json").unwrap()
+}
+
+fn evaluator(game: &Posg, dra: &Dra, def: &Fsc, adv: &Fsc) -> Evaluator {
+    Evaluator::new(
+        game,
+        dra,
+        &Support::of(def),
+        &Support::of(adv),
+        DEFAULT_TOLERANCE,
+    )
+    .unwrap()
+}
+
+fn value(game: &Posg, dra: &Dra, def: &Fsc, adv: &Fsc) -> f64 {
+    let mut ev = evaluator(game, dra, def, adv);
+    ev.evaluate(
+        &Support::probabilities_of(def),
+        &Support::probabilities_of(adv),
+    )
+    .unwrap()
+    .value
+}
+
+fn uniform(game: &Posg, role: Role, nodes: usize) -> Fsc {
+    let player = if role == Role::Defender {
+        game.defender()
+    } else {
+        game.adversary()
+    };
+    Fsc::uniform(role, nodes, player.num_observations(), player.num_actions())
+}
+
+/// One-node controller of a fully observing player, deterministic or mixed
+/// per state: `rows[s]` lists `(action, probability)`.
+fn memoryless(game: &Posg, role: Role, rows: &[&[(usize, f64)]]) -> Fsc {
+    let player = if role == Role::Defender {
+        game.defender()
+    } else {
+        game.adversary()
+    };
+    let blocks = rows
+        .iter()
+        .map(|row| {
+            row.iter()
+                .map(|&(action, probability)| Choice {
+                    next: 0,
+                    action,
+                    probability,
+                    logit: None,
+                })
+                .collect()
+        })
+        .collect();
+    Fsc::new(
+        role,
+        1,
+        player.num_observations(),
+        player.num_actions(),
+        vec![1.0],
+        blocks,
+    )
+    .unwrap()
+}
+
+const LOOP_THEN_SPLIT: &str = r#"{
+  "posg": 1, "states": ["a", "b", "c"], "initial": {"a": 1.0},
+  "labels": {"b": ["goal"]},
+  "defender": {"actions": ["go"], "observe": "full"},
+  "transitions": [
+    {"state": "a", "defender": "go", "next": {"a": 0.25, "b": 0.5, "c": 0.25}},
+    {"state": "b", "defender": "*", "next": {"b": 1.0}},
+    {"state": "c", "defender": "*", "next": {"c": 1.0}}
+  ]
+}"#;
+
+#[test]
+fn reachability_on_a_three_state_chain_is_two_thirds() {
+    // x(a) = 0.25 x(a) + 0.5  =>  x(a) = 2/3.
+    let g = game(LOOP_THEN_SPLIT);
+    let v = value(
+        &g,
+        &common::eventually_goal(),
+        &uniform(&g, Role::Defender, 1),
+        &uniform(&g, Role::Adversary, 1),
+    );
+    assert!((v - 2.0 / 3.0).abs() < 1e-12, "{v}");
+}
+
+const LEAKY_START: &str = r#"{
+  "posg": 1, "states": ["s0", "s1", "s2", "s3"], "initial": {"s0": 1.0},
+  "labels": {"s1": ["unsafe"]},
+  "defender": {"actions": ["stay"], "observe": "full"},
+  "transitions": [
+    {"state": "s0", "defender": "*", "next": {"s0": 0.5, "s1": 0.3, "s2": 0.2}},
+    {"state": "s1", "defender": "*", "next": {"s1": 1.0}},
+    {"state": "s2", "defender": "*", "next": {"s3": 1.0}},
+    {"state": "s3", "defender": "*", "next": {"s2": 1.0}}
+  ]
+}"#;
+
+#[test]
+fn safety_on_a_four_state_chain_is_two_fifths() {
+    // x(s0) = 0.5 x(s0) + 0.2  =>  x(s0) = 0.4; {s2, s3} is a safe recurrent class.
+    let g = game(LEAKY_START);
+    let v = value(
+        &g,
+        &common::always_safe(),
+        &uniform(&g, Role::Defender, 1),
+        &uniform(&g, Role::Adversary, 1),
+    );
+    assert!((v - 0.4).abs() < 1e-12, "{v}");
+}
+
+/// s0 -> s1 (goal) or s2; s1 -> s2; from s2 an attack (A) leads to s3
+/// (unsafe, absorbing) or s1, no attack (N) to s1 or s4 (goal, absorbing).
+const ATTACKED_LOOP: &str = r#"{
+  "posg": 1, "states": ["s0", "s1", "s2", "s3", "s4"], "initial": {"s0": 1.0},
+  "labels": {"s1": ["goal"], "s3": ["unsafe"], "s4": ["goal"]},
+  "defender": {"actions": ["go"], "observe": "full"},
+  "adversary": {"actions": ["A", "N"], "observe": "full"},
+  "transitions": [
+    {"state": "s0", "defender": "*", "adversary": "*", "next": {"s1": 0.5, "s2": 0.5}},
+    {"state": "s1", "defender": "*", "adversary": "*", "next": {"s2": 1.0}},
+    {"state": "s2", "defender": "go", "adversary": "A", "next": {"s3": 0.5, "s1": 0.5}},
+    {"state": "s2", "defender": "go", "adversary": "N", "next": {"s1": 0.5, "s4": 0.5}},
+    {"state": "s3", "defender": "*", "adversary": "*", "next": {"s3": 1.0}},
+    {"state": "s4", "defender": "*", "adversary": "*", "next": {"s4": 1.0}}
+  ]
+}"#;
+
+fn attacker(g: &Posg, p: f64) -> Fsc {
+    let mixed: &[(usize, f64)] = if p > 0.0 {
+        &[(0, p), (1, 1.0 - p)]
+    } else {
+        &[(1, 1.0)]
+    };
+    let idle: &[(usize, f64)] = &[(1, 1.0)];
+    memoryless(g, Role::Adversary, &[idle, idle, mixed, idle, idle])
+}
+
+#[test]
+fn recurrence_under_attack_is_one_minus_the_attack_rate() {
+    // From s2: x2 = 0.5 x1 + 0.5 (1 - p), x1 = x2  =>  x2 = 1 - p = x0.
+    let g = game(ATTACKED_LOOP);
+    let defender = uniform(&g, Role::Defender, 1);
+    for p in [0.3, 0.75, 0.0] {
+        let v = value(
+            &g,
+            &common::recurrent_goal_safe(),
+            &defender,
+            &attacker(&g, p),
+        );
+        assert!((v - (1.0 - p)).abs() < 1e-12, "p = {p}: {v}");
+    }
+}
+
+#[test]
+fn safe_until_goal_under_attack() {
+    // From s2: reach goal unless the attack leads to s3: 1 - p/2; V = 1/2 + (1 - p/2)/2.
+    let g = game(ATTACKED_LOOP);
+    let v = value(
+        &g,
+        &common::safe_until_goal(),
+        &uniform(&g, Role::Defender, 1),
+        &attacker(&g, 0.3),
+    );
+    assert!((v - (1.0 - 0.25 * 0.3)).abs() < 1e-12, "{v}");
+}
+
+#[test]
+fn a_chain_with_no_feasible_class_has_value_zero_and_no_system() {
+    let g = game(LEAKY_START);
+    let dra = common::eventually_goal();
+    let mut ev = evaluator(
+        &g,
+        &dra,
+        &uniform(&g, Role::Defender, 1),
+        &uniform(&g, Role::Adversary, 1),
+    );
+    assert!(ev.recurrence().transient.is_empty());
+    let def = Support::probabilities_of(&uniform(&g, Role::Defender, 1));
+    let adv = Support::probabilities_of(&uniform(&g, Role::Adversary, 1));
+    assert_eq!(ev.evaluate(&def, &adv).unwrap().value, 0.0);
+}
+
+fn check_rows_sum_to_one(ev: &Evaluator) -> Result<(), TestCaseError> {
+    for m in 0..ev.gmc().num_states() {
+        let total: f64 = ev.gmc().row(m).1.iter().sum();
+        prop_assert!((total - 1.0).abs() < 1e-12, "row {} sums to {}", m, total);
+    }
+    let p0: f64 = ev.gmc().initial().map(|(_, p)| p).sum();
+    prop_assert!((p0 - 1.0).abs() < 1e-12);
+    Ok(())
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(200))]
+
+    #[test]
+    fn random_games_agree_with_the_dense_reference(seed in any::<u64>()) {
+        let g = game(&common::random::game_json(seed));
+        let dra = common::random::dra(seed);
+        let def = common::random::controller(seed, &g, Role::Defender);
+        let adv = common::random::controller(seed, &g, Role::Adversary);
+        let mut ev = evaluator(&g, &dra, &def, &adv);
+        let v = ev.evaluate(&Support::probabilities_of(&def), &Support::probabilities_of(&adv)).unwrap();
+        check_rows_sum_to_one(&ev)?;
+        let reference = common::reference_value(&g, &dra, &def, &adv);
+        prop_assert!((v.value - reference).abs() < 1e-9, "value {} vs reference {}", v.value, reference);
+        prop_assert!(v.residual < 1e-12);
+    }
+
+    #[test]
+    fn adjoint_gradient_matches_central_differences(seed in any::<u64>()) {
+        let g = game(&common::random::game_json(seed));
+        let dra = common::random::dra(seed);
+        let def = common::random::controller(seed, &g, Role::Defender);
+        let adv = common::random::controller(seed, &g, Role::Adversary);
+        let mut ev = evaluator(&g, &dra, &def, &adv);
+        let (pd, pa) = (Support::probabilities_of(&def), Support::probabilities_of(&adv));
+        let (_, gradient) = ev.evaluate_with_gradient(&pd, &pa).unwrap();
+        let mut at = |pd: &Probabilities, pa: &Probabilities| ev.evaluate(pd, pa).unwrap().value;
+        let h = 1e-6;
+        let scale = 1.0 + gradient.defender.iter().chain(&gradient.adversary).fold(0.0f64, |m, g| m.max(g.abs()));
+        for k in 0..pd.entries.len() {
+            let (mut plus, mut minus) = (pd.clone(), pd.clone());
+            plus.entries[k] += h;
+            minus.entries[k] -= h;
+            let fd = (at(&plus, &pa) - at(&minus, &pa)) / (2.0 * h);
+            prop_assert!((fd - gradient.defender[k]).abs() < 1e-6 * scale, "defender {}: fd {} adjoint {}", k, fd, gradient.defender[k]);
+        }
+        for k in 0..pa.entries.len() {
+            let (mut plus, mut minus) = (pa.clone(), pa.clone());
+            plus.entries[k] += h;
+            minus.entries[k] -= h;
+            let fd = (at(&pd, &plus) - at(&pd, &minus)) / (2.0 * h);
+            prop_assert!((fd - gradient.adversary[k]).abs() < 1e-6 * scale, "adversary {}: fd {} adjoint {}", k, fd, gradient.adversary[k]);
+        }
+        for g0 in 0..pd.initial.len() {
+            let (mut plus, mut minus) = (pd.clone(), pd.clone());
+            plus.initial[g0] += h;
+            minus.initial[g0] -= h;
+            if pd.initial[g0] == 0.0 { continue; }
+            let fd = (at(&plus, &pa) - at(&minus, &pa)) / (2.0 * h);
+            prop_assert!((fd - gradient.defender_initial[g0]).abs() < 1e-6 * scale, "initial {}: fd {} adjoint {}", g0, fd, gradient.defender_initial[g0]);
+        }
+    }
+}
