@@ -2,6 +2,7 @@
 //! by clap) and `run(XArgs) -> anyhow::Result<()>`, which builds the library's
 //! objects from those arguments and prints or writes the results.
 
+mod certify;
 mod demo;
 
 use clap::{Parser, Subcommand};
@@ -19,11 +20,14 @@ pub struct Cli {
 enum Command {
     /// Run the main job on the seed paper's 3x2 grid and explain the output.
     Demo(demo::DemoArgs),
+    /// Certified lower and upper bounds (MDP analysis, method.md section 6).
+    Certify(certify::CertifyArgs),
 }
 
 /// Runs the subcommand the user chose.
 pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Demo(args) => demo::run(args),
+        Command::Certify(args) => certify::run(args),
     }
 }
