@@ -10,14 +10,15 @@
 //! [`maximal_end_components`] is the iterated SCC decomposition of Baier and
 //! Katoen, *Principles of Model Checking*, Algorithm 47: compute the SCCs of
 //! the graph of the enabled actions; disable every action that may leave its
-//! state's SCC; drop every state left without an action (its incoming actions
-//! then leave their SCC and are disabled in the next round); repeat until
-//! nothing changes. Each round removes an action or a state, so there are at
-//! most `|S| + |A|` rounds of `O(|S| + |E|)` each; in practice a few.
+//! state's SCC; a state left without an action dies, and every action that
+//! may reach it is disabled at once (a backward pass, so that a chain of
+//! removals costs one pass rather than one round per link); repeat until
+//! no action leaves its SCC. Each round removes an action, so there are at
+//! most `|A|` rounds of `O(|S| + |E|)` each; in practice a few.
 
 use crate::graph::{Digraph, strongly_connected_components};
 
-use super::Mdp;
+use super::{Mdp, Predecessors};
 
 /// An end component: its states (increasing) and, for each, the actions
 /// (local numbers, increasing) that stay inside it.
@@ -52,43 +53,92 @@ impl Digraph for Enabled<'_> {
 /// `within[s]` (actions that may leave `within` are not part of it), ordered
 /// by their smallest state. Disjoint by construction.
 pub fn maximal_end_components(mdp: &Mdp, within: &[bool]) -> Vec<EndComponent> {
-    let n = mdp.num_states();
-    let mut alive = within.to_vec();
-    let mut enabled = vec![false; mdp.num_state_actions()];
-    for s in (0..n).filter(|&s| within[s]) {
-        for a in mdp.global_actions(s) {
-            enabled[a] = mdp.global_distribution(a).iter().all(|&(t, _)| alive[t]);
-        }
-    }
+    let mut pruning = Pruning::new(mdp, within);
     loop {
         let component = strongly_connected_components(&Enabled {
             mdp,
-            enabled: &enabled,
+            enabled: &pruning.enabled,
         })
         .component;
         let mut changed = false;
-        for s in 0..n {
-            if !alive[s] {
+        for s in 0..mdp.num_states() {
+            if !pruning.alive[s] {
                 continue;
             }
             for a in mdp.global_actions(s) {
-                let leaves = enabled[a]
+                let leaves = pruning.enabled[a]
                     && mdp
                         .global_distribution(a)
                         .iter()
                         .any(|&(t, _)| component[t] != component[s]);
                 if leaves {
-                    enabled[a] = false;
+                    pruning.disable(s, a);
                     changed = true;
                 }
             }
-            if !mdp.global_actions(s).any(|a| enabled[a]) {
-                alive[s] = false;
-                changed = true;
-            }
         }
+        pruning.propagate();
         if !changed {
-            return collect(mdp, &alive, &enabled, &component);
+            return collect(mdp, &pruning.alive, &pruning.enabled, &component);
+        }
+    }
+}
+
+/// The states and actions still candidates for an end component. A state
+/// dies when its last action is disabled; then every action that may reach
+/// it is disabled at once ([`Pruning::propagate`]), so a chain of removals
+/// costs one pass instead of one SCC round per link.
+struct Pruning<'a> {
+    mdp: &'a Mdp,
+    predecessors: Predecessors,
+    alive: Vec<bool>,
+    enabled: Vec<bool>,
+    remaining: Vec<usize>,
+    dead: Vec<usize>,
+}
+
+impl<'a> Pruning<'a> {
+    /// All actions of the states in `within`, minus those that may leave it.
+    fn new(mdp: &'a Mdp, within: &[bool]) -> Self {
+        let n = mdp.num_states();
+        let mut enabled = vec![false; mdp.num_state_actions()];
+        let mut remaining = vec![0; n];
+        for s in (0..n).filter(|&s| within[s]) {
+            enabled[mdp.global_actions(s)].fill(true);
+            remaining[s] = mdp.num_actions(s);
+        }
+        let mut pruning = Self {
+            mdp,
+            predecessors: mdp.predecessors(),
+            alive: within.to_vec(),
+            enabled,
+            remaining,
+            dead: (0..n).filter(|&s| !within[s]).collect(),
+        };
+        pruning.propagate();
+        pruning
+    }
+
+    /// Disables global action `a` of state `s`; kills `s` if it was its last.
+    fn disable(&mut self, s: usize, a: usize) {
+        if !self.enabled[a] {
+            return;
+        }
+        self.enabled[a] = false;
+        self.remaining[s] -= 1;
+        if self.remaining[s] == 0 && self.alive[s] {
+            self.alive[s] = false;
+            self.dead.push(s);
+        }
+    }
+
+    /// Disables every action that may reach a dead state, until no state dies.
+    fn propagate(&mut self) {
+        while let Some(t) = self.dead.pop() {
+            for i in 0..self.predecessors.of(t).len() {
+                let (s, a) = self.predecessors.of(t)[i];
+                self.disable(s, self.mdp.global_actions(s).start + a);
+            }
         }
     }
 }
