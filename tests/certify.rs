@@ -193,11 +193,10 @@ fn closure(p: &DMatrix<f64>) -> Vec<Vec<bool>> {
         .map(|a| (0..n).map(|b| a == b || p[(a, b)] > 0.0).collect())
         .collect();
     for k in 0..n {
-        for a in 0..n {
-            if reach[a][k] {
-                for b in 0..n {
-                    reach[a][b] |= reach[k][b];
-                }
+        let through = reach[k].clone();
+        for row in reach.iter_mut().filter(|row| row[k]) {
+            for (to, &via) in row.iter_mut().zip(&through) {
+                *to |= via;
             }
         }
     }
