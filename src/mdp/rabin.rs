@@ -3,7 +3,7 @@
 //! A run satisfies the pairs `{(L_i, K_i)}` iff for some `i` it visits `L_i`
 //! finitely often and `K_i` infinitely often. An end component is
 //! *accepting* for pair `i` if it avoids `L_i` and meets `K_i`. Then
-//! (Baier and Katoen, Theorem 10.127)
+//! (Baier and Katoen, Section 10.6)
 //!
 //! ```text
 //! sup_sigma P^sigma(Rabin) = sup_sigma P^sigma(reach U),

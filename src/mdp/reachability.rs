@@ -3,13 +3,16 @@
 //! For a target set `B`, `x*(s) = sup_sigma P^sigma_s(reach B)`. It is the
 //! *least* fixed point in `[0, 1]^S` of the Bellman operator
 //! `(F x)(s) = 1` on `B`, `max_a sum_t P(t | s, a) x(t)` elsewhere (Baier and
-//! Katoen, Theorem 10.100), and memoryless deterministic strategies attain it.
+//! Katoen, Section 10.6), and memoryless deterministic strategies attain it.
 //!
 //! The algorithm:
 //!
 //! 1. **Qualitative step.** `S_0`, the states that cannot reach `B` in the
-//!    graph of all actions, have `x* = 0` under every strategy. The rest,
-//!    `M = S \ (B u S_0)`, are the "maybe" states.
+//!    graph of all actions, have `x* = 0` under every strategy; `S_1`, the
+//!    states from which some strategy reaches `B` almost surely (Baier and
+//!    Katoen, Section 10.6), have `x* = 1` exactly. The rest,
+//!    `M = S \ (S_1 u S_0)`, are the "maybe" states; below, `B` stands for
+//!    `S_1` (which contains it).
 //! 2. **Proper start.** A backward search from `B` gives every state of `M`
 //!    an action with an edge to a state found earlier, so under this policy
 //!    every state of `M` reaches `B` with positive probability: the chain
@@ -54,7 +57,8 @@ pub struct Reachability {
     pub values: Vec<f64>,
     /// An optimal memoryless deterministic strategy: the local action in each
     /// state. In `B` and in states that cannot reach `B` it is action 0
-    /// (every action is optimal there).
+    /// (every action is optimal there); in the other states of value 1 it
+    /// reaches `B` almost surely.
     pub strategy: Vec<usize>,
     /// The larger of the final linear solve's residual
     /// `max_s |((I - Q) x - b)(s)|` and the Bellman gap
@@ -76,10 +80,14 @@ pub fn max_reachability(mdp: &Mdp, target: &[bool]) -> Result<Reachability, MdpE
     }
     let predecessors = mdp.predecessors();
     let positive = backward_reachable(&predecessors, target);
-    let maybe: Vec<usize> = (0..n).filter(|&s| positive[s] && !target[s]).collect();
-    let mut strategy = attractor(n, &predecessors, target);
+    let (almost_sure, sure_strategy) = almost_surely(mdp, &predecessors, target, &positive);
+    let maybe: Vec<usize> = (0..n).filter(|&s| positive[s] && !almost_sure[s]).collect();
+    let mut strategy = attractor(n, &predecessors, &almost_sure);
+    for s in (0..n).filter(|&s| almost_sure[s]) {
+        strategy[s] = sure_strategy[s];
+    }
     for iterations in 1..=MAX_ITERATIONS {
-        let (values, solve_residual) = evaluate(mdp, target, &maybe, &strategy)?;
+        let (values, solve_residual) = evaluate(mdp, &almost_sure, &maybe, &strategy)?;
         let (switched, gap) = improve(mdp, &values, &maybe, &mut strategy);
         if !switched {
             return Ok(Reachability {
@@ -91,6 +99,42 @@ pub fn max_reachability(mdp: &Mdp, target: &[bool]) -> Result<Reachability, MdpE
         }
     }
     Err(MdpError::NotConverged(MAX_ITERATIONS))
+}
+
+/// `S_1`, the states from which some strategy reaches `target` almost
+/// surely, and such a strategy on them (Baier and Katoen, Section 10.6,
+/// "Prob1E"): starting from `U` = `positive`, keep the states that reach
+/// `target` using only actions whose successors all lie in `U`, until `U`
+/// is stable. On the result, each state outside `target` plays an action
+/// that stays in `U` and leads one step closer to `target` in that search,
+/// so it never leaves `U` and reaches `target` with probability 1.
+fn almost_surely(
+    mdp: &Mdp,
+    predecessors: &Predecessors,
+    target: &[bool],
+    positive: &[bool],
+) -> (Vec<bool>, Vec<usize>) {
+    let n = mdp.num_states();
+    let mut within = positive.to_vec();
+    let mut strategy = vec![0; n];
+    loop {
+        let mut found = target.to_vec();
+        let mut frontier: Vec<usize> = (0..n).filter(|&s| target[s]).collect();
+        while let Some(t) = frontier.pop() {
+            for &(s, a) in predecessors.of(t) {
+                let stays = || mdp.distribution(s, a).iter().all(|&(u, _)| within[u]);
+                if within[s] && !found[s] && stays() {
+                    found[s] = true;
+                    strategy[s] = a;
+                    frontier.push(s);
+                }
+            }
+        }
+        if found == within {
+            return (within, strategy);
+        }
+        within = found;
+    }
 }
 
 /// A policy that gives each state able to reach `target` an action with an
@@ -225,6 +269,20 @@ mod tests {
         assert_eq!(&result.strategy[..3], &[1, 1, 0]);
         assert!(result.residual < 1e-12);
         assert!(result.iterations >= 2, "the start policy is not optimal");
+    }
+
+    /// Retrying (action 0) reaches 1 almost surely; the one-shot action 1
+    /// looks better for one step (0.9) but risks the sink 2.
+    #[test]
+    fn patience_wins_with_value_exactly_one() {
+        let m = mdp(&[
+            &[&[(1, 0.5), (0, 0.5)], &[(1, 0.9), (2, 0.1)]],
+            &[&[(1, 1.0)]],
+            &[&[(2, 1.0)]],
+        ]);
+        let result = max_reachability(&m, &[false, true, false]).unwrap();
+        assert_eq!(result.values, vec![1.0, 1.0, 0.0]);
+        assert_eq!(result.strategy[0], 0);
     }
 
     #[test]
