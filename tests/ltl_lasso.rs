@@ -123,6 +123,25 @@ fn robotics_formulas_agree_with_the_evaluator() {
 }
 
 #[test]
+fn obligation_shapes_agree_with_the_evaluator() {
+    let formulas: Vec<String> = [
+        "!a U (a & G b)",
+        "(!a & F c) U (a & (b W G c))",
+        "a M (!a | G b)",
+        "(a | G c) R (!a | F b)",
+        "(!a & F b) W (a & (b U c))",
+        "!a U (a & X G b & F c)",
+        "(G a) U b",
+        "a W (G b | F c)",
+        "G (a | X G b)",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    check_all(&formulas, 2000);
+}
+
+#[test]
 fn formula_without_propositions_gives_an_automaton_over_no_propositions() {
     for (text, expected) in [("true", true), ("G F true", true), ("X false", false), ("F G 0 | 1 U 0", false)] {
         let dra = ltl::translate(&ltl::parse(text).unwrap()).unwrap();

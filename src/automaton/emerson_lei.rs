@@ -476,3 +476,109 @@ fn state_pair(pair: &GeneralisedPair, i: usize, keys: &[Vec<u32>]) -> RabinPair 
             .collect(),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn fin(mark: u32) -> Acceptance {
+        Acceptance::Fin {
+            mark,
+            complemented: false,
+        }
+    }
+
+    fn inf(mark: u32) -> Acceptance {
+        Acceptance::Inf {
+            mark,
+            complemented: false,
+        }
+    }
+
+    #[test]
+    fn rabin_formula_gives_its_pairs_in_order() {
+        let rabin = Acceptance::Or(vec![
+            Acceptance::And(vec![fin(0), inf(1)]),
+            Acceptance::And(vec![fin(2), inf(3)]),
+        ]);
+        let pairs = generalised_pairs(&rabin, 4).expect("small");
+        assert_eq!(
+            pairs,
+            [
+                GeneralisedPair {
+                    fin: literal(0, false),
+                    infs: vec![literal(1, false)],
+                },
+                GeneralisedPair {
+                    fin: literal(2, false),
+                    infs: vec![literal(3, false)],
+                },
+            ]
+        );
+    }
+
+    #[test]
+    fn fin_atoms_merge_and_contradictions_vanish() {
+        let merged = generalised_pairs(&Acceptance::And(vec![fin(0), fin(1)]), 2).expect("small");
+        assert_eq!(merged.len(), 1);
+        assert_eq!(merged[0].fin, literal(0, false) | literal(1, false));
+        let fin_and_inf = Acceptance::And(vec![fin(0), inf(0)]);
+        assert!(
+            generalised_pairs(&fin_and_inf, 1)
+                .expect("small")
+                .is_empty()
+        );
+        let fin_of_all = Acceptance::And(vec![
+            fin(0),
+            Acceptance::Fin {
+                mark: 0,
+                complemented: true,
+            },
+        ]);
+        assert!(generalised_pairs(&fin_of_all, 1).expect("small").is_empty());
+    }
+
+    #[test]
+    fn implied_disjuncts_are_dropped() {
+        let formula = Acceptance::Or(vec![Acceptance::And(vec![inf(0), inf(1)]), inf(0)]);
+        let pairs = generalised_pairs(&formula, 2).expect("small");
+        assert_eq!(
+            pairs,
+            [GeneralisedPair {
+                fin: 0,
+                infs: vec![literal(0, false)],
+            }]
+        );
+    }
+
+    #[test]
+    fn marks_no_transition_carries_are_folded() {
+        assert_eq!(to_dnf(&fin(3), 2).expect("small"), [Conjunct::TRUE]);
+        assert!(to_dnf(&inf(3), 2).expect("small").is_empty());
+    }
+
+    #[test]
+    fn generalised_buchi_is_degeneralised_with_a_counter() {
+        let edges = (0..4)
+            .map(|letter| Edge {
+                target: 0,
+                marks: letter,
+            })
+            .collect();
+        let aut = EmersonLeiAutomaton::new(
+            vec!["a".into(), "b".into()],
+            1,
+            0,
+            edges,
+            2,
+            Acceptance::And(vec![inf(0), inf(1)]),
+        )
+        .expect("valid");
+        let dra = to_state_based_rabin(&aut).expect("converts");
+        assert_eq!(dra.pairs().len(), 1);
+        assert!(dra.accepts_lasso(&[], &[1, 2]));
+        assert!(dra.accepts_lasso(&[], &[3]));
+        assert!(!dra.accepts_lasso(&[3], &[1]));
+        assert!(!dra.accepts_lasso(&[], &[2, 0]));
+    }
+}

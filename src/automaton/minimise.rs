@@ -190,3 +190,47 @@ fn quotient(dra: &Dra, blocks: &[u32]) -> Dra {
         .collect();
     rebuild(dra, count, 0, successors, pairs)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn pair(fin: [bool; 4], inf: [bool; 4]) -> RabinPair {
+        RabinPair {
+            fin: fin.to_vec(),
+            inf: inf.to_vec(),
+        }
+    }
+
+    /// Four states over no propositions: `0 -> 1 -> 1`, and `2 -> 3 -> 2`
+    /// unreachable.
+    fn chain(pairs: Vec<RabinPair>) -> Dra {
+        Dra::new(vec![], 4, 0, vec![1, 1, 3, 2], pairs).expect("valid")
+    }
+
+    #[test]
+    fn unreachable_states_go() {
+        let dra = chain(vec![pair([false; 4], [false, true, false, false])]);
+        let small = minimise(&dra);
+        assert_eq!(small.num_states(), 2);
+        assert_eq!(small.pairs()[0].inf, [false, true]);
+    }
+
+    #[test]
+    fn unsatisfiable_and_repeated_pairs_go() {
+        let k_inside_l = pair([false, true, false, false], [false, true, false, false]);
+        let only_unreachable_k = pair([false; 4], [false, false, true, true]);
+        let good = pair([false; 4], [false, true, false, false]);
+        let dra = chain(vec![k_inside_l, only_unreachable_k, good.clone(), good]);
+        let small = minimise(&dra);
+        assert_eq!(small.pairs().len(), 1);
+        assert!(small.accepts_lasso(&[], &[0]));
+    }
+
+    #[test]
+    fn without_pairs_everything_merges() {
+        let small = minimise(&chain(vec![]));
+        assert_eq!(small.num_states(), 1);
+        assert!(small.pairs().is_empty());
+    }
+}

@@ -12,15 +12,20 @@
 //!   HOA input and the LTL translator produce it; its conversion to a `Dra`
 //!   lives in [`emerson_lei`].
 //!
+//! [`minimise()`] shrinks a `Dra` by partition refinement, and [`hoa`] reads
+//! and writes both kinds in the HOA v1 format.
+//!
 //! Letters are bit sets: bit `i` of a [`Letter`] is set iff the automaton's
 //! `i`-th atomic proposition holds. Transition tables are explicit over all
 //! `2^|AP|` letters, so the number of propositions is limited to
 //! [`MAX_PROPOSITIONS`].
 
 pub mod emerson_lei;
+pub mod hoa;
 pub mod minimise;
 
 pub use emerson_lei::{Acceptance, EmersonLeiAutomaton, MarkSet, to_state_based_rabin};
+pub use hoa::{HoaError, parse_hoa, read_hoa_dra, write_hoa};
 pub use minimise::minimise;
 
 use thiserror::Error;

@@ -3,7 +3,13 @@
 //! objects from those arguments and prints or writes the results.
 
 mod certify;
+mod check;
+mod common;
 mod demo;
+mod eval;
+mod example;
+mod export_gmc;
+mod simulate;
 
 use clap::{Parser, Subcommand};
 
@@ -20,6 +26,16 @@ pub struct Cli {
 enum Command {
     /// Run the main job on the seed paper's 3x2 grid and explain the output.
     Demo(demo::DemoArgs),
+    /// Write a built-in example game (*.posg.json).
+    Example(example::ExampleArgs),
+    /// Validate a game file and describe it.
+    Check(check::CheckArgs),
+    /// The exact value of a controller pair, as JSON.
+    Eval(eval::EvalArgs),
+    /// A Monte Carlo estimate of the value with a 95% confidence interval.
+    Simulate(simulate::SimulateArgs),
+    /// Export the Markov chain on (s, g, h) in PRISM's explicit format.
+    ExportGmc(export_gmc::ExportGmcArgs),
     /// Certified lower and upper bounds (MDP analysis, method.md section 6).
     Certify(certify::CertifyArgs),
 }
@@ -28,6 +44,11 @@ enum Command {
 pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Demo(args) => demo::run(args),
+        Command::Example(args) => example::run(args),
+        Command::Check(args) => check::run(args),
+        Command::Eval(args) => eval::run(args),
+        Command::Simulate(args) => simulate::run(args),
+        Command::ExportGmc(args) => export_gmc::run(args),
         Command::Certify(args) => certify::run(args),
     }
 }

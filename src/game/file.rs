@@ -150,8 +150,9 @@ pub(crate) fn check_probability(p: f64, at: &Located) -> Result<(), ModelError> 
 pub(crate) fn normalise(weights: &mut [f64], at: &Located) -> Result<(), ModelError> {
     let total: f64 = weights.iter().sum();
     if (total - 1.0).abs() > 1e-6 {
+        let shown = (total * 1e9).round() / 1e9 + 0.0;
         return Err(at.error(format!(
-            "probabilities sum to {total}, not 1 (tolerance 1e-6)"
+            "probabilities sum to {shown}, not 1 (tolerance 1e-6)"
         )));
     }
     if (total - 1.0).abs() > weights.len() as f64 * f64::EPSILON {
@@ -162,7 +163,8 @@ pub(crate) fn normalise(weights: &mut [f64], at: &Located) -> Result<(), ModelEr
 
 /// The distribution written as the object at `at` over outcomes found by
 /// `index` (`kind` names them in errors, e.g. "state"): checked, renormalised,
-/// zero entries dropped.
+/// zero entries dropped, sorted by outcome (so the order of keys in the file
+/// does not matter).
 pub(crate) fn distribution(
     map: &UniqueMap<f64>,
     at: &Located,
@@ -179,11 +181,13 @@ pub(crate) fn distribution(
         weights.push(p);
     }
     normalise(&mut weights, at)?;
-    Ok(outcomes
+    let mut d: Distribution = outcomes
         .into_iter()
         .zip(weights)
         .filter(|&(_, p)| p > 0.0)
-        .collect())
+        .collect();
+    d.sort_unstable_by_key(|&(o, _)| o);
+    Ok(d)
 }
 
 /// Whether `name` is a valid state, action or observation name: `[A-Za-z0-9_.:-]+`.

@@ -295,14 +295,17 @@ impl GridSpec {
         let mut offsets = Vec::with_capacity(cells * 8 + 1);
         let mut entries = Vec::with_capacity(cells * 8 * 5);
         offsets.push(0);
-        for s in 0..cells {
+        for (s, around) in neighbours.iter().enumerate() {
             for &(_, dx, dy) in &MOVES {
                 for p_v in [self.p_a, self.p_na] {
                     match self.step(s, dx, dy) {
                         None => entries.push((s, 1.0)),
                         Some(t) => {
-                            let others = neighbours[s].iter().map(|&c| if c == t { s } else { c });
-                            entries.extend(spread(t, p_v, &others.collect::<Vec<_>>()));
+                            let mut others = [0; 4];
+                            for (o, &c) in others.iter_mut().zip(around) {
+                                *o = if c == t { s } else { c };
+                            }
+                            spread_into(&mut entries, t, p_v, &others[..around.len()]);
                         }
                     }
                     offsets.push(entries.len());
@@ -316,14 +319,30 @@ impl GridSpec {
 /// `main` with probability `p`, the rest spread evenly over `others` (all of
 /// it on `main` when `others` is empty); sorted by cell, zeros dropped.
 fn spread(main: usize, p: f64, others: &[usize]) -> Distribution {
+    let mut d = Vec::with_capacity(others.len() + 1);
+    spread_into(&mut d, main, p, others);
+    d
+}
+
+/// Appends [`spread`]`(main, p, others)` to `out` without allocating.
+fn spread_into(out: &mut Distribution, main: usize, p: f64, others: &[usize]) {
+    let start = out.len();
     if others.is_empty() {
-        return vec![(main, 1.0)];
+        out.push((main, 1.0));
+        return;
     }
     let rest = (1.0 - p) / others.len() as f64;
-    let mut d: Distribution = others.iter().map(|&c| (c, rest)).collect();
-    d.push((main, p));
-    d.sort_unstable_by_key(|&(c, _)| c);
-    positive(d)
+    out.extend(others.iter().map(|&c| (c, rest)));
+    out.push((main, p));
+    out[start..].sort_unstable_by_key(|&(c, _)| c);
+    let mut kept = start;
+    for i in start..out.len() {
+        if out[i].1 > 0.0 {
+            out[kept] = out[i];
+            kept += 1;
+        }
+    }
+    out.truncate(kept);
 }
 
 fn positive(d: Distribution) -> Distribution {

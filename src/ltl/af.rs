@@ -202,18 +202,28 @@ pub(crate) fn kind(f: &Formula) -> Kind {
     }
 }
 
-/// The subformulas of `f` with top operator of the given kind, sorted,
-/// without repetition.
-pub(crate) fn subformulas_of_kind(f: &Formula, wanted: Kind) -> Vec<Formula> {
-    fn walk(f: &Formula, wanted: Kind, out: &mut Vec<Formula>) {
-        if kind(f) == wanted {
+/// The subformulas of `f` with top operator of the given kind that occur in
+/// the scope of an operator of the other fixpoint kind, sorted, without
+/// repetition.
+///
+/// Only these can matter in a guess of the Master Theorem: a mu-subformula
+/// outside the scope of every nu-operator is evaluated at finitely many
+/// positions of a satisfied obligation, so it can be left out of `X`, and
+/// dually for `Y` (Esparza, Křetínský and Sickert, JACM 2020, Section 7).
+pub(crate) fn guess_candidates(f: &Formula, wanted: Kind) -> Vec<Formula> {
+    fn walk(f: &Formula, wanted: Kind, scoped: bool, out: &mut Vec<Formula>) {
+        let k = kind(f);
+        if k == wanted && scoped {
             out.push(f.clone());
         }
+        let scoped = scoped || (k != wanted && k != Kind::Other);
         match f {
             Formula::Not(g) | Formula::Next(g) | Formula::Finally(g) | Formula::Globally(g) => {
-                walk(g, wanted, out)
+                walk(g, wanted, scoped, out)
             }
-            Formula::And(gs) | Formula::Or(gs) => gs.iter().for_each(|g| walk(g, wanted, out)),
+            Formula::And(gs) | Formula::Or(gs) => {
+                gs.iter().for_each(|g| walk(g, wanted, scoped, out))
+            }
             Formula::Implies(g, h)
             | Formula::Equiv(g, h)
             | Formula::Xor(g, h)
@@ -221,14 +231,14 @@ pub(crate) fn subformulas_of_kind(f: &Formula, wanted: Kind) -> Vec<Formula> {
             | Formula::WeakUntil(g, h)
             | Formula::Release(g, h)
             | Formula::StrongRelease(g, h) => {
-                walk(g, wanted, out);
-                walk(h, wanted, out);
+                walk(g, wanted, scoped, out);
+                walk(h, wanted, scoped, out);
             }
             Formula::True | Formula::False | Formula::Prop(_) => {}
         }
     }
     let mut out = Vec::new();
-    walk(f, wanted, &mut out);
+    walk(f, wanted, false, &mut out);
     out.sort();
     out.dedup();
     out

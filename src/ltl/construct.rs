@@ -218,8 +218,8 @@ pub(crate) fn master(
     formula: &Formula,
     letters: usize,
 ) -> Result<Tgr, TranslateError> {
-    let mu = af::subformulas_of_kind(formula, Kind::Mu);
-    let nu = af::subformulas_of_kind(formula, Kind::Nu);
+    let mu = af::guess_candidates(formula, Kind::Mu);
+    let nu = af::guess_candidates(formula, Kind::Nu);
     if mu.len() + nu.len() > MAX_GUESS_BITS {
         return Err(TranslateError::TooManyFixpoints {
             count: mu.len() + nu.len(),

@@ -412,15 +412,54 @@ pub(crate) fn is_safety(f: &Formula) -> bool {
     }
 }
 
-/// Whether an NNF formula is a positive Boolean combination (under `X`) of
-/// syntactic safety and co-safety formulas: its language is an obligation
-/// property, recognised by a weak deterministic automaton.
+/// Whether an NNF formula is in the syntactic obligation class of Černá and
+/// Pelánek (2003), as in Spot: `O ::= S | C | O & O | O | O | X O | O U C |
+/// O R S | S W O | C M O` with `S` safety and `C` co-safety, extended by
+/// `(!c & O) U (c & O)` for a literal `c` and, dually, `(c | O) R (!c | O)`
+/// (not for `W`: `(!c & O) W false` is `G (!c & O)`, a recurrence). Its language is an obligation property, recognised by a weak
+/// deterministic automaton.
 pub(crate) fn is_obligation(f: &Formula) -> bool {
     is_safety(f)
         || is_cosafety(f)
         || match f {
             Next(g) => is_obligation(g),
             And(gs) | Or(gs) => gs.iter().all(is_obligation),
+            Until(l, r) if first_occurrence(l, r, true) => {
+                is_obligation(l) && is_obligation(r)
+            }
+            Release(l, r) if first_occurrence(l, r, false) => {
+                is_obligation(l) && is_obligation(r)
+            }
+            Until(l, r) => is_obligation(l) && is_cosafety(r),
+            Release(l, r) => is_obligation(l) && is_safety(r),
+            WeakUntil(l, r) => is_safety(l) && is_obligation(r),
+            StrongRelease(l, r) => is_cosafety(l) && is_obligation(r),
             _ => false,
         }
+}
+
+/// The literals `f` is a conjunction (`conjunctive`) or disjunction of.
+fn literals(f: &Formula, conjunctive: bool) -> Vec<&Formula> {
+    match f {
+        Prop(_) | Not(_) => vec![f],
+        And(gs) if conjunctive => gs.iter().filter(|g| matches!(g, Prop(_) | Not(_))).collect(),
+        Or(gs) if !conjunctive => gs.iter().filter(|g| matches!(g, Prop(_) | Not(_))).collect(),
+        _ => Vec::new(),
+    }
+}
+
+/// Whether `l U r` (`until`) has the shape `(!c & ...) U (c & ...)` for a
+/// literal `c`, or `l R r` the dual shape `(c | ...) R (!c | ...)`: the
+/// position where the right side is awaited is then the first one where `c`
+/// holds, and `l U r` (resp. `l R r`) is an obligation property when `l` and
+/// `r` are.
+fn first_occurrence(l: &Formula, r: &Formula, until: bool) -> bool {
+    let left = literals(l, until);
+    literals(r, until).into_iter().any(|c| {
+        let complement = match c {
+            Not(p) => (**p).clone(),
+            p => Not(Box::new(p.clone())),
+        };
+        left.contains(&&complement)
+    })
 }

@@ -1,0 +1,107 @@
+//! Arguments and loaders shared by several subcommands.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::Context;
+use clap::Args;
+use posg_fsc::automaton::Dra;
+use posg_fsc::automaton::hoa::read_hoa_dra;
+use posg_fsc::controller::{Fsc, Role};
+use posg_fsc::game::Posg;
+use serde::Serialize;
+
+/// The objective: an LTL formula or a deterministic automaton in HOA.
+#[derive(Debug, Clone, Args)]
+pub struct ObjectiveArgs {
+    /// The LTL formula phi, in Spot's syntax (e.g. 'GF goal & G !unsafe').
+    #[arg(long, required_unless_present = "automaton", conflicts_with = "automaton")]
+    pub ltl: Option<String>,
+    /// A deterministic automaton for phi in HOA v1 (instead of --ltl).
+    #[arg(long, value_name = "FILE.hoa")]
+    pub automaton: Option<PathBuf>,
+}
+
+/// The two controllers.
+#[derive(Debug, Clone, Args)]
+pub struct ControllerArgs {
+    /// The defender's controller: a *.fsc.json file or `uniform:K` (K nodes,
+    /// uniform over all (next node, action) pairs, starting in node 0).
+    #[arg(long, default_value = "uniform:1")]
+    pub defender: String,
+    /// The adversary's controller, as for --defender (`uniform:1` for a POMDP).
+    #[arg(long, default_value = "uniform:1")]
+    pub adversary: String,
+}
+
+/// Reads and validates a game file.
+pub fn read_game(path: &Path) -> anyhow::Result<Posg> {
+    Ok(posg_fsc::game::file::read(path)?)
+}
+
+/// The automaton for the objective, with a description of where it came
+/// from. Warns on stderr about propositions that label no state of the game
+/// (they are false everywhere: formats.md section 3).
+pub fn objective(args: &ObjectiveArgs, game: &Posg) -> anyhow::Result<(Dra, String)> {
+    let (dra, description) = match (&args.ltl, &args.automaton) {
+        (Some(text), _) => {
+            let formula = posg_fsc::ltl::parse(text).with_context(|| format!("in the formula '{text}'"))?;
+            (posg_fsc::ltl::translate(&formula)?, text.clone())
+        }
+        (None, Some(path)) => {
+            let text = std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+            let dra = read_hoa_dra(&text).with_context(|| format!("in {}", path.display()))?;
+            (dra, path.display().to_string())
+        }
+        (None, None) => anyhow::bail!("give --ltl or --automaton"),
+    };
+    for name in dra.propositions() {
+        if !game.propositions().contains(name) {
+            eprintln!("warning: proposition '{name}' labels no state of the game; it is false everywhere");
+        }
+    }
+    Ok((dra, description))
+}
+
+/// Both controllers, read or built from their specifications.
+pub fn controllers(args: &ControllerArgs, game: &Posg) -> anyhow::Result<(Fsc, Fsc)> {
+    let defender = posg_fsc::controller::file::resolve(&args.defender, game, Role::Defender)?;
+    let adversary = posg_fsc::controller::file::resolve(&args.adversary, game, Role::Adversary)?;
+    Ok((defender, adversary))
+}
+
+/// What every JSON report records about the run that made it.
+#[derive(Debug, Serialize)]
+pub struct Provenance {
+    /// The command line.
+    pub command: Vec<String>,
+    /// `posg-fsc`'s version.
+    pub version: &'static str,
+}
+
+impl Provenance {
+    /// The current process's command line and the crate version.
+    pub fn current() -> Self {
+        Self { command: std::env::args().collect(), version: env!("CARGO_PKG_VERSION") }
+    }
+}
+
+/// Prints a value as pretty JSON on stdout.
+pub fn print_json(value: &impl Serialize) -> anyhow::Result<()> {
+    print_text(&format!("{}\n", serde_json::to_string_pretty(value)?))
+}
+
+/// Writes text to stdout; a closed pipe (`posg-fsc ... | head`) is an
+/// `io::Error` of kind `BrokenPipe`, which `main` treats as a normal end.
+pub fn print_text(text: &str) -> anyhow::Result<()> {
+    use std::io::Write;
+    let mut stdout = std::io::stdout().lock();
+    stdout.write_all(text.as_bytes())?;
+    stdout.flush()?;
+    Ok(())
+}
+
+/// Seconds since `start`.
+pub fn seconds_since(start: Instant) -> f64 {
+    start.elapsed().as_secs_f64()
+}

@@ -1,0 +1,51 @@
+//! `posg-fsc export-gmc`: the labelled Markov chain on (s, g, h) in PRISM's
+//! explicit format, for an independent check with Storm or PRISM.
+
+use std::path::PathBuf;
+
+use clap::Args;
+use posg_fsc::export::{explicit_chain, write_explicit_chain};
+use serde::Serialize;
+
+use super::common::{self, ControllerArgs, Provenance};
+
+/// Arguments of `export-gmc`.
+#[derive(Debug, Args)]
+pub struct ExportGmcArgs {
+    /// The game (*.posg.json).
+    pub game: PathBuf,
+    #[command(flatten)]
+    pub controllers: ControllerArgs,
+    /// Directory for chain.tra, chain.lab and chain.sta (created if needed).
+    /// State 0 is a fresh initial state: check `X phi` there (see README).
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+#[derive(Serialize)]
+struct Report {
+    #[serde(flatten)]
+    provenance: Provenance,
+    directory: String,
+    states: usize,
+    transitions: usize,
+    property_hint: &'static str,
+}
+
+/// Runs `export-gmc`.
+pub fn run(args: ExportGmcArgs) -> anyhow::Result<()> {
+    let game = common::read_game(&args.game)?;
+    if let Some(reserved) = game.propositions().iter().find(|p| *p == "init" || *p == "deadlock") {
+        anyhow::bail!("the proposition '{reserved}' clashes with a reserved label of the explicit format");
+    }
+    let (defender, adversary) = common::controllers(&args.controllers, &game)?;
+    let chain = explicit_chain(&game, &defender, &adversary)?;
+    write_explicit_chain(&chain, &args.out)?;
+    common::print_json(&Report {
+        provenance: Provenance::current(),
+        directory: args.out.display().to_string(),
+        states: chain.summary.states,
+        transitions: chain.summary.transitions,
+        property_hint: "state 0 is a fresh initial state: the value of phi is P=? [ X phi ] there",
+    })
+}

@@ -1,0 +1,66 @@
+//! `posg-fsc simulate`: a Monte Carlo estimate of the value, to check `eval`.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use clap::Args;
+use posg_fsc::controller::Support;
+use posg_fsc::simulate::{Estimate, SimulationSettings, simulate};
+use posg_fsc::solver::DEFAULT_TOLERANCE;
+use posg_fsc::value::Evaluator;
+use serde::Serialize;
+
+use super::common::{self, ControllerArgs, ObjectiveArgs, Provenance};
+
+/// Arguments of `simulate`.
+#[derive(Debug, Args)]
+pub struct SimulateArgs {
+    /// The game (*.posg.json).
+    pub game: PathBuf,
+    #[command(flatten)]
+    pub objective: ObjectiveArgs,
+    #[command(flatten)]
+    pub controllers: ControllerArgs,
+    /// Number of sampled runs; each ends when it enters a recurrence class.
+    #[arg(long, default_value_t = 10_000)]
+    pub runs: u64,
+    /// Seed of the random number generator (ChaCha8).
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+}
+
+#[derive(Serialize)]
+struct Report {
+    #[serde(flatten)]
+    provenance: Provenance,
+    formula: String,
+    settings: SimulationSettings,
+    estimate: Estimate,
+    exact_value: f64,
+    exact_within_interval: bool,
+    seconds: f64,
+}
+
+/// Runs `simulate`.
+pub fn run(args: SimulateArgs) -> anyhow::Result<()> {
+    let start = Instant::now();
+    let game = common::read_game(&args.game)?;
+    let (dra, formula) = common::objective(&args.objective, &game)?;
+    let (defender, adversary) = common::controllers(&args.controllers, &game)?;
+    let mut evaluator =
+        Evaluator::new(&game, &dra, &Support::of(&defender), &Support::of(&adversary), DEFAULT_TOLERANCE)?;
+    let exact =
+        evaluator.evaluate(&Support::probabilities_of(&defender), &Support::probabilities_of(&adversary))?.value;
+    let settings = SimulationSettings { runs: args.runs, seed: args.seed };
+    anyhow::ensure!(settings.runs > 0, "--runs must be at least 1");
+    let estimate = simulate(&game, &dra, &defender, &adversary, &evaluator, settings)?;
+    common::print_json(&Report {
+        provenance: Provenance::current(),
+        formula,
+        settings,
+        estimate,
+        exact_value: exact,
+        exact_within_interval: estimate.lower <= exact && exact <= estimate.upper,
+        seconds: common::seconds_since(start),
+    })
+}
