@@ -27,16 +27,21 @@
 //! * [`graph`]: strongly connected components, BSCCs, phi-feasibility and the
 //!   target sets `B`, `Z`, `T` (method.md section 1);
 //! * [`solver`]: sparse LU solves of `(I - Q) x = b` and its transpose;
-//! * [`value`]: the exact value and its adjoint gradient (method.md sections 1-2).
+//! * [`value`]: the exact value and its adjoint gradient (method.md sections 1-2);
+//! * [`mdp`] and [`certify`]: MDP analysis (maximal end components, Rabin
+//!   acceptance, maximum reachability) and the two certified bounds of
+//!   method.md section 6.
 #![warn(missing_docs)]
 
 pub mod analysis;
 pub mod automaton;
+pub mod certify;
 pub mod controller;
 pub mod export;
 pub mod game;
 pub mod graph;
 pub mod ltl;
+pub mod mdp;
 pub mod product;
 pub mod prune;
 pub mod simulate;

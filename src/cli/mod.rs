@@ -2,6 +2,7 @@
 //! by clap) and `run(XArgs) -> anyhow::Result<()>`, which builds the library's
 //! objects from those arguments and prints or writes the results.
 
+mod certify;
 mod check;
 mod common;
 mod demo;
@@ -38,6 +39,8 @@ enum Command {
     ExportGmc(export_gmc::ExportGmcArgs),
     /// Algorithm 1: prune FSC structures so that a phi-feasible recurrent set exists.
     Prune(prune::PruneArgs),
+    /// Certified lower and upper bounds (MDP analysis, method.md section 6).
+    Certify(certify::CertifyArgs),
 }
 
 /// Runs the subcommand the user chose.
@@ -50,5 +53,6 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Simulate(args) => simulate::run(args),
         Command::ExportGmc(args) => export_gmc::run(args),
         Command::Prune(args) => prune::run(args),
+        Command::Certify(args) => certify::run(args),
     }
 }
