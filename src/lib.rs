@@ -30,19 +30,25 @@
 //! * [`value`]: the exact value and its adjoint gradient (method.md sections 1-2);
 //! * [`optimise`]: softmax parameters, alternating projected gradient
 //!   ascent-descent and best-response checks (method.md sections 3-4);
-//! * [`output`]: observers and plots that write the optimiser's results.
+//! * [`output`]: observers and plots that write the optimiser's results;
+//! * [`mdp`] and [`certify`]: MDP analysis (maximal end components, Rabin
+//!   acceptance, maximum reachability) and the two certified bounds of
+//!   method.md section 6.
 #![warn(missing_docs)]
 
 pub mod analysis;
 pub mod automaton;
+pub mod certify;
 pub mod controller;
 pub mod export;
 pub mod game;
 pub mod graph;
 pub mod ltl;
+pub mod mdp;
 pub mod optimise;
 pub mod output;
 pub mod product;
+pub mod prune;
 pub mod simulate;
 pub mod solver;
 pub mod value;

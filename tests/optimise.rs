@@ -421,3 +421,48 @@ fn runs_stop_on_the_time_budget_and_on_stalled_progress() {
         (Status::Stalled, 4, 2)
     );
 }
+
+#[test]
+fn solve_also_optimises_on_pruned_structures_and_picks_the_best() {
+    // Noise-free 3x2 grid, `GF goal & G !unsafe`: every controller on the
+    // full support has value 0; Algorithm 1 keeps one structure of value 1.
+    let g = posg_fsc::game::grid::GridSpec {
+        defender_p_obs: 1.0,
+        adversary_p_obs: 1.0,
+        p_na: 1.0,
+        p_a: 1.0,
+        ..Default::default()
+    }
+    .build()
+    .unwrap();
+    let dra = common::recurrent_goal_safe();
+    let settings = Settings {
+        max_iterations: 10,
+        ..Settings::default()
+    };
+    let found = solve(&g, &dra, 1, 1, &settings, |_, _| Box::new(())).unwrap();
+    let names: Vec<&str> = found
+        .structures
+        .iter()
+        .map(|s| s.report.name.as_str())
+        .collect();
+    assert_eq!(names, ["full", "pruned-1"]);
+    assert_eq!(found.structures[0].report.worst_case, 0.0);
+    assert_eq!(found.best().report.name, "pruned-1");
+    assert!(
+        (found.best().report.worst_case - 1.0).abs() < 1e-9,
+        "{}",
+        found.best().report.worst_case
+    );
+    let unpruned = Settings {
+        prune: false,
+        ..settings
+    };
+    assert_eq!(
+        solve(&g, &dra, 1, 1, &unpruned, |_, _| Box::new(()))
+            .unwrap()
+            .structures
+            .len(),
+        1
+    );
+}

@@ -46,8 +46,19 @@ struct Report {
     transient_states: usize,
     residual: f64,
     seconds: f64,
+    phase_seconds: PhaseSeconds,
     #[serde(skip_serializing_if = "Option::is_none")]
     recurrence_classes: Option<Vec<ClassReport>>,
+}
+
+/// Wall-clock seconds of each phase.
+#[derive(Serialize)]
+struct PhaseSeconds {
+    read_game: f64,
+    automaton: f64,
+    controllers: f64,
+    build_and_analyse: f64,
+    factorise_and_solve: f64,
 }
 
 /// One BSCC described by its members' names.
@@ -63,13 +74,20 @@ struct ClassReport {
 /// Runs `eval`.
 pub fn run(args: EvalArgs) -> anyhow::Result<()> {
     let start = Instant::now();
+    let mut lap = Lap(Instant::now());
     let game = common::read_game(&args.game)?;
+    let read_game = lap.seconds();
     let (dra, formula) = common::objective(&args.objective, &game)?;
+    let automaton = lap.seconds();
     let (defender, adversary) = common::controllers(&args.controllers, &game)?;
+    let controllers = lap.seconds();
     let mut evaluator =
         Evaluator::new(&game, &dra, &Support::of(&defender), &Support::of(&adversary), args.tolerance)?;
+    let build_and_analyse = lap.seconds();
     let evaluation =
         evaluator.evaluate(&Support::probabilities_of(&defender), &Support::probabilities_of(&adversary))?;
+    let phase_seconds =
+        PhaseSeconds { read_game, automaton, controllers, build_and_analyse, factorise_and_solve: lap.seconds() };
     let recurrence = evaluator.recurrence();
     let report = Report {
         provenance: Provenance::current(),
@@ -82,6 +100,7 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
         transient_states: recurrence.transient.len(),
         residual: evaluation.residual,
         seconds: common::seconds_since(start),
+        phase_seconds,
         recurrence_classes: args.explain.then(|| explain(&game, evaluator.gmc(), recurrence)),
     };
     common::print_json(&report)
@@ -103,4 +122,16 @@ fn explain(game: &Posg, gmc: &Gmc, recurrence: &Recurrence) -> Vec<ClassReport> 
             good: bscc.good.iter().map(name).collect(),
         })
         .collect()
+}
+
+/// Seconds since the previous lap.
+struct Lap(Instant);
+
+impl Lap {
+    fn seconds(&mut self) -> f64 {
+        let now = Instant::now();
+        let elapsed = now.duration_since(self.0).as_secs_f64();
+        self.0 = now;
+        elapsed
+    }
 }

@@ -2,12 +2,14 @@
 //! by clap) and `run(XArgs) -> anyhow::Result<()>`, which builds the library's
 //! objects from those arguments and prints or writes the results.
 
+mod certify;
 mod check;
 mod common;
 mod demo;
 mod eval;
 mod example;
 mod export_gmc;
+mod prune;
 mod simulate;
 pub(crate) mod solve;
 mod sweep;
@@ -37,6 +39,10 @@ enum Command {
     Simulate(simulate::SimulateArgs),
     /// Export the Markov chain on (s, g, h) in PRISM's explicit format.
     ExportGmc(export_gmc::ExportGmcArgs),
+    /// Algorithm 1: prune FSC structures so that a phi-feasible recurrent set exists.
+    Prune(prune::PruneArgs),
+    /// Certified lower and upper bounds (MDP analysis, method.md section 6).
+    Certify(certify::CertifyArgs),
     /// Optimise a defender FSC against a worst-case adversary FSC (max-min by
     /// alternating projected gradient ascent-descent with best-response
     /// checks) and write curve.csv, curve.svg, defender.fsc.json,
@@ -56,6 +62,8 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Eval(args) => eval::run(args),
         Command::Simulate(args) => simulate::run(args),
         Command::ExportGmc(args) => export_gmc::run(args),
+        Command::Prune(args) => prune::run(args),
+        Command::Certify(args) => certify::run(args),
         Command::Solve(args) => solve::run(args),
         Command::Sweep(args) => sweep::run(args),
     }

@@ -110,6 +110,18 @@ pub struct SettingsArgs {
     /// Largest residual accepted from a linear solve.
     #[arg(long, default_value_t = Settings::default().solver_tolerance)]
     solver_tolerance: f64,
+    /// Optimise on the starting structure only, not also on the structures
+    /// the paper's Algorithm 1 (pruning) keeps.
+    #[arg(long)]
+    no_prune: bool,
+    /// Pruning: remove action u under observation o for all nodes, as the
+    /// paper's lines 14-16 are printed (default: only the offending entries).
+    #[arg(long)]
+    prune_paper_literal: bool,
+    /// Pruning: also restrict the adversary's support (lines 18-22). The
+    /// worst-case estimate is then only against the restricted adversary.
+    #[arg(long)]
+    prune_adversary: bool,
 }
 
 /// `--update`.
@@ -146,6 +158,9 @@ impl SettingsArgs {
             stall_checks: self.stall_checks,
             stall_tolerance: self.stall_tolerance,
             solver_tolerance: self.solver_tolerance,
+            prune: !self.no_prune,
+            prune_paper_literal: self.prune_paper_literal,
+            prune_adversary: self.prune_adversary,
         };
         settings.validate()?;
         Ok(settings)
@@ -322,7 +337,7 @@ pub fn run(args: SolveArgs) -> anyhow::Result<()> {
         game: &game,
         dra: &dra,
         objective: &description,
-        structures: vec![structure],
+        structures: optimise::candidate_structures(&game, &dra, structure, &settings)?,
         settings: &settings,
         out: &args.out,
         progress: std::io::stderr().is_terminal(),

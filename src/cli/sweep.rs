@@ -8,7 +8,7 @@ use clap::Args;
 use rayon::prelude::*;
 use serde::Serialize;
 
-use posg_fsc::optimise::Structure;
+use posg_fsc::optimise::{self, Structure};
 use posg_fsc::output::{SweepPoint, plot_sweep};
 
 use super::common::ObjectiveArgs;
@@ -92,7 +92,12 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
                 game: &game,
                 dra: &dra,
                 objective: &description,
-                structures: vec![Structure::full(&game, n, m, settings.optimise_initial)],
+                structures: optimise::candidate_structures(
+                    &game,
+                    &dra,
+                    Structure::full(&game, n, m, settings.optimise_initial),
+                    &settings,
+                )?,
                 settings: &settings,
                 out: &out,
                 progress: false,

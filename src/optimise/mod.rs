@@ -17,8 +17,10 @@
 //!   adversary time scale, plain or Adam updates, periodic best-response checks,
 //!   keeping the best defender by its worst-case estimate (section 4);
 //! * [`optimise_structures`]: the optimiser on several structures in
-//!   parallel (rayon), the best worst-case estimate chosen; [`solve`] does so
-//!   on the full support structure of given sizes.
+//!   parallel (rayon), the best worst-case estimate chosen;
+//!   [`candidate_structures`] adds the structures pruning keeps (method.md
+//!   section 5) to a starting structure; [`solve`] does both from the full
+//!   support structure of given sizes.
 //!
 //! [`Settings`] holds every number; [`Observer`]s receive one
 //! [`IterationRecord`] per outer iteration and write all output.
@@ -46,6 +48,7 @@ use thiserror::Error;
 use crate::automaton::Dra;
 use crate::controller::{Fsc, Role};
 use crate::game::{ModelError, Posg};
+use crate::prune::{PruneError, PruneSettings, prune};
 use crate::value::ValueError;
 
 /// Why optimisation could not run.
@@ -63,6 +66,9 @@ pub enum OptimiseError {
     /// not be rebuilt from logits.
     #[error(transparent)]
     Model(#[from] ModelError),
+    /// Algorithm 1 (pruning) failed.
+    #[error(transparent)]
+    Prune(#[from] PruneError),
     /// A value or gradient could not be computed.
     #[error(transparent)]
     Value(#[from] ValueError),
@@ -274,9 +280,45 @@ pub fn optimise_structure(
     })
 }
 
+/// The structures to optimise on: `start` and, when `settings.prune`, every
+/// structure the paper's Algorithm 1 keeps when started from `start`
+/// ([`crate::prune::prune`] with `settings.prune_paper_literal` and
+/// `settings.prune_adversary`), named `pruned-1`, `pruned-2`, ...
+pub fn candidate_structures(
+    game: &Posg,
+    dra: &Dra,
+    start: Structure,
+    settings: &Settings,
+) -> Result<Vec<Structure>, OptimiseError> {
+    let pruned = if settings.prune {
+        let prune_settings = PruneSettings {
+            paper_literal: settings.prune_paper_literal,
+            prune_adversary: settings.prune_adversary,
+        };
+        prune(
+            game,
+            dra,
+            &start.defender,
+            &start.adversary,
+            &prune_settings,
+        )?
+        .structures
+    } else {
+        Vec::new()
+    };
+    let mut structures = vec![start];
+    structures.extend(pruned.into_iter().enumerate().map(|(k, kept)| Structure {
+        name: format!("pruned-{}", k + 1),
+        defender: kept.defender,
+        adversary: kept.adversary,
+    }));
+    Ok(structures)
+}
+
 /// The library's main job: optimise a defender of `defender_nodes` nodes
 /// against adversaries of `adversary_nodes` nodes on the full support
-/// structure ([`Structure::full`]) and report the best defender found.
+/// structure ([`Structure::full`]) and on the structures pruning keeps
+/// ([`candidate_structures`]), and report the best defender found.
 pub fn solve<F>(
     game: &Posg,
     dra: &Dra,
@@ -288,16 +330,18 @@ pub fn solve<F>(
 where
     F: Fn(usize, &Structure) -> Box<dyn Observer + Send> + Sync,
 {
+    settings.validate()?;
     if defender_nodes == 0 || adversary_nodes == 0 {
         return Err(
             ModelError::new("controller sizes", "a controller needs at least one node").into(),
         );
     }
-    let structures = [Structure::full(
+    let full = Structure::full(
         game,
         defender_nodes,
         adversary_nodes,
         settings.optimise_initial,
-    )];
+    );
+    let structures = candidate_structures(game, dra, full, settings)?;
     optimise_structures(game, dra, &structures, settings, observer)
 }

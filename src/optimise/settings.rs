@@ -60,6 +60,15 @@ pub struct Settings {
     pub stall_tolerance: f64,
     /// Largest residual accepted from a linear solve.
     pub solver_tolerance: f64,
+    /// Also optimise on every structure the paper's Algorithm 1 keeps
+    /// (method.md section 5), in parallel with the starting structure.
+    pub prune: bool,
+    /// Algorithm 1's lines 14-16 as printed (remove action `u` under
+    /// observation `o` for all nodes) instead of only the offending entries.
+    pub prune_paper_literal: bool,
+    /// Run Algorithm 1's lines 18-22, which restrict the adversary's support:
+    /// the worst-case estimate is then against a restricted adversary.
+    pub prune_adversary: bool,
 }
 
 impl Default for Settings {
@@ -83,6 +92,9 @@ impl Default for Settings {
             stall_checks: 0,
             stall_tolerance: 1e-6,
             solver_tolerance: crate::solver::DEFAULT_TOLERANCE,
+            prune: true,
+            prune_paper_literal: false,
+            prune_adversary: false,
         }
     }
 }

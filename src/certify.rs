@@ -1,0 +1,316 @@
+//! Certified bounds on the max-min value (method.md section 6).
+//!
+//! Gradient play inside fixed supports cannot see an adversary that puts
+//! probability exactly 0 on some action, and such an adversary can change
+//! which states are recurrent. These two numbers are exact whatever the
+//! optimiser did:
+//!
+//! * [`lower_bound`]: fix the defender's controller `mu_def` and let the
+//!   adversary see `(s, q, g)` and remember everything. That is an MDP on
+//!   `(s, q, g)`, with `q` a state of a deterministic Rabin automaton for
+//!   `!phi`:
+//!
+//!   ```text
+//!   P((s', q', g') | (s, q, g), v) = sum_u A_def(g', u | s, g) T(s' | s, u, v),  q' = delta(q, L(s')),
+//!   A_def(g', u | s, g) = sum_o O_def(o | s) mu_def(g', u | g, o),
+//!   p0(s, delta(q_0, L(s)), g) = init(s) init_def(g).
+//!   ```
+//!
+//!   The bound is `1 - max_sigma P^sigma(!phi)`: no adversary of any size,
+//!   observation or memory drives `P(phi)` lower, since the MDP's adversary
+//!   sees more and remembers more than any FSC. The optimal memoryless
+//!   strategy on this product is exported so a user can see the attack.
+//! * [`upper_bound`]: fix the adversary's `mu_adv` and let the defender see
+//!   `(s, q, h)` and remember everything (`q` now from an automaton for
+//!   `phi`): the MDP maximum of `P(phi)`. For every defender FSC `D`,
+//!   `min_adv V(D, adv) <= V(D, mu_adv) <=` this bound, so
+//!   `max_def min_adv V` is at most the smallest bound over the adversaries
+//!   tried.
+//!
+//! Both are [`crate::mdp::max_rabin_probability`] on the product, so the
+//! numbers are exact up to the reported residual.
+
+use std::time::Instant;
+
+use rustc_hash::FxHashMap;
+use serde::Serialize;
+use thiserror::Error;
+
+use crate::automaton::{Dra, Letter, RabinPair};
+use crate::controller::{Fsc, Role};
+use crate::game::{Player, Posg};
+use crate::mdp::{Mdp, MdpBuilder, MdpError, max_rabin_probability};
+
+/// Why a bound could not be computed.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum CertifyError {
+    /// The controller is not for the expected player or does not fit the game.
+    #[error("the {role:?} controller does not fit: {problem}")]
+    Mismatch {
+        /// The player the controller was given for.
+        role: Role,
+        /// What does not fit.
+        problem: String,
+    },
+    /// The MDP analysis failed.
+    #[error(transparent)]
+    Mdp(#[from] MdpError),
+}
+
+/// A certified bound on `P(trace |= phi)` and the strategy that attains it.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Bound {
+    /// The bound on `P(phi)`, clamped to `[0, 1]`.
+    pub value: f64,
+    /// The free player's optimal memoryless strategy on the product MDP.
+    pub strategy: Strategy,
+    /// The number of reachable product MDP states.
+    pub mdp_states: usize,
+    /// Wall-clock time to build and solve the MDP.
+    pub seconds: f64,
+    /// The MDP solution's residual ([`crate::mdp::Reachability::residual`]).
+    pub residual: f64,
+}
+
+/// A memoryless deterministic strategy of the free player on the product of
+/// the game, an automaton and the fixed player's controller.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Strategy {
+    /// The player who plays it (the adversary for a lower bound).
+    pub player: Role,
+    /// One rule per reachable product state.
+    pub rules: Vec<StrategyRule>,
+}
+
+/// The action chosen in one product state `(s, q, node)`.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct StrategyRule {
+    /// The game state `s`, by name.
+    pub state: String,
+    /// The automaton state `q`.
+    pub automaton_state: usize,
+    /// The fixed player's controller node.
+    pub node: usize,
+    /// The chosen action, by name.
+    pub action: String,
+    /// The probability that the strategy's player achieves its objective
+    /// from this state (`!phi` for the adversary, `phi` for the defender).
+    pub probability: f64,
+}
+
+/// The defender's guaranteed probability of `phi` with controller
+/// `defender`, against every adversary: `1 - max P(!phi)` on the product
+/// with `dra_not_phi`, an automaton for `!phi` (module documentation).
+pub fn lower_bound(game: &Posg, dra_not_phi: &Dra, defender: &Fsc) -> Result<Bound, CertifyError> {
+    let mut bound = best_response(game, dra_not_phi, defender, Role::Defender)?;
+    bound.value = (1.0 - bound.value).clamp(0.0, 1.0);
+    Ok(bound)
+}
+
+/// The best probability of `phi` any defender achieves against `adversary`:
+/// `max P(phi)` on the product with `dra_phi`, an automaton for `phi`
+/// (module documentation).
+pub fn upper_bound(game: &Posg, dra_phi: &Dra, adversary: &Fsc) -> Result<Bound, CertifyError> {
+    best_response(game, dra_phi, adversary, Role::Adversary)
+}
+
+/// The free player's maximum probability of the automaton's language, with
+/// the player `fixed` playing `controller`.
+fn best_response(
+    game: &Posg,
+    dra: &Dra,
+    controller: &Fsc,
+    fixed: Role,
+) -> Result<Bound, CertifyError> {
+    let start = Instant::now();
+    let product = Product::build(game, dra, controller, fixed)?;
+    let pairs = product.lift(dra.pairs());
+    let result = max_rabin_probability(&product.mdp, &pairs)?;
+    let value: f64 = product
+        .initial
+        .iter()
+        .map(|&(m, p)| p * result.values[m])
+        .sum();
+    let free = free_player(game, fixed);
+    let rules = product
+        .states
+        .iter()
+        .enumerate()
+        .map(|(m, &(s, q, node))| StrategyRule {
+            state: game.states()[s].clone(),
+            automaton_state: q,
+            node,
+            action: free.actions()[result.strategy[m]].clone(),
+            probability: result.values[m],
+        })
+        .collect();
+    Ok(Bound {
+        value: value.clamp(0.0, 1.0),
+        strategy: Strategy {
+            player: other(fixed),
+            rules,
+        },
+        mdp_states: product.states.len(),
+        seconds: start.elapsed().as_secs_f64(),
+        residual: result.residual,
+    })
+}
+
+fn other(role: Role) -> Role {
+    match role {
+        Role::Defender => Role::Adversary,
+        Role::Adversary => Role::Defender,
+    }
+}
+
+fn fixed_player(game: &Posg, fixed: Role) -> &Player {
+    match fixed {
+        Role::Defender => game.defender(),
+        Role::Adversary => game.adversary(),
+    }
+}
+
+fn free_player(game: &Posg, fixed: Role) -> &Player {
+    fixed_player(game, other(fixed))
+}
+
+/// Checks that `controller` is `role`'s and fits that player of `game`.
+fn check_fits(game: &Posg, controller: &Fsc, role: Role) -> Result<(), CertifyError> {
+    let player = fixed_player(game, role);
+    let problem = if controller.role() != role {
+        Some(format!("it is a {:?} controller", controller.role()))
+    } else if controller.num_observations() != player.num_observations() {
+        Some(format!(
+            "it has {} observations, the game's player {}",
+            controller.num_observations(),
+            player.num_observations()
+        ))
+    } else if controller.num_actions() != player.num_actions() {
+        Some(format!(
+            "it has {} actions, the game's player {}",
+            controller.num_actions(),
+            player.num_actions()
+        ))
+    } else {
+        None
+    };
+    match problem {
+        Some(problem) => Err(CertifyError::Mismatch { role, problem }),
+        None => Ok(()),
+    }
+}
+
+/// `A(g', f | s, g) = sum_o O(o | s) mu(g', f | g, o)` of the fixed player,
+/// as `(g', f, probability)` lists per `s * |G| + g`, distinct `(g', f)`.
+fn mixture(player: &Player, controller: &Fsc, num_states: usize) -> Vec<Vec<(usize, usize, f64)>> {
+    let mut mixture = Vec::with_capacity(num_states * controller.num_nodes());
+    for s in 0..num_states {
+        for g in 0..controller.num_nodes() {
+            let mut terms: Vec<(usize, usize, f64)> = player
+                .observation_distribution(s)
+                .iter()
+                .flat_map(|&(o, weight)| {
+                    controller
+                        .choices(g, o)
+                        .iter()
+                        .map(move |c| (c.next, c.action, weight * c.probability))
+                })
+                .collect();
+            terms.sort_by_key(|&(next, action, _)| (next, action));
+            let mut merged: Vec<(usize, usize, f64)> = Vec::with_capacity(terms.len());
+            for (next, action, p) in terms {
+                match merged.last_mut() {
+                    Some(last) if (last.0, last.1) == (next, action) => last.2 += p,
+                    _ => merged.push((next, action, p)),
+                }
+            }
+            mixture.push(merged);
+        }
+    }
+    mixture
+}
+
+/// The reachable product MDP of a game, an automaton and one player's controller.
+struct Product {
+    mdp: Mdp,
+    /// `(s, q, node)` of each MDP state, in exploration order.
+    states: Vec<(usize, usize, usize)>,
+    /// `p0` as `(MDP state, probability)`.
+    initial: Vec<(usize, f64)>,
+}
+
+impl Product {
+    /// Explores the product from `p0` breadth first; the free player's
+    /// action `w` in `(s, q, g)` has the distribution of the module
+    /// documentation (summed over duplicate successors by [`MdpBuilder`]).
+    fn build(game: &Posg, dra: &Dra, controller: &Fsc, fixed: Role) -> Result<Self, CertifyError> {
+        check_fits(game, controller, fixed)?;
+        let num_free_actions = free_player(game, fixed).num_actions();
+        let letters: Vec<Letter> = (0..game.num_states())
+            .map(|s| dra.letter_of(game.label_names(s)))
+            .collect();
+        let mixture = mixture(fixed_player(game, fixed), controller, game.num_states());
+        let num_nodes = controller.num_nodes();
+        let transition = |s: usize, f: usize, w: usize| match fixed {
+            Role::Defender => game.transition(s, f, w),
+            Role::Adversary => game.transition(s, w, f),
+        };
+        let mut explorer = Explorer::default();
+        let mut initial = Vec::new();
+        for &(s, p) in game.initial() {
+            let q = dra.successor(dra.initial(), letters[s]);
+            for (g, &p_node) in controller.initial().iter().enumerate() {
+                if p_node > 0.0 {
+                    initial.push((explorer.id((s, q, g)), p * p_node));
+                }
+            }
+        }
+        let mut builder = MdpBuilder::new();
+        let mut terms = Vec::new();
+        while builder.num_states() < explorer.states.len() {
+            let (s, q, g) = explorer.states[builder.num_states()];
+            for w in 0..num_free_actions {
+                terms.clear();
+                for &(next, f, a) in &mixture[s * num_nodes + g] {
+                    for &(s2, t) in transition(s, f, w) {
+                        terms.push(((s2, dra.successor(q, letters[s2]), next), a * t));
+                    }
+                }
+                builder.add_action(terms.iter().map(|&(key, p)| (explorer.id(key), p)));
+            }
+            builder.end_state();
+        }
+        Ok(Self {
+            mdp: builder.build()?,
+            states: explorer.states,
+            initial,
+        })
+    }
+
+    /// The automaton's Rabin pairs read on product states through their `q`.
+    fn lift(&self, pairs: &[RabinPair]) -> Vec<RabinPair> {
+        pairs
+            .iter()
+            .map(|pair| RabinPair {
+                fin: self.states.iter().map(|&(_, q, _)| pair.fin[q]).collect(),
+                inf: self.states.iter().map(|&(_, q, _)| pair.inf[q]).collect(),
+            })
+            .collect()
+    }
+}
+
+/// Numbers product states `(s, q, node)` in order of discovery.
+#[derive(Default)]
+struct Explorer {
+    index: FxHashMap<(usize, usize, usize), usize>,
+    states: Vec<(usize, usize, usize)>,
+}
+
+impl Explorer {
+    fn id(&mut self, key: (usize, usize, usize)) -> usize {
+        *self.index.entry(key).or_insert_with(|| {
+            self.states.push(key);
+            self.states.len() - 1
+        })
+    }
+}
