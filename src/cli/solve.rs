@@ -22,7 +22,7 @@ use posg_fsc::optimise::{
 };
 use posg_fsc::output::{CurveCsv, CurvePlot, Progress};
 
-use super::common::{ObjectiveArgs, objective, read_game};
+use super::common::{ObjectiveArgs, objective, print_text, read_game};
 
 /// Arguments of `solve`.
 #[derive(Debug, Args)]
@@ -344,17 +344,17 @@ pub fn run(args: SolveArgs) -> anyhow::Result<()> {
     };
     let solution = run_job(&job)?;
     let best = solution.best();
-    println!(
-        "worst-case estimate {:.6} (last iterate value {:.6}) after {} iterations, {:.1} s; GMC {} states",
-        best.report.worst_case,
-        best.report.last_value,
-        best.report.iterations,
-        best.report.seconds,
-        best.report.gmc.states
-    );
-    println!(
-        "wrote curve.csv, curve.svg, defender.fsc.json, adversary.fsc.json, summary.json to {}",
+    let report = &best.report;
+    print_text(&format!(
+        "structure {}: worst-case estimate {:.6} (last iterate value {:.6}) after {} iterations, {:.1} s; \
+         GMC {} states\nwrote curve.csv, curve.svg, defender.fsc.json, adversary.fsc.json, summary.json to {}\n",
+        report.name,
+        report.worst_case,
+        report.last_value,
+        report.iterations,
+        report.seconds,
+        report.gmc.states,
         args.out.display()
-    );
+    ))?;
     Ok(())
 }

@@ -11,7 +11,7 @@ use serde::Serialize;
 use posg_fsc::optimise::{self, Structure};
 use posg_fsc::output::{SweepPoint, plot_sweep};
 
-use super::common::ObjectiveArgs;
+use super::common::{ObjectiveArgs, print_text};
 use super::solve::{SettingsArgs, SolveJob, load, run_job};
 
 /// Arguments of `sweep`.
@@ -57,11 +57,12 @@ fn parse_sizes(text: &str) -> Result<Sizes, String> {
     Ok(Sizes(sizes))
 }
 
-/// One row of `sweep.csv`.
+/// One row of `sweep.csv`: the best structure's numbers for one size pair.
 #[derive(Debug, Serialize)]
 struct Row {
     defender_nodes: usize,
     adversary_nodes: usize,
+    structure: String,
     gmc_states: usize,
     gmc_transitions: usize,
     defender_parameters: usize,
@@ -112,6 +113,7 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
             Ok(Row {
                 defender_nodes: n,
                 adversary_nodes: m,
+                structure: report.name.clone(),
                 gmc_states: report.gmc.states,
                 gmc_transitions: report.gmc.transitions,
                 defender_parameters: report.defender_parameters,
@@ -138,10 +140,9 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
         .collect();
     let title = format!("{}: {}", game.name().unwrap_or("game"), description);
     plot_sweep(&args.out.join("sweep.svg"), &title, &points).map_err(|e| anyhow::anyhow!(e))?;
-    println!(
-        "wrote sweep.csv and sweep.svg ({} size pairs) to {}",
+    print_text(&format!(
+        "wrote sweep.csv and sweep.svg ({} size pairs) to {}\n",
         rows.len(),
         args.out.display()
-    );
-    Ok(())
+    ))
 }
