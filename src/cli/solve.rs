@@ -12,6 +12,7 @@ use std::time::Instant;
 
 use anyhow::Context;
 use clap::Args;
+use indicatif::MultiProgress;
 use serde::Serialize;
 
 use posg_fsc::automaton::Dra;
@@ -222,7 +223,7 @@ pub fn run_job(job: &SolveJob) -> anyhow::Result<Solution> {
     let iterations = job.settings.max_iterations;
     let multiple = job.structures.len() > 1;
     let out = job.out.to_path_buf();
-    let progress = job.progress;
+    let bars = job.progress.then(MultiProgress::new);
     let solution = optimise::optimise_structures(
         job.game,
         job.dra,
@@ -238,7 +239,8 @@ pub fn run_job(job: &SolveJob) -> anyhow::Result<Solution> {
                 &out,
                 &stem,
                 &title,
-                progress.then_some((structure.name.as_str(), iterations)),
+                bars.as_ref()
+                    .map(|bars| (bars, structure.name.as_str(), iterations)),
             )
         },
     )?;
@@ -287,7 +289,7 @@ fn observers(
     out: &Path,
     stem: &str,
     title: &str,
-    progress: Option<(&str, usize)>,
+    progress: Option<(&MultiProgress, &str, usize)>,
 ) -> Box<dyn Observer + Send> {
     let mut list: Vec<Box<dyn Observer + Send>> = Vec::new();
     match CurveCsv::create(&out.join(format!("{stem}.csv"))) {
@@ -298,8 +300,8 @@ fn observers(
         &out.join(format!("{stem}.svg")),
         title,
     )));
-    if let Some((label, iterations)) = progress {
-        list.push(Box::new(Progress::new(label, iterations)));
+    if let Some((bars, label, iterations)) = progress {
+        list.push(Box::new(Progress::new(bars, label, iterations)));
     }
     Box::new(list)
 }

@@ -16,7 +16,7 @@ pub use plot::{CurvePlot, SweepPoint, plot_sweep};
 use std::fs::File;
 use std::path::Path;
 
-use indicatif::{ProgressBar, ProgressStyle};
+use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
 
 use crate::optimise::{IterationRecord, Observer, ObserverError};
 
@@ -61,9 +61,10 @@ pub struct Progress {
 }
 
 impl Progress {
-    /// A bar of `iterations` steps labelled `label`, drawn on stderr.
-    pub fn new(label: &str, iterations: usize) -> Self {
-        let bar = ProgressBar::new(iterations as u64);
+    /// A bar of `iterations` steps labelled `label`, drawn on stderr below
+    /// the other bars of `bars` (one per structure optimised in parallel).
+    pub fn new(bars: &MultiProgress, label: &str, iterations: usize) -> Self {
+        let bar = bars.add(ProgressBar::new(iterations as u64));
         let style =
             ProgressStyle::with_template("{prefix} [{bar:30}] {pos}/{len} {msg} ({elapsed})")
                 .unwrap_or_else(|_| ProgressStyle::default_bar())
