@@ -69,6 +69,11 @@ struct Mixture {
     values: Vec<f64>,
 }
 
+/// A mixture entry `(g', u)`.
+type MixtureKey = (u32, u32);
+/// A term `(support entry k, O(o | s))` of a mixture entry.
+type MixtureTerm = (u32, f64);
+
 impl Mixture {
     fn build(player: &Player, support: &Support, num_states: usize) -> Self {
         let num_nodes = support.num_nodes();
@@ -76,7 +81,7 @@ impl Mixture {
         let mut entries = Vec::new();
         let mut term_offsets = vec![0];
         let mut terms = Vec::new();
-        let mut pending: Vec<((u32, u32), Vec<(u32, f64)>)> = Vec::new();
+        let mut pending: Vec<(MixtureKey, Vec<MixtureTerm>)> = Vec::new();
         for s in 0..num_states {
             for g in 0..num_nodes {
                 pending.clear();
@@ -461,8 +466,8 @@ impl Gmc {
         let mut x_cell = vec![0.0; self.max_cells];
         let mut d_def = Vec::new();
         let mut d_adv = Vec::new();
-        for m in 0..self.states.len() {
-            if y[m] == 0.0 {
+        for (m, &y_m) in y.iter().enumerate() {
+            if y_m == 0.0 {
                 continue;
             }
             let state = self.states[m];
@@ -485,12 +490,12 @@ impl Gmc {
             });
             for (offset, j) in def_range.enumerate() {
                 for &(k, weight) in self.defender.terms_of(j) {
-                    gradient_defender[k as usize] += y[m] * weight * d_def[offset];
+                    gradient_defender[k as usize] += y_m * weight * d_def[offset];
                 }
             }
             for (offset, l) in adv_range.enumerate() {
                 for &(k, weight) in self.adversary.terms_of(l) {
-                    gradient_adversary[k as usize] += y[m] * weight * d_adv[offset];
+                    gradient_adversary[k as usize] += y_m * weight * d_adv[offset];
                 }
             }
         }

@@ -93,9 +93,9 @@ impl SparsePattern {
     /// `max_i |(A^T y - c)_i|` for the matrix with this pattern and `values`.
     pub fn transposed_residual(&self, values: &[f64], y: &[f64], c: &[f64]) -> f64 {
         let mut aty = vec![0.0; self.n];
-        for row in 0..self.n {
+        for (row, &y_row) in y.iter().enumerate().take(self.n) {
             for k in self.row_offsets[row]..self.row_offsets[row + 1] {
-                aty[self.columns[k]] += values[k] * y[row];
+                aty[self.columns[k]] += values[k] * y_row;
             }
         }
         aty.iter()
@@ -217,7 +217,7 @@ impl LuSolver {
             self.pattern
                 .transposed_residual(&self.values, rhs, &original)
         };
-        if !(residual <= self.tolerance) {
+        if residual.is_nan() || residual > self.tolerance {
             return Err(SolverError::Inaccurate {
                 residual,
                 tolerance: self.tolerance,

@@ -11,21 +11,27 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 use clap::Args;
-use serde_json::json;
-
+use posg_fsc::automaton::Dra;
+use posg_fsc::automaton::hoa::read_hoa_dra;
 use posg_fsc::certify::{Bound, lower_bound, upper_bound};
-use posg_fsc::controller::{Role, file::resolve};
-use posg_fsc::game::file::read;
-use posg_fsc::ltl;
+use posg_fsc::controller::Role;
+use posg_fsc::controller::file::resolve;
+use posg_fsc::game::Posg;
+use serde::Serialize;
+
+use super::common::{self, ObjectiveArgs, Provenance};
 
 /// Arguments of `certify`.
 #[derive(Debug, Args)]
 pub struct CertifyArgs {
     /// The game (`*.posg.json`).
     game: PathBuf,
-    /// The LTL formula phi (Spot syntax).
-    #[arg(long)]
-    ltl: String,
+    #[command(flatten)]
+    objective: ObjectiveArgs,
+    /// With --automaton: a deterministic automaton for !phi (HOA), needed for
+    /// the lower bound (with --ltl, !phi is translated).
+    #[arg(long, value_name = "FILE.hoa", requires = "automaton")]
+    negated_automaton: Option<PathBuf>,
     /// The defender's controller: a `*.fsc.json` file or `uniform:K`.
     #[arg(long)]
     defender: String,
@@ -40,49 +46,73 @@ pub struct CertifyArgs {
     response: Option<PathBuf>,
 }
 
+#[derive(Serialize)]
+struct Report {
+    #[serde(flatten)]
+    provenance: Provenance,
+    game: String,
+    formula: String,
+    lower: BoundSummary,
+    upper: Option<BoundSummary>,
+}
+
+/// A bound without its strategy.
+#[derive(Serialize)]
+struct BoundSummary {
+    value: f64,
+    mdp_states: usize,
+    seconds: f64,
+    residual: f64,
+}
+
+impl From<&Bound> for BoundSummary {
+    fn from(bound: &Bound) -> Self {
+        Self { value: bound.value, mdp_states: bound.mdp_states, seconds: bound.seconds, residual: bound.residual }
+    }
+}
+
 /// Computes and prints the bounds.
 pub fn run(args: CertifyArgs) -> anyhow::Result<()> {
-    let game = read(&args.game)?;
-    let phi = ltl::parse(&args.ltl).with_context(|| format!("formula {:?}", args.ltl))?;
-    for name in phi.propositions() {
-        if !game.propositions().contains(&name) {
-            eprintln!(
-                "warning: proposition {name} labels no state of the game; it is false everywhere"
-            );
-        }
-    }
+    let game = common::read_game(&args.game)?;
+    let (phi_dra, formula) = common::objective(&args.objective, &game)?;
+    let not_phi_dra = negated_objective(&args, &game)?;
     let defender = resolve(&args.defender, &game, Role::Defender)?;
-    let not_phi_dra = ltl::translate(&phi.negate()).context("translating !phi")?;
     let lower = lower_bound(&game, &not_phi_dra, &defender)?;
     write_strategy(args.attack.as_deref(), &lower)?;
     let upper = match &args.adversary {
         Some(spec) => {
             let adversary = resolve(spec, &game, Role::Adversary)?;
-            let phi_dra = ltl::translate(&phi).context("translating phi")?;
             let upper = upper_bound(&game, &phi_dra, &adversary)?;
             write_strategy(args.response.as_deref(), &upper)?;
             Some(upper)
         }
         None => None,
     };
-    let report = json!({
-        "game": args.game.display().to_string(),
-        "ltl": phi.to_string(),
-        "lower": summary(&lower),
-        "upper": upper.as_ref().map(summary),
-    });
-    println!("{}", serde_json::to_string_pretty(&report)?);
-    Ok(())
+    common::print_json(&Report {
+        provenance: Provenance::current(),
+        game: args.game.display().to_string(),
+        formula,
+        lower: (&lower).into(),
+        upper: upper.as_ref().map(BoundSummary::from),
+    })
 }
 
-/// A bound without its strategy.
-fn summary(bound: &Bound) -> serde_json::Value {
-    json!({
-        "value": bound.value,
-        "mdp_states": bound.mdp_states,
-        "seconds": bound.seconds,
-        "residual": bound.residual,
-    })
+/// The automaton for `!phi`: translated from `--ltl`, or read from
+/// `--negated-automaton` when phi was given as `--automaton`.
+fn negated_objective(args: &CertifyArgs, game: &Posg) -> anyhow::Result<Dra> {
+    if let Some(text) = &args.objective.ltl {
+        let phi = posg_fsc::ltl::parse(text).with_context(|| format!("in the formula '{text}'"))?;
+        return Ok(posg_fsc::ltl::translate(&phi.negate()).context("translating !phi")?);
+    }
+    let path = args.negated_automaton.as_ref().ok_or_else(|| {
+        anyhow::anyhow!("with --automaton, give --negated-automaton (an automaton for !phi) for the lower bound")
+    })?;
+    let text = std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let dra = read_hoa_dra(&text).with_context(|| format!("in {}", path.display()))?;
+    if dra.propositions().iter().any(|p| !game.propositions().contains(p)) {
+        eprintln!("warning: the negated automaton uses propositions that label no state of the game");
+    }
+    Ok(dra)
 }
 
 fn write_strategy(path: Option<&Path>, bound: &Bound) -> anyhow::Result<()> {

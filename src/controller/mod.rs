@@ -135,7 +135,7 @@ impl Fsc {
                         c.next, c.action
                     )));
                 }
-                if !(c.probability > 0.0) {
+                if c.probability.is_nan() || c.probability <= 0.0 {
                     return Err(at(format!(
                         "choice ({}, {}) has probability {}",
                         c.next, c.action, c.probability
