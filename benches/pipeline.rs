@@ -31,7 +31,10 @@ fn fixture(side: usize) -> Fixture {
         height: side,
         unsafe_cells: Vec::new(),
         goal_cells: vec![cells - 1],
-        random_unsafe: Some(RandomUnsafe { count: cells / 20, seed: 1 }),
+        random_unsafe: Some(RandomUnsafe {
+            count: cells / 20,
+            seed: 1,
+        }),
         ..GridSpec::default()
     };
     let game = spec.build().expect("grid");
@@ -39,21 +42,36 @@ fn fixture(side: usize) -> Fixture {
     let uniform = |role, player: &posg_fsc::game::Player| {
         Fsc::uniform(role, 2, player.num_observations(), player.num_actions())
     };
-    let (def, adv) = (uniform(Role::Defender, game.defender()), uniform(Role::Adversary, game.adversary()));
+    let (def, adv) = (
+        uniform(Role::Defender, game.defender()),
+        uniform(Role::Adversary, game.adversary()),
+    );
     let fixture = Fixture {
         supports: (Support::of(&def), Support::of(&adv)),
-        probabilities: (Support::probabilities_of(&def), Support::probabilities_of(&adv)),
+        probabilities: (
+            Support::probabilities_of(&def),
+            Support::probabilities_of(&adv),
+        ),
         game,
         dra,
     };
     let mut evaluator = prepare(&fixture);
-    let evaluation = evaluator.evaluate(&fixture.probabilities.0, &fixture.probabilities.1).unwrap();
+    let evaluation = evaluator
+        .evaluate(&fixture.probabilities.0, &fixture.probabilities.1)
+        .unwrap();
     assert!(evaluation.value > 0.0 && evaluation.value < 1.0 && evaluation.residual < 1e-10);
     fixture
 }
 
 fn prepare(f: &Fixture) -> Evaluator {
-    Evaluator::new(&f.game, &f.dra, &f.supports.0, &f.supports.1, DEFAULT_TOLERANCE).unwrap()
+    Evaluator::new(
+        &f.game,
+        &f.dra,
+        &f.supports.0,
+        &f.supports.1,
+        DEFAULT_TOLERANCE,
+    )
+    .unwrap()
 }
 
 fn stages(c: &mut Criterion) {
@@ -62,7 +80,8 @@ fn stages(c: &mut Criterion) {
     for side in SIDES {
         let f = fixture(side);
         let states = prepare(&f).gmc().num_states();
-        let id = |stage: &str| BenchmarkId::new(stage, format!("{side}x{side} ({states} GMC states)"));
+        let id =
+            |stage: &str| BenchmarkId::new(stage, format!("{side}x{side} ({states} GMC states)"));
         let json = posg_fsc::game::file::to_json_string(&f.game);
         group.bench_function(id("game load"), |b| {
             b.iter(|| posg_fsc::game::file::from_json_str(&json, "grid.posg.json").unwrap())
@@ -71,15 +90,27 @@ fn stages(c: &mut Criterion) {
             b.iter(|| Gmc::build(&f.game, &f.dra, &f.supports.0, &f.supports.1).unwrap())
         });
         let mut gmc = Gmc::build(&f.game, &f.dra, &f.supports.0, &f.supports.1).unwrap();
-        group.bench_function(id("refill"), |b| b.iter(|| gmc.refill(&f.probabilities.0, &f.probabilities.1)));
-        group.bench_function(id("analysis"), |b| b.iter(|| Recurrence::analyse(&gmc, &f.dra)));
+        group.bench_function(id("refill"), |b| {
+            b.iter(|| gmc.refill(&f.probabilities.0, &f.probabilities.1))
+        });
+        group.bench_function(id("analysis"), |b| {
+            b.iter(|| Recurrence::analyse(&gmc, &f.dra))
+        });
         group.bench_function(id("prepare"), |b| b.iter(|| prepare(&f)));
         let mut evaluator = prepare(&f);
         group.bench_function(id("value"), |b| {
-            b.iter(|| evaluator.evaluate(&f.probabilities.0, &f.probabilities.1).unwrap())
+            b.iter(|| {
+                evaluator
+                    .evaluate(&f.probabilities.0, &f.probabilities.1)
+                    .unwrap()
+            })
         });
         group.bench_function(id("value+gradient"), |b| {
-            b.iter(|| evaluator.evaluate_with_gradient(&f.probabilities.0, &f.probabilities.1).unwrap())
+            b.iter(|| {
+                evaluator
+                    .evaluate_with_gradient(&f.probabilities.0, &f.probabilities.1)
+                    .unwrap()
+            })
         });
     }
     group.finish();

@@ -98,6 +98,37 @@ pub struct StrategyRule {
     pub probability: f64,
 }
 
+/// What an optimised result guarantees (method.md section 6): the defender's
+/// value against every adversary is at least `certified_lower`, and the
+/// max-min value over defenders of any size is at most `upper_bound`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Bracket {
+    /// [`lower_bound`] of the defender.
+    pub certified_lower: f64,
+    /// The smallest [`upper_bound`] over the adversaries tried.
+    pub upper_bound: f64,
+}
+
+/// The bracket for `defender` and the adversaries tried against it;
+/// `dra_phi` and `dra_not_phi` are deterministic automata for phi and !phi.
+pub fn bracket<'a>(
+    game: &Posg,
+    dra_phi: &Dra,
+    dra_not_phi: &Dra,
+    defender: &Fsc,
+    adversaries: impl IntoIterator<Item = &'a Fsc>,
+) -> Result<Bracket, CertifyError> {
+    let certified_lower = lower_bound(game, dra_not_phi, defender)?.value;
+    let mut upper = 1.0f64;
+    for adversary in adversaries {
+        upper = upper.min(upper_bound(game, dra_phi, adversary)?.value);
+    }
+    Ok(Bracket {
+        certified_lower,
+        upper_bound: upper,
+    })
+}
+
 /// The defender's guaranteed probability of `phi` with controller
 /// `defender`, against every adversary: `1 - max P(!phi)` on the product
 /// with `dra_not_phi`, an automaton for `!phi` (module documentation).

@@ -32,25 +32,60 @@ fn prune_cli(dir: &Path, extra: &[&str]) -> Value {
     let status = Command::new(env!("CARGO_BIN_EXE_posg-fsc"))
         .arg("prune")
         .arg(&game)
-        .args(["--ltl", "G !unsafe", "--def-nodes", "2", "--adv-nodes", "1", "--out"])
+        .args([
+            "--ltl",
+            "G !unsafe",
+            "--def-nodes",
+            "2",
+            "--adv-nodes",
+            "1",
+            "--out",
+        ])
         .arg(&out)
         .args(extra)
         .output()
         .unwrap();
-    assert!(status.status.success(), "{}", String::from_utf8_lossy(&status.stderr));
+    assert!(
+        status.status.success(),
+        "{}",
+        String::from_utf8_lossy(&status.stderr)
+    );
     serde_json::from_str(&std::fs::read_to_string(out.join("structures.json")).unwrap()).unwrap()
 }
 
 fn value_of(game: &Posg, dir: &Path, structure: &Value) -> f64 {
-    let read = |key: &str, role| file::read(&dir.join("out").join(structure[key].as_str().unwrap()), game, role).unwrap();
-    let (def, adv) = (read("defender", Role::Defender), read("adversary", Role::Adversary));
+    let read = |key: &str, role| {
+        file::read(
+            &dir.join("out").join(structure[key].as_str().unwrap()),
+            game,
+            role,
+        )
+        .unwrap()
+    };
+    let (def, adv) = (
+        read("defender", Role::Defender),
+        read("adversary", Role::Adversary),
+    );
     let dra = posg_fsc::ltl::translate(&posg_fsc::ltl::parse("G !unsafe").unwrap()).unwrap();
-    let mut ev = Evaluator::new(game, &dra, &Support::of(&def), &Support::of(&adv), DEFAULT_TOLERANCE).unwrap();
-    ev.evaluate(&Support::probabilities_of(&def), &Support::probabilities_of(&adv)).unwrap().value
+    let mut ev = Evaluator::new(
+        game,
+        &dra,
+        &Support::of(&def),
+        &Support::of(&adv),
+        DEFAULT_TOLERANCE,
+    )
+    .unwrap();
+    ev.evaluate(
+        &Support::probabilities_of(&def),
+        &Support::probabilities_of(&adv),
+    )
+    .unwrap()
+    .value
 }
 
 fn scratch(name: &str) -> std::path::PathBuf {
-    let dir = std::env::temp_dir().join(format!("posg-fsc-prune-cli-{name}-{}", std::process::id()));
+    let dir =
+        std::env::temp_dir().join(format!("posg-fsc-prune-cli-{name}-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     dir
 }
@@ -68,7 +103,10 @@ fn prune_writes_evaluable_structures_with_their_values() {
     assert!((recorded - 1.0).abs() < 1e-12, "{recorded}");
     assert!((value_of(&game, &dir, &structures[0]) - recorded).abs() < 1e-12);
     let produced_by = &structures[0]["produced_by"][0];
-    assert_eq!(produced_by["removed_defender"], 4, "(g', risky | g, s0) for g, g' in {{0, 1}}");
+    assert_eq!(
+        produced_by["removed_defender"], 4,
+        "(g', risky | g, s0) for g, g' in {{0, 1}}"
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
@@ -77,6 +115,11 @@ fn adversary_pruning_is_recorded_in_the_output() {
     let dir = scratch("adversary");
     let summary = prune_cli(&dir, &["--prune-adversary"]);
     assert_eq!(summary["adversary_pruned"], true);
-    assert!(summary["note"].as_str().unwrap().contains("not max-min guarantees"));
+    assert!(
+        summary["note"]
+            .as_str()
+            .unwrap()
+            .contains("not max-min guarantees")
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }

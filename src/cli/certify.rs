@@ -67,7 +67,12 @@ struct BoundSummary {
 
 impl From<&Bound> for BoundSummary {
     fn from(bound: &Bound) -> Self {
-        Self { value: bound.value, mdp_states: bound.mdp_states, seconds: bound.seconds, residual: bound.residual }
+        Self {
+            value: bound.value,
+            mdp_states: bound.mdp_states,
+            seconds: bound.seconds,
+            residual: bound.residual,
+        }
     }
 }
 
@@ -105,12 +110,21 @@ fn negated_objective(args: &CertifyArgs, game: &Posg) -> anyhow::Result<Dra> {
         return Ok(posg_fsc::ltl::translate(&phi.negate()).context("translating !phi")?);
     }
     let path = args.negated_automaton.as_ref().ok_or_else(|| {
-        anyhow::anyhow!("with --automaton, give --negated-automaton (an automaton for !phi) for the lower bound")
+        anyhow::anyhow!(
+            "with --automaton, give --negated-automaton (an automaton for !phi) for the lower bound"
+        )
     })?;
-    let text = std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
     let dra = read_hoa_dra(&text).with_context(|| format!("in {}", path.display()))?;
-    if dra.propositions().iter().any(|p| !game.propositions().contains(p)) {
-        eprintln!("warning: the negated automaton uses propositions that label no state of the game");
+    if dra
+        .propositions()
+        .iter()
+        .any(|p| !game.propositions().contains(p))
+    {
+        eprintln!(
+            "warning: the negated automaton uses propositions that label no state of the game"
+        );
     }
     Ok(dra)
 }

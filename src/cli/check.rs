@@ -22,7 +22,12 @@ pub fn run(args: CheckArgs) -> anyhow::Result<()> {
 
 fn list(names: &[String]) -> String {
     const SHOWN: usize = 12;
-    let mut text = names.iter().take(SHOWN).cloned().collect::<Vec<_>>().join(", ");
+    let mut text = names
+        .iter()
+        .take(SHOWN)
+        .cloned()
+        .collect::<Vec<_>>()
+        .join(", ");
     if names.len() > SHOWN {
         text.push_str(&format!(", ... ({} more)", names.len() - SHOWN));
     }
@@ -38,7 +43,11 @@ fn describe(game: &Posg) -> String {
         .map(|(s, u, v)| game.transition(s, u, v).len())
         .sum();
     let player = |name: &str, p: &posg_fsc::game::Player| {
-        let observe = if p.observes_fully() { " (full observation)" } else { "" };
+        let observe = if p.observes_fully() {
+            " (full observation)"
+        } else {
+            ""
+        };
         format!(
             "{name}:\n  actions ({}): {}\n  observations ({}){observe}: {}\n",
             p.num_actions(),
@@ -61,6 +70,8 @@ fn describe(game: &Posg) -> String {
     } else {
         text.push_str("adversary: none (a POMDP)\n");
     }
-    text.push_str(&format!("transitions: {transitions} (state, defender action, adversary action, successor) entries\n"));
+    text.push_str(&format!(
+        "transitions: {transitions} (state, defender action, adversary action, successor) entries\n"
+    ));
     text
 }

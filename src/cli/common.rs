@@ -15,7 +15,11 @@ use serde::Serialize;
 #[derive(Debug, Clone, Args)]
 pub struct ObjectiveArgs {
     /// The LTL formula phi, in Spot's syntax (e.g. 'GF goal & G !unsafe').
-    #[arg(long, required_unless_present = "automaton", conflicts_with = "automaton")]
+    #[arg(
+        long,
+        required_unless_present = "automaton",
+        conflicts_with = "automaton"
+    )]
     pub ltl: Option<String>,
     /// A deterministic automaton for phi in HOA v1 (instead of --ltl).
     #[arg(long, value_name = "FILE.hoa")]
@@ -45,11 +49,13 @@ pub fn read_game(path: &Path) -> anyhow::Result<Posg> {
 pub fn objective(args: &ObjectiveArgs, game: &Posg) -> anyhow::Result<(Dra, String)> {
     let (dra, description) = match (&args.ltl, &args.automaton) {
         (Some(text), _) => {
-            let formula = posg_fsc::ltl::parse(text).with_context(|| format!("in the formula '{text}'"))?;
+            let formula =
+                posg_fsc::ltl::parse(text).with_context(|| format!("in the formula '{text}'"))?;
             (posg_fsc::ltl::translate(&formula)?, text.clone())
         }
         (None, Some(path)) => {
-            let text = std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+            let text = std::fs::read_to_string(path)
+                .with_context(|| format!("cannot read {}", path.display()))?;
             let dra = read_hoa_dra(&text).with_context(|| format!("in {}", path.display()))?;
             (dra, path.display().to_string())
         }
@@ -57,7 +63,9 @@ pub fn objective(args: &ObjectiveArgs, game: &Posg) -> anyhow::Result<(Dra, Stri
     };
     for name in dra.propositions() {
         if !game.propositions().contains(name) {
-            eprintln!("warning: proposition '{name}' labels no state of the game; it is false everywhere");
+            eprintln!(
+                "warning: proposition '{name}' labels no state of the game; it is false everywhere"
+            );
         }
     }
     Ok((dra, description))
@@ -82,7 +90,10 @@ pub struct Provenance {
 impl Provenance {
     /// The current process's command line and the crate version.
     pub fn current() -> Self {
-        Self { command: std::env::args().collect(), version: env!("CARGO_PKG_VERSION") }
+        Self {
+            command: std::env::args().collect(),
+            version: env!("CARGO_PKG_VERSION"),
+        }
     }
 }
 

@@ -81,13 +81,25 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
     let automaton = lap.seconds();
     let (defender, adversary) = common::controllers(&args.controllers, &game)?;
     let controllers = lap.seconds();
-    let mut evaluator =
-        Evaluator::new(&game, &dra, &Support::of(&defender), &Support::of(&adversary), args.tolerance)?;
+    let mut evaluator = Evaluator::new(
+        &game,
+        &dra,
+        &Support::of(&defender),
+        &Support::of(&adversary),
+        args.tolerance,
+    )?;
     let build_and_analyse = lap.seconds();
-    let evaluation =
-        evaluator.evaluate(&Support::probabilities_of(&defender), &Support::probabilities_of(&adversary))?;
-    let phase_seconds =
-        PhaseSeconds { read_game, automaton, controllers, build_and_analyse, factorise_and_solve: lap.seconds() };
+    let evaluation = evaluator.evaluate(
+        &Support::probabilities_of(&defender),
+        &Support::probabilities_of(&adversary),
+    )?;
+    let phase_seconds = PhaseSeconds {
+        read_game,
+        automaton,
+        controllers,
+        build_and_analyse,
+        factorise_and_solve: lap.seconds(),
+    };
     let recurrence = evaluator.recurrence();
     let report = Report {
         provenance: Provenance::current(),
@@ -101,7 +113,9 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
         residual: evaluation.residual,
         seconds: common::seconds_since(start),
         phase_seconds,
-        recurrence_classes: args.explain.then(|| explain(&game, evaluator.gmc(), recurrence)),
+        recurrence_classes: args
+            .explain
+            .then(|| explain(&game, evaluator.gmc(), recurrence)),
     };
     common::print_json(&report)
 }
@@ -109,7 +123,13 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
 fn explain(game: &Posg, gmc: &Gmc, recurrence: &Recurrence) -> Vec<ClassReport> {
     let name = |m: &usize| {
         let state = gmc.state(*m);
-        format!("({}, q{}, g{}, h{})", game.states()[state.s as usize], state.q, state.g, state.h)
+        format!(
+            "({}, q{}, g{}, h{})",
+            game.states()[state.s as usize],
+            state.q,
+            state.g,
+            state.h
+        )
     };
     recurrence
         .bsccs

@@ -84,18 +84,25 @@ struct CellList(Vec<usize>);
 
 fn parse_cell(text: &str) -> Result<usize, String> {
     let digits = text.strip_prefix('s').unwrap_or(text);
-    digits.parse().map_err(|_| format!("'{text}' is not a cell (expected s<index> or <index>)"))
+    digits
+        .parse()
+        .map_err(|_| format!("'{text}' is not a cell (expected s<index> or <index>)"))
 }
 
 fn parse_cells(text: &str) -> Result<CellList, String> {
     if text.is_empty() || text == "none" {
         return Ok(CellList(Vec::new()));
     }
-    text.split(',').map(parse_cell).collect::<Result<_, _>>().map(CellList)
+    text.split(',')
+        .map(parse_cell)
+        .collect::<Result<_, _>>()
+        .map(CellList)
 }
 
 fn parse_label(text: &str) -> Result<(String, CellList), String> {
-    let (name, cells) = text.split_once('=').ok_or_else(|| format!("'{text}' is not NAME=CELLS"))?;
+    let (name, cells) = text
+        .split_once('=')
+        .ok_or_else(|| format!("'{text}' is not NAME=CELLS"))?;
     Ok((name.to_string(), parse_cells(cells)?))
 }
 
@@ -107,7 +114,11 @@ pub fn run(args: ExampleArgs) -> anyhow::Result<()> {
         height: grid.height,
         unsafe_cells: grid.unsafe_cells.0,
         goal_cells: grid.goal.0,
-        extra_labels: grid.label.into_iter().map(|(name, cells)| (name, cells.0)).collect(),
+        extra_labels: grid
+            .label
+            .into_iter()
+            .map(|(name, cells)| (name, cells.0))
+            .collect(),
         initial: grid.initial,
         p_na: grid.p_na,
         p_a: grid.p_a,
@@ -117,12 +128,17 @@ pub fn run(args: ExampleArgs) -> anyhow::Result<()> {
             Observation::Neighbourhood => ObservationModel::Neighbourhood,
             Observation::Blind => ObservationModel::Blind,
         },
-        random_unsafe: grid.random_unsafe.map(|count| RandomUnsafe { count, seed: grid.seed }),
+        random_unsafe: grid.random_unsafe.map(|count| RandomUnsafe {
+            count,
+            seed: grid.seed,
+        }),
     };
     let game = spec.build()?;
     let text = posg_fsc::game::file::to_json_string(&game);
     match grid.out {
-        Some(path) => std::fs::write(&path, text).with_context(|| format!("cannot write {}", path.display())),
+        Some(path) => {
+            std::fs::write(&path, text).with_context(|| format!("cannot write {}", path.display()))
+        }
         None => super::common::print_text(&format!("{text}\n")),
     }
 }

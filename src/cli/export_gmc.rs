@@ -35,8 +35,14 @@ struct Report {
 /// Runs `export-gmc`.
 pub fn run(args: ExportGmcArgs) -> anyhow::Result<()> {
     let game = common::read_game(&args.game)?;
-    if let Some(reserved) = game.propositions().iter().find(|p| *p == "init" || *p == "deadlock") {
-        anyhow::bail!("the proposition '{reserved}' clashes with a reserved label of the explicit format");
+    if let Some(reserved) = game
+        .propositions()
+        .iter()
+        .find(|p| *p == "init" || *p == "deadlock")
+    {
+        anyhow::bail!(
+            "the proposition '{reserved}' clashes with a reserved label of the explicit format"
+        );
     }
     let (defender, adversary) = common::controllers(&args.controllers, &game)?;
     let chain = explicit_chain(&game, &defender, &adversary)?;

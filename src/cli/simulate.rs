@@ -47,11 +47,23 @@ pub fn run(args: SimulateArgs) -> anyhow::Result<()> {
     let game = common::read_game(&args.game)?;
     let (dra, formula) = common::objective(&args.objective, &game)?;
     let (defender, adversary) = common::controllers(&args.controllers, &game)?;
-    let mut evaluator =
-        Evaluator::new(&game, &dra, &Support::of(&defender), &Support::of(&adversary), DEFAULT_TOLERANCE)?;
-    let exact =
-        evaluator.evaluate(&Support::probabilities_of(&defender), &Support::probabilities_of(&adversary))?.value;
-    let settings = SimulationSettings { runs: args.runs, seed: args.seed };
+    let mut evaluator = Evaluator::new(
+        &game,
+        &dra,
+        &Support::of(&defender),
+        &Support::of(&adversary),
+        DEFAULT_TOLERANCE,
+    )?;
+    let exact = evaluator
+        .evaluate(
+            &Support::probabilities_of(&defender),
+            &Support::probabilities_of(&adversary),
+        )?
+        .value;
+    let settings = SimulationSettings {
+        runs: args.runs,
+        seed: args.seed,
+    };
     anyhow::ensure!(settings.runs > 0, "--runs must be at least 1");
     let estimate = simulate(&game, &dra, &defender, &adversary, &evaluator, settings)?;
     common::print_json(&Report {

@@ -16,6 +16,7 @@ use indicatif::MultiProgress;
 use serde::Serialize;
 
 use posg_fsc::automaton::Dra;
+use posg_fsc::certify::{self, Bracket};
 use posg_fsc::controller::{self, Role};
 use posg_fsc::game::Posg;
 use posg_fsc::optimise::{
@@ -174,6 +175,9 @@ pub struct SolveJob<'a> {
     pub game: &'a Posg,
     /// The DRA of the objective.
     pub dra: &'a Dra,
+    /// A DRA of the negated objective, for the certified bracket (none
+    /// when the objective came as an automaton).
+    pub negated_dra: Option<&'a Dra>,
     /// The objective as the user gave it (formula or automaton file).
     pub objective: &'a str,
     /// The structures to optimise on.
@@ -198,24 +202,35 @@ struct Summary<'a> {
     settings: &'a Settings,
     structure_used: &'a str,
     worst_case: f64,
+    /// The best defender's guaranteed value against every adversary, and
+    /// the smallest game upper bound over the best responses found
+    /// (method.md section 6); absent when the objective came as an automaton.
+    certified: Option<Bracket>,
     last_value: f64,
     seconds: f64,
     structures: Vec<&'a StructureReport>,
     files: [&'static str; 5],
 }
 
-/// Reads the game and builds the objective's automaton; returns them with
-/// the objective's description.
-pub fn load(game: &Path, args: &ObjectiveArgs) -> anyhow::Result<(Posg, Dra, String)> {
+/// Reads the game and builds the objective's automaton (and, for an LTL
+/// formula, its negation's); returns them with the objective's description.
+pub fn load(game: &Path, args: &ObjectiveArgs) -> anyhow::Result<(Posg, Dra, Option<Dra>, String)> {
     let game = read_game(game)?;
     let (dra, description) = objective(args, &game)?;
-    Ok((game, dra, description))
+    let negated = match &args.ltl {
+        Some(text) => Some(posg_fsc::ltl::translate(
+            &posg_fsc::ltl::parse(text)?.negate(),
+        )?),
+        None => None,
+    };
+    Ok((game, dra, negated, description))
 }
 
 /// Optimises on the job's structures and writes the five output files
 /// (the best structure's curve as `curve.csv`/`curve.svg`, the others' as
-/// `curve-<name>.csv`/`.svg`). Returns the solution.
-pub fn run_job(job: &SolveJob) -> anyhow::Result<Solution> {
+/// `curve-<name>.csv`/`.svg`). Returns the solution and the best
+/// defender's certified bracket.
+pub fn run_job(job: &SolveJob) -> anyhow::Result<(Solution, Option<Bracket>)> {
     std::fs::create_dir_all(job.out)
         .with_context(|| format!("cannot create {}", job.out.display()))?;
     let clock = Instant::now();
@@ -254,6 +269,13 @@ pub fn run_job(job: &SolveJob) -> anyhow::Result<Solution> {
         }
     }
     let best = solution.best();
+    let certified = job
+        .negated_dra
+        .map(|negated| {
+            let adversaries = solution.structures.iter().map(|s| &s.adversary);
+            certify::bracket(job.game, job.dra, negated, &best.defender, adversaries)
+        })
+        .transpose()?;
     controller::file::write(&out.join("defender.fsc.json"), &best.defender, job.game)?;
     controller::file::write(&out.join("adversary.fsc.json"), &best.adversary, job.game)?;
     let summary = Summary {
@@ -266,6 +288,7 @@ pub fn run_job(job: &SolveJob) -> anyhow::Result<Solution> {
         settings: job.settings,
         structure_used: &best.report.name,
         worst_case: best.report.worst_case,
+        certified,
         last_value: best.report.last_value,
         seconds: clock.elapsed().as_secs_f64(),
         structures: solution.structures.iter().map(|s| &s.report).collect(),
@@ -281,7 +304,7 @@ pub fn run_job(job: &SolveJob) -> anyhow::Result<Solution> {
         out.join("summary.json"),
         serde_json::to_string_pretty(&summary)? + "\n",
     )?;
-    Ok(solution)
+    Ok((solution, certified))
 }
 
 /// The CSV writer and the plot for `stem`, and a progress bar when asked.
@@ -320,7 +343,7 @@ impl Observer for Failed {
 /// Runs `solve`.
 pub fn run(args: SolveArgs) -> anyhow::Result<()> {
     let settings = args.settings.settings()?;
-    let (game, dra, description) = load(&args.game, &args.objective)?;
+    let (game, dra, negated, description) = load(&args.game, &args.objective)?;
     let mut structure = Structure::full(
         &game,
         args.def_nodes,
@@ -338,18 +361,25 @@ pub fn run(args: SolveArgs) -> anyhow::Result<()> {
     let job = SolveJob {
         game: &game,
         dra: &dra,
+        negated_dra: negated.as_ref(),
         objective: &description,
         structures: optimise::candidate_structures(&game, &dra, structure, &settings)?,
         settings: &settings,
         out: &args.out,
         progress: std::io::stderr().is_terminal(),
     };
-    let solution = run_job(&job)?;
+    let (solution, certified) = run_job(&job)?;
     let best = solution.best();
     let report = &best.report;
+    let bracket = certified.map_or(String::new(), |b| {
+        format!(
+            "; certified: at least {:.6} against every adversary, game value at most {:.6}",
+            b.certified_lower, b.upper_bound
+        )
+    });
     print_text(&format!(
         "structure {}: worst-case estimate {:.6} (last iterate value {:.6}) after {} iterations, {:.1} s; \
-         GMC {} states\nwrote curve.csv, curve.svg, defender.fsc.json, adversary.fsc.json, summary.json to {}\n",
+         GMC {} states{bracket}\nwrote curve.csv, curve.svg, defender.fsc.json, adversary.fsc.json, summary.json to {}\n",
         report.name,
         report.worst_case,
         report.last_value,
@@ -357,6 +387,5 @@ pub fn run(args: SolveArgs) -> anyhow::Result<()> {
         report.seconds,
         report.gmc.states,
         args.out.display()
-    ))?;
-    Ok(())
+    ))
 }

@@ -69,6 +69,8 @@ struct Row {
     adversary_parameters: usize,
     last_value: f64,
     worst_case: f64,
+    certified_lower: Option<f64>,
+    upper_bound: Option<f64>,
     iterations: usize,
     seconds: f64,
 }
@@ -76,7 +78,7 @@ struct Row {
 /// Runs `sweep`.
 pub fn run(args: SweepArgs) -> anyhow::Result<()> {
     let settings = args.settings.settings()?;
-    let (game, dra, description) = load(&args.game, &args.objective)?;
+    let (game, dra, negated, description) = load(&args.game, &args.objective)?;
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create {}", args.out.display()))?;
     let pairs: Vec<(usize, usize)> = args
@@ -92,6 +94,7 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
             let job = SolveJob {
                 game: &game,
                 dra: &dra,
+                negated_dra: negated.as_ref(),
                 objective: &description,
                 structures: optimise::candidate_structures(
                     &game,
@@ -103,7 +106,7 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
                 out: &out,
                 progress: false,
             };
-            let solution = run_job(&job)
+            let (solution, certified) = run_job(&job)
                 .with_context(|| format!("defender {n} nodes, adversary {m} nodes"))?;
             let report = &solution.best().report;
             eprintln!(
@@ -120,6 +123,8 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
                 adversary_parameters: report.adversary_parameters,
                 last_value: report.last_value,
                 worst_case: report.worst_case,
+                certified_lower: certified.map(|b| b.certified_lower),
+                upper_bound: certified.map(|b| b.upper_bound),
                 iterations: report.iterations,
                 seconds: report.seconds,
             })
