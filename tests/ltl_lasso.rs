@@ -13,12 +13,20 @@ use rand_chacha::ChaCha8Rng;
 const SHARED: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/ltl/");
 
 /// Random lasso words over `propositions.len()` propositions, `|u|, |v| <= 6`.
-fn random_lassos(rng: &mut ChaCha8Rng, propositions: usize, count: usize) -> Vec<(Vec<Letter>, Vec<Letter>)> {
+fn random_lassos(
+    rng: &mut ChaCha8Rng,
+    propositions: usize,
+    count: usize,
+) -> Vec<(Vec<Letter>, Vec<Letter>)> {
     let letters = 1u32 << propositions;
     (0..count)
         .map(|_| {
-            let u = (0..rng.random_range(0..=6)).map(|_| rng.random_range(0..letters)).collect();
-            let v = (0..rng.random_range(1..=6)).map(|_| rng.random_range(0..letters)).collect();
+            let u = (0..rng.random_range(0..=6))
+                .map(|_| rng.random_range(0..letters))
+                .collect();
+            let v = (0..rng.random_range(1..=6))
+                .map(|_| rng.random_range(0..letters))
+                .collect();
             (u, v)
         })
         .collect()
@@ -143,7 +151,12 @@ fn obligation_shapes_agree_with_the_evaluator() {
 
 #[test]
 fn formula_without_propositions_gives_an_automaton_over_no_propositions() {
-    for (text, expected) in [("true", true), ("G F true", true), ("X false", false), ("F G 0 | 1 U 0", false)] {
+    for (text, expected) in [
+        ("true", true),
+        ("G F true", true),
+        ("X false", false),
+        ("F G 0 | 1 U 0", false),
+    ] {
         let dra = ltl::translate(&ltl::parse(text).unwrap()).unwrap();
         assert!(dra.propositions().is_empty());
         assert_eq!(dra.num_states(), 1, "{text}");
@@ -164,7 +177,12 @@ fn too_many_propositions_is_an_error() {
 #[test]
 fn emerson_lei_automaton_agrees_with_the_evaluator() {
     let mut rng = ChaCha8Rng::seed_from_u64(7);
-    for text in ["GF a & GF b & G !c", "FG a | GF b", "(GF a -> GF b) & G !c", "a U (b R F c)"] {
+    for text in [
+        "GF a & GF b & G !c",
+        "FG a | GF b",
+        "(GF a -> GF b) & G !c",
+        "a U (b R F c)",
+    ] {
         let formula = ltl::parse(text).unwrap();
         let automaton = ltl::translate_to_emerson_lei(&formula).unwrap();
         let propositions = formula.propositions();

@@ -66,7 +66,11 @@ fn display_parses_back_to_the_same_formula() {
     ];
     for text in texts {
         let formula = p(text);
-        assert_eq!(p(&formula.to_string()), formula, "{text} printed as {formula}");
+        assert_eq!(
+            p(&formula.to_string()),
+            formula,
+            "{text} printed as {formula}"
+        );
     }
 }
 
@@ -86,24 +90,80 @@ fn negate_removes_double_negation() {
 #[test]
 fn malformed_formulas_report_column_and_expectation() {
     let cases = [
-        ("", 1, "expected a formula (constant, proposition, unary operator or '('), found end of formula"),
-        ("a &", 4, "expected a formula (constant, proposition, unary operator or '('), found end of formula"),
-        ("(a | b", 7, "expected ')' or a binary operator, found end of formula"),
-        ("a b", 3, "expected a binary operator or end of formula, found proposition 'b'"),
-        ("a)", 2, "expected a binary operator or end of formula, found ')'"),
-        ("Ab", 1, "unexpected character 'A': expected an operator, a constant or a proposition ([a-z_][a-z0-9_]* or double-quoted)"),
-        ("a & \"b", 5, "unterminated quoted proposition: expected '\"'"),
+        (
+            "",
+            1,
+            "expected a formula (constant, proposition, unary operator or '('), found end of formula",
+        ),
+        (
+            "a &",
+            4,
+            "expected a formula (constant, proposition, unary operator or '('), found end of formula",
+        ),
+        (
+            "(a | b",
+            7,
+            "expected ')' or a binary operator, found end of formula",
+        ),
+        (
+            "a b",
+            3,
+            "expected a binary operator or end of formula, found proposition 'b'",
+        ),
+        (
+            "a)",
+            2,
+            "expected a binary operator or end of formula, found ')'",
+        ),
+        (
+            "Ab",
+            1,
+            "unexpected character 'A': expected an operator, a constant or a proposition ([a-z_][a-z0-9_]* or double-quoted)",
+        ),
+        (
+            "a & \"b",
+            5,
+            "unterminated quoted proposition: expected '\"'",
+        ),
         ("\"\" U a", 1, "empty quoted proposition: expected a name"),
-        ("a U 2", 5, "unexpected number '2': expected '0', '1' or a proposition"),
-        ("G -> a", 3, "expected a formula (constant, proposition, unary operator or '('), found '->'"),
-        ("a U U b", 5, "expected a formula (constant, proposition, unary operator or '('), found 'U'"),
-        ("()", 2, "expected a formula (constant, proposition, unary operator or '('), found ')'"),
-        ("a # b", 3, "unexpected character '#': expected an operator, a constant or a proposition ([a-z_][a-z0-9_]* or double-quoted)"),
-        ("F(a xor)", 8, "expected a formula (constant, proposition, unary operator or '('), found ')'"),
+        (
+            "a U 2",
+            5,
+            "unexpected number '2': expected '0', '1' or a proposition",
+        ),
+        (
+            "G -> a",
+            3,
+            "expected a formula (constant, proposition, unary operator or '('), found '->'",
+        ),
+        (
+            "a U U b",
+            5,
+            "expected a formula (constant, proposition, unary operator or '('), found 'U'",
+        ),
+        (
+            "()",
+            2,
+            "expected a formula (constant, proposition, unary operator or '('), found ')'",
+        ),
+        (
+            "a # b",
+            3,
+            "unexpected character '#': expected an operator, a constant or a proposition ([a-z_][a-z0-9_]* or double-quoted)",
+        ),
+        (
+            "F(a xor)",
+            8,
+            "expected a formula (constant, proposition, unary operator or '('), found ')'",
+        ),
     ];
     for (text, column, message) in cases {
         let error = ltl::parse(text).expect_err(text);
-        assert_eq!((error.column, error.message.as_str()), (column, message), "{text}");
+        assert_eq!(
+            (error.column, error.message.as_str()),
+            (column, message),
+            "{text}"
+        );
         assert_eq!(error.to_string(), format!("column {column}: {message}"));
     }
 }
@@ -111,5 +171,10 @@ fn malformed_formulas_report_column_and_expectation() {
 #[test]
 fn deep_nesting_is_an_error_not_a_crash() {
     let text = format!("{}a", "!".repeat(5000));
-    assert!(ltl::parse(&text).unwrap_err().message.contains("nested deeper"));
+    assert!(
+        ltl::parse(&text)
+            .unwrap_err()
+            .message
+            .contains("nested deeper")
+    );
 }

@@ -5,7 +5,10 @@
 
 use posg_fsc::ltl;
 
-const REFERENCE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/ltl/reference-sizes.tsv");
+const REFERENCE: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/../shared/ltl/reference-sizes.tsv"
+);
 const RESULTS: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/results/ltl-sizes.tsv");
 
 /// `(formula, reference states, our states or the translation error)`.
@@ -20,7 +23,11 @@ fn sizes() -> Vec<(String, usize, Result<usize, String>)> {
             let ours = ltl::translate(&formula)
                 .map(|dra| dra.num_states())
                 .map_err(|e| e.to_string());
-            (text.to_string(), reference.trim().parse().expect("a state count"), ours)
+            (
+                text.to_string(),
+                reference.trim().parse().expect("a state count"),
+                ours,
+            )
         })
         .collect()
 }
@@ -31,7 +38,10 @@ fn sizes_against_the_reference() {
     let mut table = String::from("# formula\treference_states\tour_states\tratio\n");
     for (text, reference, ours) in &rows {
         let (states, ratio) = match ours {
-            Ok(n) => (n.to_string(), format!("{:.2}", *n as f64 / *reference as f64)),
+            Ok(n) => (
+                n.to_string(),
+                format!("{:.2}", *n as f64 / *reference as f64),
+            ),
             Err(e) => (format!("error: {e}"), "-".to_string()),
         };
         table.push_str(&format!("{text}\t{reference}\t{states}\t{ratio}\n"));
@@ -40,6 +50,9 @@ fn sizes_against_the_reference() {
     if std::env::var_os("POSG_FSC_WRITE_RESULTS").is_some() {
         std::fs::write(RESULTS, &table).unwrap();
     }
-    let paper = rows.iter().find(|(t, _, _)| t == "GF goal & G !unsafe").unwrap();
+    let paper = rows
+        .iter()
+        .find(|(t, _, _)| t == "GF goal & G !unsafe")
+        .unwrap();
     assert_eq!(paper.2, Ok(3), "the paper's formula");
 }

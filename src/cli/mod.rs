@@ -3,6 +3,7 @@
 //! objects from those arguments and prints or writes the results.
 
 mod demo;
+mod translate;
 
 use clap::{Parser, Subcommand};
 
@@ -19,11 +20,14 @@ pub struct Cli {
 enum Command {
     /// Run the main job on the seed paper's 3x2 grid and explain the output.
     Demo(demo::DemoArgs),
+    /// Translate an LTL formula into a deterministic Rabin automaton.
+    Translate(translate::TranslateArgs),
 }
 
 /// Runs the subcommand the user chose.
 pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Demo(args) => demo::run(args),
+        Command::Translate(args) => translate::run(args),
     }
 }

@@ -315,7 +315,10 @@ pub(crate) fn master(
         .flat_map(|d| d.inf.iter())
         .fold(0, |m, &bit| m | (1 << bit));
 
-    let safety_x: Vec<Vec<Formula>> = used_safety.iter().map(|&i| safety_sets[i].clone()).collect();
+    let safety_x: Vec<Vec<Formula>> = used_safety
+        .iter()
+        .map(|&i| safety_sets[i].clone())
+        .collect();
     let mut initial = vec![root];
     initial.extend(used_safety.iter().map(|&i| safety_initial[i]));
     initial.extend(used_recurrent.iter().map(|&i| recurrent[i]));

@@ -289,11 +289,7 @@ fn merge_temporal(parts: Vec<Formula>, conjunction: bool) -> Vec<Formula> {
         });
     } else if !modal_parts.is_empty() {
         let g = combine(modal_parts);
-        rest.push(if conjunction {
-            globally(g)
-        } else {
-            finally(g)
-        });
+        rest.push(if conjunction { globally(g) } else { finally(g) });
     }
     rest
 }
@@ -424,12 +420,8 @@ pub(crate) fn is_obligation(f: &Formula) -> bool {
         || match f {
             Next(g) => is_obligation(g),
             And(gs) | Or(gs) => gs.iter().all(is_obligation),
-            Until(l, r) if first_occurrence(l, r, true) => {
-                is_obligation(l) && is_obligation(r)
-            }
-            Release(l, r) if first_occurrence(l, r, false) => {
-                is_obligation(l) && is_obligation(r)
-            }
+            Until(l, r) if first_occurrence(l, r, true) => is_obligation(l) && is_obligation(r),
+            Release(l, r) if first_occurrence(l, r, false) => is_obligation(l) && is_obligation(r),
             Until(l, r) => is_obligation(l) && is_cosafety(r),
             Release(l, r) => is_obligation(l) && is_safety(r),
             WeakUntil(l, r) => is_safety(l) && is_obligation(r),
@@ -442,8 +434,14 @@ pub(crate) fn is_obligation(f: &Formula) -> bool {
 fn literals(f: &Formula, conjunctive: bool) -> Vec<&Formula> {
     match f {
         Prop(_) | Not(_) => vec![f],
-        And(gs) if conjunctive => gs.iter().filter(|g| matches!(g, Prop(_) | Not(_))).collect(),
-        Or(gs) if !conjunctive => gs.iter().filter(|g| matches!(g, Prop(_) | Not(_))).collect(),
+        And(gs) if conjunctive => gs
+            .iter()
+            .filter(|g| matches!(g, Prop(_) | Not(_)))
+            .collect(),
+        Or(gs) if !conjunctive => gs
+            .iter()
+            .filter(|g| matches!(g, Prop(_) | Not(_)))
+            .collect(),
         _ => Vec::new(),
     }
 }

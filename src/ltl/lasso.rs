@@ -99,7 +99,11 @@ impl Lasso<'_> {
 
     /// The truth of `formula` at every position; `holds(p, i)` is the truth
     /// of proposition `p` at position `i`.
-    pub(crate) fn truth(&self, formula: &Formula, holds: &dyn Fn(&str, usize) -> bool) -> Vec<bool> {
+    pub(crate) fn truth(
+        &self,
+        formula: &Formula,
+        holds: &dyn Fn(&str, usize) -> bool,
+    ) -> Vec<bool> {
         let n = self.len();
         let sub = |f: &Formula| self.truth(f, holds);
         let pointwise = |a: Vec<bool>, b: Vec<bool>, op: fn(bool, bool) -> bool| -> Vec<bool> {
@@ -111,12 +115,12 @@ impl Lasso<'_> {
             Formula::False => vec![false; n],
             Formula::Prop(name) => (0..n).map(|i| holds(name, i)).collect(),
             Formula::Not(f) => not(sub(f)),
-            Formula::And(fs) => fs
-                .iter()
-                .fold(vec![true; n], |acc, f| pointwise(acc, sub(f), |x, y| x && y)),
-            Formula::Or(fs) => fs
-                .iter()
-                .fold(vec![false; n], |acc, f| pointwise(acc, sub(f), |x, y| x || y)),
+            Formula::And(fs) => fs.iter().fold(vec![true; n], |acc, f| {
+                pointwise(acc, sub(f), |x, y| x && y)
+            }),
+            Formula::Or(fs) => fs.iter().fold(vec![false; n], |acc, f| {
+                pointwise(acc, sub(f), |x, y| x || y)
+            }),
             Formula::Implies(f, g) => pointwise(sub(f), sub(g), |x, y| !x || y),
             Formula::Equiv(f, g) => pointwise(sub(f), sub(g), |x, y| x == y),
             Formula::Xor(f, g) => pointwise(sub(f), sub(g), |x, y| x != y),
@@ -130,9 +134,7 @@ impl Lasso<'_> {
             Formula::WeakUntil(f, g) => self.fixpoint(&sub(g), &sub(f), false),
             // f R g = !(!f U !g) and f M g = !(!f W !g).
             Formula::Release(f, g) => not(self.fixpoint(&not(sub(g)), &not(sub(f)), true)),
-            Formula::StrongRelease(f, g) => {
-                not(self.fixpoint(&not(sub(g)), &not(sub(f)), false))
-            }
+            Formula::StrongRelease(f, g) => not(self.fixpoint(&not(sub(g)), &not(sub(f)), false)),
         }
     }
 }

@@ -98,7 +98,10 @@ fn lex(text: &str) -> Result<Vec<(Token, usize)>, ParseError> {
             i += s.chars().count();
         } else if c == '"' {
             let Some(len) = chars[i + 1..].iter().position(|&d| d == '"') else {
-                return error(column, "unterminated quoted proposition: expected '\"'".into());
+                return error(
+                    column,
+                    "unterminated quoted proposition: expected '\"'".into(),
+                );
             };
             if len == 0 {
                 return error(column, "empty quoted proposition: expected a name".into());
@@ -143,7 +146,9 @@ fn lex(text: &str) -> Result<Vec<(Token, usize)>, ParseError> {
                 _ => {
                     return error(
                         column,
-                        format!("unexpected character '{c}': expected an operator, a constant or a proposition ([a-z_][a-z0-9_]* or double-quoted)"),
+                        format!(
+                            "unexpected character '{c}': expected an operator, a constant or a proposition ([a-z_][a-z0-9_]* or double-quoted)"
+                        ),
                     );
                 }
             };
@@ -191,7 +196,9 @@ impl Parser {
         if depth > MAX_DEPTH {
             Err(ParseError {
                 column: self.column(),
-                message: format!("formula nested deeper than {MAX_DEPTH}: expected a flatter formula"),
+                message: format!(
+                    "formula nested deeper than {MAX_DEPTH}: expected a flatter formula"
+                ),
             })
         } else {
             Ok(())
@@ -298,9 +305,9 @@ impl Parser {
                 return Ok(inner);
             }
             _ => {
-                return Err(self.expected(
-                    "a formula (constant, proposition, unary operator or '(')",
-                ));
+                return Err(
+                    self.expected("a formula (constant, proposition, unary operator or '(')")
+                );
             }
         };
         self.advance();

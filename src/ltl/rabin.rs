@@ -71,7 +71,11 @@ pub(crate) fn to_dra(tgr: &Tgr, propositions: Vec<String>) -> Result<Dra, Transl
                     while c < inf.len() && (edge.marks >> inf[c]) & 1 == 1 {
                         c += 1;
                     }
-                    if c == inf.len() { (0, true) } else { (c as u8, false) }
+                    if c == inf.len() {
+                        (0, true)
+                    } else {
+                        (c as u8, false)
+                    }
                 })
                 .unzip();
             let target: State = (
@@ -101,7 +105,10 @@ pub(crate) fn to_dra(tgr: &Tgr, propositions: Vec<String>) -> Result<Dra, Transl
         .map(|(i, d)| {
             let counter = counted.iter().position(|&j| j == i);
             RabinPair {
-                fin: states.iter().map(|(_, label, ..)| label & d.fin != 0).collect(),
+                fin: states
+                    .iter()
+                    .map(|(_, label, ..)| label & d.fin != 0)
+                    .collect(),
                 inf: states
                     .iter()
                     .map(|(_, label, _, completed)| match (d.inf.first(), counter) {
@@ -160,12 +167,8 @@ fn minimise(
     pairs: &[RabinPair],
     propositions: Vec<String>,
 ) -> Result<Dra, TranslateError> {
-    let signature = |q: usize| -> Vec<bool> {
-        pairs
-            .iter()
-            .flat_map(|p| [p.fin[q], p.inf[q]])
-            .collect()
-    };
+    let signature =
+        |q: usize| -> Vec<bool> { pairs.iter().flat_map(|p| [p.fin[q], p.inf[q]]).collect() };
     let mut block = renumber((0..n).map(signature).collect::<Vec<_>>());
     loop {
         let keys: Vec<Vec<u32>> = (0..n)
@@ -240,6 +243,7 @@ fn minimise(
                 .map(|&b| p.inf[representative[b as usize]])
                 .collect(),
         })
+        .filter(|p| p.inf.iter().any(|&k| k))
         .collect();
     quotient.sort_by(|a, b| (&a.fin, &a.inf).cmp(&(&b.fin, &b.inf)));
     quotient.dedup();
