@@ -13,6 +13,7 @@ mod prune;
 mod simulate;
 pub(crate) mod solve;
 mod sweep;
+mod translate;
 
 use clap::{Parser, Subcommand};
 
@@ -51,6 +52,8 @@ enum Command {
     /// Run `solve` for every pair of controller sizes in parallel and write
     /// sweep.csv and sweep.svg.
     Sweep(sweep::SweepArgs),
+    /// Translate an LTL formula into a deterministic Rabin automaton.
+    Translate(translate::TranslateArgs),
 }
 
 /// Runs the subcommand the user chose.
@@ -66,5 +69,6 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Certify(args) => certify::run(args),
         Command::Solve(args) => solve::run(args),
         Command::Sweep(args) => sweep::run(args),
+        Command::Translate(args) => translate::run(args),
     }
 }

@@ -243,6 +243,7 @@ fn minimise(
                 .map(|&b| p.inf[representative[b as usize]])
                 .collect(),
         })
+        .filter(|p| p.inf.iter().any(|&k| k))
         .collect();
     quotient.sort_by(|a, b| (&a.fin, &a.inf).cmp(&(&b.fin, &b.inf)));
     quotient.dedup();
