@@ -414,6 +414,36 @@ fn with_full_observation_and_one_node_the_bounds_bracket_the_value() {
     }
 }
 
+#[test]
+fn with_full_observation_and_one_node_the_bounds_bracket_the_optimised_value() {
+    let settings = posg_fsc::optimise::Settings {
+        max_iterations: 40,
+        ..posg_fsc::optimise::Settings::default()
+    };
+    for seed in 0..6 {
+        let game = small_game(seed + 700, true);
+        for formula in FORMULAS {
+            let (phi, not_phi) = automata(formula);
+            let solution =
+                posg_fsc::optimise::solve(&game, &phi, 1, 1, &settings, |_, _| Box::new(()))
+                    .unwrap();
+            let best = solution.best();
+            let value = common::reference_value(&game, &phi, &best.defender, &best.adversary);
+            let lower = lower_bound(&game, &not_phi, &best.defender).unwrap().value;
+            let upper = upper_bound(&game, &phi, &best.adversary).unwrap().value;
+            assert!(
+                lower <= value + 1e-9 && value <= upper + 1e-9,
+                "seed {seed}, {formula}: {lower} <= {value} <= {upper}"
+            );
+            assert!(
+                lower <= best.report.worst_case + 1e-9,
+                "seed {seed}, {formula}: the certified lower bound {lower} exceeds the estimate {}",
+                best.report.worst_case
+            );
+        }
+    }
+}
+
 /// s0 is left for the goal s1 only if the adversary plays `block` with
 /// probability below 1. Any adversary FSC with full support on {pass, block}
 /// gives `P(F goal) = 1`; the adversary that never plays `pass` gives 0.
