@@ -141,6 +141,7 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
             defender_nodes: r.defender_nodes,
             adversary_nodes: r.adversary_nodes,
             worst_case: r.worst_case,
+            bracket: r.certified_lower.zip(r.upper_bound),
         })
         .collect();
     let title = format!("{}: {}", game.name().unwrap_or("game"), description);

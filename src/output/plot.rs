@@ -74,33 +74,46 @@ pub struct SweepPoint {
     pub adversary_nodes: usize,
     /// The best defender's worst-case estimate.
     pub worst_case: f64,
+    /// The certified bracket (method.md section 6), when computed: the
+    /// defender's value against every adversary and the game upper bound.
+    pub bracket: Option<(f64, f64)>,
 }
 
 /// Draws `sweep.svg`: the worst-case estimate against the defender's size,
-/// one line per adversary size.
+/// one line per adversary size, and, where computed, the certified lower
+/// bound and the game upper bound of each adversary size.
 pub fn plot_sweep(path: &Path, title: &str, points: &[SweepPoint]) -> Result<(), ObserverError> {
     let mut sizes: Vec<usize> = points.iter().map(|p| p.adversary_nodes).collect();
     sizes.sort_unstable();
     sizes.dedup();
-    let series: Vec<(String, Vec<(f64, f64)>)> = sizes
-        .iter()
-        .map(|&m| {
-            let mut line: Vec<(f64, f64)> = points
-                .iter()
-                .filter(|p| p.adversary_nodes == m)
-                .map(|p| (p.defender_nodes as f64, p.worst_case))
-                .collect();
-            line.sort_by(|a, b| a.0.total_cmp(&b.0));
-            (format!("adversary nodes = {m}"), line)
-        })
-        .collect();
-    draw_lines(
-        path,
-        title,
-        "defender nodes",
-        "worst-case estimate",
-        &series,
-    )
+    let line_of = |m: usize, y: &dyn Fn(&SweepPoint) -> Option<f64>| {
+        let mut line: Vec<(f64, f64)> = points
+            .iter()
+            .filter(|p| p.adversary_nodes == m)
+            .filter_map(|p| y(p).map(|y| (p.defender_nodes as f64, y)))
+            .collect();
+        line.sort_by(|a, b| a.0.total_cmp(&b.0));
+        line
+    };
+    let mut series: Vec<(String, Vec<(f64, f64)>)> = Vec::new();
+    for &m in &sizes {
+        series.push((
+            format!("worst-case estimate, adversary nodes = {m}"),
+            line_of(m, &|p| Some(p.worst_case)),
+        ));
+        let lower = line_of(m, &|p| p.bracket.map(|b| b.0));
+        if !lower.is_empty() {
+            series.push((
+                format!("certified lower bound, adversary nodes = {m}"),
+                lower,
+            ));
+            series.push((
+                format!("game upper bound, adversary nodes = {m}"),
+                line_of(m, &|p| p.bracket.map(|b| b.1)),
+            ));
+        }
+    }
+    draw_lines(path, title, "defender nodes", "probability of phi", &series)
 }
 
 fn draw_lines<S: AsRef<str>>(
