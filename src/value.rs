@@ -20,7 +20,7 @@ use thiserror::Error;
 
 use crate::analysis::{Recurrence, StateClass};
 use crate::automaton::Dra;
-use crate::controller::{Probabilities, Support};
+use crate::controller::{Fsc, Probabilities, Support};
 use crate::game::Posg;
 use crate::product::{Gmc, ProductError};
 use crate::solver::{LuSolver, SolverError, SparsePattern};
@@ -149,6 +149,30 @@ impl TransientSystem {
             })
             .collect())
     }
+}
+
+/// The evaluator for the supports of two controllers and the value of
+/// their probabilities: the one-shot form of [`Evaluator::new`] followed by
+/// [`Evaluator::evaluate`].
+pub fn evaluate_controllers(
+    game: &Posg,
+    dra: &Dra,
+    defender: &Fsc,
+    adversary: &Fsc,
+    tolerance: f64,
+) -> Result<(Evaluator, Evaluation), ValueError> {
+    let mut evaluator = Evaluator::new(
+        game,
+        dra,
+        &Support::of(defender),
+        &Support::of(adversary),
+        tolerance,
+    )?;
+    let evaluation = evaluator.evaluate(
+        &Support::probabilities_of(defender),
+        &Support::probabilities_of(adversary),
+    )?;
+    Ok((evaluator, evaluation))
 }
 
 /// Exact values and gradients for one support structure.

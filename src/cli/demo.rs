@@ -12,13 +12,13 @@ use std::path::PathBuf;
 use clap::Args;
 use posg_fsc::automaton::Dra;
 use posg_fsc::certify::{lower_bound, upper_bound};
-use posg_fsc::controller::{Choice, Fsc, Role, Support};
+use posg_fsc::controller::{Choice, Fsc, Role};
 use posg_fsc::game::Posg;
 use posg_fsc::game::grid::GridSpec;
 use posg_fsc::optimise::{self, Settings, Structure};
 use posg_fsc::prune::{PruneSettings, prune};
 use posg_fsc::solver::DEFAULT_TOLERANCE;
-use posg_fsc::value::Evaluator;
+use posg_fsc::value::evaluate_controllers;
 
 use super::solve::{SolveJob, run_job};
 
@@ -213,19 +213,11 @@ fn recurrence(game: &Posg, out: &mut String) -> anyhow::Result<()> {
 }
 
 fn value(game: &Posg, dra: &Dra, defender: &Fsc, adversary: &Fsc) -> anyhow::Result<f64> {
-    let mut evaluator = Evaluator::new(
-        game,
-        dra,
-        &Support::of(defender),
-        &Support::of(adversary),
-        DEFAULT_TOLERANCE,
-    )?;
-    Ok(evaluator
-        .evaluate(
-            &Support::probabilities_of(defender),
-            &Support::probabilities_of(adversary),
-        )?
-        .value)
+    Ok(
+        evaluate_controllers(game, dra, defender, adversary, DEFAULT_TOLERANCE)?
+            .1
+            .value,
+    )
 }
 
 /// Node 0 walks s0 -R-> s1 -R-> s2 -D-> s5 by observation and moves to node 1

@@ -14,12 +14,12 @@ use clap::Args;
 use serde_json::{Value, json};
 
 use posg_fsc::automaton::Dra;
-use posg_fsc::controller::{Fsc, Role, Support, file};
+use posg_fsc::controller::{Fsc, Role, file};
 use posg_fsc::game::Posg;
 use posg_fsc::product::GmcState;
 use posg_fsc::prune::{Attempt, LastOptionStop, PruneReport, PruneSettings, prune};
 use posg_fsc::solver::DEFAULT_TOLERANCE;
-use posg_fsc::value::Evaluator;
+use posg_fsc::value::evaluate_controllers;
 
 use super::common::{ObjectiveArgs, Provenance, objective, read_game};
 
@@ -153,18 +153,11 @@ fn write_structure(
 
 /// The exact value of a controller pair.
 fn uniform_value(game: &Posg, dra: &Dra, defender: &Fsc, adversary: &Fsc) -> anyhow::Result<f64> {
-    let mut evaluator = Evaluator::new(
-        game,
-        dra,
-        &Support::of(defender),
-        &Support::of(adversary),
-        DEFAULT_TOLERANCE,
-    )?;
-    let evaluation = evaluator.evaluate(
-        &Support::probabilities_of(defender),
-        &Support::probabilities_of(adversary),
-    )?;
-    Ok(evaluation.value)
+    Ok(
+        evaluate_controllers(game, dra, defender, adversary, DEFAULT_TOLERANCE)?
+            .1
+            .value,
+    )
 }
 
 fn note(settings: &PruneSettings) -> &'static str {

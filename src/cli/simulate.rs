@@ -4,10 +4,9 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use clap::Args;
-use posg_fsc::controller::Support;
 use posg_fsc::simulate::{Estimate, SimulationSettings, simulate};
 use posg_fsc::solver::DEFAULT_TOLERANCE;
-use posg_fsc::value::Evaluator;
+use posg_fsc::value::evaluate_controllers;
 use serde::Serialize;
 
 use super::common::{self, ControllerArgs, ObjectiveArgs, Provenance};
@@ -47,19 +46,9 @@ pub fn run(args: SimulateArgs) -> anyhow::Result<()> {
     let game = common::read_game(&args.game)?;
     let (dra, formula) = common::objective(&args.objective, &game)?;
     let (defender, adversary) = common::controllers(&args.controllers, &game)?;
-    let mut evaluator = Evaluator::new(
-        &game,
-        &dra,
-        &Support::of(&defender),
-        &Support::of(&adversary),
-        DEFAULT_TOLERANCE,
-    )?;
-    let exact = evaluator
-        .evaluate(
-            &Support::probabilities_of(&defender),
-            &Support::probabilities_of(&adversary),
-        )?
-        .value;
+    let (evaluator, evaluation) =
+        evaluate_controllers(&game, &dra, &defender, &adversary, DEFAULT_TOLERANCE)?;
+    let exact = evaluation.value;
     let settings = SimulationSettings {
         runs: args.runs,
         seed: args.seed,
