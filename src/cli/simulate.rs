@@ -61,7 +61,8 @@ pub fn run(args: SimulateArgs) -> anyhow::Result<()> {
         settings,
         estimate,
         exact_value: exact,
-        exact_within_interval: estimate.lower <= exact && exact <= estimate.upper,
+        exact_within_interval: estimate.lower - DEFAULT_TOLERANCE <= exact
+            && exact <= estimate.upper + DEFAULT_TOLERANCE,
         seconds: common::seconds_since(start),
     })
 }
