@@ -10,7 +10,12 @@
 //! * `B`, the union of feasible BSCCs; `Z`, the states that cannot reach `B`;
 //!   `T`, every other reachable state.
 //!
-//! The value is 1 on `B`, 0 on `Z` and solves `(I - Q) x = b` on `T`.
+//! The value is 1 on `B`, 0 on `Z` and solves `(I - Q) x = b` on `T`. As a
+//! qualitative precomputation (standard in probabilistic model checkers),
+//! the states of `T` that cannot reach `Z` are classified [`StateClass::Sure`]:
+//! their value is exactly 1 for every probability on the supports, so they
+//! join `B` in the linear system, which makes it smaller and their values
+//! exact rather than `1 - 1e-15`.
 
 use serde::Serialize;
 
@@ -27,6 +32,9 @@ pub enum StateClass {
     Target,
     /// Cannot reach a phi-feasible BSCC: probability 0.
     Zero,
+    /// Not in a feasible BSCC, but cannot reach a `Zero` state: every run
+    /// from here reaches a feasible BSCC, so the probability is exactly 1.
+    Sure,
     /// Transient and can reach a phi-feasible BSCC: solved for.
     Transient,
 }
@@ -58,7 +66,8 @@ pub struct Recurrence {
     pub bsccs: Vec<Bscc>,
     /// The class of every GMC state.
     pub classes: Vec<StateClass>,
-    /// The transient states `T` in increasing GMC order.
+    /// The transient states `T` (without the [`StateClass::Sure`] ones) in
+    /// increasing GMC order: the unknowns of the linear system.
     pub transient: Vec<usize>,
     /// For each GMC state, its position in `transient` (or `u32::MAX`).
     pub transient_index: Vec<u32>,
@@ -93,11 +102,20 @@ impl Recurrence {
             },
             &in_target,
         );
+        let zero: Vec<bool> = reaches.iter().map(|&r| !r).collect();
+        let reaches_zero = backward_reachable(
+            &CsrGraph {
+                offsets: &offsets,
+                targets: &targets,
+            },
+            &zero,
+        );
         let classes: Vec<StateClass> = (0..gmc.num_states())
-            .map(|m| match (in_target[m], reaches[m]) {
-                (true, _) => StateClass::Target,
-                (false, true) => StateClass::Transient,
-                (false, false) => StateClass::Zero,
+            .map(|m| match (in_target[m], reaches[m], reaches_zero[m]) {
+                (true, _, _) => StateClass::Target,
+                (false, false, _) => StateClass::Zero,
+                (false, true, false) => StateClass::Sure,
+                (false, true, true) => StateClass::Transient,
             })
             .collect();
         let transient: Vec<usize> = (0..classes.len())

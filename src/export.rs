@@ -12,7 +12,9 @@
 //!
 //! Files: `chain.tra` (`states transitions`, then `source target probability`
 //! lines), `chain.lab` (label declarations, then `state: labels` lines) and
-//! `chain.sta` (the `(s,g,h)` names of the states).
+//! `chain.sta` (each state's `(s,g,h)`: the game state's index in the game
+//! file's `states` list and the two controller nodes; `-1` for the fresh
+//! initial state).
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -88,7 +90,7 @@ pub fn explicit_chain(
         write!(lab, " {}=\"{name}\"", i + 2).expect("writing to a String");
     }
     lab.push_str("\n0: 0\n");
-    let mut sta = String::from("(s,g,h)\n0:(init,-,-)\n");
+    let mut sta = String::from("(s,g,h)\n0:(-1,-1,-1)\n");
     for m in 0..gmc.num_states() {
         let state = gmc.state(m);
         let label = game.label(state.s as usize);
@@ -96,8 +98,8 @@ pub fn explicit_chain(
             let ids: Vec<String> = label.iter().map(|p| (p + 2).to_string()).collect();
             writeln!(lab, "{}: {}", m + 1, ids.join(" ")).expect("writing to a String");
         }
-        let name = &game.states()[state.s as usize];
-        writeln!(sta, "{}:({name},{},{})", m + 1, state.g, state.h).expect("writing to a String");
+        writeln!(sta, "{}:({},{},{})", m + 1, state.s, state.g, state.h)
+            .expect("writing to a String");
     }
     Ok(ExplicitChain {
         tra,

@@ -35,6 +35,9 @@ pub enum SolverError {
         /// The tolerance asked for.
         tolerance: f64,
     },
+    /// The tolerance is not a finite positive number.
+    #[error("the tolerance must be finite and positive, not {0}")]
+    InvalidTolerance(f64),
     /// Memory for the factorisation could not be allocated.
     #[error("out of memory in the sparse LU factorisation")]
     OutOfMemory,
@@ -121,6 +124,9 @@ impl LuSolver {
     /// Symbolic analysis (fill-reducing ordering, elimination structure) of
     /// `pattern`; solves are accepted when their residual is at most `tolerance`.
     pub fn new(pattern: SparsePattern, tolerance: f64) -> Result<Self, SolverError> {
+        if !(tolerance.is_finite() && tolerance > 0.0) {
+            return Err(SolverError::InvalidTolerance(tolerance));
+        }
         pattern.check()?;
         let symbolic = factorize_symbolic_lu(transpose_view(&pattern), Default::default())
             .map_err(|_| SolverError::OutOfMemory)?;
@@ -317,6 +323,17 @@ mod tests {
             .factorize(&[1.0, -1.0, -1.0, 1.0])
             .and_then(|()| solver.solve(&mut [0.0, 1.0]));
         assert!(result.is_err(), "{result:?}");
+    }
+
+    #[test]
+    fn a_tolerance_that_accepts_everything_is_refused() {
+        for tolerance in [f64::NAN, f64::INFINITY, 0.0, -1.0] {
+            let (pattern, _) = tridiagonal(3);
+            assert!(matches!(
+                LuSolver::new(pattern, tolerance),
+                Err(SolverError::InvalidTolerance(_))
+            ));
+        }
     }
 
     #[test]

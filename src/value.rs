@@ -90,7 +90,7 @@ impl TransientSystem {
                     StateClass::Transient => {
                         entries.push((recurrence.transient_index[c as usize] as usize, k as u32))
                     }
-                    StateClass::Target => target_sources.push(k as u32),
+                    StateClass::Target | StateClass::Sure => target_sources.push(k as u32),
                     StateClass::Zero => {}
                 }
             }
@@ -199,7 +199,7 @@ impl Evaluator {
         let values = recurrence
             .classes
             .iter()
-            .map(|&c| f64::from(c == StateClass::Target))
+            .map(|&c| f64::from(matches!(c, StateClass::Target | StateClass::Sure)))
             .collect();
         Ok(Self {
             gmc,

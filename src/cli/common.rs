@@ -38,6 +38,14 @@ pub struct ControllerArgs {
     pub adversary: String,
 }
 
+/// Parses a tolerance: a finite number greater than 0.
+pub fn positive_tolerance(text: &str) -> Result<f64, String> {
+    match text.parse::<f64>() {
+        Ok(t) if t.is_finite() && t > 0.0 => Ok(t),
+        _ => Err(format!("'{text}' is not a finite number greater than 0")),
+    }
+}
+
 /// Reads and validates a game file.
 pub fn read_game(path: &Path) -> anyhow::Result<Posg> {
     Ok(posg_fsc::game::file::read(path)?)

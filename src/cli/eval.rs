@@ -29,7 +29,7 @@ pub struct EvalArgs {
     #[arg(long)]
     pub explain: bool,
     /// Largest accepted residual max |(I - Q) x - b| of the linear solve.
-    #[arg(long, default_value_t = DEFAULT_TOLERANCE)]
+    #[arg(long, default_value_t = DEFAULT_TOLERANCE, value_parser = common::positive_tolerance)]
     pub tolerance: f64,
 }
 

@@ -110,7 +110,7 @@ pub struct SettingsArgs {
     #[arg(long, default_value_t = Settings::default().stall_tolerance)]
     stall_tolerance: f64,
     /// Largest residual accepted from a linear solve.
-    #[arg(long, default_value_t = Settings::default().solver_tolerance)]
+    #[arg(long, default_value_t = Settings::default().solver_tolerance, value_parser = super::common::positive_tolerance)]
     solver_tolerance: f64,
     /// Optimise on the starting structure only, not also on the structures
     /// the paper's Algorithm 1 (pruning) keeps.
@@ -371,12 +371,19 @@ pub fn run(args: SolveArgs) -> anyhow::Result<()> {
     let (solution, certified) = run_job(&job)?;
     let best = solution.best();
     let report = &best.report;
-    let bracket = certified.map_or(String::new(), |b| {
-        format!(
-            "; certified: at least {:.6} against every adversary, game value at most {:.6}",
-            b.certified_lower, b.upper_bound
-        )
-    });
+    let bracket = certified.map_or_else(
+        || {
+            "; no certified bracket (the objective came as an automaton: run `posg-fsc certify \
+         --automaton A --negated-automaton N --defender defender.fsc.json`)"
+                .to_string()
+        },
+        |b| {
+            format!(
+                "; certified: at least {:.6} against every adversary, game value at most {:.6}",
+                b.certified_lower, b.upper_bound
+            )
+        },
+    );
     print_text(&format!(
         "structure {}: worst-case estimate {:.6} (last iterate value {:.6}) after {} iterations, {:.1} s; \
          GMC {} states{bracket}\nwrote curve.csv, curve.svg, defender.fsc.json, adversary.fsc.json, summary.json to {}\n",

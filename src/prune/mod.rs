@@ -26,6 +26,12 @@
 //! * Line 9's guard is checked before every single removal: a removal that
 //!   would leave some block `(g, o)` without options is not made, the loop
 //!   ends there and the attempt records a [`LastOptionStop`].
+//! * Line 11's sources are `C \ Bad_i` with `Bad_i` as first computed
+//!   (lines 5-6), fixed for the whole loop: line 24 shrinks `Bad_i` one state
+//!   per round, and taking the shrunken set would make the removals depend
+//!   on the order in which bad states are handled. Bad states inside `C` are
+//!   therefore never sources; the final recurrence check (line 29) is exact
+//!   either way.
 //! * Line 29 keeps a structure only if a recurrent `Good_i` state lies in a
 //!   BSCC that misses `L_i`: "recurrent" alone would keep structures without
 //!   a phi-feasible recurrent set when `K_i` meets `L_i` or the loop stopped
