@@ -425,8 +425,10 @@ fn with_full_observation_and_one_node_the_bounds_bracket_the_optimised_value() {
         for formula in FORMULAS {
             let (phi, not_phi) = automata(formula);
             let solution =
-                posg_fsc::optimise::solve(&game, &phi, 1, 1, &settings, |_, _| Box::new(()))
-                    .unwrap();
+                posg_fsc::optimise::solve(&game, &phi, Some(&not_phi), 1, 1, &settings, |_, _| {
+                    Box::new(())
+                })
+                .unwrap();
             let best = solution.best();
             let value = common::reference_value(&game, &phi, &best.defender, &best.adversary);
             let lower = lower_bound(&game, &not_phi, &best.defender).unwrap().value;

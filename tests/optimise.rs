@@ -207,7 +207,7 @@ fn single_player_reach_avoid_matches_the_best_deterministic_controller() {
     for seed in 0..8 {
         let g = game(&single_player_json(seed, 6, 0));
         let optimum = best_deterministic(&g, &dra);
-        let found = solve(&g, &dra, 1, 1, &single_player_settings(), |_, _| {
+        let found = solve(&g, &dra, None, 1, 1, &single_player_settings(), |_, _| {
             Box::new(())
         })
         .unwrap();
@@ -227,7 +227,7 @@ fn partially_observed_single_player_is_at_least_the_best_deterministic_controlle
     for seed in 0..8 {
         let g = game(&single_player_json(100 + seed, 6, 2));
         let optimum = best_deterministic(&g, &dra);
-        let found = solve(&g, &dra, 1, 1, &single_player_settings(), |_, _| {
+        let found = solve(&g, &dra, None, 1, 1, &single_player_settings(), |_, _| {
             Box::new(())
         })
         .unwrap();
@@ -263,7 +263,7 @@ fn matching_pennies_has_max_min_value_one_half_with_both_mixing() {
             seed,
             ..Settings::default()
         };
-        let found = solve(&g, &dra, 1, 1, &settings, |_, _| Box::new(())).unwrap();
+        let found = solve(&g, &dra, None, 1, 1, &settings, |_, _| Box::new(())).unwrap();
         let best = found.best();
         assert!(
             (best.report.worst_case - 0.5).abs() < 1e-3,
@@ -313,13 +313,13 @@ fn same_seed_and_settings_give_the_same_curve_except_wall_clock_seconds() {
         .map(|name| {
             let path = dir.join(name);
             let mut writer = CurveCsv::create(&path).unwrap();
-            optimise_structure(&g, &dra, &structure, &settings, 0, &mut writer).unwrap();
+            optimise_structure(&g, &dra, None, &structure, &settings, 0, &mut writer).unwrap();
             curve_without_seconds(&path)
         })
         .collect();
     assert_eq!(
         curves[0][0],
-        "iteration,value,defender_gradient_norm,adversary_gradient_norm,defender_step,adversary_step,worst_case"
+        "iteration,value,defender_gradient_norm,adversary_gradient_norm,defender_step,adversary_step,worst_case,certified_lower,upper_bound"
     );
     assert_eq!(curves[0].len(), 41);
     assert_eq!(curves[0], curves[1]);
@@ -350,7 +350,7 @@ fn settings_out_of_range_are_rejected_before_any_work() {
     ];
     for settings in bad {
         assert!(settings.validate().is_err(), "{settings:?}");
-        assert!(solve(&g, &dra, 1, 1, &settings, |_, _| Box::new(())).is_err());
+        assert!(solve(&g, &dra, None, 1, 1, &settings, |_, _| Box::new(())).is_err());
     }
     assert!(Settings::default().validate().is_ok());
 }
@@ -363,7 +363,7 @@ fn a_run_resumes_from_the_logits_it_wrote() {
         max_iterations: 20,
         ..Settings::default()
     };
-    let first = solve(&g, &dra, 1, 1, &settings, |_, _| Box::new(())).unwrap();
+    let first = solve(&g, &dra, None, 1, 1, &settings, |_, _| Box::new(())).unwrap();
     let best = first.best();
     let resumed = Structure {
         name: "resumed".into(),
@@ -376,7 +376,7 @@ fn a_run_resumes_from_the_logits_it_wrote() {
         restarts: 0,
         ..Settings::default()
     };
-    let again = optimise_structure(&g, &dra, &resumed, &still, 0, &mut ()).unwrap();
+    let again = optimise_structure(&g, &dra, None, &resumed, &still, 0, &mut ()).unwrap();
     let heads = |f: &Fsc| {
         f.choices(0, 0)
             .iter()
@@ -396,7 +396,7 @@ fn runs_stop_on_the_time_budget_and_on_stalled_progress() {
         time_budget: 1e-9,
         ..Settings::default()
     };
-    let report = solve(&g, &dra, 1, 1, &timed, |_, _| Box::new(()))
+    let report = solve(&g, &dra, None, 1, 1, &timed, |_, _| Box::new(()))
         .unwrap()
         .best()
         .report
@@ -411,7 +411,7 @@ fn runs_stop_on_the_time_budget_and_on_stalled_progress() {
         check_every: 3,
         ..Settings::default()
     };
-    let report = solve(&g, &dra, 1, 1, &stalling, |_, _| Box::new(()))
+    let report = solve(&g, &dra, None, 1, 1, &stalling, |_, _| Box::new(()))
         .unwrap()
         .best()
         .report
@@ -440,7 +440,7 @@ fn solve_also_optimises_on_pruned_structures_and_picks_the_best() {
         max_iterations: 10,
         ..Settings::default()
     };
-    let found = solve(&g, &dra, 1, 1, &settings, |_, _| Box::new(())).unwrap();
+    let found = solve(&g, &dra, None, 1, 1, &settings, |_, _| Box::new(())).unwrap();
     let names: Vec<&str> = found
         .structures
         .iter()
@@ -459,7 +459,7 @@ fn solve_also_optimises_on_pruned_structures_and_picks_the_best() {
         ..settings
     };
     assert_eq!(
-        solve(&g, &dra, 1, 1, &unpruned, |_, _| Box::new(()))
+        solve(&g, &dra, None, 1, 1, &unpruned, |_, _| Box::new(()))
             .unwrap()
             .structures
             .len(),

@@ -242,6 +242,7 @@ pub fn run_job(job: &SolveJob) -> anyhow::Result<(Solution, Option<Bracket>)> {
     let solution = optimise::optimise_structures(
         job.game,
         job.dra,
+        job.negated_dra,
         &job.structures,
         job.settings,
         |_, structure| {

@@ -35,7 +35,7 @@ mod softmax;
 pub use best_response::{BestResponse, best_response};
 pub use objective::{GmcSize, Objective, Point};
 pub use observer::{IterationRecord, Observer, ObserverError};
-pub use optimiser::{Incumbent, Optimiser, RunOutcome};
+pub use optimiser::{Certifier, Incumbent, Optimiser, RunOutcome};
 pub use settings::{Settings, UpdateRule};
 pub use softmax::{Softmax, clip};
 
@@ -72,6 +72,9 @@ pub enum OptimiseError {
     /// A value or gradient could not be computed.
     #[error(transparent)]
     Value(#[from] ValueError),
+    /// A certified bound could not be computed.
+    #[error(transparent)]
+    Certify(#[from] crate::certify::CertifyError),
     /// An observer failed (its output could not be written).
     #[error("output: {0}")]
     Observer(ObserverError),
@@ -196,10 +199,13 @@ impl Solution {
 /// Optimises on every structure in parallel (rayon), each with its own
 /// [`Objective`] and random stream (`settings.seed`, stream = its index),
 /// each reporting to the observer `observer(index, structure)` makes;
-/// returns every outcome and the best by worst-case estimate.
+/// returns every outcome and the best by worst-case estimate. With an
+/// automaton `negated` for !phi, every best-response check also certifies
+/// (see [`Certifier`]).
 pub fn optimise_structures<F>(
     game: &Posg,
     dra: &Dra,
+    negated: Option<&Dra>,
     structures: &[Structure],
     settings: &Settings,
     observer: F,
@@ -216,6 +222,7 @@ where
             optimise_structure(
                 game,
                 dra,
+                negated,
                 structure,
                 settings,
                 index as u64,
@@ -240,10 +247,12 @@ where
     })
 }
 
-/// Optimises on one structure with random stream `stream` of `settings.seed`.
+/// Optimises on one structure with random stream `stream` of `settings.seed`;
+/// with an automaton `negated` for !phi the checks also certify ([`Certifier`]).
 pub fn optimise_structure(
     game: &Posg,
     dra: &Dra,
+    negated: Option<&Dra>,
     structure: &Structure,
     settings: &Settings,
     stream: u64,
@@ -257,6 +266,13 @@ pub fn optimise_structure(
     let mut rng = ChaCha8Rng::seed_from_u64(settings.seed);
     rng.set_stream(stream);
     let mut optimiser = Optimiser::new(objective, settings, rng);
+    if let Some(not_phi) = negated {
+        optimiser = optimiser.with_certifier(Certifier {
+            game,
+            phi: dra,
+            not_phi,
+        });
+    }
     let run = optimiser.run(observer)?;
     observer.finish().map_err(OptimiseError::Observer)?;
     let objective = optimiser.objective();
@@ -322,6 +338,7 @@ pub fn candidate_structures(
 pub fn solve<F>(
     game: &Posg,
     dra: &Dra,
+    negated: Option<&Dra>,
     defender_nodes: usize,
     adversary_nodes: usize,
     settings: &Settings,
@@ -343,5 +360,5 @@ where
         settings.optimise_initial,
     );
     let structures = candidate_structures(game, dra, full, settings)?;
-    optimise_structures(game, dra, &structures, settings, observer)
+    optimise_structures(game, dra, negated, &structures, settings, observer)
 }

@@ -23,6 +23,12 @@ pub struct IterationRecord {
     pub adversary_step: f64,
     /// The best-response value of `phi_def(t)`, when a check ran at `t`.
     pub worst_case: Option<f64>,
+    /// When a check ran and an automaton for !phi was given: the certified
+    /// lower bound of `phi_def(t)` against every adversary (method.md section 6).
+    pub certified_lower: Option<f64>,
+    /// With `certified_lower`: the smallest game upper bound over the best
+    /// responses found so far (no defender of any size does better).
+    pub upper_bound: Option<f64>,
 }
 
 /// An observer's failure (an output file could not be written, say).

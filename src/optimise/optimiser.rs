@@ -29,10 +29,14 @@ use super::objective::Objective;
 use super::observer::{IterationRecord, Observer};
 use super::softmax::clip;
 use super::{OptimiseError, Settings, Status, UpdateRule};
+use crate::automaton::Dra;
+use crate::certify::{lower_bound, upper_bound};
+use crate::game::Posg;
 
 /// The optimiser's state on one structure.
-pub struct Optimiser {
+pub struct Optimiser<'a> {
     objective: Objective,
+    certifier: Option<Certifier<'a>>,
     settings: Settings,
     rng: ChaCha8Rng,
     defender: Vec<f64>,
@@ -69,7 +73,19 @@ pub struct RunOutcome {
     pub seconds: f64,
 }
 
-impl Optimiser {
+/// What the best-response checks certify with (method.md section 6): the
+/// game and deterministic automata for phi and !phi.
+#[derive(Debug, Clone, Copy)]
+pub struct Certifier<'a> {
+    /// The game.
+    pub game: &'a Posg,
+    /// An automaton for phi (for the game upper bound).
+    pub phi: &'a Dra,
+    /// An automaton for !phi (for the defender's certified lower bound).
+    pub not_phi: &'a Dra,
+}
+
+impl<'a> Optimiser<'a> {
     /// Starts from the templates' logits plus noise uniform in
     /// `[-initial_spread, initial_spread]` drawn from `rng`, clipped to `[-c, c]`.
     pub fn new(objective: Objective, settings: &Settings, mut rng: ChaCha8Rng) -> Self {
@@ -93,11 +109,20 @@ impl Optimiser {
         );
         Self {
             objective,
+            certifier: None,
             settings: settings.clone(),
             rng,
             defender,
             adversary,
         }
+    }
+
+    /// Makes every best-response check also record the current defender's
+    /// certified lower bound and the smallest game upper bound over the
+    /// adversaries found so far.
+    pub fn with_certifier(mut self, certifier: Certifier<'a>) -> Self {
+        self.certifier = Some(certifier);
+        self
     }
 
     /// The objective (its softmax maps turn logits into controllers).
@@ -115,6 +140,7 @@ impl Optimiser {
         let mut best: Option<Incumbent> = None;
         let mut history = Vec::new();
         let mut average = SuffixAverage::new(self.defender.len());
+        let mut upper_bound = None;
         let mut t = 0;
         let (status, last_value) = loop {
             let mut adversary_norm = 0.0;
@@ -145,7 +171,8 @@ impl Optimiser {
                     .probabilities(&self.defender)
                     .entries,
             );
-            let worst_case = if t % s.check_every == 0 || status.is_some() {
+            let checked = t % s.check_every == 0 || status.is_some();
+            let worst_case = if checked {
                 let found = self.check(&mut best, t, &average)?;
                 history.push(best.as_ref().map_or(found, |b| b.worst_case));
                 if status.is_none() && stalled(&history, &s) {
@@ -154,6 +181,14 @@ impl Optimiser {
                 Some(found)
             } else {
                 None
+            };
+            let certified_lower = match (&self.certifier, checked) {
+                (Some(certifier), true) => {
+                    let (lower, upper) = self.certify(certifier, best.as_ref())?;
+                    upper_bound = Some(upper_bound.map_or(upper, |u: f64| u.min(upper)));
+                    Some(lower)
+                }
+                _ => None,
             };
             let defender_step = s.defender_step / (1.0 + s.defender_decay * t as f64).sqrt();
             observer.observe(&IterationRecord {
@@ -165,6 +200,8 @@ impl Optimiser {
                 defender_step,
                 adversary_step: s.adversary_step,
                 worst_case,
+                certified_lower,
+                upper_bound: upper_bound.filter(|_| certified_lower.is_some()),
             });
             if let Some(status) = status {
                 break (status, point.value);
@@ -191,7 +228,22 @@ impl Optimiser {
     }
 }
 
-impl Optimiser {
+impl Optimiser<'_> {
+    /// The certified lower bound of the current defender and the game upper
+    /// bound against the incumbent's best response.
+    fn certify(
+        &self,
+        certifier: &Certifier<'_>,
+        best: Option<&Incumbent>,
+    ) -> Result<(f64, f64), OptimiseError> {
+        let defender = self.objective.defender().controller(&self.defender)?;
+        let adversary_logits = best.map_or(&self.adversary, |b| &b.adversary);
+        let adversary = self.objective.adversary().controller(adversary_logits)?;
+        let lower = lower_bound(certifier.game, certifier.not_phi, &defender)?.value;
+        let upper = upper_bound(certifier.game, certifier.phi, &adversary)?.value;
+        Ok((lower, upper))
+    }
+
     /// The best-response check at iteration `t`: the worst-case estimates of
     /// the current defender (returned) and of the suffix average; either
     /// replaces the incumbent when it is better.

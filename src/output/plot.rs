@@ -49,12 +49,21 @@ impl Observer for CurvePlot {
             .iter()
             .map(|r| (r.iteration as f64, r.value))
             .collect();
-        let worst: Vec<(f64, f64)> = self
-            .records
-            .iter()
-            .filter_map(|r| r.worst_case.map(|w| (r.iteration as f64, w)))
-            .collect();
-        let series = [("value", values), ("worst-case estimate", worst)];
+        let checked = |pick: fn(&IterationRecord) -> Option<f64>| -> Vec<(f64, f64)> {
+            self.records
+                .iter()
+                .filter_map(|r| pick(r).map(|y| (r.iteration as f64, y)))
+                .collect()
+        };
+        let mut series = vec![
+            ("value", values),
+            ("worst-case estimate", checked(|r| r.worst_case)),
+        ];
+        let lower = checked(|r| r.certified_lower);
+        if !lower.is_empty() {
+            series.push(("certified lower bound", lower));
+            series.push(("game upper bound", checked(|r| r.upper_bound)));
+        }
         draw_lines(
             &self.path,
             &self.title,
