@@ -9,7 +9,7 @@ mod common;
 use nalgebra::{DMatrix, DVector};
 use posg_fsc::automaton::Dra;
 use posg_fsc::certify::{Bound, CertifyError, lower_bound, upper_bound};
-use posg_fsc::controller::{Choice, Fsc, Role};
+use posg_fsc::controller::{Fsc, Role};
 use posg_fsc::game::Posg;
 use posg_fsc::game::file::from_json_str;
 use posg_fsc::ltl;
@@ -97,42 +97,6 @@ fn small_game(seed: u64, full: bool) -> Posg {
         "labels": labels, "defender": defender, "adversary": adversary, "transitions": transitions,
     });
     from_json_str(&game.to_string(), "small.posg.json").unwrap()
-}
-
-/// A random controller with `nodes` nodes and random non-empty supports.
-fn controller(seed: u64, game: &Posg, role: Role, nodes: usize) -> Fsc {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let player = match role {
-        Role::Defender => game.defender(),
-        Role::Adversary => game.adversary(),
-    };
-    let (no, na) = (player.num_observations(), player.num_actions());
-    let blocks = (0..nodes * no)
-        .map(|_| {
-            let mut pairs: Vec<(usize, usize)> = (0..nodes)
-                .flat_map(|g| (0..na).map(move |u| (g, u)))
-                .filter(|_| rng.random_bool(0.6))
-                .collect();
-            if pairs.is_empty() {
-                pairs.push((rng.random_range(0..nodes), rng.random_range(0..na)));
-            }
-            let weights: Vec<f64> = pairs.iter().map(|_| rng.random_range(0.1..1.0)).collect();
-            let total: f64 = weights.iter().sum();
-            pairs
-                .into_iter()
-                .zip(weights)
-                .map(|((next, action), w)| Choice {
-                    next,
-                    action,
-                    probability: w / total,
-                    logit: None,
-                })
-                .collect()
-        })
-        .collect();
-    let mut initial = vec![0.0; nodes];
-    initial[0] = 1.0;
-    Fsc::new(role, nodes, no, na, initial, blocks).unwrap()
 }
 
 /// The MDP of the free player against `fixed`, dense over all `(s, q, node)`
@@ -311,7 +275,12 @@ fn lower_bound_is_the_minimum_over_enumerated_adversary_strategies() {
     let mut checked = 0;
     for seed in 0..30 {
         let game = small_game(seed, seed % 3 == 0);
-        let defender = controller(seed + 100, &game, Role::Defender, 1 + seed as usize % 2);
+        let defender = common::random::controller_with_nodes(
+            seed + 100,
+            &game,
+            Role::Defender,
+            1 + seed as usize % 2,
+        );
         for formula in FORMULAS {
             let (_, not_phi) = automata(formula);
             let bound = lower_bound(&game, &not_phi, &defender).unwrap();
@@ -342,7 +311,12 @@ fn upper_bound_is_the_maximum_over_enumerated_defender_strategies() {
     let mut checked = 0;
     for seed in 0..30 {
         let game = small_game(seed + 1000, seed % 3 == 1);
-        let adversary = controller(seed + 200, &game, Role::Adversary, 1 + seed as usize % 2);
+        let adversary = common::random::controller_with_nodes(
+            seed + 200,
+            &game,
+            Role::Adversary,
+            1 + seed as usize % 2,
+        );
         for formula in FORMULAS {
             let (phi, _) = automata(formula);
             let bound = upper_bound(&game, &phi, &adversary).unwrap();
@@ -398,8 +372,10 @@ fn with_full_observation_and_one_node_the_bounds_bracket_the_value() {
         let game = small_game(seed + 500, true);
         for formula in FORMULAS {
             let (phi, not_phi) = automata(formula);
-            let defender = controller(seed + 300, &game, Role::Defender, 1);
-            let adversary = controller(seed + 400, &game, Role::Adversary, 1);
+            let defender =
+                common::random::controller_with_nodes(seed + 300, &game, Role::Defender, 1);
+            let adversary =
+                common::random::controller_with_nodes(seed + 400, &game, Role::Adversary, 1);
             let value = common::reference_value(&game, &phi, &defender, &adversary);
             let lower = lower_bound(&game, &not_phi, &defender).unwrap();
             let upper = upper_bound(&game, &phi, &adversary).unwrap();

@@ -5,12 +5,12 @@
 mod common;
 
 use posg_fsc::automaton::Dra;
-use posg_fsc::controller::{Choice, Fsc, Role, Support};
+use posg_fsc::controller::{Choice, Fsc, Role};
 use posg_fsc::game::Posg;
 use posg_fsc::game::grid::{GridSpec, ObservationModel};
 use posg_fsc::simulate::{SimulationSettings, simulate};
 use posg_fsc::solver::DEFAULT_TOLERANCE;
-use posg_fsc::value::Evaluator;
+use posg_fsc::value::evaluate_controllers;
 
 fn objectives() -> Vec<(&'static str, Dra)> {
     vec![
@@ -141,21 +141,9 @@ fn controller_pairs(game: &Posg) -> Vec<(&'static str, Fsc, Fsc)> {
 fn check_grid(game: &Posg) {
     for (formula, dra) in objectives() {
         for (name, defender, adversary) in controller_pairs(game) {
-            let mut evaluator = Evaluator::new(
-                game,
-                &dra,
-                &Support::of(&defender),
-                &Support::of(&adversary),
-                DEFAULT_TOLERANCE,
-            )
-            .unwrap();
-            let value = evaluator
-                .evaluate(
-                    &Support::probabilities_of(&defender),
-                    &Support::probabilities_of(&adversary),
-                )
-                .unwrap()
-                .value;
+            let (evaluator, evaluation) =
+                evaluate_controllers(game, &dra, &defender, &adversary, DEFAULT_TOLERANCE).unwrap();
+            let value = evaluation.value;
             let reference = common::reference_value(game, &dra, &defender, &adversary);
             assert!(
                 (value - reference).abs() < 1e-9,
@@ -194,21 +182,10 @@ fn paper_grid_with_blind_observations_matches_too() {
                 uniform(&game, Role::Defender, nodes),
                 uniform(&game, Role::Adversary, nodes),
             );
-            let mut evaluator = Evaluator::new(
-                &game,
-                &dra,
-                &Support::of(&defender),
-                &Support::of(&adversary),
-                DEFAULT_TOLERANCE,
-            )
-            .unwrap();
-            let value = evaluator
-                .evaluate(
-                    &Support::probabilities_of(&defender),
-                    &Support::probabilities_of(&adversary),
-                )
-                .unwrap()
-                .value;
+            let (_, evaluation) =
+                evaluate_controllers(&game, &dra, &defender, &adversary, DEFAULT_TOLERANCE)
+                    .unwrap();
+            let value = evaluation.value;
             let reference = common::reference_value(&game, &dra, &defender, &adversary);
             assert!(
                 (value - reference).abs() < 1e-9,
@@ -227,20 +204,8 @@ fn full_support_makes_recurrent_safety_exactly_zero() {
             uniform(&game, Role::Defender, nodes),
             uniform(&game, Role::Adversary, 1),
         );
-        let mut evaluator = Evaluator::new(
-            &game,
-            &dra,
-            &Support::of(&defender),
-            &Support::of(&adversary),
-            DEFAULT_TOLERANCE,
-        )
-        .unwrap();
-        let evaluation = evaluator
-            .evaluate(
-                &Support::probabilities_of(&defender),
-                &Support::probabilities_of(&adversary),
-            )
-            .unwrap();
+        let (evaluator, evaluation) =
+            evaluate_controllers(&game, &dra, &defender, &adversary, DEFAULT_TOLERANCE).unwrap();
         assert_eq!(evaluation.value, 0.0, "{nodes} nodes");
         assert_eq!(evaluator.recurrence().feasible().count(), 0);
     }

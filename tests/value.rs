@@ -8,7 +8,7 @@ use posg_fsc::controller::{Choice, Fsc, Probabilities, Role, Support};
 use posg_fsc::game::Posg;
 use posg_fsc::game::file::from_json_str;
 use posg_fsc::solver::DEFAULT_TOLERANCE;
-use posg_fsc::value::Evaluator;
+use posg_fsc::value::{Evaluator, evaluate_controllers};
 use proptest::prelude::*;
 
 fn game(text: &str) -> Posg {
@@ -27,13 +27,10 @@ fn evaluator(game: &Posg, dra: &Dra, def: &Fsc, adv: &Fsc) -> Evaluator {
 }
 
 fn value(game: &Posg, dra: &Dra, def: &Fsc, adv: &Fsc) -> f64 {
-    let mut ev = evaluator(game, dra, def, adv);
-    ev.evaluate(
-        &Support::probabilities_of(def),
-        &Support::probabilities_of(adv),
-    )
-    .unwrap()
-    .value
+    evaluate_controllers(game, dra, def, adv, DEFAULT_TOLERANCE)
+        .unwrap()
+        .1
+        .value
 }
 
 fn uniform(game: &Posg, role: Role, nodes: usize) -> Fsc {

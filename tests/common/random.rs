@@ -106,6 +106,13 @@ pub fn dra(seed: u64) -> Dra {
 /// A random controller with 1-2 nodes, random non-empty supports and
 /// random probabilities on them.
 pub fn controller(seed: u64, game: &Posg, role: Role) -> Fsc {
+    let nodes = ChaCha8Rng::seed_from_u64(seed ^ 0x90de5).random_range(1..=2);
+    controller_with_nodes(seed, game, role, nodes)
+}
+
+/// A random controller with `nodes` nodes, random non-empty supports and
+/// random probabilities on them.
+pub fn controller_with_nodes(seed: u64, game: &Posg, role: Role, nodes: usize) -> Fsc {
     let mut rng =
         ChaCha8Rng::seed_from_u64(seed ^ if role == Role::Defender { 0xdef } else { 0xad7 });
     let player = if role == Role::Defender {
@@ -113,7 +120,6 @@ pub fn controller(seed: u64, game: &Posg, role: Role) -> Fsc {
     } else {
         game.adversary()
     };
-    let nodes = rng.random_range(1..=2);
     let (no, na) = (player.num_observations(), player.num_actions());
     let blocks = (0..nodes * no)
         .map(|_| {
