@@ -227,6 +227,7 @@ pub struct Gmc {
     initial_probabilities: Vec<f64>,
     game_initial: Vec<f64>,
     max_cells: usize,
+    scratch: Vec<f64>,
 }
 
 impl Gmc {
@@ -269,6 +270,7 @@ impl Gmc {
             initial_probabilities: Vec::new(),
             game_initial,
             max_cells,
+            scratch: vec![0.0; max_cells],
         };
         for &(s, _) in game.initial() {
             let q = dra.successor(dra.initial(), gmc.tables.letters[s]) as u32;
@@ -370,7 +372,7 @@ impl Gmc {
     pub fn refill(&mut self, defender: &Probabilities, adversary: &Probabilities) {
         self.defender.refill(&defender.entries);
         self.adversary.refill(&adversary.entries);
-        let mut scratch = vec![0.0; self.max_cells];
+        let mut scratch = std::mem::take(&mut self.scratch);
         for m in 0..self.states.len() {
             let state = self.states[m];
             let (defender_mixture, adversary_mixture) =
@@ -384,6 +386,7 @@ impl Gmc {
                 scratch[cell] = 0.0;
             }
         }
+        self.scratch = scratch;
         for (i, &m) in self.initial_states.iter().enumerate() {
             let state = self.states[m as usize];
             self.initial_probabilities[i] = self.game_initial[state.s as usize]
