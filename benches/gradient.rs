@@ -18,7 +18,7 @@ use std::time::Duration;
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use posg_fsc::game::grid::GridSpec;
 use posg_fsc::optimise::{Objective, Softmax, Structure};
-use posg_fsc::solver::DEFAULT_TOLERANCE;
+use posg_fsc::solver::SolverSettings;
 
 /// (grid side, defender nodes, adversary nodes).
 const SIZES: [(usize, usize, usize); 3] = [(3, 1, 1), (5, 2, 1), (8, 2, 2)];
@@ -41,7 +41,7 @@ fn objective(side: usize, def: usize, adv: usize) -> (Objective, Vec<f64>, Vec<f
         &dra,
         Softmax::new(&structure.defender, false),
         Softmax::new(&structure.adversary, false),
-        DEFAULT_TOLERANCE,
+        &SolverSettings::default(),
     )
     .expect("an evaluable structure");
     let logits = |n: usize| {

@@ -12,7 +12,7 @@ use posg_fsc::controller::{Fsc, Probabilities, Role, Support};
 use posg_fsc::game::Posg;
 use posg_fsc::game::grid::{GridSpec, RandomUnsafe};
 use posg_fsc::product::Gmc;
-use posg_fsc::solver::DEFAULT_TOLERANCE;
+use posg_fsc::solver::SolverSettings;
 use posg_fsc::value::Evaluator;
 
 const SIDES: [usize; 3] = [8, 24, 64];
@@ -69,7 +69,7 @@ fn prepare(f: &Fixture) -> Evaluator {
         &f.dra,
         &f.supports.0,
         &f.supports.1,
-        DEFAULT_TOLERANCE,
+        &SolverSettings::default(),
     )
     .unwrap()
 }

@@ -10,11 +10,14 @@
 //! dV/dtheta = sum_{m in T} y(m) sum_m' dP(m'|m)/dtheta x(m') + sum_m dp0(m)/dtheta x(m).
 //! ```
 //!
-//! [`Evaluator`] builds the GMC, its analysis and the LU's symbolic
-//! factorisation once per support structure; each evaluation then refills
-//! the numbers, factorises once and solves once (value) or twice (value and
-//! gradient), followed by one pass over the GMC for the gradient of all
-//! parameters of both players.
+//! [`Evaluator`] builds the GMC, its analysis and the solver's set-up (the
+//! LU's symbolic factorisation, or the ILU(0) structure) once per support
+//! structure; each evaluation then refills the numbers, factorises once and
+//! solves once (value) or twice (value and gradient), followed by one pass
+//! over the GMC for the gradient of all parameters of both players. The
+//! vectors `b`, `x`, `p0` and `y` live in the evaluator: an evaluation
+//! allocates nothing, and an iterative solver starts from the previous
+//! evaluation's `x` and `y` (warm start).
 
 use thiserror::Error;
 
@@ -23,7 +26,10 @@ use crate::automaton::Dra;
 use crate::controller::{Fsc, Probabilities, Support};
 use crate::game::Posg;
 use crate::product::{Gmc, ProductError};
-use crate::solver::{LuSolver, SolverError, SparsePattern};
+use crate::solver::{
+    FlushDenormals, LinearSolver, SolveReport, SolverError, SolverMethod, SolverSettings,
+    SparsePattern,
+};
 
 /// Why a value could not be computed.
 #[derive(Debug, Error, Clone, PartialEq)]
@@ -43,6 +49,8 @@ pub struct Evaluation {
     pub value: f64,
     /// `max_i |((I - Q) x - b)_i|` (0 when `T` is empty).
     pub residual: f64,
+    /// BiCGSTAB iterations of the solve (0 for LU or when `T` is empty).
+    pub iterations: usize,
 }
 
 /// Partial derivatives of `V` with respect to every controller probability,
@@ -59,31 +67,43 @@ pub struct Gradient {
     pub adversary_initial: Vec<f64>,
     /// The residual of the adjoint solve `(I - Q)^T y = p0`.
     pub adjoint_residual: f64,
+    /// BiCGSTAB iterations of the adjoint solve (0 for LU).
+    pub adjoint_iterations: usize,
 }
 
 /// The linear system on `T`: the pattern of `I - Q` and where each entry's
-/// number comes from in the GMC, plus `b`'s sources.
+/// number comes from in the GMC, `b`'s sources, and the vectors of both
+/// solves (kept between evaluations as warm starts).
 struct TransientSystem {
-    solver: LuSolver,
+    solver: LinearSolver,
     sources: Vec<u32>,
     diagonal: Vec<bool>,
     matrix_values: Vec<f64>,
     target_offsets: Vec<usize>,
     target_sources: Vec<u32>,
+    b: Vec<f64>,
+    x: Vec<f64>,
+    p0: Vec<f64>,
+    y: Vec<f64>,
 }
 
 const NO_SOURCE: u32 = u32::MAX;
 
 impl TransientSystem {
-    fn build(gmc: &Gmc, recurrence: &Recurrence, tolerance: f64) -> Result<Self, SolverError> {
+    fn build(
+        gmc: &Gmc,
+        recurrence: &Recurrence,
+        settings: &SolverSettings,
+    ) -> Result<Self, SolverError> {
         let mut row_offsets = vec![0];
         let mut columns = Vec::new();
         let mut sources = Vec::new();
         let mut diagonal = Vec::new();
         let mut target_offsets = vec![0];
         let mut target_sources = Vec::new();
+        let mut entries: Vec<(usize, u32)> = Vec::new();
         for (i, &m) in recurrence.transient.iter().enumerate() {
-            let mut entries: Vec<(usize, u32)> = Vec::new();
+            entries.clear();
             let (row_columns, _) = gmc.row(m);
             for (k, &c) in gmc.row_range(m).zip(row_columns) {
                 match recurrence.classes[c as usize] {
@@ -98,7 +118,7 @@ impl TransientSystem {
                 entries.push((i, NO_SOURCE));
                 entries.sort_unstable();
             }
-            for (c, source) in entries {
+            for &(c, source) in &entries {
                 columns.push(c);
                 sources.push(source);
                 diagonal.push(c == i);
@@ -108,13 +128,13 @@ impl TransientSystem {
         }
         let n = recurrence.transient.len();
         let matrix_values = vec![0.0; columns.len()];
-        let solver = LuSolver::new(
+        let solver = LinearSolver::new(
             SparsePattern {
                 n,
                 row_offsets,
                 columns,
             },
-            tolerance,
+            settings,
         )?;
         Ok(Self {
             solver,
@@ -123,11 +143,19 @@ impl TransientSystem {
             matrix_values,
             target_offsets,
             target_sources,
+            b: vec![0.0; n],
+            x: vec![0.0; n],
+            p0: vec![0.0; n],
+            y: vec![0.0; n],
         })
     }
 
-    /// Writes `I - Q` from the GMC's numbers, factorises, and returns `b`.
-    fn factorize(&mut self, gmc: &Gmc) -> Result<Vec<f64>, SolverError> {
+    fn len(&self) -> usize {
+        self.b.len()
+    }
+
+    /// Writes `I - Q` and `b` from the GMC's numbers and factorises.
+    fn factorize(&mut self, gmc: &Gmc) -> Result<(), SolverError> {
         let p = gmc.values();
         for (k, value) in self.matrix_values.iter_mut().enumerate() {
             let q = if self.sources[k] == NO_SOURCE {
@@ -137,19 +165,37 @@ impl TransientSystem {
             };
             *value = if self.diagonal[k] { 1.0 - q } else { -q };
         }
-        self.solver.factorize(&self.matrix_values)?;
-        Ok(self
-            .target_offsets
-            .windows(2)
-            .map(|w| {
-                self.target_sources[w[0]..w[1]]
-                    .iter()
-                    .map(|&k| p[k as usize])
-                    .sum()
-            })
-            .collect())
+        for (b, w) in self.b.iter_mut().zip(self.target_offsets.windows(2)) {
+            *b = self.target_sources[w[0]..w[1]]
+                .iter()
+                .map(|&k| p[k as usize])
+                .sum();
+        }
+        self.solver.factorize(&self.matrix_values)
+    }
+
+    /// Solves `(I - Q) x = b` from the previous `x`.
+    fn solve_value(&mut self) -> Result<SolveReport, SolverError> {
+        if self.len() == 0 {
+            return Ok(NO_SOLVE);
+        }
+        self.solver.solve(&self.b, &mut self.x)
+    }
+
+    /// Solves `(I - Q)^T y = p0` from the previous `y`.
+    fn solve_adjoint(&mut self) -> Result<SolveReport, SolverError> {
+        if self.len() == 0 {
+            return Ok(NO_SOLVE);
+        }
+        self.solver.solve_transpose(&self.p0, &mut self.y)
     }
 }
+
+/// The report of the solve of an empty system.
+const NO_SOLVE: SolveReport = SolveReport {
+    residual: 0.0,
+    iterations: 0,
+};
 
 /// The evaluator for the supports of two controllers and the value of
 /// their probabilities: the one-shot form of [`Evaluator::new`] followed by
@@ -159,14 +205,14 @@ pub fn evaluate_controllers(
     dra: &Dra,
     defender: &Fsc,
     adversary: &Fsc,
-    tolerance: f64,
+    settings: &SolverSettings,
 ) -> Result<(Evaluator, Evaluation), ValueError> {
     let mut evaluator = Evaluator::new(
         game,
         dra,
         &Support::of(defender),
         &Support::of(adversary),
-        tolerance,
+        settings,
     )?;
     let evaluation = evaluator.evaluate(
         &Support::probabilities_of(defender),
@@ -181,31 +227,34 @@ pub struct Evaluator {
     recurrence: Recurrence,
     system: TransientSystem,
     values: Vec<f64>,
+    adjoint: Vec<f64>,
 }
 
 impl Evaluator {
     /// Builds the GMC under the supports, analyses its recurrence classes and
-    /// prepares the sparse LU of `I - Q`; solves must reach `tolerance`.
+    /// prepares the solver of `I - Q` chosen by `settings`.
     pub fn new(
         game: &Posg,
         dra: &Dra,
         defender: &Support,
         adversary: &Support,
-        tolerance: f64,
+        settings: &SolverSettings,
     ) -> Result<Self, ValueError> {
         let gmc = Gmc::build(game, dra, defender, adversary)?;
         let recurrence = Recurrence::analyse(&gmc, dra);
-        let system = TransientSystem::build(&gmc, &recurrence, tolerance)?;
+        let system = TransientSystem::build(&gmc, &recurrence, settings)?;
         let values = recurrence
             .classes
             .iter()
             .map(|&c| f64::from(matches!(c, StateClass::Target | StateClass::Sure)))
             .collect();
+        let adjoint = vec![0.0; gmc.num_states()];
         Ok(Self {
             gmc,
             recurrence,
             system,
             values,
+            adjoint,
         })
     }
 
@@ -219,6 +268,17 @@ impl Evaluator {
         &self.recurrence
     }
 
+    /// The method solving `(I - Q) x = b` ([`SolverMethod::Lu`] or
+    /// [`SolverMethod::Krylov`]).
+    pub fn solver_method(&self) -> SolverMethod {
+        self.system.solver.method()
+    }
+
+    /// The pattern of `I - Q` on `T` and its numbers as of the last evaluation.
+    pub fn system(&self) -> (&SparsePattern, &[f64]) {
+        (self.system.solver.pattern(), &self.system.matrix_values)
+    }
+
     /// `x(m)`, the probability of phi from each GMC state, as of the last evaluation.
     pub fn state_values(&self) -> &[f64] {
         &self.values
@@ -230,18 +290,19 @@ impl Evaluator {
         defender: &Probabilities,
         adversary: &Probabilities,
     ) -> Result<Evaluation, ValueError> {
+        let _flush = FlushDenormals::on_this_thread();
         self.gmc.refill(defender, adversary);
-        let mut x = self.system.factorize(&self.gmc)?;
-        let residual = if x.is_empty() {
-            0.0
-        } else {
-            self.system.solver.solve(&mut x)?
-        };
-        for (&m, &xm) in self.recurrence.transient.iter().zip(&x) {
+        self.system.factorize(&self.gmc)?;
+        let report = self.system.solve_value()?;
+        for (&m, &xm) in self.recurrence.transient.iter().zip(&self.system.x) {
             self.values[m] = xm;
         }
         let value = self.gmc.initial().map(|(m, p)| p * self.values[m]).sum();
-        Ok(Evaluation { value, residual })
+        Ok(Evaluation {
+            value,
+            residual: report.residual,
+            iterations: report.iterations,
+        })
     }
 
     /// The value and its gradient with respect to every probability of both
@@ -252,32 +313,29 @@ impl Evaluator {
         adversary: &Probabilities,
     ) -> Result<(Evaluation, Gradient), ValueError> {
         let evaluation = self.evaluate(defender, adversary)?;
-        let mut p0 = vec![0.0; self.recurrence.transient.len()];
+        let _flush = FlushDenormals::on_this_thread();
+        self.system.p0.fill(0.0);
         for (m, p) in self.gmc.initial() {
             let i = self.recurrence.transient_index[m];
             if i != u32::MAX {
-                p0[i as usize] += p;
+                self.system.p0[i as usize] += p;
             }
         }
-        let adjoint_residual = if p0.is_empty() {
-            0.0
-        } else {
-            self.system.solver.solve_transpose(&mut p0)?
-        };
-        let mut y = vec![0.0; self.gmc.num_states()];
-        for (&m, &ym) in self.recurrence.transient.iter().zip(&p0) {
-            y[m] = ym;
+        let report = self.system.solve_adjoint()?;
+        for (&m, &ym) in self.recurrence.transient.iter().zip(&self.system.y) {
+            self.adjoint[m] = ym;
         }
         let mut gradient = Gradient {
             defender: vec![0.0; defender.entries.len()],
             adversary: vec![0.0; adversary.entries.len()],
             defender_initial: vec![0.0; defender.initial.len()],
             adversary_initial: vec![0.0; adversary.initial.len()],
-            adjoint_residual,
+            adjoint_residual: report.residual,
+            adjoint_iterations: report.iterations,
         };
         self.gmc.add_adjoint_gradient(
             &self.values,
-            &y,
+            &self.adjoint,
             &mut gradient.defender,
             &mut gradient.adversary,
         );

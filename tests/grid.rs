@@ -9,7 +9,7 @@ use posg_fsc::controller::{Choice, Fsc, Role};
 use posg_fsc::game::Posg;
 use posg_fsc::game::grid::{GridSpec, ObservationModel};
 use posg_fsc::simulate::{SimulationSettings, simulate};
-use posg_fsc::solver::DEFAULT_TOLERANCE;
+use posg_fsc::solver::{DEFAULT_TOLERANCE, SolverSettings};
 use posg_fsc::value::evaluate_controllers;
 
 fn objectives() -> Vec<(&'static str, Dra)> {
@@ -141,8 +141,14 @@ fn controller_pairs(game: &Posg) -> Vec<(&'static str, Fsc, Fsc)> {
 fn check_grid(game: &Posg) {
     for (formula, dra) in objectives() {
         for (name, defender, adversary) in controller_pairs(game) {
-            let (evaluator, evaluation) =
-                evaluate_controllers(game, &dra, &defender, &adversary, DEFAULT_TOLERANCE).unwrap();
+            let (evaluator, evaluation) = evaluate_controllers(
+                game,
+                &dra,
+                &defender,
+                &adversary,
+                &SolverSettings::default(),
+            )
+            .unwrap();
             let value = evaluation.value;
             let reference = common::reference_value(game, &dra, &defender, &adversary);
             assert!(
@@ -182,9 +188,14 @@ fn paper_grid_with_blind_observations_matches_too() {
                 uniform(&game, Role::Defender, nodes),
                 uniform(&game, Role::Adversary, nodes),
             );
-            let (_, evaluation) =
-                evaluate_controllers(&game, &dra, &defender, &adversary, DEFAULT_TOLERANCE)
-                    .unwrap();
+            let (_, evaluation) = evaluate_controllers(
+                &game,
+                &dra,
+                &defender,
+                &adversary,
+                &SolverSettings::default(),
+            )
+            .unwrap();
             let value = evaluation.value;
             let reference = common::reference_value(&game, &dra, &defender, &adversary);
             assert!(
@@ -204,8 +215,14 @@ fn full_support_makes_recurrent_safety_exactly_zero() {
             uniform(&game, Role::Defender, nodes),
             uniform(&game, Role::Adversary, 1),
         );
-        let (evaluator, evaluation) =
-            evaluate_controllers(&game, &dra, &defender, &adversary, DEFAULT_TOLERANCE).unwrap();
+        let (evaluator, evaluation) = evaluate_controllers(
+            &game,
+            &dra,
+            &defender,
+            &adversary,
+            &SolverSettings::default(),
+        )
+        .unwrap();
         assert_eq!(evaluation.value, 0.0, "{nodes} nodes");
         assert_eq!(evaluator.recurrence().feasible().count(), 0);
     }

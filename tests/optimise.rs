@@ -12,7 +12,7 @@ use posg_fsc::optimise::{
     Objective, Settings, Softmax, Status, Structure, optimise_structure, solve,
 };
 use posg_fsc::output::CurveCsv;
-use posg_fsc::solver::DEFAULT_TOLERANCE;
+use posg_fsc::solver::SolverSettings;
 use posg_fsc::value::Evaluator;
 use proptest::prelude::*;
 use rand::{Rng, SeedableRng};
@@ -86,7 +86,7 @@ proptest! {
         let dra = common::random::dra(seed);
         let def = common::random::controller(seed, &g, Role::Defender);
         let adv = common::random::controller(seed, &g, Role::Adversary);
-        let mut objective = Objective::new(&g, &dra, Softmax::new(&def, with_initial), Softmax::new(&adv, with_initial), DEFAULT_TOLERANCE).unwrap();
+        let mut objective = Objective::new(&g, &dra, Softmax::new(&def, with_initial), Softmax::new(&adv, with_initial), &SolverSettings::default()).unwrap();
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         let phi_def = random_logits(&mut rng, objective.defender().num_parameters());
         let phi_adv = random_logits(&mut rng, objective.adversary().num_parameters());
@@ -176,7 +176,7 @@ fn best_deterministic(g: &Posg, dra: &Dra) -> f64 {
             dra,
             &Support::of(&fsc),
             &Support::of(&adversary),
-            DEFAULT_TOLERANCE,
+            &SolverSettings::default(),
         )
         .unwrap();
         best = best.max(

@@ -14,7 +14,7 @@ use posg_fsc::game::file::from_json_str;
 use posg_fsc::game::grid::{GridSpec, ObservationModel};
 use posg_fsc::product::{Gmc, GmcState};
 use posg_fsc::prune::{PruneReport, PruneSettings, good_sets, prune};
-use posg_fsc::solver::DEFAULT_TOLERANCE;
+use posg_fsc::solver::SolverSettings;
 use posg_fsc::value::Evaluator;
 use proptest::prelude::*;
 
@@ -37,7 +37,7 @@ fn value(game: &Posg, dra: &Dra, def: &Fsc, adv: &Fsc) -> f64 {
         dra,
         &Support::of(def),
         &Support::of(adv),
-        DEFAULT_TOLERANCE,
+        &SolverSettings::default(),
     )
     .unwrap();
     ev.evaluate(

@@ -6,7 +6,7 @@ use std::process::Command;
 
 use posg_fsc::controller::{Role, Support, file};
 use posg_fsc::game::Posg;
-use posg_fsc::solver::DEFAULT_TOLERANCE;
+use posg_fsc::solver::SolverSettings;
 use posg_fsc::value::Evaluator;
 use serde_json::Value;
 
@@ -72,7 +72,7 @@ fn value_of(game: &Posg, dir: &Path, structure: &Value) -> f64 {
         &dra,
         &Support::of(&def),
         &Support::of(&adv),
-        DEFAULT_TOLERANCE,
+        &SolverSettings::default(),
     )
     .unwrap();
     ev.evaluate(

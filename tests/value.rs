@@ -7,7 +7,8 @@ use posg_fsc::automaton::Dra;
 use posg_fsc::controller::{Choice, Fsc, Probabilities, Role, Support};
 use posg_fsc::game::Posg;
 use posg_fsc::game::file::from_json_str;
-use posg_fsc::solver::DEFAULT_TOLERANCE;
+use posg_fsc::optimise::Softmax;
+use posg_fsc::solver::{SolverMethod, SolverSettings};
 use posg_fsc::value::{Evaluator, evaluate_controllers};
 use proptest::prelude::*;
 
@@ -21,13 +22,13 @@ fn evaluator(game: &Posg, dra: &Dra, def: &Fsc, adv: &Fsc) -> Evaluator {
         dra,
         &Support::of(def),
         &Support::of(adv),
-        DEFAULT_TOLERANCE,
+        &SolverSettings::default(),
     )
     .unwrap()
 }
 
 fn value(game: &Posg, dra: &Dra, def: &Fsc, adv: &Fsc) -> f64 {
-    evaluate_controllers(game, dra, def, adv, DEFAULT_TOLERANCE)
+    evaluate_controllers(game, dra, def, adv, &SolverSettings::default())
         .unwrap()
         .1
         .value
@@ -255,6 +256,38 @@ proptest! {
             if pd.initial[g0] == 0.0 { continue; }
             let fd = (at(&plus, &pa) - at(&minus, &pa)) / (2.0 * h);
             prop_assert!((fd - gradient.defender_initial[g0]).abs() < 1e-6 * scale, "initial {}: fd {} adjoint {}", g0, fd, gradient.defender_initial[g0]);
+        }
+    }
+
+    #[test]
+    fn krylov_agrees_with_lu_on_values_and_gradients_also_when_warm_started(seed in any::<u64>()) {
+        let g = game(&common::random::game_json(seed));
+        let dra = common::random::dra(seed);
+        let def = common::random::controller(seed, &g, Role::Defender);
+        let adv = common::random::controller(seed, &g, Role::Adversary);
+        let (soft_def, soft_adv) = (Softmax::new(&def, true), Softmax::new(&adv, true));
+        let evaluator_with = |method| {
+            let settings = SolverSettings { method, tolerance: 1e-11, ..SolverSettings::default() };
+            Evaluator::new(&g, &dra, &Support::of(&def), &Support::of(&adv), &settings).unwrap()
+        };
+        let (mut lu, mut krylov) = (evaluator_with(SolverMethod::Lu), evaluator_with(SolverMethod::Krylov));
+        prop_assert_eq!(krylov.solver_method(), SolverMethod::Krylov);
+        for step in 0..3 {
+            let logits = |n: usize, salt: u64| -> Vec<f64> {
+                (0..n).map(|i| ((seed ^ salt).wrapping_mul(i as u64 + 7 + step) % 1000) as f64 / 250.0 - 2.0).collect()
+            };
+            let pd = soft_def.probabilities(&logits(soft_def.num_parameters(), 1));
+            let pa = soft_adv.probabilities(&logits(soft_adv.num_parameters(), 2));
+            let (v_lu, g_lu) = lu.evaluate_with_gradient(&pd, &pa).unwrap();
+            let (v_kr, g_kr) = krylov.evaluate_with_gradient(&pd, &pa).unwrap();
+            prop_assert!((v_lu.value - v_kr.value).abs() < 1e-9, "step {}: value {} vs {}", step, v_lu.value, v_kr.value);
+            prop_assert!(v_kr.residual <= 1e-11 && g_kr.adjoint_residual <= 1e-11);
+            let pairs = g_lu.defender.iter().zip(&g_kr.defender)
+                .chain(g_lu.adversary.iter().zip(&g_kr.adversary))
+                .chain(g_lu.defender_initial.iter().zip(&g_kr.defender_initial));
+            for (a, b) in pairs {
+                prop_assert!((a - b).abs() < 1e-7 * (1.0 + a.abs()), "step {}: gradient {} vs {}", step, a, b);
+            }
         }
     }
 }

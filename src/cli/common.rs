@@ -9,6 +9,7 @@ use posg_fsc::automaton::Dra;
 use posg_fsc::automaton::hoa::read_hoa_dra;
 use posg_fsc::controller::{Fsc, Role};
 use posg_fsc::game::Posg;
+use posg_fsc::solver::{DEFAULT_LU_LIMIT, DEFAULT_TOLERANCE, SolverMethod, SolverSettings};
 use serde::Serialize;
 
 /// The objective: an LTL formula or a deterministic automaton in HOA.
@@ -36,6 +37,38 @@ pub struct ControllerArgs {
     /// The adversary's controller, as for --defender (`uniform:1` for a POMDP).
     #[arg(long, default_value = "uniform:1")]
     pub adversary: String,
+}
+
+/// How the linear systems are solved.
+#[derive(Debug, Clone, Args)]
+pub struct SolverArgs {
+    /// `lu` (sparse LU, direct), `krylov` (BiCGSTAB with an ILU(0)
+    /// preconditioner, iterative, warm-started) or `auto` (LU up to
+    /// --lu-limit unknowns, krylov above).
+    #[arg(long, default_value = "auto", value_parser = solver_method)]
+    pub solver: SolverMethod,
+    /// With --solver auto: the most unknowns |T| solved by LU.
+    #[arg(long, default_value_t = DEFAULT_LU_LIMIT)]
+    pub lu_limit: usize,
+    /// Largest accepted residual max |(I - Q) x - b| of a linear solve.
+    #[arg(long, default_value_t = DEFAULT_TOLERANCE, value_parser = positive_tolerance)]
+    pub tolerance: f64,
+}
+
+impl SolverArgs {
+    /// The library's settings.
+    pub fn settings(&self) -> SolverSettings {
+        SolverSettings {
+            method: self.solver,
+            tolerance: self.tolerance,
+            lu_limit: self.lu_limit,
+            ..SolverSettings::default()
+        }
+    }
+}
+
+fn solver_method(text: &str) -> Result<SolverMethod, String> {
+    text.parse()
 }
 
 /// Parses a tolerance: a finite number greater than 0.

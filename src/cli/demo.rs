@@ -17,7 +17,7 @@ use posg_fsc::game::Posg;
 use posg_fsc::game::grid::GridSpec;
 use posg_fsc::optimise::{self, Settings, Structure};
 use posg_fsc::prune::{PruneSettings, prune};
-use posg_fsc::solver::DEFAULT_TOLERANCE;
+use posg_fsc::solver::SolverSettings;
 use posg_fsc::value::evaluate_controllers;
 
 use super::solve::{SolveJob, run_job};
@@ -214,7 +214,7 @@ fn recurrence(game: &Posg, out: &mut String) -> anyhow::Result<()> {
 
 fn value(game: &Posg, dra: &Dra, defender: &Fsc, adversary: &Fsc) -> anyhow::Result<f64> {
     Ok(
-        evaluate_controllers(game, dra, defender, adversary, DEFAULT_TOLERANCE)?
+        evaluate_controllers(game, dra, defender, adversary, &SolverSettings::default())?
             .1
             .value,
     )

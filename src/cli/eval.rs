@@ -8,7 +8,6 @@ use posg_fsc::analysis::Recurrence;
 use posg_fsc::controller::Support;
 use posg_fsc::game::Posg;
 use posg_fsc::product::Gmc;
-use posg_fsc::solver::DEFAULT_TOLERANCE;
 use posg_fsc::value::Evaluator;
 use serde::Serialize;
 
@@ -28,9 +27,8 @@ pub struct EvalArgs {
     /// set (the paper's Algorithm 2).
     #[arg(long)]
     pub explain: bool,
-    /// Largest accepted residual max |(I - Q) x - b| of the linear solve.
-    #[arg(long, default_value_t = DEFAULT_TOLERANCE, value_parser = common::positive_tolerance)]
-    pub tolerance: f64,
+    #[command(flatten)]
+    pub solver: common::SolverArgs,
 }
 
 #[derive(Serialize)]
@@ -44,7 +42,9 @@ struct Report {
     bsccs: usize,
     feasible_bsccs: usize,
     transient_states: usize,
+    solver: &'static str,
     residual: f64,
+    solver_iterations: usize,
     seconds: f64,
     phase_seconds: PhaseSeconds,
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -86,7 +86,7 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
         &dra,
         &Support::of(&defender),
         &Support::of(&adversary),
-        args.tolerance,
+        &args.solver.settings(),
     )?;
     let build_and_analyse = lap.seconds();
     let evaluation = evaluator.evaluate(
@@ -110,7 +110,9 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
         bsccs: recurrence.bsccs.len(),
         feasible_bsccs: recurrence.feasible().count(),
         transient_states: recurrence.transient.len(),
+        solver: evaluator.solver_method().name(),
         residual: evaluation.residual,
+        solver_iterations: evaluation.iterations,
         seconds: common::seconds_since(start),
         phase_seconds,
         recurrence_classes: args

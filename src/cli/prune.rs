@@ -18,7 +18,7 @@ use posg_fsc::controller::{Fsc, Role, file};
 use posg_fsc::game::Posg;
 use posg_fsc::product::GmcState;
 use posg_fsc::prune::{Attempt, LastOptionStop, PruneReport, PruneSettings, prune};
-use posg_fsc::solver::DEFAULT_TOLERANCE;
+use posg_fsc::solver::SolverSettings;
 use posg_fsc::value::evaluate_controllers;
 
 use super::common::{ObjectiveArgs, Provenance, objective, read_game};
@@ -154,7 +154,7 @@ fn write_structure(
 /// The exact value of a controller pair.
 fn uniform_value(game: &Posg, dra: &Dra, defender: &Fsc, adversary: &Fsc) -> anyhow::Result<f64> {
     Ok(
-        evaluate_controllers(game, dra, defender, adversary, DEFAULT_TOLERANCE)?
+        evaluate_controllers(game, dra, defender, adversary, &SolverSettings::default())?
             .1
             .value,
     )

@@ -5,7 +5,7 @@ use std::time::Instant;
 
 use clap::Args;
 use posg_fsc::simulate::{Estimate, SimulationSettings, simulate};
-use posg_fsc::solver::DEFAULT_TOLERANCE;
+use posg_fsc::solver::{DEFAULT_TOLERANCE, SolverSettings};
 use posg_fsc::value::evaluate_controllers;
 use serde::Serialize;
 
@@ -46,8 +46,13 @@ pub fn run(args: SimulateArgs) -> anyhow::Result<()> {
     let game = common::read_game(&args.game)?;
     let (dra, formula) = common::objective(&args.objective, &game)?;
     let (defender, adversary) = common::controllers(&args.controllers, &game)?;
-    let (evaluator, evaluation) =
-        evaluate_controllers(&game, &dra, &defender, &adversary, DEFAULT_TOLERANCE)?;
+    let (evaluator, evaluation) = evaluate_controllers(
+        &game,
+        &dra,
+        &defender,
+        &adversary,
+        &SolverSettings::default(),
+    )?;
     let exact = evaluation.value;
     let settings = SimulationSettings {
         runs: args.runs,

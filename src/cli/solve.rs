@@ -23,6 +23,7 @@ use posg_fsc::optimise::{
     self, Observer, Settings, Solution, Structure, StructureReport, UpdateRule,
 };
 use posg_fsc::output::{CurveCsv, CurvePlot, Progress};
+use posg_fsc::solver::SolverMethod;
 
 use super::common::{ObjectiveArgs, objective, print_text, read_game};
 
@@ -112,6 +113,10 @@ pub struct SettingsArgs {
     /// Largest residual accepted from a linear solve.
     #[arg(long, default_value_t = Settings::default().solver_tolerance, value_parser = super::common::positive_tolerance)]
     solver_tolerance: f64,
+    /// `lu` (sparse LU), `krylov` (BiCGSTAB with ILU(0), warm-started from
+    /// the previous iteration) or `auto` (LU up to 50000 unknowns).
+    #[arg(long, default_value = "auto", value_parser = |text: &str| text.parse::<SolverMethod>())]
+    solver: SolverMethod,
     /// Optimise on the starting structure only, not also on the structures
     /// the paper's Algorithm 1 (pruning) keeps.
     #[arg(long)]
@@ -160,6 +165,7 @@ impl SettingsArgs {
             stall_checks: self.stall_checks,
             stall_tolerance: self.stall_tolerance,
             solver_tolerance: self.solver_tolerance,
+            solver: self.solver,
             prune: !self.no_prune,
             prune_paper_literal: self.prune_paper_literal,
             prune_adversary: self.prune_adversary,

@@ -205,8 +205,9 @@ fn evaluate(
     };
     let mut solver = LuSolver::new(pattern, DEFAULT_TOLERANCE)?;
     solver.factorize(&coefficients)?;
-    let residual = solver.solve(&mut rhs)?;
-    for (&s, &x) in maybe.iter().zip(&rhs) {
+    let mut solution = vec![0.0; rhs.len()];
+    let residual = solver.solve(&rhs, &mut solution)?.residual;
+    for (&s, &x) in maybe.iter().zip(&solution) {
         values[s] = x;
     }
     Ok((values, residual))

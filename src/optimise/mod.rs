@@ -261,7 +261,7 @@ pub fn optimise_structure(
     settings.validate()?;
     let defender = Softmax::new(&structure.defender, settings.optimise_initial);
     let adversary = Softmax::new(&structure.adversary, settings.optimise_initial);
-    let objective = Objective::new(game, dra, defender, adversary, settings.solver_tolerance)?;
+    let objective = Objective::new(game, dra, defender, adversary, &settings.solver_settings())?;
     let gmc = objective.gmc_size();
     let mut rng = ChaCha8Rng::seed_from_u64(settings.seed);
     rng.set_stream(stream);

@@ -11,6 +11,7 @@ use crate::analysis::StateClass;
 use crate::automaton::Dra;
 use crate::controller::Support;
 use crate::game::Posg;
+use crate::solver::SolverSettings;
 use crate::value::{Evaluator, ValueError};
 
 use super::softmax::Softmax;
@@ -54,14 +55,14 @@ impl Objective {
         dra: &Dra,
         defender: Softmax,
         adversary: Softmax,
-        tolerance: f64,
+        solver: &SolverSettings,
     ) -> Result<Self, ValueError> {
         let evaluator = Evaluator::new(
             game,
             dra,
             &Support::of(defender.template()),
             &Support::of(adversary.template()),
-            tolerance,
+            solver,
         )?;
         Ok(Self {
             evaluator,

@@ -4,6 +4,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::OptimiseError;
+use crate::solver::{SolverMethod, SolverSettings};
 
 /// How a player turns its logit gradient into a step (method.md section 4).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -60,6 +61,8 @@ pub struct Settings {
     pub stall_tolerance: f64,
     /// Largest residual accepted from a linear solve.
     pub solver_tolerance: f64,
+    /// How the linear systems are solved (LU, BiCGSTAB, or by size).
+    pub solver: SolverMethod,
     /// Also optimise on every structure the paper's Algorithm 1 keeps
     /// (method.md section 5), in parallel with the starting structure.
     pub prune: bool,
@@ -92,6 +95,7 @@ impl Default for Settings {
             stall_checks: 0,
             stall_tolerance: 1e-6,
             solver_tolerance: crate::solver::DEFAULT_TOLERANCE,
+            solver: SolverMethod::Auto,
             prune: true,
             prune_paper_literal: false,
             prune_adversary: false,
@@ -100,6 +104,15 @@ impl Default for Settings {
 }
 
 impl Settings {
+    /// The linear solver's settings: [`Self::solver`] to [`Self::solver_tolerance`].
+    pub fn solver_settings(&self) -> SolverSettings {
+        SolverSettings {
+            method: self.solver,
+            tolerance: self.solver_tolerance,
+            ..SolverSettings::default()
+        }
+    }
+
     /// Checks every field's range; the optimiser cannot fail on settings afterwards.
     pub fn validate(&self) -> Result<(), OptimiseError> {
         let positive = [

@@ -1,0 +1,207 @@
+//! Sparse LU of `A = I - Q` with faer.
+//!
+//! `A` is given row-wise (compressed sparse rows), which is the compressed
+//! sparse column form of `A^T`; faer factorises `A^T`, so `A x = b` is its
+//! transposed solve and `A^T y = c` its plain solve.
+
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::sparse::linalg::lu::{LuRef, NumericLu, SymbolicLu, factorize_symbolic_lu};
+use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
+use faer::{Conj, MatMut, Par};
+
+use super::{
+    Direction, SolveReport, SolverError, SparsePattern, accept, check_solve_inputs, check_values,
+};
+
+/// Sparse LU of `A` with a fixed pattern: analyse once, factorise per values,
+/// solve many times.
+pub struct LuSolver {
+    pattern: SparsePattern,
+    symbolic: SymbolicLu<usize>,
+    numeric: NumericLu<usize, f64>,
+    values: Vec<f64>,
+    factorised: bool,
+    workspace: MemBuffer,
+    residual_work: Vec<f64>,
+    tolerance: f64,
+}
+
+impl LuSolver {
+    /// Symbolic analysis (fill-reducing ordering, elimination structure) of
+    /// `pattern`; solves are accepted when their residual is at most `tolerance`.
+    pub fn new(pattern: SparsePattern, tolerance: f64) -> Result<Self, SolverError> {
+        super::SolverSettings::with_tolerance(tolerance).check()?;
+        pattern.check()?;
+        let symbolic = factorize_symbolic_lu(transpose_view(&pattern), Default::default())
+            .map_err(|_| SolverError::OutOfMemory)?;
+        let scratch = symbolic
+            .factorize_numeric_lu_scratch::<f64>(Par::Seq, Default::default())
+            .or(symbolic.solve_in_place_scratch::<f64>(1, Par::Seq));
+        let workspace = MemBuffer::try_new(scratch).map_err(|_| SolverError::OutOfMemory)?;
+        let values = vec![0.0; pattern.nnz()];
+        let residual_work = vec![0.0; pattern.n];
+        Ok(Self {
+            pattern,
+            symbolic,
+            numeric: NumericLu::new(),
+            values,
+            factorised: false,
+            workspace,
+            residual_work,
+            tolerance,
+        })
+    }
+
+    /// The pattern of `A`.
+    pub fn pattern(&self) -> &SparsePattern {
+        &self.pattern
+    }
+
+    /// Numeric LU of `A` with `values` (aligned with the pattern's entries),
+    /// reusing the symbolic analysis and the numeric storage.
+    pub fn factorize(&mut self, values: &[f64]) -> Result<(), SolverError> {
+        check_values(&self.pattern, values)?;
+        self.values.copy_from_slice(values);
+        self.factorised = false;
+        let matrix = SparseColMatRef::new(transpose_view(&self.pattern), &self.values);
+        self.symbolic
+            .factorize_numeric_lu(
+                &mut self.numeric,
+                matrix,
+                Par::Seq,
+                MemStack::new(&mut self.workspace),
+                Default::default(),
+            )
+            .map_err(|e| SolverError::Singular(format!("{e:?}")))?;
+        self.factorised = true;
+        Ok(())
+    }
+
+    /// Solves `A x = b` into `x` (whose entry value is ignored).
+    pub fn solve(&mut self, b: &[f64], x: &mut [f64]) -> Result<SolveReport, SolverError> {
+        self.solve_checked(b, x, Direction::Forward)
+    }
+
+    /// Solves `A^T y = c` into `y` (whose entry value is ignored).
+    pub fn solve_transpose(
+        &mut self,
+        c: &[f64],
+        y: &mut [f64],
+    ) -> Result<SolveReport, SolverError> {
+        self.solve_checked(c, y, Direction::Transposed)
+    }
+
+    fn solve_checked(
+        &mut self,
+        rhs: &[f64],
+        solution: &mut [f64],
+        direction: Direction,
+    ) -> Result<SolveReport, SolverError> {
+        if !self.factorised {
+            return Err(SolverError::Malformed(
+                "solve called before a successful factorisation".into(),
+            ));
+        }
+        let n = self.pattern.n;
+        check_solve_inputs(n, rhs, solution)?;
+        solution.copy_from_slice(rhs);
+        let lu = LuRef::new_unchecked(&self.symbolic, &self.numeric);
+        let stack = MemStack::new(&mut self.workspace);
+        let column = MatMut::from_column_major_slice_mut(solution, n, 1);
+        let residual = match direction {
+            Direction::Forward => {
+                lu.solve_transpose_in_place_with_conj(Conj::No, column, Par::Seq, stack);
+                self.pattern.residual(&self.values, solution, rhs)
+            }
+            Direction::Transposed => {
+                lu.solve_in_place_with_conj(Conj::No, column, Par::Seq, stack);
+                self.pattern.transposed_residual(
+                    &self.values,
+                    solution,
+                    rhs,
+                    &mut self.residual_work,
+                )
+            }
+        };
+        let residual = accept(residual, solution, self.tolerance)?;
+        Ok(SolveReport {
+            residual,
+            iterations: 0,
+        })
+    }
+}
+
+/// The CSR pattern of `A` read as the CSC pattern of `A^T`.
+fn transpose_view(pattern: &SparsePattern) -> SymbolicSparseColMatRef<'_, usize> {
+    SymbolicSparseColMatRef::new_checked(
+        pattern.n,
+        pattern.n,
+        &pattern.row_offsets,
+        None,
+        &pattern.columns,
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::DEFAULT_TOLERANCE;
+    use super::super::test_systems::tridiagonal;
+    use super::*;
+
+    #[test]
+    fn forward_and_transposed_solves_match_a_nonsymmetric_system() {
+        let pattern = SparsePattern {
+            n: 3,
+            row_offsets: vec![0, 2, 4, 5],
+            columns: vec![0, 1, 1, 2, 2],
+        };
+        let values = [1.0, -0.5, 1.0, -0.25, 1.0];
+        let mut solver = LuSolver::new(pattern, DEFAULT_TOLERANCE).unwrap();
+        solver.factorize(&values).unwrap();
+        let mut x = vec![0.0; 3];
+        solver.solve(&[0.0, 0.0, 1.0], &mut x).unwrap();
+        assert!(
+            (x[2] - 1.0).abs() < 1e-15
+                && (x[1] - 0.25).abs() < 1e-15
+                && (x[0] - 0.125).abs() < 1e-15
+        );
+        let mut y = vec![0.0; 3];
+        solver.solve_transpose(&[1.0, 0.0, 0.0], &mut y).unwrap();
+        assert!(
+            (y[0] - 1.0).abs() < 1e-15
+                && (y[1] - 0.5).abs() < 1e-15
+                && (y[2] - 0.125).abs() < 1e-15
+        );
+    }
+
+    #[test]
+    fn refactorisation_reuses_the_pattern() {
+        let (pattern, mut values) = tridiagonal(50, 0.4);
+        let mut solver = LuSolver::new(pattern, DEFAULT_TOLERANCE).unwrap();
+        for scale in [0.4, 0.2, 0.45] {
+            for (k, v) in values.iter_mut().enumerate() {
+                if *v != 1.0 {
+                    *v = -scale - 1e-3 * (k % 7) as f64;
+                }
+            }
+            solver.factorize(&values).unwrap();
+            let mut x = vec![0.0; 50];
+            assert!(solver.solve(&[1.0; 50], &mut x).unwrap().residual < 1e-12);
+        }
+    }
+
+    #[test]
+    fn a_singular_system_is_an_error_not_a_number() {
+        let pattern = SparsePattern {
+            n: 2,
+            row_offsets: vec![0, 2, 4],
+            columns: vec![0, 1, 0, 1],
+        };
+        let mut solver = LuSolver::new(pattern, DEFAULT_TOLERANCE).unwrap();
+        let mut x = [0.0; 2];
+        let result = solver
+            .factorize(&[1.0, -1.0, -1.0, 1.0])
+            .and_then(|()| solver.solve(&[0.0, 1.0], &mut x));
+        assert!(result.is_err(), "{result:?}");
+    }
+}

@@ -1,0 +1,566 @@
+//! Sparse linear solves of `A x = b` and `A^T y = c` for the transient part
+//! of a Markov chain, `A = I - Q` (method.md sections 1 and 2).
+//!
+//! Two methods share one accuracy contract:
+//!
+//! * [`LuSolver`]: faer's sparse LU. Exact up to rounding; its fill-in grows
+//!   faster than the chain, so memory and time limit it to a few 10^5
+//!   unknowns on this kind of machine.
+//! * [`KrylovSolver`]: BiCGSTAB (faer's) right-preconditioned by an
+//!   incomplete LU factorisation without fill-in, ILU(0). Memory stays
+//!   linear in the number of entries, and a solve starts from the caller's
+//!   `x`: between optimiser iterations the previous solution is an excellent
+//!   starting point (warm start).
+//!
+//! [`LinearSolver`] picks one by [`SolverSettings`]. Whatever the method,
+//! every solve is checked by its true residual `max_i |(A x - b)_i|` (or the
+//! transposed one), reported in a [`SolveReport`], and a solve whose residual
+//! exceeds the tolerance is an error ([`SolverError::Inaccurate`]), never a
+//! number. `A` is an M-matrix (`Q` substochastic, every transient state
+//! leaves `T` eventually), so both the LU and ILU(0) exist without pivoting
+//! breakdown; a singular `A` is reported, not solved.
+
+mod denormals;
+mod ilu;
+mod krylov;
+mod lu;
+
+pub use denormals::FlushDenormals;
+pub use ilu::Ilu0;
+pub use krylov::KrylovSolver;
+pub use lu::LuSolver;
+
+use thiserror::Error;
+
+/// The largest residual `max_i |(A x - b)_i|` accepted by default.
+pub const DEFAULT_TOLERANCE: f64 = 1e-9;
+
+/// With [`SolverMethod::Auto`], systems with more unknowns than this use
+/// [`KrylovSolver`]; smaller ones use [`LuSolver`].
+pub const DEFAULT_LU_LIMIT: usize = 50_000;
+
+/// BiCGSTAB iterations allowed per solve by default.
+pub const DEFAULT_MAX_ITERATIONS: usize = 20_000;
+
+/// Why a linear system could not be solved to the required accuracy.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum SolverError {
+    /// The matrix is singular (structurally or numerically).
+    #[error("the linear system is singular ({0})")]
+    Singular(String),
+    /// A coefficient or a solution entry is NaN or infinite.
+    #[error("non-finite number in the linear system ({0})")]
+    NonFinite(&'static str),
+    /// The residual exceeds the tolerance.
+    #[error("residual {residual:e} exceeds the tolerance {tolerance:e}")]
+    Inaccurate {
+        /// `max_i |(A x - b)_i|`.
+        residual: f64,
+        /// The tolerance asked for.
+        tolerance: f64,
+    },
+    /// The iterative solver stopped before reaching the tolerance.
+    #[error(
+        "BiCGSTAB did not reach the tolerance {tolerance:e} in {iterations} iterations \
+         (residual {residual:e}); use --solver lu or allow more iterations"
+    )]
+    NotConverged {
+        /// Iterations performed.
+        iterations: usize,
+        /// `max_i |(A x - b)_i|` of the last iterate.
+        residual: f64,
+        /// The tolerance asked for.
+        tolerance: f64,
+    },
+    /// The tolerance is not a finite positive number.
+    #[error("the tolerance must be finite and positive, not {0}")]
+    InvalidTolerance(f64),
+    /// Memory for the factorisation could not be allocated.
+    #[error("out of memory in the sparse LU factorisation")]
+    OutOfMemory,
+    /// The pattern or values have inconsistent sizes or unsorted columns.
+    #[error("malformed sparse matrix: {0}")]
+    Malformed(String),
+}
+
+/// Which method solves the linear systems.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SolverMethod {
+    /// [`SolverMethod::Lu`] up to [`SolverSettings::lu_limit`] unknowns,
+    /// [`SolverMethod::Krylov`] above.
+    #[default]
+    Auto,
+    /// Sparse LU (direct).
+    Lu,
+    /// BiCGSTAB with an ILU(0) preconditioner, warm-started (iterative).
+    Krylov,
+}
+
+impl SolverMethod {
+    /// The name used on the command line and in output files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Auto => "auto",
+            Self::Lu => "lu",
+            Self::Krylov => "krylov",
+        }
+    }
+}
+
+impl std::str::FromStr for SolverMethod {
+    type Err = String;
+
+    fn from_str(text: &str) -> Result<Self, String> {
+        [Self::Auto, Self::Lu, Self::Krylov]
+            .into_iter()
+            .find(|method| method.name() == text)
+            .ok_or_else(|| format!("unknown solver `{text}` (expected auto, lu or krylov)"))
+    }
+}
+
+/// How linear systems are solved, and how accurately.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SolverSettings {
+    /// The method, or [`SolverMethod::Auto`] to choose by size.
+    pub method: SolverMethod,
+    /// The largest accepted residual `max_i |(A x - b)_i|`.
+    pub tolerance: f64,
+    /// With [`SolverMethod::Auto`]: the most unknowns solved by LU.
+    pub lu_limit: usize,
+    /// The most BiCGSTAB iterations per solve.
+    pub max_iterations: usize,
+}
+
+impl Default for SolverSettings {
+    fn default() -> Self {
+        Self {
+            method: SolverMethod::Auto,
+            tolerance: DEFAULT_TOLERANCE,
+            lu_limit: DEFAULT_LU_LIMIT,
+            max_iterations: DEFAULT_MAX_ITERATIONS,
+        }
+    }
+}
+
+impl SolverSettings {
+    /// The default settings with another tolerance.
+    pub fn with_tolerance(tolerance: f64) -> Self {
+        Self {
+            tolerance,
+            ..Self::default()
+        }
+    }
+
+    /// The method used for a system with `n` unknowns: never
+    /// [`SolverMethod::Auto`].
+    pub fn method_for(&self, n: usize) -> SolverMethod {
+        match self.method {
+            SolverMethod::Auto if n > self.lu_limit => SolverMethod::Krylov,
+            SolverMethod::Auto => SolverMethod::Lu,
+            chosen => chosen,
+        }
+    }
+
+    fn check(&self) -> Result<(), SolverError> {
+        if self.tolerance.is_finite() && self.tolerance > 0.0 {
+            Ok(())
+        } else {
+            Err(SolverError::InvalidTolerance(self.tolerance))
+        }
+    }
+}
+
+/// The accuracy and cost of one solve.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SolveReport {
+    /// `max_i |(A x - b)_i|` (or `|(A^T y - c)_i|`) of the returned solution.
+    pub residual: f64,
+    /// BiCGSTAB iterations (0 for LU).
+    pub iterations: usize,
+}
+
+/// A square sparse matrix `A` in compressed sparse row form with sorted,
+/// distinct column indices per row.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SparsePattern {
+    /// `n`: rows and columns.
+    pub n: usize,
+    /// Row offsets, `n + 1` entries.
+    pub row_offsets: Vec<usize>,
+    /// Column indices.
+    pub columns: Vec<usize>,
+}
+
+impl SparsePattern {
+    /// The number of stored entries.
+    pub fn nnz(&self) -> usize {
+        self.columns.len()
+    }
+
+    /// The stored entries of `row`, as a range into [`Self::columns`].
+    pub fn row_range(&self, row: usize) -> std::ops::Range<usize> {
+        self.row_offsets[row]..self.row_offsets[row + 1]
+    }
+
+    fn check(&self) -> Result<(), SolverError> {
+        let bad = |m: &str| Err(SolverError::Malformed(m.to_string()));
+        if self.row_offsets.len() != self.n + 1 || self.row_offsets[self.n] != self.columns.len() {
+            return bad("row offsets do not match the entries");
+        }
+        for row in 0..self.n {
+            let cols = &self.columns[self.row_range(row)];
+            if cols.windows(2).any(|w| w[0] >= w[1]) || cols.iter().any(|&c| c >= self.n) {
+                return bad("columns must be sorted, distinct and in range");
+            }
+        }
+        Ok(())
+    }
+
+    /// `out = A x` for the matrix with this pattern and `values`.
+    pub fn multiply(&self, values: &[f64], x: &[f64], out: &mut [f64]) {
+        for (row, out_row) in out.iter_mut().enumerate().take(self.n) {
+            let range = self.row_range(row);
+            *out_row = self.columns[range.clone()]
+                .iter()
+                .zip(&values[range])
+                .map(|(&c, &a)| a * x[c])
+                .sum();
+        }
+    }
+
+    /// `out = A^T y` for the matrix with this pattern and `values`.
+    pub fn multiply_transposed(&self, values: &[f64], y: &[f64], out: &mut [f64]) {
+        out.fill(0.0);
+        for (row, &y_row) in y.iter().enumerate().take(self.n) {
+            for k in self.row_range(row) {
+                out[self.columns[k]] += values[k] * y_row;
+            }
+        }
+    }
+
+    /// `max_i |(A x - b)_i|` for the matrix with this pattern and `values`.
+    pub fn residual(&self, values: &[f64], x: &[f64], b: &[f64]) -> f64 {
+        (0..self.n)
+            .map(|row| {
+                let range = self.row_range(row);
+                let ax: f64 = self.columns[range.clone()]
+                    .iter()
+                    .zip(&values[range])
+                    .map(|(&c, &a)| a * x[c])
+                    .sum();
+                (ax - b[row]).abs()
+            })
+            .fold(0.0, nan_max)
+    }
+
+    /// `max_i |(A^T y - c)_i|`, using `work` (length `n`) for `A^T y`.
+    pub fn transposed_residual(
+        &self,
+        values: &[f64],
+        y: &[f64],
+        c: &[f64],
+        work: &mut [f64],
+    ) -> f64 {
+        self.multiply_transposed(values, y, work);
+        work.iter()
+            .zip(c)
+            .map(|(a, c)| (a - c).abs())
+            .fold(0.0, nan_max)
+    }
+}
+
+/// `max` that lets NaN win, so a NaN residual is never mistaken for a small one.
+fn nan_max(a: f64, b: f64) -> f64 {
+    if a.is_nan() || b.is_nan() {
+        f64::NAN
+    } else {
+        a.max(b)
+    }
+}
+
+/// Which direction a solve goes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Direction {
+    /// `A x = b`.
+    Forward,
+    /// `A^T y = c`.
+    Transposed,
+}
+
+/// The checks every method makes before a solve: sizes and finite inputs.
+fn check_solve_inputs(n: usize, rhs: &[f64], x: &[f64]) -> Result<(), SolverError> {
+    if rhs.len() != n || x.len() != n {
+        return Err(SolverError::Malformed(
+            "right-hand side or solution has the wrong length".into(),
+        ));
+    }
+    if rhs.iter().any(|v| !v.is_finite()) {
+        return Err(SolverError::NonFinite("right-hand side"));
+    }
+    Ok(())
+}
+
+/// The check every method makes on a matrix's values.
+fn check_values(pattern: &SparsePattern, values: &[f64]) -> Result<(), SolverError> {
+    if values.len() != pattern.nnz() {
+        return Err(SolverError::Malformed(
+            "values do not match the pattern".into(),
+        ));
+    }
+    if values.iter().any(|v| !v.is_finite()) {
+        return Err(SolverError::NonFinite("matrix entry"));
+    }
+    Ok(())
+}
+
+/// The residual contract: a finite solution whose residual is at most the tolerance.
+fn accept(residual: f64, x: &[f64], tolerance: f64) -> Result<f64, SolverError> {
+    if x.iter().any(|v| !v.is_finite()) {
+        return Err(SolverError::Singular("the solution is not finite".into()));
+    }
+    if residual.is_nan() || residual > tolerance {
+        return Err(SolverError::Inaccurate {
+            residual,
+            tolerance,
+        });
+    }
+    Ok(residual)
+}
+
+/// The sparse solver of one fixed pattern, by the method [`SolverSettings`]
+/// chooses for its size.
+pub enum LinearSolver {
+    /// Direct solves.
+    Lu(Box<LuSolver>),
+    /// Preconditioned iterative solves.
+    Krylov(Box<KrylovSolver>),
+}
+
+impl LinearSolver {
+    /// Prepares solves for matrices with `pattern` (for LU: the symbolic
+    /// analysis).
+    pub fn new(pattern: SparsePattern, settings: &SolverSettings) -> Result<Self, SolverError> {
+        Ok(match settings.method_for(pattern.n) {
+            SolverMethod::Krylov => Self::Krylov(Box::new(KrylovSolver::new(pattern, settings)?)),
+            _ => Self::Lu(Box::new(LuSolver::new(pattern, settings.tolerance)?)),
+        })
+    }
+
+    /// The method in use ([`SolverMethod::Lu`] or [`SolverMethod::Krylov`]).
+    pub fn method(&self) -> SolverMethod {
+        match self {
+            Self::Lu(_) => SolverMethod::Lu,
+            Self::Krylov(_) => SolverMethod::Krylov,
+        }
+    }
+
+    /// The pattern of `A`.
+    pub fn pattern(&self) -> &SparsePattern {
+        match self {
+            Self::Lu(lu) => lu.pattern(),
+            Self::Krylov(krylov) => krylov.pattern(),
+        }
+    }
+
+    /// Takes new values of `A` (aligned with the pattern's entries) and
+    /// factorises them: the LU, or the ILU(0) preconditioner.
+    pub fn factorize(&mut self, values: &[f64]) -> Result<(), SolverError> {
+        match self {
+            Self::Lu(lu) => lu.factorize(values),
+            Self::Krylov(krylov) => krylov.factorize(values),
+        }
+    }
+
+    /// Solves `A x = b`. On entry `x` is the starting point of an iterative
+    /// solve (ignored by LU); on return it is the solution.
+    pub fn solve(&mut self, b: &[f64], x: &mut [f64]) -> Result<SolveReport, SolverError> {
+        match self {
+            Self::Lu(lu) => lu.solve(b, x),
+            Self::Krylov(krylov) => krylov.solve(b, x),
+        }
+    }
+
+    /// Solves `A^T y = c`, `y` as `x` in [`Self::solve`].
+    pub fn solve_transpose(
+        &mut self,
+        c: &[f64],
+        y: &mut [f64],
+    ) -> Result<SolveReport, SolverError> {
+        match self {
+            Self::Lu(lu) => lu.solve_transpose(c, y),
+            Self::Krylov(krylov) => krylov.solve_transpose(c, y),
+        }
+    }
+}
+
+#[cfg(test)]
+pub(crate) mod test_systems {
+    use super::SparsePattern;
+
+    /// A tridiagonal M-matrix: 1 on the diagonal, `-off` beside it.
+    pub fn tridiagonal(n: usize, off: f64) -> (SparsePattern, Vec<f64>) {
+        let mut row_offsets = vec![0];
+        let mut columns = Vec::new();
+        let mut values = Vec::new();
+        for i in 0..n {
+            for j in i.saturating_sub(1)..(i + 2).min(n) {
+                columns.push(j);
+                values.push(if i == j { 1.0 } else { -off });
+            }
+            row_offsets.push(columns.len());
+        }
+        (
+            SparsePattern {
+                n,
+                row_offsets,
+                columns,
+            },
+            values,
+        )
+    }
+
+    /// `I - Q` for a random substochastic `Q` on `n` states with about
+    /// `per_row` successors per row and escape probability at least `escape`
+    /// from each row (a deterministic pseudo-random generator keeps it
+    /// reproducible).
+    pub fn random_chain(
+        n: usize,
+        per_row: usize,
+        escape: f64,
+        seed: u64,
+    ) -> (SparsePattern, Vec<f64>) {
+        let mut state = seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        let mut next = move || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 33) as usize
+        };
+        let mut row_offsets = vec![0];
+        let mut columns = Vec::new();
+        let mut values = Vec::new();
+        for i in 0..n {
+            let mut successors: Vec<usize> = (0..per_row).map(|_| next() % n).collect();
+            successors.push(i);
+            successors.sort_unstable();
+            successors.dedup();
+            let weights: Vec<f64> = successors
+                .iter()
+                .map(|_| 1.0 + (next() % 100) as f64)
+                .collect();
+            let total: f64 = weights.iter().sum::<f64>() / (1.0 - escape);
+            for (&j, w) in successors.iter().zip(&weights) {
+                columns.push(j);
+                values.push(f64::from(i == j) - w / total);
+            }
+            row_offsets.push(columns.len());
+        }
+        (
+            SparsePattern {
+                n,
+                row_offsets,
+                columns,
+            },
+            values,
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::test_systems::{random_chain, tridiagonal};
+    use super::*;
+
+    #[test]
+    fn auto_chooses_by_size_and_explicit_choices_are_kept() {
+        let settings = SolverSettings {
+            lu_limit: 10,
+            ..SolverSettings::default()
+        };
+        assert_eq!(settings.method_for(10), SolverMethod::Lu);
+        assert_eq!(settings.method_for(11), SolverMethod::Krylov);
+        for method in [SolverMethod::Lu, SolverMethod::Krylov] {
+            let forced = SolverSettings { method, ..settings };
+            assert_eq!(forced.method_for(5), method);
+            assert_eq!(forced.method_for(500), method);
+        }
+    }
+
+    #[test]
+    fn both_methods_agree_on_random_chains() {
+        for seed in 0..5 {
+            let (pattern, values) = random_chain(300, 4, 0.05, seed);
+            let b: Vec<f64> = (0..300).map(|i| (i % 7) as f64 / 7.0).collect();
+            let mut solutions = Vec::new();
+            for method in [SolverMethod::Lu, SolverMethod::Krylov] {
+                let settings = SolverSettings {
+                    method,
+                    tolerance: 1e-12,
+                    ..SolverSettings::default()
+                };
+                let mut solver = LinearSolver::new(pattern.clone(), &settings).unwrap();
+                assert_eq!(solver.method(), method);
+                solver.factorize(&values).unwrap();
+                let mut x = vec![0.0; 300];
+                let forward = solver.solve(&b, &mut x).unwrap();
+                let mut y = vec![0.0; 300];
+                let backward = solver.solve_transpose(&b, &mut y).unwrap();
+                assert!(forward.residual <= 1e-12 && backward.residual <= 1e-12);
+                assert_eq!(pattern.residual(&values, &x, &b), forward.residual);
+                solutions.push((x, y));
+            }
+            let (lu, krylov) = (&solutions[0], &solutions[1]);
+            for i in 0..300 {
+                assert!((lu.0[i] - krylov.0[i]).abs() < 1e-9, "x[{i}]");
+                assert!((lu.1[i] - krylov.1[i]).abs() < 1e-9, "y[{i}]");
+            }
+        }
+    }
+
+    #[test]
+    fn a_tolerance_that_accepts_everything_is_refused_by_both_methods() {
+        for method in [SolverMethod::Lu, SolverMethod::Krylov] {
+            for tolerance in [f64::NAN, f64::INFINITY, 0.0, -1.0] {
+                let (pattern, _) = tridiagonal(3, 0.4);
+                let settings = SolverSettings {
+                    method,
+                    tolerance,
+                    ..SolverSettings::default()
+                };
+                assert!(matches!(
+                    LinearSolver::new(pattern, &settings),
+                    Err(SolverError::InvalidTolerance(_))
+                ));
+            }
+        }
+    }
+
+    #[test]
+    fn non_finite_values_are_rejected_by_both_methods() {
+        for method in [SolverMethod::Lu, SolverMethod::Krylov] {
+            let (pattern, mut values) = tridiagonal(4, 0.4);
+            values[0] = f64::NAN;
+            let settings = SolverSettings {
+                method,
+                ..SolverSettings::default()
+            };
+            let mut solver = LinearSolver::new(pattern, &settings).unwrap();
+            assert_eq!(
+                solver.factorize(&values),
+                Err(SolverError::NonFinite("matrix entry"))
+            );
+        }
+    }
+
+    #[test]
+    fn a_nan_residual_is_never_accepted() {
+        assert!(nan_max(0.0, f64::NAN).is_nan());
+        assert!(matches!(
+            accept(f64::NAN, &[0.0], 1.0),
+            Err(SolverError::Inaccurate { .. })
+        ));
+    }
+}
