@@ -28,6 +28,8 @@
 //!   target sets `B`, `Z`, `T` (method.md section 1);
 //! * [`solver`]: sparse LU solves of `(I - Q) x = b` and its transpose;
 //! * [`value`]: the exact value and its adjoint gradient (method.md sections 1-2);
+//!   [`sensitivity`]: the same gradient by forward sensitivities, one solve
+//!   per parameter (a reference for comparison);
 //! * [`optimise`]: softmax parameters, alternating projected gradient
 //!   ascent-descent and best-response checks (method.md sections 3-4);
 //! * [`output`]: observers and plots that write the optimiser's results;
@@ -49,6 +51,7 @@ pub mod optimise;
 pub mod output;
 pub mod product;
 pub mod prune;
+pub mod sensitivity;
 pub mod simulate;
 pub mod solver;
 pub mod value;

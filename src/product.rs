@@ -25,6 +25,18 @@ use crate::automaton::{Dra, Letter};
 use crate::controller::{Probabilities, Support};
 use crate::game::{Player, Posg};
 use crate::graph::CsrGraph;
+use crate::solver::FlushDenormals;
+
+/// The fewest rows with nonzero adjoint weight for which
+/// [`Gmc::add_adjoint_gradient`] runs in parallel.
+pub const PARALLEL_GRADIENT_ROWS: usize = 4096;
+
+/// The number of row chunks of the parallel gradient pass: fixed, so that
+/// the sum does not depend on the number of threads.
+pub const GRADIENT_CHUNKS: usize = 4;
+
+/// Gradient entries per task when the chunks' buffers are added up.
+const REDUCTION_BLOCK: usize = 1 << 14;
 
 /// A state `(s, q, g, h)` of the GMC: game state, automaton state, defender
 /// node, adversary node.
@@ -207,6 +219,33 @@ impl GameTables {
     }
 }
 
+/// Scratch vectors of [`Gmc::row_derivatives`] (one per thread): the
+/// values `x` of a row's successors by cell, and the derivatives of the
+/// row with respect to each of its mixture entries.
+#[derive(Debug, Clone, Default)]
+pub struct RowWorkspace {
+    x_cell: Vec<f64>,
+    d_def: Vec<f64>,
+    d_adv: Vec<f64>,
+}
+
+/// One chunk of rows of the parallel gradient pass: its partial gradients
+/// and its row scratch.
+#[derive(Debug, Clone)]
+struct GradientChunk {
+    defender: Vec<f64>,
+    adversary: Vec<f64>,
+    rows: RowWorkspace,
+}
+
+/// The buffers of [`Gmc::add_adjoint_gradient`], kept between calls: the
+/// rows with nonzero adjoint weight and one [`GradientChunk`] per chunk.
+#[derive(Debug, Clone, Default)]
+struct GradientWorkspace {
+    rows: Vec<u32>,
+    chunks: Vec<GradientChunk>,
+}
+
 /// The reachable global Markov chain in compressed sparse row form.
 ///
 /// Row `m` holds `P(. | m)`; within a row the columns are sorted. Each
@@ -228,6 +267,7 @@ pub struct Gmc {
     game_initial: Vec<f64>,
     max_cells: usize,
     scratch: Vec<f64>,
+    gradient_workspace: GradientWorkspace,
 }
 
 impl Gmc {
@@ -271,6 +311,7 @@ impl Gmc {
             game_initial,
             max_cells,
             scratch: vec![0.0; max_cells],
+            gradient_workspace: GradientWorkspace::default(),
         };
         for &(s, _) in game.initial() {
             let q = dra.successor(dra.initial(), gmc.tables.letters[s]) as u32;
@@ -449,59 +490,191 @@ impl Gmc {
             .map(|(&m, &p)| (m as usize, p))
     }
 
-    /// The adjoint gradient pass of method.md section 2. With `x` the value
-    /// vector on all states and `y` the adjoint weights (zero outside `T`),
-    /// adds to `gradient_defender[k]`, for support entry `k = (g', u | g, o)`,
+    /// A scratch space for [`Gmc::row_derivatives`], sized for this chain.
+    pub fn row_workspace(&self) -> RowWorkspace {
+        RowWorkspace {
+            x_cell: vec![0.0; self.max_cells],
+            d_def: Vec::new(),
+            d_adv: Vec::new(),
+        }
+    }
+
+    /// The partial derivatives of row `m`'s expectation of `x` with respect
+    /// to the controller probabilities (method.md section 2):
     ///
     /// ```text
-    /// sum_{m=(s,q,g,h)} y(m) O_def(o|s) sum_{h',v} A_adv(h',v | s,h) sum_{s'} T(s'|s,u,v) x(s', q', g', h')
+    /// r_k(m) = sum_m' dP(m' | m)/d mu_k x(m').
     /// ```
     ///
-    /// and symmetrically to `gradient_adversary`: the partial derivatives of
-    /// `sum_m y(m) sum_m' P(m' | m) x(m')` with respect to `mu_def` and `mu_adv`.
-    pub fn add_adjoint_gradient(
+    /// For a defender support entry `k = (g', u | g, o)` with `m = (s, q, g, h)`,
+    ///
+    /// ```text
+    /// r_k(m) = O_def(o|s) sum_{h',v} A_adv(h',v | s,h) sum_{s'} T(s'|s,u,v) x(s', q', g', h'),
+    /// ```
+    ///
+    /// and symmetrically for the adversary. Calls `defender(k, r_k(m))` and
+    /// `adversary(k, r_k(m))` once for every support entry `k` whose
+    /// probability appears in row `m` (every other `r_k(m)` is zero), using
+    /// the numbers of the last [`Gmc::refill`]. `x` is indexed by GMC state.
+    pub fn row_derivatives(
         &self,
+        m: usize,
+        x: &[f64],
+        work: &mut RowWorkspace,
+        mut defender: impl FnMut(usize, f64),
+        mut adversary: impl FnMut(usize, f64),
+    ) {
+        let state = self.states[m];
+        for k in self.row_range(m) {
+            work.x_cell[self.cells[k] as usize] = x[self.columns[k] as usize];
+        }
+        let def_range = self.defender.at(state.s as usize, state.g as usize);
+        let adv_range = self.adversary.at(state.s as usize, state.h as usize);
+        work.d_def.clear();
+        work.d_def.resize(def_range.len(), 0.0);
+        work.d_adv.clear();
+        work.d_adv.resize(adv_range.len(), 0.0);
+        let (def_start, adv_start) = (def_range.start, adv_range.start);
+        let (defender_mixture, adversary_mixture) = (&self.defender.values, &self.adversary.values);
+        let (x_cell, d_def, d_adv) = (&work.x_cell, &mut work.d_def, &mut work.d_adv);
+        self.for_each_term(state, |cell, j, l, p| {
+            let w = p * x_cell[cell];
+            d_def[j - def_start] += adversary_mixture[l] * w;
+            d_adv[l - adv_start] += defender_mixture[j] * w;
+        });
+        for (offset, j) in def_range.enumerate() {
+            for &(k, weight) in self.defender.terms_of(j) {
+                defender(k as usize, weight * d_def[offset]);
+            }
+        }
+        for (offset, l) in adv_range.enumerate() {
+            for &(k, weight) in self.adversary.terms_of(l) {
+                adversary(k as usize, weight * d_adv[offset]);
+            }
+        }
+    }
+
+    /// The adjoint gradient pass of method.md section 2. With `x` the value
+    /// vector on all states and `y` the adjoint weights (zero outside `T`),
+    /// adds to `gradient_defender[k]` and `gradient_adversary[k]`
+    ///
+    /// ```text
+    /// grad_k = sum_m y(m) r_k(m),   r_k(m) = sum_m' dP(m' | m)/d mu_k x(m')
+    /// ```
+    ///
+    /// ([`Gmc::row_derivatives`]): the partial derivatives of
+    /// `sum_m y(m) sum_m' P(m' | m) x(m')` with respect to `mu_def` and `mu_adv`.
+    ///
+    /// Above [`PARALLEL_GRADIENT_ROWS`] rows with `y(m) != 0`, the rows are
+    /// split into [`GRADIENT_CHUNKS`] contiguous chunks handled in parallel
+    /// (rayon), each summing into its own buffers, which are then added in
+    /// chunk order. The chunks do not depend on the number of threads, so
+    /// the result is bitwise reproducible; it differs from a sequential sum
+    /// only by the order of summation. The buffers are kept in the GMC and
+    /// reused: after the first call the pass allocates nothing.
+    pub fn add_adjoint_gradient(
+        &mut self,
         x: &[f64],
         y: &[f64],
         gradient_defender: &mut [f64],
         gradient_adversary: &mut [f64],
     ) {
-        let mut x_cell = vec![0.0; self.max_cells];
-        let mut d_def = Vec::new();
-        let mut d_adv = Vec::new();
-        for (m, &y_m) in y.iter().enumerate() {
-            if y_m == 0.0 {
-                continue;
+        let mut workspace = std::mem::take(&mut self.gradient_workspace);
+        workspace.rows.clear();
+        workspace
+            .rows
+            .extend((0..y.len()).filter(|&m| y[m] != 0.0).map(|m| m as u32));
+        if workspace.rows.len() < PARALLEL_GRADIENT_ROWS {
+            let mut work = match workspace.chunks.first_mut() {
+                Some(chunk) => std::mem::replace(&mut chunk.rows, self.row_workspace()),
+                None => self.row_workspace(),
+            };
+            for &m in &workspace.rows {
+                let y_m = y[m as usize];
+                self.row_derivatives(
+                    m as usize,
+                    x,
+                    &mut work,
+                    |k, r| gradient_defender[k] += y_m * r,
+                    |k, r| gradient_adversary[k] += y_m * r,
+                );
             }
-            let state = self.states[m];
-            for k in self.row_range(m) {
-                x_cell[self.cells[k] as usize] = x[self.columns[k] as usize];
+            if let Some(chunk) = workspace.chunks.first_mut() {
+                chunk.rows = work;
             }
-            let def_range = self.defender.at(state.s as usize, state.g as usize);
-            let adv_range = self.adversary.at(state.s as usize, state.h as usize);
-            d_def.clear();
-            d_def.resize(def_range.len(), 0.0);
-            d_adv.clear();
-            d_adv.resize(adv_range.len(), 0.0);
-            let (def_start, adv_start) = (def_range.start, adv_range.start);
-            let (defender_mixture, adversary_mixture) =
-                (&self.defender.values, &self.adversary.values);
-            self.for_each_term(state, |cell, j, l, p| {
-                let w = p * x_cell[cell];
-                d_def[j - def_start] += adversary_mixture[l] * w;
-                d_adv[l - adv_start] += defender_mixture[j] * w;
-            });
-            for (offset, j) in def_range.enumerate() {
-                for &(k, weight) in self.defender.terms_of(j) {
-                    gradient_defender[k as usize] += y_m * weight * d_def[offset];
-                }
-            }
-            for (offset, l) in adv_range.enumerate() {
-                for &(k, weight) in self.adversary.terms_of(l) {
-                    gradient_adversary[k as usize] += y_m * weight * d_adv[offset];
-                }
-            }
+        } else {
+            self.parallel_adjoint_gradient(
+                &mut workspace,
+                x,
+                y,
+                gradient_defender,
+                gradient_adversary,
+            );
         }
+        self.gradient_workspace = workspace;
+    }
+
+    fn parallel_adjoint_gradient(
+        &self,
+        workspace: &mut GradientWorkspace,
+        x: &[f64],
+        y: &[f64],
+        gradient_defender: &mut [f64],
+        gradient_adversary: &mut [f64],
+    ) {
+        use rayon::prelude::*;
+        let (num_def, num_adv) = (gradient_defender.len(), gradient_adversary.len());
+        workspace
+            .chunks
+            .resize_with(GRADIENT_CHUNKS, || GradientChunk {
+                defender: Vec::new(),
+                adversary: Vec::new(),
+                rows: RowWorkspace::default(),
+            });
+        let rows = &workspace.rows;
+        let per_chunk = rows.len().div_ceil(GRADIENT_CHUNKS);
+        workspace
+            .chunks
+            .par_iter_mut()
+            .enumerate()
+            .for_each(|(c, chunk)| {
+                let _flush = FlushDenormals::on_this_thread();
+                chunk.defender.clear();
+                chunk.defender.resize(num_def, 0.0);
+                chunk.adversary.clear();
+                chunk.adversary.resize(num_adv, 0.0);
+                chunk.rows.x_cell.resize(self.max_cells, 0.0);
+                let mine =
+                    &rows[(c * per_chunk).min(rows.len())..((c + 1) * per_chunk).min(rows.len())];
+                let (defender, adversary) = (&mut chunk.defender, &mut chunk.adversary);
+                for &m in mine {
+                    let y_m = y[m as usize];
+                    self.row_derivatives(
+                        m as usize,
+                        x,
+                        &mut chunk.rows,
+                        |k, r| defender[k] += y_m * r,
+                        |k, r| adversary[k] += y_m * r,
+                    );
+                }
+            });
+        let chunks = &workspace.chunks;
+        let reduce = |gradient: &mut [f64], part: fn(&GradientChunk) -> &[f64]| {
+            gradient
+                .par_chunks_mut(REDUCTION_BLOCK)
+                .enumerate()
+                .for_each(|(b, block)| {
+                    let start = b * REDUCTION_BLOCK;
+                    for (i, g) in block.iter_mut().enumerate() {
+                        *g += chunks
+                            .iter()
+                            .map(|chunk| part(chunk)[start + i])
+                            .fold(0.0, |sum, v| sum + v);
+                    }
+                });
+        };
+        reduce(gradient_defender, |chunk| &chunk.defender);
+        reduce(gradient_adversary, |chunk| &chunk.adversary);
     }
 
     /// Adds to `initial_defender[g]` and `initial_adversary[h]` the partial
