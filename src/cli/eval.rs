@@ -1,4 +1,5 @@
-//! `posg-fsc eval`: the exact value of a controller pair.
+//! `posg-fsc eval`: the exact value of a controller pair, and with
+//! `--gradient` its adjoint gradient (method.md section 2).
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -8,7 +9,7 @@ use posg_fsc::analysis::Recurrence;
 use posg_fsc::controller::Support;
 use posg_fsc::game::Posg;
 use posg_fsc::product::Gmc;
-use posg_fsc::value::Evaluator;
+use posg_fsc::value::{Evaluator, Gradient};
 use serde::Serialize;
 
 use super::common::{self, ControllerArgs, ObjectiveArgs, Provenance};
@@ -29,6 +30,14 @@ pub struct EvalArgs {
     pub explain: bool,
     #[command(flatten)]
     pub solver: common::SolverArgs,
+    /// Also compute the gradient of the value with respect to every
+    /// controller probability of both players by the adjoint method (one
+    /// more solve, transposed, and one pass over the GMC), and report its
+    /// size, its norms and the adjoint solve's residual under `gradient`
+    /// (the gradient itself is not printed); the time of value and gradient
+    /// is the phase `value_and_gradient`, instead of `factorise_and_solve`.
+    #[arg(long)]
+    pub gradient: bool,
 }
 
 #[derive(Serialize)]
@@ -48,7 +57,47 @@ struct Report {
     seconds: f64,
     phase_seconds: PhaseSeconds,
     #[serde(skip_serializing_if = "Option::is_none")]
+    gradient: Option<GradientReport>,
+    #[serde(skip_serializing_if = "Option::is_none")]
     recurrence_classes: Option<Vec<ClassReport>>,
+}
+
+/// The adjoint gradient `dV/d mu` of both players (with `--gradient`).
+#[derive(Serialize)]
+struct GradientReport {
+    /// Defender support entries `mu_def(g', u | g, o)`.
+    defender_parameters: usize,
+    /// Adversary support entries `mu_adv(h', v | h, o')`.
+    adversary_parameters: usize,
+    /// Euclidean norm of `dV/d mu_def`.
+    defender_norm: f64,
+    /// Euclidean norm of `dV/d mu_adv`.
+    adversary_norm: f64,
+    /// Largest `|dV/d mu_def|`.
+    defender_max_abs: f64,
+    /// Largest `|dV/d mu_adv|`.
+    adversary_max_abs: f64,
+    /// `max_i |((I - Q)^T y - p0)_i|` of the adjoint solve.
+    adjoint_residual: f64,
+    /// BiCGSTAB iterations of the adjoint solve (0 for LU).
+    adjoint_iterations: usize,
+}
+
+impl GradientReport {
+    fn new(gradient: &Gradient) -> Self {
+        let norm = |g: &[f64]| g.iter().map(|v| v * v).sum::<f64>().sqrt();
+        let max_abs = |g: &[f64]| g.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        Self {
+            defender_parameters: gradient.defender.len(),
+            adversary_parameters: gradient.adversary.len(),
+            defender_norm: norm(&gradient.defender),
+            adversary_norm: norm(&gradient.adversary),
+            defender_max_abs: max_abs(&gradient.defender),
+            adversary_max_abs: max_abs(&gradient.adversary),
+            adjoint_residual: gradient.adjoint_residual,
+            adjoint_iterations: gradient.adjoint_iterations,
+        }
+    }
 }
 
 /// Wall-clock seconds of each phase.
@@ -58,7 +107,13 @@ struct PhaseSeconds {
     automaton: f64,
     controllers: f64,
     build_and_analyse: f64,
-    factorise_and_solve: f64,
+    /// Without `--gradient`: the value (refill, factorisation, one solve).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    factorise_and_solve: Option<f64>,
+    /// With `--gradient`: the value and the gradient (refill,
+    /// factorisation, two solves, one pass over the GMC).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    value_and_gradient: Option<f64>,
 }
 
 /// One BSCC described by its members' names.
@@ -89,16 +144,26 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
         &args.solver.settings(),
     )?;
     let build_and_analyse = lap.seconds();
-    let evaluation = evaluator.evaluate(
-        &Support::probabilities_of(&defender),
-        &Support::probabilities_of(&adversary),
-    )?;
+    let (def_probabilities, adv_probabilities) = (
+        Support::probabilities_of(&defender),
+        Support::probabilities_of(&adversary),
+    );
+    let (evaluation, gradient) = if args.gradient {
+        let (evaluation, gradient) =
+            evaluator.evaluate_with_gradient(&def_probabilities, &adv_probabilities)?;
+        (evaluation, Some(gradient))
+    } else {
+        let evaluation = evaluator.evaluate(&def_probabilities, &adv_probabilities)?;
+        (evaluation, None)
+    };
+    let solve_seconds = lap.seconds();
     let phase_seconds = PhaseSeconds {
         read_game,
         automaton,
         controllers,
         build_and_analyse,
-        factorise_and_solve: lap.seconds(),
+        factorise_and_solve: gradient.is_none().then_some(solve_seconds),
+        value_and_gradient: gradient.is_some().then_some(solve_seconds),
     };
     let recurrence = evaluator.recurrence();
     let report = Report {
@@ -115,6 +180,7 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
         solver_iterations: evaluation.iterations,
         seconds: common::seconds_since(start),
         phase_seconds,
+        gradient: gradient.as_ref().map(GradientReport::new),
         recurrence_classes: args
             .explain
             .then(|| explain(&game, evaluator.gmc(), recurrence)),

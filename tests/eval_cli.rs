@@ -1,0 +1,62 @@
+//! `posg-fsc eval --gradient` end to end, on a game whose value and
+//! gradient are known on paper.
+
+use std::process::Command;
+
+use serde_json::Value;
+
+/// From s0 the adversary lets the defender through to the goal s1 (pass)
+/// or into the trap s2 (attack), each with probability 1/2, else s0 again.
+/// With `a = mu_adv(pass)`, `b = mu_adv(attack)` and `g = mu_def(go)`:
+/// `x = g (a/2 + (a + b) x/2)`, so at `a = b = 1/2`, `g = 1`: `x = 1/2`,
+/// `dx/da = 3/2`, `dx/db = 1/2`, `dx/dg = 1`.
+const PASS_OR_TRAP: &str = r#"{
+  "posg": 1, "states": ["s0", "s1", "s2"], "initial": {"s0": 1.0}, "labels": {"s1": ["goal"]},
+  "defender": {"actions": ["go"], "observe": "full"},
+  "adversary": {"actions": ["pass", "attack"], "observe": "full"},
+  "transitions": [
+    {"state": "s0", "defender": "go", "adversary": "pass", "next": {"s1": 0.5, "s0": 0.5}},
+    {"state": "s0", "defender": "go", "adversary": "attack", "next": {"s2": 0.5, "s0": 0.5}},
+    {"state": "s1", "defender": "*", "adversary": "*", "next": {"s1": 1.0}},
+    {"state": "s2", "defender": "*", "adversary": "*", "next": {"s2": 1.0}}
+  ]
+}"#;
+
+fn close(value: &Value, expected: f64) -> bool {
+    (value.as_f64().unwrap() - expected).abs() < 1e-12
+}
+
+#[test]
+fn eval_with_gradient_reports_the_norms_of_the_adjoint_gradient() {
+    let dir = std::env::temp_dir().join(format!("posg-fsc-eval-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let game = dir.join("pass-or-trap.posg.json");
+    std::fs::write(&game, PASS_OR_TRAP).unwrap();
+    let output = Command::new(env!("CARGO_BIN_EXE_posg-fsc"))
+        .arg("eval")
+        .arg(&game)
+        .args(["--ltl", "F goal", "--gradient"])
+        .output()
+        .unwrap();
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    let report: Value = serde_json::from_slice(&output.stdout).unwrap();
+    assert!(close(&report["value"], 0.5), "{report}");
+    let gradient = &report["gradient"];
+    // One block per state (full observation): only s0's entries move the value.
+    assert_eq!(gradient["defender_parameters"], 3);
+    assert_eq!(gradient["adversary_parameters"], 6);
+    assert!(close(&gradient["defender_norm"], 1.0), "{gradient}");
+    assert!(
+        close(&gradient["adversary_norm"], 2.5f64.sqrt()),
+        "{gradient}"
+    );
+    assert!(close(&gradient["adversary_max_abs"], 1.5), "{gradient}");
+    assert!(gradient["adjoint_residual"].as_f64().unwrap() < 1e-12);
+    assert!(report["phase_seconds"]["value_and_gradient"].is_number());
+    assert!(report["phase_seconds"]["factorise_and_solve"].is_null());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
