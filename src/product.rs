@@ -14,10 +14,12 @@
 //! *supports* and stores the chain in compressed sparse rows: an edge exists
 //! iff some term of the sum is positive under the supports, so the pattern
 //! depends on the supports only. [`Gmc::refill`] then writes the numbers for
-//! new probabilities into the same arrays, without allocating: the optimiser
-//! does this thousands of times. The cost of both is linear in the number of
-//! terms of the sum.
+//! new probabilities into the same arrays, in parallel over chunks of rows
+//! (each row is computed alone, so the numbers do not depend on the number
+//! of threads): the optimiser does this thousands of times. The cost of both
+//! is linear in the number of terms of the sum.
 
+use rayon::prelude::*;
 use rustc_hash::FxHashMap;
 use thiserror::Error;
 
@@ -266,9 +268,11 @@ pub struct Gmc {
     initial_probabilities: Vec<f64>,
     game_initial: Vec<f64>,
     max_cells: usize,
-    scratch: Vec<f64>,
     gradient_workspace: GradientWorkspace,
 }
+
+/// Rows refilled by one parallel task of [`Gmc::refill`].
+const REFILL_CHUNK_ROWS: usize = 8192;
 
 impl Gmc {
     /// Explores the GMC reachable from the initial distribution under the
@@ -310,7 +314,6 @@ impl Gmc {
             initial_probabilities: Vec::new(),
             game_initial,
             max_cells,
-            scratch: vec![0.0; max_cells],
             gradient_workspace: GradientWorkspace::default(),
         };
         for &(s, _) in game.initial() {
@@ -413,26 +416,44 @@ impl Gmc {
     pub fn refill(&mut self, defender: &Probabilities, adversary: &Probabilities) {
         self.defender.refill(&defender.entries);
         self.adversary.refill(&adversary.entries);
-        let mut scratch = std::mem::take(&mut self.scratch);
-        for m in 0..self.states.len() {
-            let state = self.states[m];
-            let (defender_mixture, adversary_mixture) =
-                (&self.defender.values, &self.adversary.values);
-            self.for_each_term(state, |cell, j, l, p| {
-                scratch[cell] += defender_mixture[j] * adversary_mixture[l] * p;
-            });
-            for k in self.row_offsets[m]..self.row_offsets[m + 1] {
-                let cell = self.cells[k] as usize;
-                self.values[k] = scratch[cell];
-                scratch[cell] = 0.0;
-            }
+        let mut values = std::mem::take(&mut self.values);
+        let mut chunks = Vec::with_capacity(self.states.len().div_ceil(REFILL_CHUNK_ROWS));
+        let mut rest = values.as_mut_slice();
+        for first in (0..self.states.len()).step_by(REFILL_CHUNK_ROWS) {
+            let rows = first..(first + REFILL_CHUNK_ROWS).min(self.states.len());
+            let entries = self.row_offsets[rows.end] - self.row_offsets[rows.start];
+            let (chunk, tail) = rest.split_at_mut(entries);
+            chunks.push((rows, chunk));
+            rest = tail;
         }
-        self.scratch = scratch;
+        chunks
+            .into_par_iter()
+            .for_each(|(rows, chunk)| self.refill_rows(rows, chunk));
+        self.values = values;
         for (i, &m) in self.initial_states.iter().enumerate() {
             let state = self.states[m as usize];
             self.initial_probabilities[i] = self.game_initial[state.s as usize]
                 * defender.initial[state.g as usize]
                 * adversary.initial[state.h as usize];
+        }
+    }
+
+    /// Writes the probabilities of `rows` into `values`, the slice of the
+    /// value array that starts at the first entry of `rows`.
+    fn refill_rows(&self, rows: std::ops::Range<usize>, values: &mut [f64]) {
+        let _flush = FlushDenormals::on_this_thread();
+        let mut scratch = vec![0.0; self.max_cells];
+        let base = self.row_offsets[rows.start];
+        let (defender_mixture, adversary_mixture) = (&self.defender.values, &self.adversary.values);
+        for m in rows {
+            self.for_each_term(self.states[m], |cell, j, l, p| {
+                scratch[cell] += defender_mixture[j] * adversary_mixture[l] * p;
+            });
+            for k in self.row_range(m) {
+                let cell = self.cells[k] as usize;
+                values[k - base] = scratch[cell];
+                scratch[cell] = 0.0;
+            }
         }
     }
 
@@ -622,7 +643,6 @@ impl Gmc {
         gradient_defender: &mut [f64],
         gradient_adversary: &mut [f64],
     ) {
-        use rayon::prelude::*;
         let (num_def, num_adv) = (gradient_defender.len(), gradient_adversary.len());
         workspace
             .chunks

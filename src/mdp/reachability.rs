@@ -21,7 +21,9 @@
 //!    forever and make the system singular).
 //! 3. **Evaluation.** `(I - Q_sigma) x = b_sigma` on `M`, with `Q_sigma =
 //!    P_sigma` restricted to `M x M` and `b_sigma(s) = P_sigma(B | s)`, by
-//!    sparse LU ([`crate::solver::LuSolver`], residual checked).
+//!    sparse LU or, above [`crate::solver::DEFAULT_LU_LIMIT`] unknowns,
+//!    BiCGSTAB warm-started from the previous policy's values
+//!    ([`crate::solver::LinearSolver`], residual checked).
 //! 4. **Improvement.** In each state of `M` switch to an action with the
 //!    largest `sum_t P(t | s, a) x(t)` only if it beats the current action's
 //!    by more than [`IMPROVEMENT_THRESHOLD`]; keep the current action on ties.
@@ -38,7 +40,7 @@
 //! evaluation nonsingular.
 
 use crate::graph::backward_reachable;
-use crate::solver::{DEFAULT_TOLERANCE, LuSolver, SparsePattern};
+use crate::solver::{LinearSolver, SolverSettings, SparsePattern};
 
 use super::{Mdp, MdpError, Predecessors};
 
@@ -86,8 +88,9 @@ pub fn max_reachability(mdp: &Mdp, target: &[bool]) -> Result<Reachability, MdpE
     for s in (0..n).filter(|&s| almost_sure[s]) {
         strategy[s] = sure_strategy[s];
     }
+    let mut previous: Vec<f64> = almost_sure.iter().map(|&t| f64::from(t)).collect();
     for iterations in 1..=MAX_ITERATIONS {
-        let (values, solve_residual) = evaluate(mdp, &almost_sure, &maybe, &strategy)?;
+        let (values, solve_residual) = evaluate(mdp, &almost_sure, &maybe, &strategy, &previous)?;
         let (switched, gap) = improve(mdp, &values, &maybe, &mut strategy);
         if !switched {
             return Ok(Reachability {
@@ -97,6 +100,7 @@ pub fn max_reachability(mdp: &Mdp, target: &[bool]) -> Result<Reachability, MdpE
                 iterations,
             });
         }
+        previous = values;
     }
     Err(MdpError::NotConverged(MAX_ITERATIONS))
 }
@@ -157,11 +161,14 @@ fn attractor(n: usize, predecessors: &Predecessors, target: &[bool]) -> Vec<usiz
 
 /// The reachability probabilities of the policy: 1 on `target`, the solution
 /// of `(I - Q) x = b` on `maybe`, 0 elsewhere; and the solve's residual.
+/// The linear solver is chosen by size ([`SolverSettings::default`]); an
+/// iterative one starts from `start` (the previous policy's values).
 fn evaluate(
     mdp: &Mdp,
     target: &[bool],
     maybe: &[usize],
     strategy: &[usize],
+    start: &[f64],
 ) -> Result<(Vec<f64>, f64), MdpError> {
     let n = mdp.num_states();
     let mut values: Vec<f64> = target.iter().map(|&t| f64::from(t)).collect();
@@ -203,9 +210,9 @@ fn evaluate(
         row_offsets,
         columns,
     };
-    let mut solver = LuSolver::new(pattern, DEFAULT_TOLERANCE)?;
+    let mut solver = LinearSolver::new(pattern, &SolverSettings::default())?;
     solver.factorize(&coefficients)?;
-    let mut solution = vec![0.0; rhs.len()];
+    let mut solution: Vec<f64> = maybe.iter().map(|&s| start[s]).collect();
     let residual = solver.solve(&rhs, &mut solution)?.residual;
     for (&s, &x) in maybe.iter().zip(&solution) {
         values[s] = x;
