@@ -12,8 +12,7 @@ to exit, maximum resident set size; `reported_seconds` is the program's
 own `seconds`, without process start-up); the median of --repeats runs when one run takes under
 --repeat-below seconds, else one run. A run is stopped (and recorded as
 not run) when it exceeds --max-seconds or --max-gib; a method is not tried
-at larger sizes after that (a run that fails is tried again at the next
-size). Writes results/scaling.csv (one row per size,
+at larger sizes after that, nor after it failed (an error exit) at two sizes. Writes results/scaling.csv (one row per size,
 kind and solver, fitted exponents in the header) and results/scaling.svg.
 
 "One optimiser iteration" is `posg-fsc solve --automaton` (no certified
@@ -37,6 +36,7 @@ import statistics
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "common"))
@@ -79,25 +79,30 @@ def timed(command, max_seconds, max_gib):
         process = subprocess.Popen(["/usr/bin/time", "-v", *command], stdout=out, stderr=err,
                                    start_new_session=True, text=True)
         start = time.monotonic()
-        status = None
-        while True:
-            try:
-                process.wait(timeout=0.1)
-                break
-            except subprocess.TimeoutExpired:
-                pass
-            if time.monotonic() - start > max_seconds:
-                status = "timeout"
-            elif rss_kib(process.pid) > max_gib * 1024 * 1024:
-                status = "memory"
-            if status:
-                os.killpg(process.pid, signal.SIGKILL)
-                process.wait()
-                return status, time.monotonic() - start, None, ""
+        stopped = []
+        watching = threading.Event()
+
+        def watch():
+            while not watching.wait(0.05):
+                if time.monotonic() - start > max_seconds:
+                    stopped.append("timeout")
+                elif rss_kib(process.pid) > max_gib * 1024 * 1024:
+                    stopped.append("memory")
+                if stopped:
+                    os.killpg(process.pid, signal.SIGKILL)
+                    return
+
+        watcher = threading.Thread(target=watch)
+        watcher.start()
+        process.wait()
+        seconds = time.monotonic() - start
+        watching.set()
+        watcher.join()
+        if stopped:
+            return stopped[0], seconds, None, ""
         out.seek(0)
         err.seek(0)
         stdout, stderr = out.read(), err.read()
-    seconds = time.monotonic() - start
     if process.returncode != 0:
         sys.stderr.write(stderr.split("\tCommand being timed")[0][-2000:])
         return "failed", seconds, None, stdout
@@ -119,6 +124,7 @@ def measure(args):
     build()
     rows = []
     given_up = set()
+    failures = {}
     with tempfile.TemporaryDirectory() as tmp:
         hoa = os.path.join(tmp, "objective.hoa")
         with open(hoa, "w") as handle:
@@ -133,7 +139,7 @@ def measure(args):
                 for solver in SOLVERS:
                     row = {"side": side, "kind": kind, "solver": solver}
                     if (kind, solver) in given_up:
-                        row.update(status="not run (over a limit at a smaller size)", runs=0)
+                        row.update(status="not run (failed twice or over a limit at a smaller size)", runs=0)
                         rows.append(row)
                         continue
                     walls, peaks, reported = [], [], []
@@ -155,7 +161,8 @@ def measure(args):
                         if len(walls) >= args.repeats or wall >= args.repeat_below:
                             break
                     if status != "ok":
-                        if status != "failed":
+                        failures[(kind, solver)] = failures.get((kind, solver), 0) + 1
+                        if status != "failed" or failures[(kind, solver)] >= 2:
                             given_up.add((kind, solver))
                         limit = {"timeout": f"over {args.max_seconds:g} s", "memory": f"over {args.max_gib:g} GiB",
                                  "failed": f"failed after {wall:.1f} s"}[status]
