@@ -223,7 +223,7 @@ DASHES = {"lu": "", "krylov": "6,4"}
 def svg(rows, fitted, title):
     """Two log-log panels (wall seconds, peak GiB) against GMC states."""
     width, height, margin = 460, 360, 60
-    out = [f'<svg xmlns="http://www.w3.org/2000/svg" width="{2 * width}" height="{height + 70}" '
+    out = [f'<svg xmlns="http://www.w3.org/2000/svg" width="{2 * width}" height="{height + 80}" '
            'font-family="sans-serif" font-size="12">', '<rect width="100%" height="100%" fill="white"/>',
            f'<text x="{width}" y="18" text-anchor="middle" font-size="14">{title}</text>']
     done = [r for r in rows if r["status"] == "ok"]
@@ -267,13 +267,13 @@ def svg(rows, fitted, title):
     legend_y = height + 30
     for i, kind in enumerate(KINDS):
         for j, solver in enumerate(SOLVERS):
-            x = 40 + (i * 2 + j) * 150
+            x, y = 40 + i * 300, legend_y + j * 18
             slope = fitted.get((kind, solver, "wall_seconds"))
-            text = f"{kind}, {solver}" + (f" (t ~ n^{slope:.2f})" if slope is not None else "")
+            text = f"{kind}, {solver}" + (f" (t ~ n^{slope:.2f})" if slope is not None else " (not run)")
             dash = f' stroke-dasharray="{DASHES[solver]}"' if DASHES[solver] else ""
-            out.append(f'<line x1="{x}" y1="{legend_y}" x2="{x + 24}" y2="{legend_y}" stroke="{COLOURS[kind]}" '
+            out.append(f'<line x1="{x}" y1="{y}" x2="{x + 24}" y2="{y}" stroke="{COLOURS[kind]}" '
                        f'stroke-width="2"{dash}/>')
-            out.append(f'<text x="{x + 28}" y="{legend_y + 4}" font-size="10">{text}</text>')
+            out.append(f'<text x="{x + 28}" y="{y + 4}" font-size="11">{text}</text>')
     out.append("</svg>")
     with open(SVG_PATH, "w") as handle:
         handle.write("\n".join(out) + "\n")
