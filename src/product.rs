@@ -241,10 +241,12 @@ struct GradientChunk {
 }
 
 /// The buffers of [`Gmc::add_adjoint_gradient`], kept between calls: the
-/// rows with nonzero adjoint weight and one [`GradientChunk`] per chunk.
+/// rows with nonzero adjoint weight, the row scratch of the sequential
+/// pass and one [`GradientChunk`] per chunk of the parallel pass.
 #[derive(Debug, Clone, Default)]
 struct GradientWorkspace {
     rows: Vec<u32>,
+    sequential: RowWorkspace,
     chunks: Vec<GradientChunk>,
 }
 
@@ -606,22 +608,17 @@ impl Gmc {
             .rows
             .extend((0..y.len()).filter(|&m| y[m] != 0.0).map(|m| m as u32));
         if workspace.rows.len() < PARALLEL_GRADIENT_ROWS {
-            let mut work = match workspace.chunks.first_mut() {
-                Some(chunk) => std::mem::replace(&mut chunk.rows, self.row_workspace()),
-                None => self.row_workspace(),
-            };
+            let work = &mut workspace.sequential;
+            work.x_cell.resize(self.max_cells, 0.0);
             for &m in &workspace.rows {
                 let y_m = y[m as usize];
                 self.row_derivatives(
                     m as usize,
                     x,
-                    &mut work,
+                    work,
                     |k, r| gradient_defender[k] += y_m * r,
                     |k, r| gradient_adversary[k] += y_m * r,
                 );
-            }
-            if let Some(chunk) = workspace.chunks.first_mut() {
-                chunk.rows = work;
             }
         } else {
             self.parallel_adjoint_gradient(
@@ -689,7 +686,7 @@ impl Gmc {
                         *g += chunks
                             .iter()
                             .map(|chunk| part(chunk)[start + i])
-                            .fold(0.0, |sum, v| sum + v);
+                            .sum::<f64>();
                     }
                 });
         };
