@@ -420,6 +420,45 @@ pub(crate) mod test_systems {
         )
     }
 
+    /// `I - Q` for the random walk on a `side x side` grid that moves to each
+    /// of its four neighbours with probability 0.25 and leaves the system
+    /// when it steps off the grid: slowly mixing, as the games' chains are.
+    pub fn grid_walk(side: usize) -> (SparsePattern, Vec<f64>) {
+        let mut row_offsets = vec![0];
+        let mut columns = Vec::new();
+        let mut values = Vec::new();
+        for i in 0..side * side {
+            let (x, y) = (i % side, i / side);
+            let mut row = vec![(i, 1.0)];
+            if y > 0 {
+                row.push((i - side, -0.25));
+            }
+            if x > 0 {
+                row.push((i - 1, -0.25));
+            }
+            if x + 1 < side {
+                row.push((i + 1, -0.25));
+            }
+            if y + 1 < side {
+                row.push((i + side, -0.25));
+            }
+            row.sort_by_key(|&(j, _)| j);
+            for (j, v) in row {
+                columns.push(j);
+                values.push(v);
+            }
+            row_offsets.push(columns.len());
+        }
+        (
+            SparsePattern {
+                n: side * side,
+                row_offsets,
+                columns,
+            },
+            values,
+        )
+    }
+
     /// `I - Q` for a random substochastic `Q` on `n` states with about
     /// `per_row` successors per row and escape probability at least `escape`
     /// from each row (a deterministic pseudo-random generator keeps it
