@@ -149,6 +149,31 @@ fn obligation_shapes_agree_with_the_evaluator() {
     check_all(&formulas, 2000);
 }
 
+/// `G chi` with `chi` an obligation (the breakpoint construction), and
+/// formulas that are obligations without being syntactically so (the weak
+/// automaton certified against the Master Theorem automata).
+#[test]
+fn globally_obligation_and_semantic_obligation_shapes_agree_with_the_evaluator() {
+    let formulas: Vec<String> = [
+        "G (a -> (b U c))",
+        "G (F a & !b)",
+        "G ((a & F b) -> (!c U b))",
+        "G (a | G b | F c)",
+        "G (a -> X (b U (c & X b)))",
+        "G (a -> (G !b | (!b U (c & X (!b U a)))))",
+        "G ((a & X F b) -> X F (b & F c))",
+        "G (a W (b & X F c))",
+        "G ((a & !b) U (b | c | G a))",
+        "(a & !b) U (!a W b)",
+        "(a & !b) U (b | (!a W b) | G a)",
+        "F (a U G b) | G (a W X c)",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    check_all(&formulas, 3000);
+}
+
 #[test]
 fn formula_without_propositions_gives_an_automaton_over_no_propositions() {
     for (text, expected) in [

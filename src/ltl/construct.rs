@@ -136,6 +136,15 @@ pub(crate) fn weak(
     formula: &Formula,
     letters: usize,
 ) -> Result<Tgr, TranslateError> {
+    weak_with_classes(context, formula, letters).map(|(_, tgr)| tgr)
+}
+
+/// [`weak`] together with the class of every state.
+fn weak_with_classes(
+    context: &mut Context,
+    formula: &Formula,
+    letters: usize,
+) -> Result<(Vec<Node>, Tgr), TranslateError> {
     let root = context.class(formula);
     let (states, edges) = explore(root, letters, |&q, a| (context.after(q, a), 0))?;
     let mut tgr = Tgr {
@@ -164,7 +173,82 @@ pub(crate) fn weak(
             }
         }
     }
-    Ok(tgr)
+    Ok((states, tgr))
+}
+
+/// The deterministic Büchi automaton of `G chi` for an obligation formula
+/// `chi`, by the breakpoint construction of Miyano and Hayashi (1984) on the
+/// weak automaton `A` of `chi` ([`weak`]) read as a universal automaton.
+///
+/// `w |= G chi` iff for every `i` the run of `A` on `w_i w_{i+1} ...` ends in
+/// an accepting component. A state is a pair `(S, O)` of sets of states of
+/// `A`: `S` holds the states of the runs started so far (runs that meet
+/// merge, runs that reach `true` are dropped, one reaching `false` rejects
+/// for good), and `O` the runs still owed a visit to an accepting component
+/// since the last breakpoint. On a letter `a`, `S' = delta(S + {chi}, a)`
+/// and `O' = delta(O, a)` minus the states of accepting components, where
+/// an empty `O` is first refilled with `S + {chi}`. States with `O` empty are
+/// the breakpoints and carry the Büchi mark. By König's lemma a run of the
+/// product passes infinitely many breakpoints iff no run of `A` stays in
+/// non-accepting states forever; in a weak automaton that is iff every run
+/// ends in an accepting component.
+pub(crate) fn globally_obligation(
+    context: &mut Context,
+    chi: &Formula,
+    letters: usize,
+) -> Result<Tgr, TranslateError> {
+    let (classes, inner) = weak_with_classes(context, chi, letters)?;
+    let accepting = |q: u32| inner.edges[q as usize * letters].marks != 0;
+    let is_class = |q: u32, class: Node| classes[q as usize] == class;
+    let delta = |q: u32, a: Letter| inner.edges[q as usize * letters + a as usize].target;
+    // The rejecting sink: a run of `A` reached `false`.
+    let dead = (vec![u32::MAX], vec![u32::MAX]);
+    let (states, mut edges) = explore(
+        (Vec::new(), Vec::new()),
+        letters,
+        |(s, o): &(Vec<u32>, Vec<u32>), a| {
+            if s.first() == Some(&u32::MAX) {
+                return (dead.clone(), 0);
+            }
+            let mut moved: Vec<u32> = s
+                .iter()
+                .chain(std::iter::once(&0))
+                .map(|&q| delta(q, a))
+                .filter(|&q| !is_class(q, TRUE))
+                .collect();
+            if moved.iter().any(|&q| is_class(q, FALSE)) {
+                return (dead.clone(), 0);
+            }
+            moved.sort_unstable();
+            moved.dedup();
+            let mut owed: Vec<u32> = if o.is_empty() {
+                moved.clone()
+            } else {
+                o.iter().map(|&q| delta(q, a)).collect()
+            };
+            owed.retain(|&q| !accepting(q) && !is_class(q, TRUE));
+            owed.sort_unstable();
+            owed.dedup();
+            ((moved, owed), 0)
+        },
+    )?;
+    for (q, (_, o)) in states.iter().enumerate() {
+        if o.is_empty() {
+            for edge in &mut edges[q * letters..(q + 1) * letters] {
+                edge.marks = 1;
+            }
+        }
+    }
+    Ok(Tgr {
+        letters,
+        initial: 0,
+        edges,
+        num_marks: 1,
+        disjuncts: vec![Disjunct {
+            fin: 0,
+            inf: vec![0],
+        }],
+    })
 }
 
 /// One guess `(X, Y)` of the Master Theorem, by the monitors it needs.
@@ -390,4 +474,78 @@ fn used(indices: impl Iterator<Item = usize>) -> Vec<usize> {
     v.sort_unstable();
     v.dedup();
     v
+}
+
+/// Whether some word is accepted by `other` while the run of the weak
+/// automaton `weak` on it ends in a component with the given verdict
+/// (accepting or not).
+///
+/// The product of the two deterministic automata is explored; the answer is
+/// yes iff for some disjunct `Fin(L) & Inf(K_1) & ... & Inf(K_m)` of `other`
+/// a strongly connected part of the product, restricted to states whose weak
+/// component has the verdict and to transitions outside `L`, has internal
+/// transitions in every `K_j` (then a cycle through all of them is the loop
+/// of an accepted lasso, and conversely).
+fn meets(weak: &Tgr, verdict: bool, other: &Tgr) -> Result<bool, TranslateError> {
+    let letters = weak.letters;
+    let (states, edges) = explore(
+        (weak.initial as u32, other.initial as u32),
+        letters,
+        |&(w, o), a| {
+            let we = weak.edges[w as usize * letters + a as usize];
+            let oe = other.edges[o as usize * letters + a as usize];
+            ((we.target, oe.target), oe.marks)
+        },
+    )?;
+    let good: Vec<bool> = states
+        .iter()
+        .map(|&(w, _)| (weak.edges[w as usize * letters].marks != 0) == verdict)
+        .collect();
+    for d in &other.disjuncts {
+        let allowed =
+            |s: usize, e: &Edge| good[s] && good[e.target as usize] && e.marks & d.fin == 0;
+        let mut offsets = vec![0];
+        let mut targets = Vec::new();
+        for s in 0..states.len() {
+            targets.extend(
+                edges[s * letters..(s + 1) * letters]
+                    .iter()
+                    .filter(|e| allowed(s, e))
+                    .map(|e| e.target),
+            );
+            offsets.push(targets.len());
+        }
+        let components = graph::strongly_connected_components(&graph::CsrGraph {
+            offsets: &offsets,
+            targets: &targets,
+        });
+        let mut cyclic = vec![false; components.count];
+        let mut seen: Vec<MarkSet> = vec![0; components.count];
+        for s in 0..states.len() {
+            let c = components.component[s] as usize;
+            for e in &edges[s * letters..(s + 1) * letters] {
+                if allowed(s, e) && components.component[e.target as usize] as usize == c {
+                    cyclic[c] = true;
+                    seen[c] |= e.marks;
+                }
+            }
+        }
+        if (0..components.count)
+            .any(|c| cyclic[c] && d.inf.iter().all(|&m| (seen[c] >> m) & 1 == 1))
+        {
+            return Ok(true);
+        }
+    }
+    Ok(false)
+}
+
+/// Whether the weak automaton `weak` accepts exactly the words that
+/// `positive` accepts, given an automaton `negative` for the complement.
+///
+/// This certifies the weak automaton of a formula that is an obligation
+/// property without being syntactically one: it must accept no word of the
+/// negation and reject no word of the formula.
+pub(crate) fn weak_agrees(weak: &Tgr, positive: &Tgr, negative: &Tgr) -> bool {
+    matches!(meets(weak, true, negative), Ok(false))
+        && matches!(meets(weak, false, positive), Ok(false))
 }

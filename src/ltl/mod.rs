@@ -99,16 +99,63 @@ fn checked_propositions(formula: &Formula) -> Result<Vec<String>, TranslateError
     Ok(propositions)
 }
 
-/// The transition-based generalised Rabin automaton of `formula`.
-fn build(formula: &Formula, propositions: &[String]) -> Result<construct::Tgr, TranslateError> {
+/// Transition-based generalised Rabin automata for `formula`, each accepting
+/// exactly its words: the weak automaton if the formula is an obligation
+/// (syntactically, or as certified by [`construct::weak_agrees`]), else the
+/// Master Theorem automaton and, for `G chi` with `chi` an obligation, the
+/// breakpoint automaton.
+fn build(
+    formula: &Formula,
+    propositions: &[String],
+) -> Result<Vec<construct::Tgr>, TranslateError> {
     let nnf = formula::nnf(formula, true);
     let letters = 1usize << propositions.len();
     let mut context = af::Context::new(propositions);
     if formula::is_obligation(&nnf) {
-        construct::weak(&mut context, &nnf, letters)
-    } else {
-        construct::master(&mut context, &nnf, letters)
+        return Ok(vec![construct::weak(&mut context, &nnf, letters)?]);
     }
+    let master = construct::master(&mut context, &nnf, letters);
+    if let Ok(positive) = &master
+        && let Some(weak) = certified_weak(&mut context, &nnf, positive, letters)
+    {
+        return Ok(vec![weak]);
+    }
+    let mut candidates = Vec::new();
+    if let Formula::Globally(chi) = &nnf
+        && is_semantic_obligation(&mut context, chi, letters)
+    {
+        candidates.push(construct::globally_obligation(&mut context, chi, letters)?);
+    }
+    match master {
+        Ok(master) => candidates.push(master),
+        Err(e) if candidates.is_empty() => return Err(e),
+        Err(_) => {}
+    }
+    Ok(candidates)
+}
+
+/// The weak automaton of the NNF formula `nnf` if it provably accepts the
+/// same words as `positive`, an automaton for `nnf`.
+fn certified_weak(
+    context: &mut af::Context,
+    nnf: &Formula,
+    positive: &construct::Tgr,
+    letters: usize,
+) -> Option<construct::Tgr> {
+    let weak = construct::weak(context, nnf, letters).ok()?;
+    let negated = formula::nnf(nnf, false);
+    let negative = construct::master(context, &negated, letters).ok()?;
+    construct::weak_agrees(&weak, positive, &negative).then_some(weak)
+}
+
+/// Whether the NNF formula `chi` is an obligation, syntactically or by a
+/// certified weak automaton.
+fn is_semantic_obligation(context: &mut af::Context, chi: &Formula, letters: usize) -> bool {
+    formula::is_obligation(chi)
+        || construct::master(context, chi, letters)
+            .ok()
+            .and_then(|positive| certified_weak(context, chi, &positive, letters))
+            .is_some()
 }
 
 /// A deterministic, complete, state-based Rabin automaton over `2^AP`, where
@@ -116,8 +163,19 @@ fn build(formula: &Formula, propositions: &[String]) -> Result<construct::Tgr, T
 /// `i`-th), accepting exactly the infinite words that satisfy `formula`.
 pub fn translate(formula: &Formula) -> Result<Dra, TranslateError> {
     let propositions = checked_propositions(formula)?;
-    let tgr = build(formula, &propositions)?;
-    rabin::to_dra(&tgr, propositions)
+    let mut best: Option<Dra> = None;
+    for tgr in build(formula, &propositions)? {
+        let dra = rabin::to_dra(&tgr, propositions.clone())?;
+        if best
+            .as_ref()
+            .is_none_or(|b| dra.num_states() < b.num_states())
+        {
+            best = Some(dra);
+        }
+    }
+    best.ok_or(TranslateError::TooLarge {
+        limit: construct::MAX_STATES,
+    })
 }
 
 /// A deterministic, complete automaton over `2^AP` (`AP` as in
@@ -126,7 +184,7 @@ pub fn translate(formula: &Formula) -> Result<Dra, TranslateError> {
 /// infinite words that satisfy `formula`.
 pub fn translate_to_emerson_lei(formula: &Formula) -> Result<EmersonLeiAutomaton, TranslateError> {
     let propositions = checked_propositions(formula)?;
-    let tgr = build(formula, &propositions)?;
+    let tgr = build(formula, &propositions)?.swap_remove(0);
     let acceptance = Acceptance::Or(
         tgr.disjuncts
             .iter()
