@@ -149,9 +149,10 @@ fn obligation_shapes_agree_with_the_evaluator() {
     check_all(&formulas, 2000);
 }
 
-/// `G chi` with `chi` an obligation (the breakpoint construction), and
-/// formulas that are obligations without being syntactically so (the weak
-/// automaton certified against the Master Theorem automata).
+/// `G chi` with `chi` an obligation (the breakpoint construction), `G (l |
+/// G psi)` with `l` propositional (waiting for `l` to fail), and formulas
+/// that are obligations without being syntactically so (the weak automaton
+/// certified against the Master Theorem automata).
 #[test]
 fn globally_obligation_and_semantic_obligation_shapes_agree_with_the_evaluator() {
     let formulas: Vec<String> = [
@@ -167,6 +168,10 @@ fn globally_obligation_and_semantic_obligation_shapes_agree_with_the_evaluator()
         "(a & !b) U (!a W b)",
         "(a & !b) U (b | (!a W b) | G a)",
         "F (a U G b) | G (a W X c)",
+        "G (a -> G (b -> F c))",
+        "G ((a & !b) -> G (F c & (b | X a)))",
+        "G (a -> G (F b | F G c))",
+        "G (!a | b | G (a U c))",
     ]
     .iter()
     .map(|s| s.to_string())

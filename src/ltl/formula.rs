@@ -385,6 +385,17 @@ pub(crate) fn strong_release(f: Formula, g: Formula) -> Formula {
     }
 }
 
+/// Whether an NNF formula is propositional (no temporal operator): its
+/// truth depends on the first letter only.
+pub(crate) fn is_propositional(f: &Formula) -> bool {
+    match f {
+        True | False | Prop(_) => true,
+        Not(g) => is_propositional(g),
+        And(gs) | Or(gs) => gs.iter().all(is_propositional),
+        _ => false,
+    }
+}
+
 /// Whether an NNF formula is syntactically co-safety (no `G`, `R`, `W`):
 /// every satisfying word has a finite prefix all of whose extensions satisfy it.
 pub(crate) fn is_cosafety(f: &Formula) -> bool {

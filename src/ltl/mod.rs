@@ -100,10 +100,7 @@ fn checked_propositions(formula: &Formula) -> Result<Vec<String>, TranslateError
 }
 
 /// Transition-based generalised Rabin automata for `formula`, each accepting
-/// exactly its words: the weak automaton if the formula is an obligation
-/// (syntactically, or as certified by [`construct::weak_agrees`]), else the
-/// Master Theorem automaton and, for `G chi` with `chi` an obligation, the
-/// breakpoint automaton.
+/// exactly its words (see [`build_nnf`]).
 fn build(
     formula: &Formula,
     propositions: &[String],
@@ -111,20 +108,42 @@ fn build(
     let nnf = formula::nnf(formula, true);
     let letters = 1usize << propositions.len();
     let mut context = af::Context::new(propositions);
-    if formula::is_obligation(&nnf) {
-        return Ok(vec![construct::weak(&mut context, &nnf, letters)?]);
+    build_nnf(&mut context, &nnf, letters)
+}
+
+/// Transition-based generalised Rabin automata for the NNF formula `nnf`,
+/// each accepting exactly its words:
+///
+/// * the weak automaton if `nnf` is an obligation (syntactically, or as
+///   certified by [`construct::weak_agrees`]);
+/// * for `G (l | G psi)` with `l` propositional, the automata of `G psi`
+///   behind a state waiting for `l` to fail ([`construct::wait_then`]);
+/// * for `G chi` with `chi` an obligation, the breakpoint automaton
+///   ([`construct::globally_obligation`]);
+/// * the Master Theorem automaton ([`construct::master`]).
+fn build_nnf(
+    context: &mut af::Context,
+    nnf: &Formula,
+    letters: usize,
+) -> Result<Vec<construct::Tgr>, TranslateError> {
+    if formula::is_obligation(nnf) {
+        return Ok(vec![construct::weak(context, nnf, letters)?]);
     }
-    let master = construct::master(&mut context, &nnf, letters);
+    let master = construct::master(context, nnf, letters);
     if let Ok(positive) = &master
-        && let Some(weak) = certified_weak(&mut context, &nnf, positive, letters)
+        && let Some(weak) = certified_weak(context, nnf, positive, letters)
     {
         return Ok(vec![weak]);
     }
     let mut candidates = Vec::new();
-    if let Formula::Globally(chi) = &nnf
-        && is_semantic_obligation(&mut context, chi, letters)
-    {
-        candidates.push(construct::globally_obligation(&mut context, chi, letters)?);
+    if let Formula::Globally(chi) = nnf {
+        if let Some((l, psi)) = waiting_form(chi) {
+            for then in build_nnf(context, &formula::globally(psi), letters)? {
+                candidates.push(construct::wait_then(context, &l, &then));
+            }
+        } else if is_semantic_obligation(context, chi, letters) {
+            candidates.push(construct::globally_obligation(context, chi, letters)?);
+        }
     }
     match master {
         Ok(master) => candidates.push(master),
@@ -132,6 +151,28 @@ fn build(
         Err(_) => {}
     }
     Ok(candidates)
+}
+
+/// `(l, psi)` if `chi` is `l | G psi` with `l` propositional.
+fn waiting_form(chi: &Formula) -> Option<(Formula, Formula)> {
+    let Formula::Or(parts) = chi else {
+        return None;
+    };
+    let at = parts
+        .iter()
+        .position(|p| matches!(p, Formula::Globally(_)))?;
+    let Formula::Globally(psi) = &parts[at] else {
+        return None;
+    };
+    let rest: Vec<Formula> = parts
+        .iter()
+        .enumerate()
+        .filter(|&(i, _)| i != at)
+        .map(|(_, p)| p.clone())
+        .collect();
+    rest.iter()
+        .all(formula::is_propositional)
+        .then(|| (formula::or(rest), (**psi).clone()))
 }
 
 /// The weak automaton of the NNF formula `nnf` if it provably accepts the
