@@ -149,8 +149,10 @@ fn obligation_shapes_agree_with_the_evaluator() {
     check_all(&formulas, 2000);
 }
 
-/// `G chi` with `chi` an obligation (the breakpoint construction), `G (l |
-/// G psi)` with `l` propositional (waiting for `l` to fail), and formulas
+/// `G chi` with `chi` an obligation, also `G (l | (chi W r))` with `l`, `r`
+/// propositional (the breakpoint construction), `G (l | G psi)` with `l`
+/// propositional (waiting for `l` to fail), `f U (g | G h)` where `f`
+/// implies `h` (a simplification rule), and formulas
 /// that are obligations without being syntactically so (the weak automaton
 /// certified against the Master Theorem automata).
 #[test]
@@ -172,6 +174,9 @@ fn globally_obligation_and_semantic_obligation_shapes_agree_with_the_evaluator()
         "G ((a & !b) -> G (F c & (b | X a)))",
         "G (a -> G (F b | F G c))",
         "G (!a | b | G (a U c))",
+        "G (a -> ((b -> X (!c U (b & F a))) W c))",
+        "G ((a & X F b) -> ((b | X G !c) U (c | G (b | X G !c))))",
+        "a U (c | G (a & X F b)) | (a & !b) U (c | G a)",
     ]
     .iter()
     .map(|s| s.to_string())

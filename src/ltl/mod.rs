@@ -118,8 +118,9 @@ fn build(
 ///   certified by [`construct::weak_agrees`]);
 /// * for `G (l | G psi)` with `l` propositional, the automata of `G psi`
 ///   behind a state waiting for `l` to fail ([`construct::wait_then`]);
-/// * for `G chi` with `chi` an obligation, the breakpoint automaton
-///   ([`construct::globally_obligation`]);
+/// * for `G chi` with `chi` an obligation or `chi = l | (psi W r)` with `l`
+///   and `r` propositional and `psi` an obligation, the breakpoint automaton
+///   ([`construct::guarded_globally`]);
 /// * the Master Theorem automaton ([`construct::master`]).
 fn build_nnf(
     context: &mut af::Context,
@@ -141,8 +142,21 @@ fn build_nnf(
             for then in build_nnf(context, &formula::globally(psi), letters)? {
                 candidates.push(construct::wait_then(context, &l, &then));
             }
-        } else if is_semantic_obligation(context, chi, letters) {
-            candidates.push(construct::globally_obligation(context, chi, letters)?);
+        } else {
+            if let Some((l, psi, r)) = guarded_form(chi)
+                && is_semantic_obligation(context, &psi, letters)
+            {
+                candidates.push(construct::guarded_globally(context, &l, &psi, &r, letters)?);
+            }
+            if is_semantic_obligation(context, chi, letters) {
+                candidates.push(construct::guarded_globally(
+                    context,
+                    &Formula::False,
+                    chi,
+                    &Formula::False,
+                    letters,
+                )?);
+            }
         }
     }
     match master {
@@ -151,6 +165,30 @@ fn build_nnf(
         Err(_) => {}
     }
     Ok(candidates)
+}
+
+/// `(l, psi, r)` if `chi` is `l | (psi W r)` with `l` and `r` propositional
+/// (`l` may be `false`).
+fn guarded_form(chi: &Formula) -> Option<(Formula, Formula, Formula)> {
+    let parts = match chi {
+        Formula::Or(parts) => parts.as_slice(),
+        other => std::slice::from_ref(other),
+    };
+    let at = parts
+        .iter()
+        .position(|p| matches!(p, Formula::WeakUntil(_, r) if formula::is_propositional(r)))?;
+    let Formula::WeakUntil(psi, r) = &parts[at] else {
+        return None;
+    };
+    let rest: Vec<Formula> = parts
+        .iter()
+        .enumerate()
+        .filter(|&(i, _)| i != at)
+        .map(|(_, p)| p.clone())
+        .collect();
+    rest.iter()
+        .all(formula::is_propositional)
+        .then(|| (formula::or(rest), (**psi).clone(), (**r).clone()))
 }
 
 /// `(l, psi)` if `chi` is `l | G psi` with `l` propositional.
