@@ -41,7 +41,6 @@ mod construct;
 mod formula;
 mod lasso;
 mod parser;
-mod rabin;
 
 pub use formula::Formula;
 pub use lasso::{LassoError, holds_on_lasso};
@@ -50,7 +49,10 @@ pub use parser::{ParseError, parse};
 use thiserror::Error;
 
 use crate::automaton::emerson_lei::Acceptance;
-use crate::automaton::{AutomatonError, Dra, EmersonLeiAutomaton, MAX_PROPOSITIONS};
+use crate::automaton::{
+    AutomatonError, Dra, EmersonLeiAutomaton, MAX_PROPOSITIONS, minimise_with_free_start,
+    to_state_based_rabin,
+};
 
 /// Why a formula could not be translated.
 #[derive(Debug, Error, Clone, PartialEq, Eq)]
@@ -240,11 +242,17 @@ fn is_semantic_obligation(context: &mut af::Context, chi: &Formula, letters: usi
 /// A deterministic, complete, state-based Rabin automaton over `2^AP`, where
 /// `AP` is `formula.propositions()` (sorted; bit `i` of a letter is the
 /// `i`-th), accepting exactly the infinite words that satisfy `formula`.
+///
+/// Every automaton [`build_nnf`] produces is converted by
+/// [`crate::automaton::to_state_based_rabin`] and minimised by
+/// [`crate::automaton::minimise_with_free_start`]; the one with the fewest
+/// states is returned.
 pub fn translate(formula: &Formula) -> Result<Dra, TranslateError> {
     let propositions = checked_propositions(formula)?;
     let mut best: Option<Dra> = None;
     for tgr in build(formula, &propositions)? {
-        let dra = rabin::to_dra(&tgr, propositions.clone())?;
+        let automaton = to_emerson_lei(tgr, propositions.clone())?;
+        let dra = minimise_with_free_start(&to_state_based_rabin(&automaton)?);
         if best
             .as_ref()
             .is_none_or(|b| dra.num_states() < b.num_states())
@@ -260,10 +268,20 @@ pub fn translate(formula: &Formula) -> Result<Dra, TranslateError> {
 /// A deterministic, complete automaton over `2^AP` (`AP` as in
 /// [`translate`]) with transition-based marks and a generalised Rabin
 /// condition `OR_i (Fin(m_i) & AND_j Inf(m_ij))`, accepting exactly the
-/// infinite words that satisfy `formula`.
+/// infinite words that satisfy `formula` (the first automaton
+/// [`build_nnf`] produces).
 pub fn translate_to_emerson_lei(formula: &Formula) -> Result<EmersonLeiAutomaton, TranslateError> {
     let propositions = checked_propositions(formula)?;
     let tgr = build(formula, &propositions)?.swap_remove(0);
+    to_emerson_lei(tgr, propositions)
+}
+
+/// `tgr` as an automaton over `propositions` with its generalised Rabin
+/// condition written as an Emerson-Lei formula.
+fn to_emerson_lei(
+    tgr: construct::Tgr,
+    propositions: Vec<String>,
+) -> Result<EmersonLeiAutomaton, TranslateError> {
     let acceptance = Acceptance::Or(
         tgr.disjuncts
             .iter()
