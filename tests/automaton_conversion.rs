@@ -3,9 +3,9 @@
 //! random acceptance formulas and random lasso words.
 
 use posg_fsc::automaton::emerson_lei::Edge;
+use posg_fsc::automaton::minimise::minimise_with_free_start;
 use posg_fsc::automaton::{
-    Acceptance, Dra, EmersonLeiAutomaton, Letter, RabinPair, minimise, minimise_with_free_start,
-    to_state_based_rabin,
+    Acceptance, Dra, EmersonLeiAutomaton, Letter, RabinPair, minimise, to_state_based_rabin,
 };
 use proptest::prelude::*;
 

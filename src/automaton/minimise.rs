@@ -5,7 +5,9 @@
 //! (Moore's algorithm). The quotient is bisimilar to the input, so it accepts
 //! the same language. It is not in general the smallest Rabin automaton for
 //! the language (that problem is NP-hard), only the smallest one with the
-//! same pairs up to bisimulation.
+//! same pairs up to bisimulation. [`minimise_with_free_start`] goes one step
+//! beyond bisimulation: an initial state that no transition enters is
+//! replaced by a state with the same successors.
 
 use rustc_hash::FxHashMap;
 

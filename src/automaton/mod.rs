@@ -12,8 +12,7 @@
 //!   HOA input and the LTL translator produce it; its conversion to a `Dra`
 //!   lives in [`emerson_lei`].
 //!
-//! [`minimise()`] shrinks a `Dra` by partition refinement
-//! ([`minimise_with_free_start`] also lets a transient initial state go), and [`hoa`] reads
+//! [`minimise()`] shrinks a `Dra` by partition refinement, and [`hoa`] reads
 //! and writes both kinds in the HOA v1 format.
 //!
 //! Letters are bit sets: bit `i` of a [`Letter`] is set iff the automaton's
@@ -27,7 +26,7 @@ pub mod minimise;
 
 pub use emerson_lei::{Acceptance, EmersonLeiAutomaton, MarkSet, to_state_based_rabin};
 pub use hoa::{HoaError, parse_hoa, read_hoa_dra, write_hoa};
-pub use minimise::{minimise, minimise_with_free_start};
+pub use minimise::minimise;
 
 use thiserror::Error;
 

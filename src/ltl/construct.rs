@@ -1,7 +1,12 @@
-//! The two constructions of deterministic automata from NNF formulas:
+//! The constructions of deterministic automata from NNF formulas:
 //!
 //! * [`weak`]: for obligation formulas, the automaton of `af`-classes with a
-//!   verdict per strongly connected component;
+//!   verdict per strongly connected component, and [`weak_agrees`], which
+//!   certifies it for formulas that are not syntactically obligations;
+//! * [`guarded_globally`]: for `G (l | (chi W r))` with `chi` an obligation,
+//!   the breakpoint automaton over copies of the weak automaton of `chi`;
+//! * [`wait_then`]: for `G (l | G psi)`, a waiting state in front of an
+//!   automaton of `G psi`;
 //! * [`master`]: for every formula, the product of the `af`-tracker with the
 //!   co-Büchi and Büchi monitors of the Master Theorem, with a transition-based
 //!   generalised Rabin condition (one disjunct per guess `(X, Y)`).

@@ -13,27 +13,43 @@
 //! # Construction
 //!
 //! The formula is put in negation normal form and simplified with
-//! Spot-style rewriting rules. Then:
+//! Spot-style rewriting rules (among them `f U (g | G h) = (f U g) | G h`
+//! when `f` implies `h`, which is `f W g` for `h = f`). Then one or more
+//! candidate automata with transition-based generalised Rabin acceptance
+//! are built:
 //!
 //! * **obligation formulas** (Boolean combinations of syntactic safety and
 //!   co-safety formulas, which covers pure safety and co-safety) get the
 //!   *weak* automaton whose states are the propositional equivalence classes
 //!   `af(phi, u)` of the "after" function, with one verdict per strongly
 //!   connected component, found by evaluating the state's formula on the
-//!   word of one cycle;
-//! * **all other formulas** get the construction of Esparza, Křetínský and
-//!   Sickert, "A Unified Translation of Linear Temporal Logic to
-//!   ω-Automata", J. ACM 67(6), 2020 (the "Master Theorem"): the product of
-//!   the `af`-tracker with one co-Büchi or Büchi monitor per needed formula
-//!   and a transition-based generalised Rabin condition with one disjunct
-//!   per guess `(X, Y)` of the mu- and nu-subformulas that hold infinitely
+//!   word of one cycle. A formula that is not syntactically an obligation
+//!   gets it too if it is *certified*: the products of the weak automaton
+//!   with the Master Theorem automata of the formula and of its negation
+//!   have no accepting lasso where they should disagree;
+//! * **`G chi` for an obligation `chi`**, and more generally `G (l | (chi W
+//!   r))` for propositional `l`, `r`, gets a deterministic Büchi automaton
+//!   by the breakpoint construction of Miyano and Hayashi, "Alternating
+//!   finite automata on ω-words", TCS 32, 1984, applied to the copies of the
+//!   weak automaton of `chi` started at every position where a past monitor
+//!   (`l` failed since the last `r`) requires `chi`;
+//! * **`G (l | G psi)`** for propositional `l` (`l W G psi`) gets a state
+//!   that waits for `l` to fail in front of the automata of `G psi`;
+//! * **every other formula**, and the two previous kinds as a further
+//!   candidate, gets the construction of Esparza, Křetínský and Sickert, "A
+//!   Unified Translation of Linear Temporal Logic to ω-Automata", J. ACM
+//!   67(6), 2020 (the "Master Theorem"): the product of the `af`-tracker
+//!   with one co-Büchi or Büchi monitor per needed formula and a
+//!   transition-based generalised Rabin condition with one disjunct per
+//!   guess `(X, Y)` of the mu- and nu-subformulas that hold infinitely
 //!   often and almost always.
 //!
 //! Propositional equivalence classes are reduced ordered BDDs over the
-//! formula's temporal subformulas, so equivalent states coincide. The
-//! generalised Rabin automaton is turned into a state-based Rabin automaton
-//! (marks moved onto states, counters for generalised pairs) and minimised by
-//! partition refinement.
+//! formula's temporal subformulas, so equivalent states coincide. Every
+//! candidate is turned into a state-based Rabin automaton by
+//! [`crate::automaton::to_state_based_rabin`] and minimised by
+//! [`crate::automaton::minimise::minimise_with_free_start`]; the smallest
+//! one is kept.
 
 mod af;
 mod bdd;
@@ -50,7 +66,7 @@ use thiserror::Error;
 
 use crate::automaton::emerson_lei::Acceptance;
 use crate::automaton::{
-    AutomatonError, Dra, EmersonLeiAutomaton, MAX_PROPOSITIONS, minimise_with_free_start,
+    AutomatonError, Dra, EmersonLeiAutomaton, MAX_PROPOSITIONS, minimise::minimise_with_free_start,
     to_state_based_rabin,
 };
 
@@ -243,9 +259,9 @@ fn is_semantic_obligation(context: &mut af::Context, chi: &Formula, letters: usi
 /// `AP` is `formula.propositions()` (sorted; bit `i` of a letter is the
 /// `i`-th), accepting exactly the infinite words that satisfy `formula`.
 ///
-/// Every automaton [`build_nnf`] produces is converted by
+/// Every candidate automaton of the module's construction is converted by
 /// [`crate::automaton::to_state_based_rabin`] and minimised by
-/// [`crate::automaton::minimise_with_free_start`]; the one with the fewest
+/// [`crate::automaton::minimise::minimise_with_free_start`]; the one with the fewest
 /// states is returned.
 pub fn translate(formula: &Formula) -> Result<Dra, TranslateError> {
     let propositions = checked_propositions(formula)?;
@@ -268,8 +284,8 @@ pub fn translate(formula: &Formula) -> Result<Dra, TranslateError> {
 /// A deterministic, complete automaton over `2^AP` (`AP` as in
 /// [`translate`]) with transition-based marks and a generalised Rabin
 /// condition `OR_i (Fin(m_i) & AND_j Inf(m_ij))`, accepting exactly the
-/// infinite words that satisfy `formula` (the first automaton
-/// [`build_nnf`] produces).
+/// infinite words that satisfy `formula` (the first candidate automaton of
+/// the module's construction).
 pub fn translate_to_emerson_lei(formula: &Formula) -> Result<EmersonLeiAutomaton, TranslateError> {
     let propositions = checked_propositions(formula)?;
     let tgr = build(formula, &propositions)?.swap_remove(0);
