@@ -16,7 +16,7 @@ use rustc_hash::FxHashMap;
 use super::TranslateError;
 use super::af::{self, Context, Kind};
 use super::bdd::{FALSE, Node, TRUE};
-use super::formula::Formula;
+use super::formula::{self, Formula};
 use crate::automaton::emerson_lei::Edge;
 use crate::automaton::{Letter, MarkSet};
 use crate::graph::{self, Digraph};
@@ -336,7 +336,7 @@ pub(crate) fn master(
     let mut safety_initial: Vec<Node> = Vec::new();
     let mut recurrent: Vec<Node> = Vec::new();
     let mut persistent: Vec<Node> = Vec::new();
-    let mut guesses = Vec::new();
+    let mut found: Vec<Found> = Vec::new();
     for x_bits in 0u32..1 << mu.len() {
         let x: Vec<Formula> = select(&mu, x_bits);
         let start = context.substitute(root, &|f| af::nu_under(f, &x));
@@ -347,19 +347,26 @@ pub(crate) fn master(
                 recurrent: Vec::new(),
                 persistent: Vec::new(),
             };
+            let mut infinitely_often = Vec::new();
+            let mut almost_always = TRUE;
             for psi in &x {
-                match context.class(&af::mu_under(psi, &y)) {
+                let c = af::mu_under(psi, &y);
+                match context.class(&c) {
                     FALSE => continue 'guess,
                     TRUE => {}
-                    c => guess.recurrent.push(index_of(&mut recurrent, c)),
+                    class => guess.recurrent.push(index_of(&mut recurrent, class)),
                 }
+                infinitely_often.push(context.class(&recurrence_core(&c)));
             }
             for psi in &y {
-                match context.class(&af::nu_under(psi, &x)) {
+                let s = af::nu_under(psi, &x);
+                match context.class(&s) {
                     FALSE => continue 'guess,
                     TRUE => {}
-                    s => guess.persistent.push(index_of(&mut persistent, s)),
+                    class => guess.persistent.push(index_of(&mut persistent, class)),
                 }
+                let core = context.class(&persistence_core(&s));
+                almost_always = context.bdd.and(almost_always, core);
             }
             if start != TRUE {
                 let i = index_of(&mut safety_sets, x.clone());
@@ -372,9 +379,26 @@ pub(crate) fn master(
             guess.recurrent.dedup();
             guess.persistent.sort_unstable();
             guess.persistent.dedup();
-            guesses.push(guess);
+            found.push(Found {
+                x_bits,
+                y_bits,
+                infinitely_often,
+                almost_always,
+                guess,
+            });
         }
     }
+    let dominated: Vec<bool> = (0..found.len())
+        .map(|i| {
+            (0..found.len()).any(|j| j != i && dominates(context, &mu, &nu, &found[j], &found[i]))
+        })
+        .collect();
+    let mut guesses: Vec<Guess> = found
+        .into_iter()
+        .zip(dominated)
+        .filter(|(_, d)| !d)
+        .map(|(f, _)| f.guess)
+        .collect();
     guesses.sort();
     guesses.dedup();
     let strongest: Vec<Guess> = guesses
@@ -479,6 +503,82 @@ pub(crate) fn master(
         num_marks: num_marks as u32,
         disjuncts,
     })
+}
+
+/// A guess `(X, Y)` (as bit sets over the candidates) with its monitors and
+/// what its conditions (2) and (3) say: `GF c` for every class `c` of
+/// `infinitely_often`, and `FG almost_always`.
+struct Found {
+    x_bits: u32,
+    y_bits: u32,
+    infinitely_often: Vec<Node>,
+    almost_always: Node,
+    guess: Guess,
+}
+
+/// Whether every word satisfying the conditions of guess `stronger` also
+/// satisfies those of `weaker`, so that `stronger`'s disjunct is
+/// redundant: `X ⊆ X'`, `Y ⊆ Y'` (then condition (1) and the conditions
+/// for the common members are monotone), and for every `psi` in `X' \ X`
+/// some `GF c` of `stronger` implies `GF (psi[Y']^mu)`, for every `psi` in
+/// `Y' \ Y` the `FG s` of `stronger` implies `FG (psi[X']_nu)`; `GF c`
+/// implies `GF c'` if `c` propositionally implies `c'`, up to
+/// [`recurrence_core`], dually for `FG`.
+fn dominates(
+    context: &mut Context,
+    mu: &[Formula],
+    nu: &[Formula],
+    weaker: &Found,
+    stronger: &Found,
+) -> bool {
+    if stronger.x_bits & !weaker.x_bits != 0 || stronger.y_bits & !weaker.y_bits != 0 {
+        return false;
+    }
+    let x = select(mu, weaker.x_bits);
+    let y = select(nu, weaker.y_bits);
+    let implies = |context: &mut Context, a: Node, b: Node| {
+        let not_b = context.bdd.not(b);
+        context.bdd.and(a, not_b) == FALSE
+    };
+    for psi in select(mu, weaker.x_bits & !stronger.x_bits) {
+        let c = context.class(&recurrence_core(&af::mu_under(&psi, &y)));
+        if !stronger
+            .infinitely_often
+            .iter()
+            .any(|&d| implies(context, d, c))
+        {
+            return false;
+        }
+    }
+    for psi in select(nu, weaker.y_bits & !stronger.y_bits) {
+        let s = context.class(&persistence_core(&af::nu_under(&psi, &x)));
+        if !implies(context, stronger.almost_always, s) {
+            return false;
+        }
+    }
+    true
+}
+
+/// A formula `c'` with `GF c' = GF c`: `GF F g = GF X g = GF (f U g) = GF g`,
+/// `GF (f M g) = GF (f & g)`, and `GF` distributes over `|`.
+fn recurrence_core(c: &Formula) -> Formula {
+    match c {
+        Formula::Finally(g) | Formula::Next(g) | Formula::Until(_, g) => recurrence_core(g),
+        Formula::StrongRelease(f, g) => formula::and(vec![(**f).clone(), (**g).clone()]),
+        Formula::Or(gs) => formula::or(gs.iter().map(recurrence_core).collect()),
+        other => other.clone(),
+    }
+}
+
+/// A formula `s'` with `FG s' = FG s`: `FG G g = FG X g = FG (f R g) = FG
+/// g`, `FG (f W g) = FG (f | g)`, and `FG` distributes over `&`.
+fn persistence_core(s: &Formula) -> Formula {
+    match s {
+        Formula::Globally(g) | Formula::Next(g) | Formula::Release(_, g) => persistence_core(g),
+        Formula::WeakUntil(f, g) => formula::or(vec![(**f).clone(), (**g).clone()]),
+        Formula::And(gs) => formula::and(gs.iter().map(persistence_core).collect()),
+        other => other.clone(),
+    }
 }
 
 fn select(items: &[Formula], bits: u32) -> Vec<Formula> {
