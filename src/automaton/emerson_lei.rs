@@ -223,12 +223,16 @@ pub const MAX_TABLE_ENTRIES: usize = 1 << 26;
 ///    formula or of a subformula) would exceed [`MAX_DNF_DISJUNCTS`]
 ///    disjuncts, the conversion fails.
 /// 2. **Marks onto states.** Only the literals some pair mentions are
-///    *relevant*. If every state's outgoing transitions satisfy the same
-///    relevant literals (state-based acceptance in disguise), a state is
-///    labelled by them. Otherwise a state is split by the relevant literals
-///    of the transition entering it (`(q, M)`, the initial state with no
-///    literal), which are then visited infinitely often iff the transitions
-///    are, one step later.
+///    *relevant*. A state whose outgoing transitions all satisfy the same
+///    relevant literals is *uniform* and labelled by them (state-based
+///    acceptance in disguise): every visit is followed by such a transition.
+///    The transitions leaving a non-uniform state are represented at their
+///    targets instead: a state is split by the relevant literals of the
+///    transition entering it when that transition's source is not uniform
+///    (`(q, M)`; the initial state has no entering transition). So each
+///    transition of a run is represented by a state visited just before or
+///    after it, and every label literal by an adjacent transition: a literal
+///    is seen on states infinitely often iff on transitions.
 /// 3. **Degeneralisation.** A pair with `k >= 2` `Inf` literals gets a
 ///    counter `c` in `0..k` that a transition advances past every
 ///    `I_c, I_{c+1}, ...` it lies in; when it passes `k` it restarts at 0 and
@@ -252,21 +256,25 @@ pub fn to_state_based_rabin(aut: &EmersonLeiAutomaton) -> Result<Dra, AutomatonE
     let relevant: Literals = pairs.iter().fold(0, |acc, p| {
         p.infs.iter().fold(acc | p.fin, |acc, l| acc | l)
     });
-    let uniform =
-        (0..n).all(|q| (1..letters).all(|a| (satisfied(q, a) ^ satisfied(q, 0)) & relevant == 0));
+    let uniform: Vec<bool> = (0..n)
+        .map(|q| (1..letters).all(|a| (satisfied(q, a) ^ satisfied(q, 0)) & relevant == 0))
+        .collect();
     let counted: Vec<usize> = (0..pairs.len())
         .filter(|&i| pairs[i].infs.len() >= 2)
         .collect();
-    let label_of = |q: usize, incoming: Literals| {
-        if uniform {
-            satisfied(q, 0) & relevant
-        } else {
-            incoming & relevant
-        }
+    // The relevant literals of the transitions leaving `q` if they agree,
+    // and of the entering transition if its source's do not.
+    let label_of = |source: Option<usize>, q: usize, seen: Literals| {
+        let own = if uniform[q] { satisfied(q, 0) } else { 0 };
+        let entering = match source {
+            Some(p) if !uniform[p] => seen,
+            _ => 0,
+        };
+        (own | entering) & relevant
     };
     let initial = State {
         q: aut.initial() as u32,
-        label: label_of(aut.initial(), 0),
+        label: label_of(None, aut.initial(), 0),
         counters: vec![0; counted.len()],
         completed: vec![false; counted.len()],
     };
@@ -299,7 +307,7 @@ pub fn to_state_based_rabin(aut: &EmersonLeiAutomaton) -> Result<Dra, AutomatonE
             let target = aut.edges[q * letters + letter].target as usize;
             let key = State {
                 q: target as u32,
-                label: label_of(target, seen),
+                label: label_of(Some(q), target, seen),
                 counters,
                 completed,
             };
