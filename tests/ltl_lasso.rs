@@ -32,6 +32,36 @@ fn random_lassos(
         .collect()
 }
 
+/// Random lasso words over `propositions` propositions, `|u| <= 8`,
+/// `1 <= |v| <= 8`, in which each proposition holds with probability 1/4:
+/// sparse events exercise the response and precedence patterns better
+/// than uniform letters.
+fn sparse_lassos(
+    rng: &mut ChaCha8Rng,
+    propositions: usize,
+    count: usize,
+) -> Vec<(Vec<Letter>, Vec<Letter>)> {
+    let word = |rng: &mut ChaCha8Rng, length: usize| -> Vec<Letter> {
+        (0..length)
+            .map(|_| {
+                (0..propositions).fold(0, |letter, bit| {
+                    if rng.random_bool(0.25) {
+                        letter | (1 << bit)
+                    } else {
+                        letter
+                    }
+                })
+            })
+            .collect()
+    };
+    (0..count)
+        .map(|_| {
+            let (u, v) = (rng.random_range(0..=8), rng.random_range(1..=8));
+            (word(rng, u), word(rng, v))
+        })
+        .collect()
+}
+
 /// Checks the automata of `formula` and its negation against the evaluator
 /// on `words`; returns a description of the first disagreement.
 fn check(formula: &Formula, words: &[(Vec<Letter>, Vec<Letter>)]) -> Result<(), String> {
@@ -121,6 +151,20 @@ fn dac_patterns_agree_with_the_evaluator() {
     let patterns = shared_formulas("dac-patterns.ltl");
     assert_eq!(patterns.len(), 55);
     check_all(&patterns, 300);
+}
+
+#[test]
+fn dac_patterns_agree_with_the_evaluator_on_sparse_words() {
+    let mut rng = ChaCha8Rng::seed_from_u64(1998);
+    let failures: Vec<String> = shared_formulas("dac-patterns.ltl")
+        .iter()
+        .filter_map(|text| {
+            let formula = ltl::parse(text).unwrap_or_else(|e| panic!("{text}: {e}"));
+            let words = sparse_lassos(&mut rng, formula.propositions().len(), 2000);
+            check(&formula, &words).err()
+        })
+        .collect();
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 
 #[test]
