@@ -33,8 +33,8 @@ use faer::{MatMut, MatRef, Par};
 
 use super::ilu::{IluPreconditioner, MatrixOperator};
 use super::{
-    Direction, Ilu0, SolveReport, SolverError, SolverSettings, SparsePattern, accept,
-    check_solve_inputs, check_values,
+    Direction, FlushDenormals, Ilu0, SolveReport, SolverError, SolverSettings, SparsePattern,
+    accept, check_solve_inputs, check_values,
 };
 
 /// BiCGSTAB aims at this fraction of the tolerance.
@@ -48,15 +48,45 @@ pub const ROUND_ITERATIONS: usize = 200;
 
 /// Preconditioned BiCGSTAB for `A x = b` and `A^T y = c` with a fixed pattern.
 pub struct KrylovSolver {
+    system: System,
+    forward: Workspace,
+    transposed: Workspace,
+}
+
+/// What both directions share: `A` and its ILU(0).
+struct System {
     pattern: SparsePattern,
     values: Vec<f64>,
     ilu: Ilu0,
     factorised: bool,
-    workspace: MemBuffer,
-    residual_work: Vec<f64>,
-    best: Vec<f64>,
     tolerance: f64,
     max_iterations: usize,
+}
+
+/// The memory of one direction's solves: faer's BiCGSTAB workspace, a
+/// buffer for `A^T y`, and the best iterate so far.
+struct Workspace {
+    bicgstab: MemBuffer,
+    product: Vec<f64>,
+    best: Vec<f64>,
+}
+
+impl Workspace {
+    fn new(system: &System, direction: Direction) -> Result<Self, SolverError> {
+        let n = system.pattern.n;
+        let scratch = bicgstab_scratch(
+            IdentityPrecond { dim: n },
+            system.preconditioner(direction),
+            system.operator(direction),
+            1,
+            Par::Seq,
+        );
+        Ok(Self {
+            bicgstab: MemBuffer::try_new(scratch).map_err(|_| SolverError::OutOfMemory)?,
+            product: vec![0.0; n],
+            best: vec![0.0; n],
+        })
+    }
 }
 
 impl KrylovSolver {
@@ -65,85 +95,118 @@ impl KrylovSolver {
     pub fn new(pattern: SparsePattern, settings: &SolverSettings) -> Result<Self, SolverError> {
         settings.check()?;
         pattern.check()?;
-        let ilu = Ilu0::new(&pattern)?;
-        let n = pattern.n;
-        let values = vec![0.0; pattern.nnz()];
-        let scratch = {
-            let operator = MatrixOperator {
-                pattern: &pattern,
-                values: &values,
-                direction: Direction::Forward,
-            };
-            let preconditioner = IluPreconditioner {
-                pattern: &pattern,
-                ilu: &ilu,
-                direction: Direction::Forward,
-            };
-            bicgstab_scratch(
-                IdentityPrecond { dim: n },
-                preconditioner,
-                operator,
-                1,
-                Par::Seq,
-            )
-        };
-        let workspace = MemBuffer::try_new(scratch).map_err(|_| SolverError::OutOfMemory)?;
-        Ok(Self {
+        let system = System {
+            ilu: Ilu0::new(&pattern)?,
+            values: vec![0.0; pattern.nnz()],
             pattern,
-            values,
-            ilu,
             factorised: false,
-            workspace,
-            residual_work: vec![0.0; n],
-            best: vec![0.0; n],
             tolerance: settings.tolerance,
             max_iterations: settings.max_iterations,
+        };
+        Ok(Self {
+            forward: Workspace::new(&system, Direction::Forward)?,
+            transposed: Workspace::new(&system, Direction::Transposed)?,
+            system,
         })
     }
 
     /// The pattern of `A`.
     pub fn pattern(&self) -> &SparsePattern {
-        &self.pattern
+        &self.system.pattern
     }
 
     /// Takes the values of `A` and computes its ILU(0) preconditioner.
     pub fn factorize(&mut self, values: &[f64]) -> Result<(), SolverError> {
-        check_values(&self.pattern, values)?;
-        self.factorised = false;
-        self.values.copy_from_slice(values);
-        self.ilu.factorize(&self.pattern, &self.values)?;
-        self.factorised = true;
+        let system = &mut self.system;
+        check_values(&system.pattern, values)?;
+        system.factorised = false;
+        system.values.copy_from_slice(values);
+        system.ilu.factorize(&system.pattern, &system.values)?;
+        system.factorised = true;
         Ok(())
     }
 
-    /// Solves `A x = b` starting from `x` (a non-finite start is replaced by 0).
+    /// Solves `A x = b` starting from `x` (see the module documentation for
+    /// starts that are zero or not finite).
     pub fn solve(&mut self, b: &[f64], x: &mut [f64]) -> Result<SolveReport, SolverError> {
-        self.solve_checked(b, x, Direction::Forward)
+        self.system
+            .solve(&mut self.forward, b, x, Direction::Forward)
     }
 
-    /// Solves `A^T y = c` starting from `y` (a non-finite start is replaced by 0).
+    /// Solves `A^T y = c` starting from `y`, as [`Self::solve`].
     pub fn solve_transpose(
         &mut self,
         c: &[f64],
         y: &mut [f64],
     ) -> Result<SolveReport, SolverError> {
-        self.solve_checked(c, y, Direction::Transposed)
+        self.system
+            .solve(&mut self.transposed, c, y, Direction::Transposed)
     }
 
-    fn true_residual(&mut self, rhs: &[f64], solution: &[f64], direction: Direction) -> f64 {
+    /// [`Self::solve`] and [`Self::solve_transpose`] at once, on two threads.
+    pub fn solve_both(
+        &mut self,
+        b: &[f64],
+        x: &mut [f64],
+        c: &[f64],
+        y: &mut [f64],
+    ) -> (
+        Result<SolveReport, SolverError>,
+        Result<SolveReport, SolverError>,
+    ) {
+        let system = &self.system;
+        let (forward, transposed) = (&mut self.forward, &mut self.transposed);
+        rayon::join(
+            || {
+                let _flush = FlushDenormals::on_this_thread();
+                system.solve(forward, b, x, Direction::Forward)
+            },
+            || {
+                let _flush = FlushDenormals::on_this_thread();
+                system.solve(transposed, c, y, Direction::Transposed)
+            },
+        )
+    }
+}
+
+impl System {
+    fn operator(&self, direction: Direction) -> MatrixOperator<'_> {
+        MatrixOperator {
+            pattern: &self.pattern,
+            values: &self.values,
+            direction,
+        }
+    }
+
+    fn preconditioner(&self, direction: Direction) -> IluPreconditioner<'_> {
+        IluPreconditioner {
+            pattern: &self.pattern,
+            ilu: &self.ilu,
+            direction,
+        }
+    }
+
+    fn true_residual(
+        &self,
+        workspace: &mut Workspace,
+        rhs: &[f64],
+        solution: &[f64],
+        direction: Direction,
+    ) -> f64 {
         match direction {
             Direction::Forward => self.pattern.residual(&self.values, solution, rhs),
             Direction::Transposed => self.pattern.transposed_residual(
                 &self.values,
                 solution,
                 rhs,
-                &mut self.residual_work,
+                &mut workspace.product,
             ),
         }
     }
 
-    fn solve_checked(
-        &mut self,
+    fn solve(
+        &self,
+        workspace: &mut Workspace,
         rhs: &[f64],
         solution: &mut [f64],
         direction: Direction,
@@ -160,11 +223,12 @@ impl KrylovSolver {
         let target = ACCURACY_MARGIN * self.tolerance;
         let mut threshold = target;
         let mut iterations = 0;
-        let mut residual = self.true_residual(rhs, solution, direction);
-        self.best.copy_from_slice(solution);
+        let mut residual = self.true_residual(workspace, rhs, solution, direction);
+        workspace.best.copy_from_slice(solution);
         while residual > target && iterations < self.max_iterations {
             let budget = ROUND_ITERATIONS.min(self.max_iterations - iterations);
-            let converged = match self.run_bicgstab(rhs, solution, direction, threshold, budget) {
+            let run = self.run_bicgstab(workspace, rhs, solution, direction, threshold, budget);
+            let converged = match run {
                 Ok(done) => {
                     iterations += done.max(1);
                     true
@@ -175,9 +239,9 @@ impl KrylovSolver {
                 }
             };
             let previous = residual;
-            residual = self.true_residual(rhs, solution, direction);
+            residual = self.true_residual(workspace, rhs, solution, direction);
             if residual.is_finite() && residual < previous {
-                self.best.copy_from_slice(solution);
+                workspace.best.copy_from_slice(solution);
                 if residual > 0.5 * previous && residual <= self.tolerance {
                     break;
                 }
@@ -185,7 +249,7 @@ impl KrylovSolver {
                     threshold *= 0.1;
                 }
             } else {
-                solution.copy_from_slice(&self.best);
+                solution.copy_from_slice(&workspace.best);
                 residual = previous;
                 break;
             }
@@ -220,7 +284,8 @@ impl KrylovSolver {
     /// One BiCGSTAB run of at most `budget` iterations from `solution`; the
     /// iterations it took, or `Err` when it used up the budget.
     fn run_bicgstab(
-        &mut self,
+        &self,
+        workspace: &mut Workspace,
         rhs: &[f64],
         solution: &mut [f64],
         direction: Direction,
@@ -228,16 +293,6 @@ impl KrylovSolver {
         budget: usize,
     ) -> Result<usize, ()> {
         let n = self.pattern.n;
-        let operator = MatrixOperator {
-            pattern: &self.pattern,
-            values: &self.values,
-            direction,
-        };
-        let preconditioner = IluPreconditioner {
-            pattern: &self.pattern,
-            ilu: &self.ilu,
-            direction,
-        };
         let params = BicgParams {
             abs_tolerance: threshold,
             rel_tolerance: 0.0,
@@ -247,13 +302,13 @@ impl KrylovSolver {
         let result = bicgstab(
             MatMut::from_column_major_slice_mut(solution, n, 1),
             IdentityPrecond { dim: n },
-            preconditioner,
-            operator,
+            self.preconditioner(direction),
+            self.operator(direction),
             MatRef::from_column_major_slice(rhs, n, 1),
             params,
             |_| {},
             Par::Seq,
-            MemStack::new(&mut self.workspace),
+            MemStack::new(&mut workspace.bicgstab),
         );
         match result {
             Ok(info) => Ok(info.iter_count),

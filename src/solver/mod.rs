@@ -381,6 +381,24 @@ impl LinearSolver {
         }
     }
 
+    /// [`Self::solve`] and [`Self::solve_transpose`] at once, on two threads
+    /// (the two solves share the factorisation and nothing else).
+    pub fn solve_both(
+        &mut self,
+        b: &[f64],
+        x: &mut [f64],
+        c: &[f64],
+        y: &mut [f64],
+    ) -> (
+        Result<SolveReport, SolverError>,
+        Result<SolveReport, SolverError>,
+    ) {
+        match self {
+            Self::Lu(lu) => lu.solve_both(b, x, c, y),
+            Self::Krylov(krylov) => krylov.solve_both(b, x, c, y),
+        }
+    }
+
     /// Solves `A^T y = c`, `y` as `x` in [`Self::solve`].
     pub fn solve_transpose(
         &mut self,
@@ -549,6 +567,14 @@ mod tests {
                 let backward = solver.solve_transpose(&b, &mut y).unwrap();
                 assert!(forward.residual <= 1e-12 && backward.residual <= 1e-12);
                 assert_eq!(pattern.residual(&values, &x, &b), forward.residual);
+                let (mut x_both, mut y_both) = (vec![0.0; 300], vec![0.0; 300]);
+                let (both_forward, both_backward) =
+                    solver.solve_both(&b, &mut x_both, &b, &mut y_both);
+                assert_eq!(
+                    (both_forward.unwrap(), both_backward.unwrap()),
+                    (forward, backward)
+                );
+                assert_eq!((&x_both, &y_both), (&x, &y));
                 solutions.push((x, y));
             }
             let (lu, krylov) = (&solutions[0], &solutions[1]);
