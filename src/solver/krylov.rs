@@ -33,8 +33,8 @@ use faer::{MatMut, MatRef, Par};
 
 use super::ilu::{IluPreconditioner, MatrixOperator};
 use super::{
-    Direction, FlushDenormals, Ilu0, SolveReport, SolverError, SolverSettings, SparsePattern,
-    accept, check_solve_inputs, check_values,
+    Direction, FlushDenormals, Ilu0, SolvePair, SolveReport, SolverError, SolverSettings,
+    SparsePattern, accept, check_solve_inputs, check_values,
 };
 
 /// BiCGSTAB aims at this fraction of the tolerance.
@@ -115,6 +115,11 @@ impl KrylovSolver {
         &self.system.pattern
     }
 
+    /// The values of `A` as of the last factorisation.
+    pub fn values(&self) -> &[f64] {
+        &self.system.values
+    }
+
     /// Takes the values of `A` and computes its ILU(0) preconditioner.
     pub fn factorize(&mut self, values: &[f64]) -> Result<(), SolverError> {
         let system = &mut self.system;
@@ -144,16 +149,7 @@ impl KrylovSolver {
     }
 
     /// [`Self::solve`] and [`Self::solve_transpose`] at once, on two threads.
-    pub fn solve_both(
-        &mut self,
-        b: &[f64],
-        x: &mut [f64],
-        c: &[f64],
-        y: &mut [f64],
-    ) -> (
-        Result<SolveReport, SolverError>,
-        Result<SolveReport, SolverError>,
-    ) {
+    pub fn solve_both(&mut self, b: &[f64], x: &mut [f64], c: &[f64], y: &mut [f64]) -> SolvePair {
         let system = &self.system;
         let (forward, transposed) = (&mut self.forward, &mut self.transposed);
         rayon::join(

@@ -10,8 +10,8 @@ use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Conj, MatMut, Par};
 
 use super::{
-    Direction, FlushDenormals, SolveReport, SolverError, SparsePattern, accept, check_solve_inputs,
-    check_values,
+    Direction, FlushDenormals, SolvePair, SolveReport, SolverError, SparsePattern, accept,
+    check_solve_inputs, check_values,
 };
 
 /// Sparse LU of `A` with a fixed pattern: analyse once, factorise per values,
@@ -121,16 +121,7 @@ impl LuSolver {
     }
 
     /// [`Self::solve`] and [`Self::solve_transpose`] at once, on two threads.
-    pub fn solve_both(
-        &mut self,
-        b: &[f64],
-        x: &mut [f64],
-        c: &[f64],
-        y: &mut [f64],
-    ) -> (
-        Result<SolveReport, SolverError>,
-        Result<SolveReport, SolverError>,
-    ) {
+    pub fn solve_both(&mut self, b: &[f64], x: &mut [f64], c: &[f64], y: &mut [f64]) -> SolvePair {
         let factors = match self.system.factors() {
             Ok(factors) => factors,
             Err(error) => return (Err(error.clone()), Err(error)),

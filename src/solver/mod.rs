@@ -329,73 +329,81 @@ fn accept(residual: f64, x: &[f64], tolerance: f64) -> Result<f64, SolverError> 
 }
 
 /// The sparse solver of one fixed pattern, by the method [`SolverSettings`]
-/// chooses for its size.
-pub enum LinearSolver {
-    /// Direct solves.
+/// chooses for its size. With [`SolverMethod::Auto`], a BiCGSTAB solve that
+/// does not converge is repeated by LU, which then stays in use: `auto`
+/// never fails where LU would succeed.
+pub struct LinearSolver {
+    backend: Backend,
+    fall_back_to_lu: bool,
+    tolerance: f64,
+}
+
+enum Backend {
     Lu(Box<LuSolver>),
-    /// Preconditioned iterative solves.
     Krylov(Box<KrylovSolver>),
 }
+
+/// The outcome of [`LinearSolver::solve_both`]: the forward and the transposed solve.
+pub type SolvePair = (
+    Result<SolveReport, SolverError>,
+    Result<SolveReport, SolverError>,
+);
 
 impl LinearSolver {
     /// Prepares solves for matrices with `pattern` (for LU: the symbolic
     /// analysis).
     pub fn new(pattern: SparsePattern, settings: &SolverSettings) -> Result<Self, SolverError> {
-        Ok(match settings.method_for(pattern.n) {
-            SolverMethod::Krylov => Self::Krylov(Box::new(KrylovSolver::new(pattern, settings)?)),
-            _ => Self::Lu(Box::new(LuSolver::new(pattern, settings.tolerance)?)),
+        let backend = match settings.method_for(pattern.n) {
+            SolverMethod::Krylov => {
+                Backend::Krylov(Box::new(KrylovSolver::new(pattern, settings)?))
+            }
+            _ => Backend::Lu(Box::new(LuSolver::new(pattern, settings.tolerance)?)),
+        };
+        Ok(Self {
+            backend,
+            fall_back_to_lu: settings.method == SolverMethod::Auto,
+            tolerance: settings.tolerance,
         })
     }
 
     /// The method in use ([`SolverMethod::Lu`] or [`SolverMethod::Krylov`]).
     pub fn method(&self) -> SolverMethod {
-        match self {
-            Self::Lu(_) => SolverMethod::Lu,
-            Self::Krylov(_) => SolverMethod::Krylov,
+        match self.backend {
+            Backend::Lu(_) => SolverMethod::Lu,
+            Backend::Krylov(_) => SolverMethod::Krylov,
         }
     }
 
     /// The pattern of `A`.
     pub fn pattern(&self) -> &SparsePattern {
-        match self {
-            Self::Lu(lu) => lu.pattern(),
-            Self::Krylov(krylov) => krylov.pattern(),
+        match &self.backend {
+            Backend::Lu(lu) => lu.pattern(),
+            Backend::Krylov(krylov) => krylov.pattern(),
         }
     }
 
     /// Takes new values of `A` (aligned with the pattern's entries) and
     /// factorises them: the LU, or the ILU(0) preconditioner.
     pub fn factorize(&mut self, values: &[f64]) -> Result<(), SolverError> {
-        match self {
-            Self::Lu(lu) => lu.factorize(values),
-            Self::Krylov(krylov) => krylov.factorize(values),
+        match &mut self.backend {
+            Backend::Lu(lu) => lu.factorize(values),
+            Backend::Krylov(krylov) => krylov.factorize(values),
         }
     }
 
     /// Solves `A x = b`. On entry `x` is the starting point of an iterative
     /// solve (ignored by LU); on return it is the solution.
     pub fn solve(&mut self, b: &[f64], x: &mut [f64]) -> Result<SolveReport, SolverError> {
-        match self {
-            Self::Lu(lu) => lu.solve(b, x),
-            Self::Krylov(krylov) => krylov.solve(b, x),
-        }
-    }
-
-    /// [`Self::solve`] and [`Self::solve_transpose`] at once, on two threads
-    /// (the two solves share the factorisation and nothing else).
-    pub fn solve_both(
-        &mut self,
-        b: &[f64],
-        x: &mut [f64],
-        c: &[f64],
-        y: &mut [f64],
-    ) -> (
-        Result<SolveReport, SolverError>,
-        Result<SolveReport, SolverError>,
-    ) {
-        match self {
-            Self::Lu(lu) => lu.solve_both(b, x, c, y),
-            Self::Krylov(krylov) => krylov.solve_both(b, x, c, y),
+        let result = match &mut self.backend {
+            Backend::Lu(lu) => return lu.solve(b, x),
+            Backend::Krylov(krylov) => krylov.solve(b, x),
+        };
+        match result {
+            Err(SolverError::NotConverged { .. }) if self.fall_back_to_lu => {
+                self.switch_to_lu()?;
+                self.solve(b, x)
+            }
+            other => other,
         }
     }
 
@@ -405,10 +413,48 @@ impl LinearSolver {
         c: &[f64],
         y: &mut [f64],
     ) -> Result<SolveReport, SolverError> {
-        match self {
-            Self::Lu(lu) => lu.solve_transpose(c, y),
-            Self::Krylov(krylov) => krylov.solve_transpose(c, y),
+        let result = match &mut self.backend {
+            Backend::Lu(lu) => return lu.solve_transpose(c, y),
+            Backend::Krylov(krylov) => krylov.solve_transpose(c, y),
+        };
+        match result {
+            Err(SolverError::NotConverged { .. }) if self.fall_back_to_lu => {
+                self.switch_to_lu()?;
+                self.solve_transpose(c, y)
+            }
+            other => other,
         }
+    }
+
+    /// [`Self::solve`] and [`Self::solve_transpose`] at once, on two threads
+    /// (the two solves share the factorisation and nothing else).
+    pub fn solve_both(&mut self, b: &[f64], x: &mut [f64], c: &[f64], y: &mut [f64]) -> SolvePair {
+        let (forward, transposed) = match &mut self.backend {
+            Backend::Lu(lu) => return lu.solve_both(b, x, c, y),
+            Backend::Krylov(krylov) => krylov.solve_both(b, x, c, y),
+        };
+        let failed = |r: &Result<SolveReport, SolverError>| {
+            matches!(r, Err(SolverError::NotConverged { .. }))
+        };
+        if self.fall_back_to_lu && (failed(&forward) || failed(&transposed)) {
+            match self.switch_to_lu() {
+                Ok(()) => self.solve_both(b, x, c, y),
+                Err(error) => (Err(error.clone()), Err(error)),
+            }
+        } else {
+            (forward, transposed)
+        }
+    }
+
+    /// Replaces BiCGSTAB by an LU of the same matrix, once.
+    fn switch_to_lu(&mut self) -> Result<(), SolverError> {
+        self.fall_back_to_lu = false;
+        if let Backend::Krylov(krylov) = &self.backend {
+            let mut lu = LuSolver::new(krylov.pattern().clone(), self.tolerance)?;
+            lu.factorize(krylov.values())?;
+            self.backend = Backend::Lu(Box::new(lu));
+        }
+        Ok(())
     }
 }
 
@@ -617,6 +663,33 @@ mod tests {
                 solver.factorize(&values),
                 Err(SolverError::NonFinite("matrix entry"))
             );
+        }
+    }
+
+    #[test]
+    fn auto_repeats_a_failed_iterative_solve_by_lu_and_keeps_lu() {
+        let (pattern, values) = random_chain(400, 5, 0.01, 4);
+        let b = vec![1.0; 400];
+        let hopeless = SolverSettings {
+            lu_limit: 0,
+            max_iterations: 1,
+            tolerance: 1e-12,
+            ..SolverSettings::default()
+        };
+        for method in [SolverMethod::Auto, SolverMethod::Krylov] {
+            let settings = SolverSettings { method, ..hopeless };
+            let mut solver = LinearSolver::new(pattern.clone(), &settings).unwrap();
+            assert_eq!(solver.method(), SolverMethod::Krylov);
+            solver.factorize(&values).unwrap();
+            let mut x = vec![0.0; 400];
+            let result = solver.solve(&b, &mut x);
+            if method == SolverMethod::Auto {
+                assert!(result.unwrap().residual <= 1e-12);
+                assert_eq!(solver.method(), SolverMethod::Lu);
+            } else {
+                assert!(matches!(result, Err(SolverError::NotConverged { .. })));
+                assert_eq!(solver.method(), SolverMethod::Krylov);
+            }
         }
     }
 
