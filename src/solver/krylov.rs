@@ -33,8 +33,8 @@ use faer::{MatMut, MatRef, Par};
 
 use super::ilu::{IluPreconditioner, MatrixOperator};
 use super::{
-    Direction, FlushDenormals, Ilu0, SolvePair, SolveReport, SolverError, SolverSettings,
-    SparsePattern, accept, check_solve_inputs, check_values,
+    Direction, Ilu0, SolvePair, SolveReport, SolverError, SolverSettings, SparsePattern, accept,
+    check_solve_inputs, check_values, join_directions,
 };
 
 /// BiCGSTAB aims at this fraction of the tolerance.
@@ -152,15 +152,9 @@ impl KrylovSolver {
     pub fn solve_both(&mut self, b: &[f64], x: &mut [f64], c: &[f64], y: &mut [f64]) -> SolvePair {
         let system = &self.system;
         let (forward, transposed) = (&mut self.forward, &mut self.transposed);
-        rayon::join(
-            || {
-                let _flush = FlushDenormals::on_this_thread();
-                system.solve(forward, b, x, Direction::Forward)
-            },
-            || {
-                let _flush = FlushDenormals::on_this_thread();
-                system.solve(transposed, c, y, Direction::Transposed)
-            },
+        join_directions(
+            || system.solve(forward, b, x, Direction::Forward),
+            || system.solve(transposed, c, y, Direction::Transposed),
         )
     }
 }

@@ -10,8 +10,8 @@ use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Conj, MatMut, Par};
 
 use super::{
-    Direction, FlushDenormals, SolvePair, SolveReport, SolverError, SparsePattern, accept,
-    check_solve_inputs, check_values,
+    Direction, SolvePair, SolveReport, SolverError, SparsePattern, accept, check_solve_inputs,
+    check_values, join_directions,
 };
 
 /// Sparse LU of `A` with a fixed pattern: analyse once, factorise per values,
@@ -127,15 +127,9 @@ impl LuSolver {
             Err(error) => return (Err(error.clone()), Err(error)),
         };
         let (forward, transposed) = (&mut self.forward, &mut self.transposed);
-        rayon::join(
-            || {
-                let _flush = FlushDenormals::on_this_thread();
-                factors.solve(forward, b, x, Direction::Forward)
-            },
-            || {
-                let _flush = FlushDenormals::on_this_thread();
-                factors.solve(transposed, c, y, Direction::Transposed)
-            },
+        join_directions(
+            || factors.solve(forward, b, x, Direction::Forward),
+            || factors.solve(transposed, c, y, Direction::Transposed),
         )
     }
 }

@@ -304,6 +304,24 @@ enum Direction {
     Transposed,
 }
 
+/// Runs `forward` and `transposed` at once on two threads (rayon), each
+/// with subnormals flushed.
+fn join_directions(
+    forward: impl FnOnce() -> Result<SolveReport, SolverError> + Send,
+    transposed: impl FnOnce() -> Result<SolveReport, SolverError> + Send,
+) -> SolvePair {
+    rayon::join(
+        || {
+            let _flush = FlushDenormals::on_this_thread();
+            forward()
+        },
+        || {
+            let _flush = FlushDenormals::on_this_thread();
+            transposed()
+        },
+    )
+}
+
 /// The checks every method makes before a solve: sizes and finite inputs.
 fn check_solve_inputs(n: usize, rhs: &[f64], x: &[f64]) -> Result<(), SolverError> {
     if rhs.len() != n || x.len() != n {
@@ -422,16 +440,7 @@ impl LinearSolver {
     /// Solves `A x = b`. On entry `x` is the starting point of an iterative
     /// solve (ignored by LU); on return it is the solution.
     pub fn solve(&mut self, b: &[f64], x: &mut [f64]) -> Result<SolveReport, SolverError> {
-        let result = match &mut self.backend {
-            Backend::Lu(lu) => return lu.solve(b, x),
-            Backend::Krylov(krylov) => krylov.solve(b, x),
-        };
-        if self.should_fall_back(&result) {
-            self.fall_back()?;
-            return self.solve(b, x);
-        }
-        self.note_speed(&result);
-        result
+        self.solve_in(Direction::Forward, b, x)
     }
 
     /// Solves `A^T y = c`, `y` as `x` in [`Self::solve`].
@@ -440,13 +449,26 @@ impl LinearSolver {
         c: &[f64],
         y: &mut [f64],
     ) -> Result<SolveReport, SolverError> {
-        let result = match &mut self.backend {
-            Backend::Lu(lu) => return lu.solve_transpose(c, y),
-            Backend::Krylov(krylov) => krylov.solve_transpose(c, y),
+        self.solve_in(Direction::Transposed, c, y)
+    }
+
+    fn solve_in(
+        &mut self,
+        direction: Direction,
+        rhs: &[f64],
+        solution: &mut [f64],
+    ) -> Result<SolveReport, SolverError> {
+        let result = match (&mut self.backend, direction) {
+            (Backend::Lu(lu), Direction::Forward) => return lu.solve(rhs, solution),
+            (Backend::Lu(lu), Direction::Transposed) => return lu.solve_transpose(rhs, solution),
+            (Backend::Krylov(krylov), Direction::Forward) => krylov.solve(rhs, solution),
+            (Backend::Krylov(krylov), Direction::Transposed) => {
+                krylov.solve_transpose(rhs, solution)
+            }
         };
         if self.should_fall_back(&result) {
             self.fall_back()?;
-            return self.solve_transpose(c, y);
+            return self.solve_in(direction, rhs, solution);
         }
         self.note_speed(&result);
         result
