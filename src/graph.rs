@@ -175,6 +175,8 @@ pub fn reverse_csr(graph: &CsrGraph<'_>) -> (Vec<usize>, Vec<u32>) {
 }
 
 #[cfg(test)]
+// Reachability matrices are read as reach[a][b] and reach[b][a]: index loops are clearer.
+#[allow(clippy::needless_range_loop)]
 mod tests {
     use super::*;
     use proptest::prelude::*;

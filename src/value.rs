@@ -182,12 +182,19 @@ impl TransientSystem {
         self.solver.solve(&self.b, &mut self.x)
     }
 
-    /// Solves `(I - Q)^T y = p0` from the previous `y`.
-    fn solve_adjoint(&mut self) -> Result<SolveReport, SolverError> {
+    /// Solves `(I - Q) x = b` and `(I - Q)^T y = p0` from the previous `x`
+    /// and `y`, at once.
+    fn solve_both(
+        &mut self,
+    ) -> (
+        Result<SolveReport, SolverError>,
+        Result<SolveReport, SolverError>,
+    ) {
         if self.len() == 0 {
-            return Ok(NO_SOLVE);
+            return (Ok(NO_SOLVE), Ok(NO_SOLVE));
         }
-        self.solver.solve_transpose(&self.p0, &mut self.y)
+        self.solver
+            .solve_both(&self.b, &mut self.x, &self.p0, &mut self.y)
     }
 }
 
@@ -294,26 +301,33 @@ impl Evaluator {
         self.gmc.refill(defender, adversary);
         self.system.factorize(&self.gmc)?;
         let report = self.system.solve_value()?;
+        Ok(self.store_values(report))
+    }
+
+    /// Copies `x` from `T` into the state values and computes `V`.
+    fn store_values(&mut self, report: SolveReport) -> Evaluation {
         for (&m, &xm) in self.recurrence.transient.iter().zip(&self.system.x) {
             self.values[m] = xm;
         }
         let value = self.gmc.initial().map(|(m, p)| p * self.values[m]).sum();
-        Ok(Evaluation {
+        Evaluation {
             value,
             residual: report.residual,
             iterations: report.iterations,
-        })
+        }
     }
 
     /// The value and its gradient with respect to every probability of both
-    /// controllers (adjoint method: one factorisation, two solves, one pass).
+    /// controllers (adjoint method: one factorisation, two solves, run at
+    /// once on two threads, and one pass over the GMC).
     pub fn evaluate_with_gradient(
         &mut self,
         defender: &Probabilities,
         adversary: &Probabilities,
     ) -> Result<(Evaluation, Gradient), ValueError> {
-        let evaluation = self.evaluate(defender, adversary)?;
         let _flush = FlushDenormals::on_this_thread();
+        self.gmc.refill(defender, adversary);
+        self.system.factorize(&self.gmc)?;
         self.system.p0.fill(0.0);
         for (m, p) in self.gmc.initial() {
             let i = self.recurrence.transient_index[m];
@@ -321,7 +335,9 @@ impl Evaluator {
                 self.system.p0[i as usize] += p;
             }
         }
-        let report = self.system.solve_adjoint()?;
+        let (value_report, adjoint_report) = self.system.solve_both();
+        let evaluation = self.store_values(value_report?);
+        let report = adjoint_report?;
         for (&m, &ym) in self.recurrence.transient.iter().zip(&self.system.y) {
             self.adjoint[m] = ym;
         }

@@ -1,8 +1,9 @@
 //! The conversion of Emerson-Lei automata to state-based Rabin automata and
-//! their minimisation preserve the language, checked on random automata with
+//! their minimisation (also with a free start) preserve the language, checked on random automata with
 //! random acceptance formulas and random lasso words.
 
 use posg_fsc::automaton::emerson_lei::Edge;
+use posg_fsc::automaton::minimise::minimise_with_free_start;
 use posg_fsc::automaton::{
     Acceptance, Dra, EmersonLeiAutomaton, Letter, RabinPair, minimise, to_state_based_rabin,
 };
@@ -76,12 +77,15 @@ proptest! {
         let dra = to_state_based_rabin(&aut).expect("conversion succeeds");
         let small = minimise(&dra);
         prop_assert!(small.num_states() <= dra.num_states());
+        let smaller = minimise_with_free_start(&dra);
+        prop_assert!(smaller.num_states() <= small.num_states());
         let props = aut.propositions().len();
         for (prefix, cycle) in &words {
             let (u, v) = (masked(prefix, props), masked(cycle, props));
             let expected = aut.accepts_lasso(&u, &v);
             prop_assert_eq!(dra.accepts_lasso(&u, &v), expected, "converted, word {:?} {:?}", u, v);
             prop_assert_eq!(small.accepts_lasso(&u, &v), expected, "minimised, word {:?} {:?}", u, v);
+            prop_assert_eq!(smaller.accepts_lasso(&u, &v), expected, "free start, word {:?} {:?}", u, v);
         }
     }
 

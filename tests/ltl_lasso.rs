@@ -32,6 +32,36 @@ fn random_lassos(
         .collect()
 }
 
+/// Random lasso words over `propositions` propositions, `|u| <= 8`,
+/// `1 <= |v| <= 8`, in which each proposition holds with probability 1/4:
+/// sparse events exercise the response and precedence patterns better
+/// than uniform letters.
+fn sparse_lassos(
+    rng: &mut ChaCha8Rng,
+    propositions: usize,
+    count: usize,
+) -> Vec<(Vec<Letter>, Vec<Letter>)> {
+    let word = |rng: &mut ChaCha8Rng, length: usize| -> Vec<Letter> {
+        (0..length)
+            .map(|_| {
+                (0..propositions).fold(0, |letter, bit| {
+                    if rng.random_bool(0.25) {
+                        letter | (1 << bit)
+                    } else {
+                        letter
+                    }
+                })
+            })
+            .collect()
+    };
+    (0..count)
+        .map(|_| {
+            let (u, v) = (rng.random_range(0..=8), rng.random_range(1..=8));
+            (word(rng, u), word(rng, v))
+        })
+        .collect()
+}
+
 /// Checks the automata of `formula` and its negation against the evaluator
 /// on `words`; returns a description of the first disagreement.
 fn check(formula: &Formula, words: &[(Vec<Letter>, Vec<Letter>)]) -> Result<(), String> {
@@ -124,6 +154,20 @@ fn dac_patterns_agree_with_the_evaluator() {
 }
 
 #[test]
+fn dac_patterns_agree_with_the_evaluator_on_sparse_words() {
+    let mut rng = ChaCha8Rng::seed_from_u64(1998);
+    let failures: Vec<String> = shared_formulas("dac-patterns.ltl")
+        .iter()
+        .filter_map(|text| {
+            let formula = ltl::parse(text).unwrap_or_else(|e| panic!("{text}: {e}"));
+            let words = sparse_lassos(&mut rng, formula.propositions().len(), 2000);
+            check(&formula, &words).err()
+        })
+        .collect();
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+#[test]
 fn robotics_formulas_agree_with_the_evaluator() {
     let all = shared_formulas("reference-sizes.tsv");
     let robotics = &all[all.len() - 11..];
@@ -147,6 +191,41 @@ fn obligation_shapes_agree_with_the_evaluator() {
     .map(|s| s.to_string())
     .collect();
     check_all(&formulas, 2000);
+}
+
+/// `G chi` with `chi` an obligation, also `G (l | (chi W r))` with `l`, `r`
+/// propositional (the breakpoint construction), `G (l | G psi)` with `l`
+/// propositional (waiting for `l` to fail), `f U (g | G h)` where `f`
+/// implies `h` (a simplification rule), and formulas
+/// that are obligations without being syntactically so (the weak automaton
+/// certified against the Master Theorem automata).
+#[test]
+fn globally_obligation_and_semantic_obligation_shapes_agree_with_the_evaluator() {
+    let formulas: Vec<String> = [
+        "G (a -> (b U c))",
+        "G (F a & !b)",
+        "G ((a & F b) -> (!c U b))",
+        "G (a | G b | F c)",
+        "G (a -> X (b U (c & X b)))",
+        "G (a -> (G !b | (!b U (c & X (!b U a)))))",
+        "G ((a & X F b) -> X F (b & F c))",
+        "G (a W (b & X F c))",
+        "G ((a & !b) U (b | c | G a))",
+        "(a & !b) U (!a W b)",
+        "(a & !b) U (b | (!a W b) | G a)",
+        "F (a U G b) | G (a W X c)",
+        "G (a -> G (b -> F c))",
+        "G ((a & !b) -> G (F c & (b | X a)))",
+        "G (a -> G (F b | F G c))",
+        "G (!a | b | G (a U c))",
+        "G (a -> ((b -> X (!c U (b & F a))) W c))",
+        "G ((a & X F b) -> ((b | X G !c) U (c | G (b | X G !c))))",
+        "a U (c | G (a & X F b)) | (a & !b) U (c | G a)",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    check_all(&formulas, 3000);
 }
 
 #[test]

@@ -213,57 +213,115 @@ pub const MAX_TABLE_ENTRIES: usize = 1 << 26;
 ///    mark literals: `m` (the transitions carrying mark `m`) or `!m` (those
 ///    not carrying it). The formula is put in disjunctive normal form by
 ///    distributing `&` over `|`; constants are folded, and so are atoms on
-///    marks no transition can carry (`Fin(m)` = `t`, `Inf(m)` = `f`,
-///    `Fin(!m)` = `f`, `Inf(!m)` = `t`). Each disjunct is a conjunction
-///    `Fin(F) & Inf(I_1) & ... & Inf(I_k)` where the `Fin` atoms are merged
-///    into one by `Fin(a) & Fin(b) = Fin(a | b)`, so `F` is a union of
-///    literals and each `I_j` is one literal: a generalised Rabin pair.
-///    Disjuncts that cannot hold (`Fin` of both `m` and `!m`, or `Inf(l)` with
-///    `l` inside `F`) and disjuncts implied by another one are dropped. If a
-///    normal form (of the whole formula or of a subformula) would exceed
-///    [`MAX_DNF_DISJUNCTS`] disjuncts, the conversion fails.
-/// 2. **Degeneralisation and state splitting.** The states of the result are
-///    the tuples `(q, c_1, s_1, ..., c_n, s_n)` reachable from
-///    `(q_0, 0, -, ..., 0, -)`, one counter `c_i` in `0..k_i` and one record
-///    `s_i` per generalised pair `i`. On a transition `q --a--> q'` the counter
-///    `c_i` advances while the transition lies in `I_{i, c_i}`; when it passes
-///    `k_i` it restarts at 0 and the pair has completed a round. The record
-///    `s_i` of the entered state says whether the entering transition lay in
-///    `F_i` and whether it completed a round of pair `i`.
-/// 3. **Rabin pairs on states.** `L_i` is the set of states entered through a
-///    transition in `F_i`; `K_i` is the set of states entered when pair `i`
-///    completed a round, or all states if `k_i = 0`. A run visits `L_i`
-///    infinitely often iff the original run takes `F_i` infinitely often, and
-///    `K_i` iff it takes every `I_{i, j}` infinitely often.
+///    literals no transition satisfies (`Fin(l)` = `t`, `Inf(l)` = `f`).
+///    Each disjunct is a conjunction `Fin(F) & Inf(I_1) & ... & Inf(I_k)`
+///    where the `Fin` atoms are merged into one by `Fin(a) & Fin(b) =
+///    Fin(a | b)`, so `F` is a union of literals and each `I_j` is one
+///    literal: a generalised Rabin pair. Disjuncts that cannot hold (`Fin` of
+///    both `m` and `!m`, or `Inf(l)` with `l` inside `F`) and disjuncts
+///    implied by another one are dropped. If a normal form (of the whole
+///    formula or of a subformula) would exceed [`MAX_DNF_DISJUNCTS`]
+///    disjuncts, the conversion fails.
+/// 2. **Marks onto states.** Only the literals some pair mentions are
+///    *relevant*. A state whose outgoing transitions all satisfy the same
+///    relevant literals is *uniform* and labelled by them (state-based
+///    acceptance in disguise): every visit is followed by such a transition.
+///    The transitions leaving a non-uniform state are represented at their
+///    targets instead: a state is split by the relevant literals of the
+///    transition entering it when that transition's source is not uniform
+///    (`(q, M)`; the initial state has no entering transition). So each
+///    transition of a run is represented by a state visited just before or
+///    after it, and every label literal by an adjacent transition: a literal
+///    is seen on states infinitely often iff on transitions.
+/// 3. **Degeneralisation.** A pair with `k >= 2` `Inf` literals gets a
+///    counter `c` in `0..k` that a transition advances past every
+///    `I_c, I_{c+1}, ...` it lies in; when it passes `k` it restarts at 0 and
+///    the entered state records that the pair completed a round.
+/// 4. **Rabin pairs on states.** `L_i` is the set of states whose label
+///    meets `F_i`; `K_i` is the set of states whose label contains `I_1` if
+///    `k_i = 1`, the states entered when pair `i` completed a round if `k_i
+///    >= 2`, and all states if `k_i = 0`.
 ///
 /// `Constant(true)` thus gives the single pair `(empty set, all states)` and
 /// `Constant(false)` no pair at all. States are numbered in breadth-first
 /// order from the initial state `0`, letters in increasing order. The result
 /// fails if its table would exceed [`MAX_TABLE_ENTRIES`] entries.
 pub fn to_state_based_rabin(aut: &EmersonLeiAutomaton) -> Result<Dra, AutomatonError> {
-    let pairs = generalised_pairs(aut.acceptance(), aut.num_marks())?;
     let letters = 1usize << aut.propositions().len();
-    let mut initial = vec![aut.initial() as u32];
-    initial.extend(std::iter::repeat_n(0, 2 * pairs.len()));
-    let mut keys = vec![initial.clone()];
+    let n = aut.num_states();
+    let satisfied =
+        |q: usize, a: usize| literals_of(aut.edges[q * letters + a].marks, aut.num_marks);
+    let available = (0..n * letters).fold(0, |acc, e| acc | satisfied(e / letters, e % letters));
+    let pairs = generalised_pairs(aut.acceptance(), aut.num_marks(), available)?;
+    let relevant: Literals = pairs.iter().fold(0, |acc, p| {
+        p.infs.iter().fold(acc | p.fin, |acc, l| acc | l)
+    });
+    let uniform: Vec<bool> = (0..n)
+        .map(|q| (1..letters).all(|a| (satisfied(q, a) ^ satisfied(q, 0)) & relevant == 0))
+        .collect();
+    let counted: Vec<usize> = (0..pairs.len())
+        .filter(|&i| pairs[i].infs.len() >= 2)
+        .collect();
+    // The relevant literals of the transitions leaving `q` if they agree,
+    // and of the entering transition if its source's do not.
+    let label_of = |source: Option<usize>, q: usize, seen: Literals| {
+        let own = if uniform[q] { satisfied(q, 0) } else { 0 };
+        let entering = match source {
+            Some(p) if !uniform[p] => seen,
+            _ => 0,
+        };
+        (own | entering) & relevant
+    };
+    let initial = State {
+        q: aut.initial() as u32,
+        label: label_of(None, aut.initial(), 0),
+        counters: vec![0; counted.len()],
+        completed: vec![false; counted.len()],
+    };
+    let mut states = vec![initial.clone()];
     let mut index = FxHashMap::default();
     index.insert(initial, 0u32);
     let mut successors = Vec::new();
     let mut next = 0;
-    while next < keys.len() {
+    while next < states.len() {
         for letter in 0..letters {
-            let key = step(aut, &pairs, &keys[next], letter as Letter);
+            let state = &states[next];
+            let q = state.q as usize;
+            let seen = satisfied(q, letter);
+            let (counters, completed) = counted
+                .iter()
+                .zip(&state.counters)
+                .map(|(&i, &c)| {
+                    let infs = &pairs[i].infs;
+                    let mut c = c as usize;
+                    while c < infs.len() && seen & infs[c] != 0 {
+                        c += 1;
+                    }
+                    if c == infs.len() {
+                        (0, true)
+                    } else {
+                        (c as u8, false)
+                    }
+                })
+                .unzip();
+            let target = aut.edges[q * letters + letter].target as usize;
+            let key = State {
+                q: target as u32,
+                label: label_of(Some(q), target, seen),
+                counters,
+                completed,
+            };
             let id = match index.get(&key) {
                 Some(&id) => id,
                 None => {
-                    if (keys.len() + 1) * letters > MAX_TABLE_ENTRIES {
+                    if (states.len() + 1) * letters > MAX_TABLE_ENTRIES {
                         return Err(AutomatonError::Malformed(format!(
                             "the state-based Rabin automaton would exceed {} states",
                             MAX_TABLE_ENTRIES / letters
                         )));
                     }
-                    let id = keys.len() as u32;
-                    keys.push(key.clone());
+                    let id = states.len() as u32;
+                    states.push(key.clone());
                     index.insert(key, id);
                     id
                 }
@@ -275,15 +333,40 @@ pub fn to_state_based_rabin(aut: &EmersonLeiAutomaton) -> Result<Dra, AutomatonE
     let rabin_pairs = pairs
         .iter()
         .enumerate()
-        .map(|(i, pair)| state_pair(pair, i, &keys))
+        .map(|(i, pair)| {
+            let counter = counted.iter().position(|&j| j == i);
+            RabinPair {
+                fin: states.iter().map(|s| s.label & pair.fin != 0).collect(),
+                inf: states
+                    .iter()
+                    .map(|s| match (pair.infs.as_slice(), counter) {
+                        ([], _) => true,
+                        (_, Some(c)) => s.completed[c],
+                        ([only], None) => s.label & only != 0,
+                        (_, None) => unreachable!("pairs with two or more Inf are counted"),
+                    })
+                    .collect(),
+            }
+        })
         .collect();
     Dra::new(
         aut.propositions().to_vec(),
-        keys.len(),
+        states.len(),
         0,
         successors,
         rabin_pairs,
     )
+}
+
+/// A state of [`to_state_based_rabin`]'s result: the original state `q`, its
+/// label (relevant literals), and per counted pair the counter and whether
+/// the entering transition completed a round.
+#[derive(Debug, Clone, PartialEq, Eq, Hash)]
+struct State {
+    q: u32,
+    label: Literals,
+    counters: Vec<u8>,
+    completed: Vec<bool>,
 }
 
 /// A set of transitions named by mark literals: bit `2m` stands for the
@@ -351,8 +434,17 @@ struct GeneralisedPair {
 fn generalised_pairs(
     acceptance: &Acceptance,
     num_marks: u32,
+    available: Literals,
 ) -> Result<Vec<GeneralisedPair>, AutomatonError> {
-    let pairs = to_dnf(acceptance, num_marks)?
+    let folded = to_dnf(acceptance, num_marks)?
+        .into_iter()
+        .filter(|c| c.inf & !available == 0)
+        .map(|c| Conjunct {
+            fin: c.fin & available,
+            inf: c.inf,
+        })
+        .collect();
+    let pairs = simplify(folded)
         .into_iter()
         .map(|c| GeneralisedPair {
             fin: c.fin,
@@ -431,52 +523,6 @@ fn simplify(disjuncts: Vec<Conjunct>) -> Vec<Conjunct> {
         .collect()
 }
 
-/// Record bit: the entering transition lay in the pair's `Fin` set.
-const FIN_SEEN: u32 = 1;
-/// Record bit: the entering transition completed a round of the pair.
-const ROUND_DONE: u32 = 2;
-
-/// The successor of the product state `key = [q, c_1, s_1, ..., c_n, s_n]` on
-/// `letter` (step 2 of [`to_state_based_rabin`]).
-fn step(
-    aut: &EmersonLeiAutomaton,
-    pairs: &[GeneralisedPair],
-    key: &[u32],
-    letter: Letter,
-) -> Vec<u32> {
-    let edge = aut.edge(key[0] as usize, letter);
-    let seen = literals_of(edge.marks, aut.num_marks());
-    let mut next = Vec::with_capacity(key.len());
-    next.push(edge.target);
-    for (i, pair) in pairs.iter().enumerate() {
-        let mut counter = key[1 + 2 * i] as usize;
-        let mut record = if seen & pair.fin != 0 { FIN_SEEN } else { 0 };
-        while counter < pair.infs.len() && seen & pair.infs[counter] != 0 {
-            counter += 1;
-        }
-        if !pair.infs.is_empty() && counter == pair.infs.len() {
-            counter = 0;
-            record |= ROUND_DONE;
-        }
-        next.push(counter as u32);
-        next.push(record);
-    }
-    next
-}
-
-/// The Rabin pair on product states for generalised pair `i` (step 3 of
-/// [`to_state_based_rabin`]).
-fn state_pair(pair: &GeneralisedPair, i: usize, keys: &[Vec<u32>]) -> RabinPair {
-    let record = |key: &Vec<u32>| key[2 + 2 * i];
-    RabinPair {
-        fin: keys.iter().map(|k| record(k) & FIN_SEEN != 0).collect(),
-        inf: keys
-            .iter()
-            .map(|k| pair.infs.is_empty() || record(k) & ROUND_DONE != 0)
-            .collect(),
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -501,7 +547,7 @@ mod tests {
             Acceptance::And(vec![fin(0), inf(1)]),
             Acceptance::And(vec![fin(2), inf(3)]),
         ]);
-        let pairs = generalised_pairs(&rabin, 4).expect("small");
+        let pairs = generalised_pairs(&rabin, 4, Literals::MAX).expect("small");
         assert_eq!(
             pairs,
             [
@@ -519,12 +565,13 @@ mod tests {
 
     #[test]
     fn fin_atoms_merge_and_contradictions_vanish() {
-        let merged = generalised_pairs(&Acceptance::And(vec![fin(0), fin(1)]), 2).expect("small");
+        let merged = generalised_pairs(&Acceptance::And(vec![fin(0), fin(1)]), 2, Literals::MAX)
+            .expect("small");
         assert_eq!(merged.len(), 1);
         assert_eq!(merged[0].fin, literal(0, false) | literal(1, false));
         let fin_and_inf = Acceptance::And(vec![fin(0), inf(0)]);
         assert!(
-            generalised_pairs(&fin_and_inf, 1)
+            generalised_pairs(&fin_and_inf, 1, Literals::MAX)
                 .expect("small")
                 .is_empty()
         );
@@ -535,17 +582,41 @@ mod tests {
                 complemented: true,
             },
         ]);
-        assert!(generalised_pairs(&fin_of_all, 1).expect("small").is_empty());
+        assert!(
+            generalised_pairs(&fin_of_all, 1, Literals::MAX)
+                .expect("small")
+                .is_empty()
+        );
     }
 
     #[test]
     fn implied_disjuncts_are_dropped() {
         let formula = Acceptance::Or(vec![Acceptance::And(vec![inf(0), inf(1)]), inf(0)]);
-        let pairs = generalised_pairs(&formula, 2).expect("small");
+        let pairs = generalised_pairs(&formula, 2, Literals::MAX).expect("small");
         assert_eq!(
             pairs,
             [GeneralisedPair {
                 fin: 0,
+                infs: vec![literal(0, false)],
+            }]
+        );
+    }
+
+    #[test]
+    fn literals_no_transition_satisfies_are_folded() {
+        let only_positive = literal(0, false) | literal(1, false);
+        let formula = Acceptance::Or(vec![
+            Acceptance::And(vec![fin(1), inf(0)]),
+            Acceptance::Inf {
+                mark: 0,
+                complemented: true,
+            },
+        ]);
+        let pairs = generalised_pairs(&formula, 2, only_positive).expect("small");
+        assert_eq!(
+            pairs,
+            [GeneralisedPair {
+                fin: literal(1, false),
                 infs: vec![literal(0, false)],
             }]
         );

@@ -5,7 +5,9 @@
 //! (Moore's algorithm). The quotient is bisimilar to the input, so it accepts
 //! the same language. It is not in general the smallest Rabin automaton for
 //! the language (that problem is NP-hard), only the smallest one with the
-//! same pairs up to bisimulation.
+//! same pairs up to bisimulation. [`minimise_with_free_start`] goes one step
+//! beyond bisimulation: an initial state that no transition enters is
+//! replaced by a state with the same successors.
 
 use rustc_hash::FxHashMap;
 
@@ -35,6 +37,33 @@ pub fn minimise(dra: &Dra) -> Dra {
     let restricted = restrict(dra, &reachable);
     let blocks = coarsest_blocks(&restricted);
     quotient(&restricted, &blocks)
+}
+
+/// [`minimise`], then, if no transition enters the initial state and some
+/// other state has the same successor as it on every letter, that state
+/// made initial and the result minimised again.
+///
+/// A run visits an initial state that no transition enters only once, so
+/// that state's membership in the `L_i` and `K_i` does not matter, and
+/// starting from a state with the same successors accepts the same words.
+/// The result accepts the same words as `dra` but, unlike [`minimise`]'s,
+/// need not be bisimilar to it.
+pub fn minimise_with_free_start(dra: &Dra) -> Dra {
+    let small = minimise(dra);
+    let letters = letters(&small);
+    let n = small.num_states();
+    let small = &small;
+    let row = |q: usize| (0..letters).map(move |a| small.successor(q, a as u32));
+    let start = small.initial();
+    let entered = (0..n).any(|q| row(q).any(|t| t == start));
+    let twin = (0..n).find(|&q| q != start && row(q).eq(row(start)));
+    match twin {
+        Some(q) if !entered => {
+            let successors = (0..n).flat_map(|p| row(p).map(|t| t as u32)).collect();
+            minimise(&rebuild(small, n, q, successors, small.pairs().to_vec()))
+        }
+        _ => small.clone(),
+    }
 }
 
 /// `2^|AP|`.
@@ -224,6 +253,26 @@ mod tests {
         let dra = chain(vec![k_inside_l, only_unreachable_k, good.clone(), good]);
         let small = minimise(&dra);
         assert_eq!(small.pairs().len(), 1);
+        assert!(small.accepts_lasso(&[], &[0]));
+    }
+
+    #[test]
+    fn an_initial_state_never_entered_is_replaced_by_its_twin() {
+        // 0 -> 1 -> 1 with 1 in K and 0 in L: the run visits 0 once.
+        let dra = Dra::new(
+            vec![],
+            2,
+            0,
+            vec![1, 1],
+            vec![RabinPair {
+                fin: vec![true, false],
+                inf: vec![false, true],
+            }],
+        )
+        .expect("valid");
+        assert_eq!(minimise(&dra).num_states(), 2);
+        let small = minimise_with_free_start(&dra);
+        assert_eq!(small.num_states(), 1);
         assert!(small.accepts_lasso(&[], &[0]));
     }
 

@@ -1,7 +1,12 @@
-//! The two constructions of deterministic automata from NNF formulas:
+//! The constructions of deterministic automata from NNF formulas:
 //!
 //! * [`weak`]: for obligation formulas, the automaton of `af`-classes with a
-//!   verdict per strongly connected component;
+//!   verdict per strongly connected component, and [`weak_agrees`], which
+//!   certifies it for formulas that are not syntactically obligations;
+//! * [`guarded_globally`]: for `G (l | (chi W r))` with `chi` an obligation,
+//!   the breakpoint automaton over copies of the weak automaton of `chi`;
+//! * [`wait_then`]: for `G (l | G psi)`, a waiting state in front of an
+//!   automaton of `G psi`;
 //! * [`master`]: for every formula, the product of the `af`-tracker with the
 //!   co-Büchi and Büchi monitors of the Master Theorem, with a transition-based
 //!   generalised Rabin condition (one disjunct per guess `(X, Y)`).
@@ -11,7 +16,7 @@ use rustc_hash::FxHashMap;
 use super::TranslateError;
 use super::af::{self, Context, Kind};
 use super::bdd::{FALSE, Node, TRUE};
-use super::formula::Formula;
+use super::formula::{self, Formula};
 use crate::automaton::emerson_lei::Edge;
 use crate::automaton::{Letter, MarkSet};
 use crate::graph::{self, Digraph};
@@ -136,6 +141,15 @@ pub(crate) fn weak(
     formula: &Formula,
     letters: usize,
 ) -> Result<Tgr, TranslateError> {
+    weak_with_classes(context, formula, letters).map(|(_, tgr)| tgr)
+}
+
+/// [`weak`] together with the class of every state.
+fn weak_with_classes(
+    context: &mut Context,
+    formula: &Formula,
+    letters: usize,
+) -> Result<(Vec<Node>, Tgr), TranslateError> {
     let root = context.class(formula);
     let (states, edges) = explore(root, letters, |&q, a| (context.after(q, a), 0))?;
     let mut tgr = Tgr {
@@ -164,7 +178,98 @@ pub(crate) fn weak(
             }
         }
     }
-    Ok(tgr)
+    Ok((states, tgr))
+}
+
+/// The deterministic Büchi automaton of `G (l | (chi W r))` for an
+/// obligation formula `chi` and propositional formulas `l` and `r` (`G chi`
+/// is the case `l = r = false`), by the breakpoint construction of Miyano
+/// and Hayashi (1984) on the weak automaton `A` of `chi` ([`weak`]) read as
+/// a universal automaton.
+///
+/// `chi` must hold at position `k` iff `m_k`, where `m_k = !r(w_k) &
+/// (!l(w_k) | m_{k-1})` and `m_{-1} = false`: some position `j <= k` violates
+/// `l` and `r` holds nowhere in `j..=k`. So the formula holds iff for every
+/// `k` with `m_k` the run of `A` on `w_k w_{k+1} ...` ends in an accepting
+/// component. A state is a triple `(m, S, O)`: the last `m`, the set `S` of
+/// states of the runs started so far (runs that meet merge, runs that reach
+/// `true` are dropped, one reaching `false` rejects for good), and the set
+/// `O` of the runs still owed a visit to an accepting component since the
+/// last breakpoint. On a letter `a`, `S' = delta(S + {chi if m'}, a)` and
+/// `O' = delta(O, a)` minus the states of accepting components, where an
+/// empty `O` is first refilled with `S + {chi if m'}`. States with `O` empty
+/// are the breakpoints and carry the Büchi mark. By König's lemma a run of
+/// the product passes infinitely many breakpoints iff no run of `A` stays in
+/// non-accepting states forever; in a weak automaton that is iff every run
+/// ends in an accepting component.
+pub(crate) fn guarded_globally(
+    context: &mut Context,
+    l: &Formula,
+    chi: &Formula,
+    r: &Formula,
+    letters: usize,
+) -> Result<Tgr, TranslateError> {
+    let (classes, inner) = weak_with_classes(context, chi, letters)?;
+    let (l, r) = (context.class(l), context.class(r));
+    let holds: Vec<(bool, bool)> = (0..letters as Letter)
+        .map(|a| (context.after(l, a) == TRUE, context.after(r, a) == TRUE))
+        .collect();
+    let accepting = |q: u32| inner.edges[q as usize * letters].marks != 0;
+    let is_class = |q: u32, class: Node| classes[q as usize] == class;
+    let delta = |q: u32, a: Letter| inner.edges[q as usize * letters + a as usize].target;
+    // The rejecting sink: a run of `A` reached `false`.
+    let dead = (false, vec![u32::MAX], vec![u32::MAX]);
+    type State = (bool, Vec<u32>, Vec<u32>);
+    let (states, mut edges) = explore(
+        (false, Vec::new(), Vec::new()),
+        letters,
+        |(m, s, o): &State, a| {
+            if s.first() == Some(&u32::MAX) {
+                return (dead.clone(), 0);
+            }
+            let (l_holds, r_holds) = holds[a as usize];
+            let m = !r_holds && (!l_holds || *m);
+            let spawned = m.then_some(0);
+            let mut moved: Vec<u32> = s
+                .iter()
+                .copied()
+                .chain(spawned)
+                .map(|q| delta(q, a))
+                .filter(|&q| !is_class(q, TRUE))
+                .collect();
+            if moved.iter().any(|&q| is_class(q, FALSE)) {
+                return (dead.clone(), 0);
+            }
+            moved.sort_unstable();
+            moved.dedup();
+            let mut owed: Vec<u32> = if o.is_empty() {
+                moved.clone()
+            } else {
+                o.iter().map(|&q| delta(q, a)).collect()
+            };
+            owed.retain(|&q| !accepting(q) && !is_class(q, TRUE));
+            owed.sort_unstable();
+            owed.dedup();
+            ((m, moved, owed), 0)
+        },
+    )?;
+    for (q, (_, _, o)) in states.iter().enumerate() {
+        if o.is_empty() {
+            for edge in &mut edges[q * letters..(q + 1) * letters] {
+                edge.marks = 1;
+            }
+        }
+    }
+    Ok(Tgr {
+        letters,
+        initial: 0,
+        edges,
+        num_marks: 1,
+        disjuncts: vec![Disjunct {
+            fin: 0,
+            inf: vec![0],
+        }],
+    })
 }
 
 /// One guess `(X, Y)` of the Master Theorem, by the monitors it needs.
@@ -231,7 +336,7 @@ pub(crate) fn master(
     let mut safety_initial: Vec<Node> = Vec::new();
     let mut recurrent: Vec<Node> = Vec::new();
     let mut persistent: Vec<Node> = Vec::new();
-    let mut guesses = Vec::new();
+    let mut found: Vec<Found> = Vec::new();
     for x_bits in 0u32..1 << mu.len() {
         let x: Vec<Formula> = select(&mu, x_bits);
         let start = context.substitute(root, &|f| af::nu_under(f, &x));
@@ -242,19 +347,26 @@ pub(crate) fn master(
                 recurrent: Vec::new(),
                 persistent: Vec::new(),
             };
+            let mut infinitely_often = Vec::new();
+            let mut almost_always = TRUE;
             for psi in &x {
-                match context.class(&af::mu_under(psi, &y)) {
+                let c = af::mu_under(psi, &y);
+                match context.class(&c) {
                     FALSE => continue 'guess,
                     TRUE => {}
-                    c => guess.recurrent.push(index_of(&mut recurrent, c)),
+                    class => guess.recurrent.push(index_of(&mut recurrent, class)),
                 }
+                infinitely_often.push(context.class(&recurrence_core(&c)));
             }
             for psi in &y {
-                match context.class(&af::nu_under(psi, &x)) {
+                let s = af::nu_under(psi, &x);
+                match context.class(&s) {
                     FALSE => continue 'guess,
                     TRUE => {}
-                    s => guess.persistent.push(index_of(&mut persistent, s)),
+                    class => guess.persistent.push(index_of(&mut persistent, class)),
                 }
+                let core = context.class(&persistence_core(&s));
+                almost_always = context.bdd.and(almost_always, core);
             }
             if start != TRUE {
                 let i = index_of(&mut safety_sets, x.clone());
@@ -267,9 +379,26 @@ pub(crate) fn master(
             guess.recurrent.dedup();
             guess.persistent.sort_unstable();
             guess.persistent.dedup();
-            guesses.push(guess);
+            found.push(Found {
+                x_bits,
+                y_bits,
+                infinitely_often,
+                almost_always,
+                guess,
+            });
         }
     }
+    let dominated: Vec<bool> = (0..found.len())
+        .map(|i| {
+            (0..found.len()).any(|j| j != i && dominates(context, &mu, &nu, &found[j], &found[i]))
+        })
+        .collect();
+    let mut guesses: Vec<Guess> = found
+        .into_iter()
+        .zip(dominated)
+        .filter(|(_, d)| !d)
+        .map(|(f, _)| f.guess)
+        .collect();
     guesses.sort();
     guesses.dedup();
     let strongest: Vec<Guess> = guesses
@@ -376,6 +505,82 @@ pub(crate) fn master(
     })
 }
 
+/// A guess `(X, Y)` (as bit sets over the candidates) with its monitors and
+/// what its conditions (2) and (3) say: `GF c` for every class `c` of
+/// `infinitely_often`, and `FG almost_always`.
+struct Found {
+    x_bits: u32,
+    y_bits: u32,
+    infinitely_often: Vec<Node>,
+    almost_always: Node,
+    guess: Guess,
+}
+
+/// Whether every word satisfying the conditions of guess `stronger` also
+/// satisfies those of `weaker`, so that `stronger`'s disjunct is
+/// redundant: `X ⊆ X'`, `Y ⊆ Y'` (then condition (1) and the conditions
+/// for the common members are monotone), and for every `psi` in `X' \ X`
+/// some `GF c` of `stronger` implies `GF (psi[Y']^mu)`, for every `psi` in
+/// `Y' \ Y` the `FG s` of `stronger` implies `FG (psi[X']_nu)`; `GF c`
+/// implies `GF c'` if `c` propositionally implies `c'`, up to
+/// [`recurrence_core`], dually for `FG`.
+fn dominates(
+    context: &mut Context,
+    mu: &[Formula],
+    nu: &[Formula],
+    weaker: &Found,
+    stronger: &Found,
+) -> bool {
+    if stronger.x_bits & !weaker.x_bits != 0 || stronger.y_bits & !weaker.y_bits != 0 {
+        return false;
+    }
+    let x = select(mu, weaker.x_bits);
+    let y = select(nu, weaker.y_bits);
+    let implies = |context: &mut Context, a: Node, b: Node| {
+        let not_b = context.bdd.not(b);
+        context.bdd.and(a, not_b) == FALSE
+    };
+    for psi in select(mu, weaker.x_bits & !stronger.x_bits) {
+        let c = context.class(&recurrence_core(&af::mu_under(&psi, &y)));
+        if !stronger
+            .infinitely_often
+            .iter()
+            .any(|&d| implies(context, d, c))
+        {
+            return false;
+        }
+    }
+    for psi in select(nu, weaker.y_bits & !stronger.y_bits) {
+        let s = context.class(&persistence_core(&af::nu_under(&psi, &x)));
+        if !implies(context, stronger.almost_always, s) {
+            return false;
+        }
+    }
+    true
+}
+
+/// A formula `c'` with `GF c' = GF c`: `GF F g = GF X g = GF (f U g) = GF g`,
+/// `GF (f M g) = GF (f & g)`, and `GF` distributes over `|`.
+fn recurrence_core(c: &Formula) -> Formula {
+    match c {
+        Formula::Finally(g) | Formula::Next(g) | Formula::Until(_, g) => recurrence_core(g),
+        Formula::StrongRelease(f, g) => formula::and(vec![(**f).clone(), (**g).clone()]),
+        Formula::Or(gs) => formula::or(gs.iter().map(recurrence_core).collect()),
+        other => other.clone(),
+    }
+}
+
+/// A formula `s'` with `FG s' = FG s`: `FG G g = FG X g = FG (f R g) = FG
+/// g`, `FG (f W g) = FG (f | g)`, and `FG` distributes over `&`.
+fn persistence_core(s: &Formula) -> Formula {
+    match s {
+        Formula::Globally(g) | Formula::Next(g) | Formula::Release(_, g) => persistence_core(g),
+        Formula::WeakUntil(f, g) => formula::or(vec![(**f).clone(), (**g).clone()]),
+        Formula::And(gs) => formula::and(gs.iter().map(persistence_core).collect()),
+        other => other.clone(),
+    }
+}
+
 fn select(items: &[Formula], bits: u32) -> Vec<Formula> {
     items
         .iter()
@@ -390,4 +595,124 @@ fn used(indices: impl Iterator<Item = usize>) -> Vec<usize> {
     v.sort_unstable();
     v.dedup();
     v
+}
+
+/// Whether some word is accepted by `other` while the run of the weak
+/// automaton `weak` on it ends in a component with the given verdict
+/// (accepting or not).
+///
+/// The product of the two deterministic automata is explored; the answer is
+/// yes iff for some disjunct `Fin(L) & Inf(K_1) & ... & Inf(K_m)` of `other`
+/// a strongly connected part of the product, restricted to states whose weak
+/// component has the verdict and to transitions outside `L`, has internal
+/// transitions in every `K_j` (then a cycle through all of them is the loop
+/// of an accepted lasso, and conversely).
+fn meets(weak: &Tgr, verdict: bool, other: &Tgr) -> Result<bool, TranslateError> {
+    let letters = weak.letters;
+    let (states, edges) = explore(
+        (weak.initial as u32, other.initial as u32),
+        letters,
+        |&(w, o), a| {
+            let we = weak.edges[w as usize * letters + a as usize];
+            let oe = other.edges[o as usize * letters + a as usize];
+            ((we.target, oe.target), oe.marks)
+        },
+    )?;
+    let good: Vec<bool> = states
+        .iter()
+        .map(|&(w, _)| (weak.edges[w as usize * letters].marks != 0) == verdict)
+        .collect();
+    for d in &other.disjuncts {
+        let allowed =
+            |s: usize, e: &Edge| good[s] && good[e.target as usize] && e.marks & d.fin == 0;
+        let mut offsets = vec![0];
+        let mut targets = Vec::new();
+        for s in 0..states.len() {
+            targets.extend(
+                edges[s * letters..(s + 1) * letters]
+                    .iter()
+                    .filter(|e| allowed(s, e))
+                    .map(|e| e.target),
+            );
+            offsets.push(targets.len());
+        }
+        let components = graph::strongly_connected_components(&graph::CsrGraph {
+            offsets: &offsets,
+            targets: &targets,
+        });
+        let mut cyclic = vec![false; components.count];
+        let mut seen: Vec<MarkSet> = vec![0; components.count];
+        for s in 0..states.len() {
+            let c = components.component[s] as usize;
+            for e in &edges[s * letters..(s + 1) * letters] {
+                if allowed(s, e) && components.component[e.target as usize] as usize == c {
+                    cyclic[c] = true;
+                    seen[c] |= e.marks;
+                }
+            }
+        }
+        if (0..components.count)
+            .any(|c| cyclic[c] && d.inf.iter().all(|&m| (seen[c] >> m) & 1 == 1))
+        {
+            return Ok(true);
+        }
+    }
+    Ok(false)
+}
+
+/// Whether the weak automaton `weak` accepts exactly the words that
+/// `positive` accepts, given an automaton `negative` for the complement.
+///
+/// This certifies the weak automaton of a formula that is an obligation
+/// property without being syntactically one: it must accept no word of the
+/// negation and reject no word of the formula.
+pub(crate) fn weak_agrees(weak: &Tgr, positive: &Tgr, negative: &Tgr) -> bool {
+    matches!(meets(weak, true, negative), Ok(false))
+        && matches!(meets(weak, false, positive), Ok(false))
+}
+
+/// The automaton of `G (l | G psi)` for a propositional formula `l`, from an
+/// automaton `then` of `G psi`.
+///
+/// `G (l | G psi)` holds iff `l` holds forever or, at the first position
+/// where `l` fails, `G psi` holds (then `G psi` holds at every later position
+/// too). The automaton waits in a new state while `l` holds, marking its
+/// loop with a new mark that a new disjunct `Inf` accepts, and on the first
+/// letter violating `l` moves as `then` does from its initial state. That
+/// transition is taken at most once, so it carries the waiting mark too
+/// (then all transitions of the waiting state carry the same marks).
+pub(crate) fn wait_then(context: &mut Context, l: &Formula, then: &Tgr) -> Tgr {
+    let letters = then.letters;
+    let class = context.class(l);
+    let wait_mark = then.num_marks;
+    let shifted = |e: &Edge| Edge {
+        target: e.target + 1,
+        marks: e.marks,
+    };
+    let mut edges: Vec<Edge> = (0..letters as Letter)
+        .map(|a| {
+            let target = if context.after(class, a) == TRUE {
+                0
+            } else {
+                then.edges[then.initial * letters + a as usize].target + 1
+            };
+            Edge {
+                target,
+                marks: 1 << wait_mark,
+            }
+        })
+        .collect();
+    edges.extend(then.edges.iter().map(shifted));
+    let mut disjuncts = then.disjuncts.clone();
+    disjuncts.push(Disjunct {
+        fin: 0,
+        inf: vec![wait_mark],
+    });
+    Tgr {
+        letters,
+        initial: 0,
+        edges,
+        num_marks: wait_mark + 1,
+        disjuncts,
+    }
 }

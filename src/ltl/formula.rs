@@ -339,8 +339,37 @@ pub(crate) fn globally(f: Formula) -> Formula {
     }
 }
 
-/// `f U g`, simplified.
+/// Whether `f` propositionally implies `h` because `h` is `f` or `h`'s
+/// conjuncts are among `f`'s.
+fn implies_conjuncts(f: &Formula, h: &Formula) -> bool {
+    let conjuncts = |x: &Formula| match x {
+        And(xs) => xs.clone(),
+        x => vec![x.clone()],
+    };
+    let fs = conjuncts(f);
+    conjuncts(h).iter().all(|x| fs.contains(x))
+}
+
+/// `f U g`, simplified; also `f U (g | G h) = (f U g) | G h` if `f` implies
+/// `h` (if `G h` holds at the position where the until is fulfilled, `h`
+/// holds from the start), which is `f W g` for `h = f`.
 pub(crate) fn until(f: Formula, g: Formula) -> Formula {
+    if let Or(gs) = &g
+        && let Some(at) = gs
+            .iter()
+            .position(|x| matches!(x, Globally(h) if implies_conjuncts(&f, h)))
+    {
+        let mut rest = gs.clone();
+        let Globally(h) = rest.remove(at) else {
+            unreachable!("matched above")
+        };
+        let rest = or(rest);
+        return if *h == f {
+            weak_until(f, rest)
+        } else {
+            or(vec![until(f, rest), Globally(h)])
+        };
+    }
     match (f, g) {
         (_, g @ (True | False)) => g,
         (False, g) => g,
@@ -382,6 +411,17 @@ pub(crate) fn strong_release(f: Formula, g: Formula) -> Formula {
         (f, True) => finally(f),
         (f, g) if f == g => f,
         (f, g) => StrongRelease(Box::new(f), Box::new(g)),
+    }
+}
+
+/// Whether an NNF formula is propositional (no temporal operator): its
+/// truth depends on the first letter only.
+pub(crate) fn is_propositional(f: &Formula) -> bool {
+    match f {
+        True | False | Prop(_) => true,
+        Not(g) => is_propositional(g),
+        And(gs) | Or(gs) => gs.iter().all(is_propositional),
+        _ => false,
     }
 }
 

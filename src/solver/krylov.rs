@@ -11,12 +11,20 @@
 //! within the tolerance when it cannot get further.
 //!
 //! faer stops when the recursively updated residual has Euclidean norm below
-//! its threshold; that residual can drift from the true one. So every solve
+//! its threshold; that residual can drift from the true one. So every run
 //! is followed by the true residual `max_i |(A x - b)_i|`, and when that is
-//! above the tolerance BiCGSTAB restarts from the current `x` with a
-//! tenfold stricter threshold, up to [`RESTARTS`] times. The Euclidean norm
-//! bounds the maximum norm, so the recursion's threshold suffices when it is
-//! faithful.
+//! above the target BiCGSTAB restarts from the current `x` with a tenfold
+//! stricter threshold. The Euclidean norm bounds the maximum norm, so the
+//! recursion's threshold suffices when it is faithful. Runs are also cut
+//! into rounds of [`ROUND_ITERATIONS`], each restarting from the current
+//! iterate, and a solve without a usable start begins at the
+//! preconditioner's guess `M^{-1} b`: both guard against BiCGSTAB's
+//! stagnation. A round that does not improve the true residual is undone
+//! and ends the solve (restarting from the same iterate would repeat it);
+//! once within the tolerance, a round that no longer halves the residual
+//! also ends it (the target lies below what rounding allows). The solve is
+//! accepted if the residual is within the tolerance. The whole
+//! solve is limited to [`SolverSettings::max_iterations`] iterations.
 
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::matrix_free::IdentityPrecond;
@@ -25,27 +33,60 @@ use faer::{MatMut, MatRef, Par};
 
 use super::ilu::{IluPreconditioner, MatrixOperator};
 use super::{
-    Direction, Ilu0, SolveReport, SolverError, SolverSettings, SparsePattern, accept,
-    check_solve_inputs, check_values,
+    Direction, Ilu0, SolvePair, SolveReport, SolverError, SolverSettings, SparsePattern, accept,
+    check_solve_inputs, check_values, join_directions,
 };
 
 /// BiCGSTAB aims at this fraction of the tolerance.
 pub const ACCURACY_MARGIN: f64 = 1e-4;
 
-/// Restarts allowed when BiCGSTAB's own residual is below its threshold but
-/// the true residual is not.
-pub const RESTARTS: usize = 3;
+/// BiCGSTAB restarts from its current iterate (with a fresh shadow residual)
+/// after this many iterations without reaching its target: restarting cures
+/// the stagnation that a shadow residual nearly orthogonal to the Krylov
+/// space causes.
+pub const ROUND_ITERATIONS: usize = 200;
 
 /// Preconditioned BiCGSTAB for `A x = b` and `A^T y = c` with a fixed pattern.
 pub struct KrylovSolver {
+    system: System,
+    forward: Workspace,
+    transposed: Workspace,
+}
+
+/// What both directions share: `A` and its ILU(0).
+struct System {
     pattern: SparsePattern,
     values: Vec<f64>,
     ilu: Ilu0,
     factorised: bool,
-    workspace: MemBuffer,
-    residual_work: Vec<f64>,
     tolerance: f64,
     max_iterations: usize,
+}
+
+/// The memory of one direction's solves: faer's BiCGSTAB workspace, a
+/// buffer for `A^T y`, and the best iterate so far.
+struct Workspace {
+    bicgstab: MemBuffer,
+    product: Vec<f64>,
+    best: Vec<f64>,
+}
+
+impl Workspace {
+    fn new(system: &System, direction: Direction) -> Result<Self, SolverError> {
+        let n = system.pattern.n;
+        let scratch = bicgstab_scratch(
+            IdentityPrecond { dim: n },
+            system.preconditioner(direction),
+            system.operator(direction),
+            1,
+            Par::Seq,
+        );
+        Ok(Self {
+            bicgstab: MemBuffer::try_new(scratch).map_err(|_| SolverError::OutOfMemory)?,
+            product: vec![0.0; n],
+            best: vec![0.0; n],
+        })
+    }
 }
 
 impl KrylovSolver {
@@ -54,84 +95,108 @@ impl KrylovSolver {
     pub fn new(pattern: SparsePattern, settings: &SolverSettings) -> Result<Self, SolverError> {
         settings.check()?;
         pattern.check()?;
-        let ilu = Ilu0::new(&pattern)?;
-        let n = pattern.n;
-        let values = vec![0.0; pattern.nnz()];
-        let scratch = {
-            let operator = MatrixOperator {
-                pattern: &pattern,
-                values: &values,
-                direction: Direction::Forward,
-            };
-            let preconditioner = IluPreconditioner {
-                pattern: &pattern,
-                ilu: &ilu,
-                direction: Direction::Forward,
-            };
-            bicgstab_scratch(
-                IdentityPrecond { dim: n },
-                preconditioner,
-                operator,
-                1,
-                Par::Seq,
-            )
-        };
-        let workspace = MemBuffer::try_new(scratch).map_err(|_| SolverError::OutOfMemory)?;
-        Ok(Self {
+        let system = System {
+            ilu: Ilu0::new(&pattern)?,
+            values: vec![0.0; pattern.nnz()],
             pattern,
-            values,
-            ilu,
             factorised: false,
-            workspace,
-            residual_work: vec![0.0; n],
             tolerance: settings.tolerance,
             max_iterations: settings.max_iterations,
+        };
+        Ok(Self {
+            forward: Workspace::new(&system, Direction::Forward)?,
+            transposed: Workspace::new(&system, Direction::Transposed)?,
+            system,
         })
     }
 
     /// The pattern of `A`.
     pub fn pattern(&self) -> &SparsePattern {
-        &self.pattern
+        &self.system.pattern
+    }
+
+    /// The values of `A` as of the last factorisation.
+    pub fn values(&self) -> &[f64] {
+        &self.system.values
     }
 
     /// Takes the values of `A` and computes its ILU(0) preconditioner.
     pub fn factorize(&mut self, values: &[f64]) -> Result<(), SolverError> {
-        check_values(&self.pattern, values)?;
-        self.factorised = false;
-        self.values.copy_from_slice(values);
-        self.ilu.factorize(&self.pattern, &self.values)?;
-        self.factorised = true;
+        let system = &mut self.system;
+        check_values(&system.pattern, values)?;
+        system.factorised = false;
+        system.values.copy_from_slice(values);
+        system.ilu.factorize(&system.pattern, &system.values)?;
+        system.factorised = true;
         Ok(())
     }
 
-    /// Solves `A x = b` starting from `x` (a non-finite start is replaced by 0).
+    /// Solves `A x = b` starting from `x` (see the module documentation for
+    /// starts that are zero or not finite).
     pub fn solve(&mut self, b: &[f64], x: &mut [f64]) -> Result<SolveReport, SolverError> {
-        self.solve_checked(b, x, Direction::Forward)
+        self.system
+            .solve(&mut self.forward, b, x, Direction::Forward)
     }
 
-    /// Solves `A^T y = c` starting from `y` (a non-finite start is replaced by 0).
+    /// Solves `A^T y = c` starting from `y`, as [`Self::solve`].
     pub fn solve_transpose(
         &mut self,
         c: &[f64],
         y: &mut [f64],
     ) -> Result<SolveReport, SolverError> {
-        self.solve_checked(c, y, Direction::Transposed)
+        self.system
+            .solve(&mut self.transposed, c, y, Direction::Transposed)
     }
 
-    fn true_residual(&mut self, rhs: &[f64], solution: &[f64], direction: Direction) -> f64 {
+    /// [`Self::solve`] and [`Self::solve_transpose`] at once, on two threads.
+    pub fn solve_both(&mut self, b: &[f64], x: &mut [f64], c: &[f64], y: &mut [f64]) -> SolvePair {
+        let system = &self.system;
+        let (forward, transposed) = (&mut self.forward, &mut self.transposed);
+        join_directions(
+            || system.solve(forward, b, x, Direction::Forward),
+            || system.solve(transposed, c, y, Direction::Transposed),
+        )
+    }
+}
+
+impl System {
+    fn operator(&self, direction: Direction) -> MatrixOperator<'_> {
+        MatrixOperator {
+            pattern: &self.pattern,
+            values: &self.values,
+            direction,
+        }
+    }
+
+    fn preconditioner(&self, direction: Direction) -> IluPreconditioner<'_> {
+        IluPreconditioner {
+            pattern: &self.pattern,
+            ilu: &self.ilu,
+            direction,
+        }
+    }
+
+    fn true_residual(
+        &self,
+        workspace: &mut Workspace,
+        rhs: &[f64],
+        solution: &[f64],
+        direction: Direction,
+    ) -> f64 {
         match direction {
             Direction::Forward => self.pattern.residual(&self.values, solution, rhs),
             Direction::Transposed => self.pattern.transposed_residual(
                 &self.values,
                 solution,
                 rhs,
-                &mut self.residual_work,
+                &mut workspace.product,
             ),
         }
     }
 
-    fn solve_checked(
-        &mut self,
+    fn solve(
+        &self,
+        workspace: &mut Workspace,
         rhs: &[f64],
         solution: &mut [f64],
         direction: Direction,
@@ -142,33 +207,44 @@ impl KrylovSolver {
             ));
         }
         check_solve_inputs(self.pattern.n, rhs, solution)?;
-        if solution.iter().any(|v| !v.is_finite()) {
-            solution.fill(0.0);
+        if solution.iter().all(|&v| v == 0.0) || solution.iter().any(|v| !v.is_finite()) {
+            self.preconditioned_start(rhs, solution, direction);
         }
         let target = ACCURACY_MARGIN * self.tolerance;
         let mut threshold = target;
         let mut iterations = 0;
-        let mut residual = self.true_residual(rhs, solution, direction);
-        for _ in 0..=RESTARTS {
-            if residual <= target {
-                break;
-            }
-            let outcome = self.run_bicgstab(rhs, solution, direction, threshold, iterations);
-            residual = self.true_residual(rhs, solution, direction);
-            if !residual.is_finite() {
-                solution.fill(0.0);
-                residual = self.true_residual(rhs, solution, direction);
-            }
-            match outcome {
-                Ok(done) => iterations += done,
+        let mut residual = self.true_residual(workspace, rhs, solution, direction);
+        workspace.best.copy_from_slice(solution);
+        while residual > target && iterations < self.max_iterations {
+            let budget = ROUND_ITERATIONS.min(self.max_iterations - iterations);
+            let run = self.run_bicgstab(workspace, rhs, solution, direction, threshold, budget);
+            let converged = match run {
+                Ok(done) => {
+                    iterations += done.max(1);
+                    true
+                }
                 Err(()) => {
-                    iterations = self.max_iterations;
+                    iterations += budget;
+                    false
+                }
+            };
+            let previous = residual;
+            residual = self.true_residual(workspace, rhs, solution, direction);
+            if residual.is_finite() && residual < previous {
+                workspace.best.copy_from_slice(solution);
+                if residual > 0.5 * previous && residual <= self.tolerance {
                     break;
                 }
+                if converged && residual > target {
+                    threshold *= 0.1;
+                }
+            } else {
+                solution.copy_from_slice(&workspace.best);
+                residual = previous;
+                break;
             }
-            threshold *= 0.1;
         }
-        if iterations >= self.max_iterations && (residual.is_nan() || residual > self.tolerance) {
+        if residual.is_nan() || residual > self.tolerance {
             return Err(SolverError::NotConverged {
                 iterations,
                 residual,
@@ -182,43 +258,47 @@ impl KrylovSolver {
         })
     }
 
-    /// One BiCGSTAB run from `solution`; the iterations it took, or `Err`
-    /// when it used up the remaining iteration budget.
+    /// `solution := M^{-1} rhs` (or `M^{-T} rhs`): the preconditioner's
+    /// guess, a far better start than 0, whose residual is also dense. A
+    /// right-hand side with a single nonzero, such as the adjoint's `p0`,
+    /// otherwise gives BiCGSTAB a shadow residual nearly orthogonal to the
+    /// Krylov space, and it stagnates.
+    fn preconditioned_start(&self, rhs: &[f64], solution: &mut [f64], direction: Direction) {
+        solution.copy_from_slice(rhs);
+        match direction {
+            Direction::Forward => self.ilu.solve_in_place(&self.pattern, solution),
+            Direction::Transposed => self.ilu.solve_transpose_in_place(&self.pattern, solution),
+        }
+    }
+
+    /// One BiCGSTAB run of at most `budget` iterations from `solution`; the
+    /// iterations it took, or `Err` when it used up the budget.
     fn run_bicgstab(
-        &mut self,
+        &self,
+        workspace: &mut Workspace,
         rhs: &[f64],
         solution: &mut [f64],
         direction: Direction,
         threshold: f64,
-        used: usize,
+        budget: usize,
     ) -> Result<usize, ()> {
         let n = self.pattern.n;
-        let operator = MatrixOperator {
-            pattern: &self.pattern,
-            values: &self.values,
-            direction,
-        };
-        let preconditioner = IluPreconditioner {
-            pattern: &self.pattern,
-            ilu: &self.ilu,
-            direction,
-        };
         let params = BicgParams {
             abs_tolerance: threshold,
             rel_tolerance: 0.0,
-            max_iters: self.max_iterations.saturating_sub(used).max(1),
+            max_iters: budget,
             ..BicgParams::default()
         };
         let result = bicgstab(
             MatMut::from_column_major_slice_mut(solution, n, 1),
             IdentityPrecond { dim: n },
-            preconditioner,
-            operator,
+            self.preconditioner(direction),
+            self.operator(direction),
             MatRef::from_column_major_slice(rhs, n, 1),
             params,
             |_| {},
             Par::Seq,
-            MemStack::new(&mut self.workspace),
+            MemStack::new(&mut workspace.bicgstab),
         );
         match result {
             Ok(info) => Ok(info.iter_count),
@@ -229,7 +309,7 @@ impl KrylovSolver {
 
 #[cfg(test)]
 mod tests {
-    use super::super::test_systems::random_chain;
+    use super::super::test_systems::{grid_walk, random_chain};
     use super::*;
 
     fn settings(tolerance: f64) -> SolverSettings {
@@ -269,6 +349,30 @@ mod tests {
             warm.iterations,
             cold_again.iterations
         );
+    }
+
+    #[test]
+    fn a_right_hand_side_with_one_nonzero_converges_in_both_directions() {
+        let (pattern, values) = grid_walk(60);
+        let n = pattern.n;
+        let mut solver = KrylovSolver::new(pattern.clone(), &settings(1e-9)).unwrap();
+        solver.factorize(&values).unwrap();
+        let mut unit = vec![0.0; n];
+        unit[0] = 1.0;
+        let (mut x, mut y) = (vec![0.0; n], vec![0.0; n]);
+        let forward = solver.solve(&unit, &mut x).unwrap();
+        let backward = solver.solve_transpose(&unit, &mut y).unwrap();
+        assert!(forward.residual <= 1e-9 && backward.residual <= 1e-9);
+        let mut lu = crate::solver::LuSolver::new(pattern, 1e-9).unwrap();
+        lu.factorize(&values).unwrap();
+        let mut exact = vec![0.0; n];
+        lu.solve_transpose(&unit, &mut exact).unwrap();
+        let error = exact
+            .iter()
+            .zip(&y)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        assert!(error < 1e-9, "largest error {error}");
     }
 
     #[test]

@@ -10,20 +10,44 @@ use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Conj, MatMut, Par};
 
 use super::{
-    Direction, SolveReport, SolverError, SparsePattern, accept, check_solve_inputs, check_values,
+    Direction, SolvePair, SolveReport, SolverError, SparsePattern, accept, check_solve_inputs,
+    check_values, join_directions,
 };
 
 /// Sparse LU of `A` with a fixed pattern: analyse once, factorise per values,
 /// solve many times.
 pub struct LuSolver {
+    system: System,
+    factorisation_workspace: MemBuffer,
+    forward: Workspace,
+    transposed: Workspace,
+}
+
+/// What both directions share: `A` and its factorisation.
+struct System {
     pattern: SparsePattern,
     symbolic: SymbolicLu<usize>,
     numeric: NumericLu<usize, f64>,
     values: Vec<f64>,
     factorised: bool,
-    workspace: MemBuffer,
-    residual_work: Vec<f64>,
     tolerance: f64,
+}
+
+/// The memory of one direction's solves: faer's workspace and a buffer for
+/// `A^T y`.
+struct Workspace {
+    solve: MemBuffer,
+    product: Vec<f64>,
+}
+
+impl Workspace {
+    fn new(symbolic: &SymbolicLu<usize>, n: usize) -> Result<Self, SolverError> {
+        let scratch = symbolic.solve_in_place_scratch::<f64>(1, Par::Seq);
+        Ok(Self {
+            solve: MemBuffer::try_new(scratch).map_err(|_| SolverError::OutOfMemory)?,
+            product: vec![0.0; n],
+        })
+    }
 }
 
 impl LuSolver {
@@ -34,52 +58,56 @@ impl LuSolver {
         pattern.check()?;
         let symbolic = factorize_symbolic_lu(transpose_view(&pattern), Default::default())
             .map_err(|_| SolverError::OutOfMemory)?;
-        let scratch = symbolic
-            .factorize_numeric_lu_scratch::<f64>(Par::Seq, Default::default())
-            .or(symbolic.solve_in_place_scratch::<f64>(1, Par::Seq));
-        let workspace = MemBuffer::try_new(scratch).map_err(|_| SolverError::OutOfMemory)?;
+        let scratch = symbolic.factorize_numeric_lu_scratch::<f64>(Par::Seq, Default::default());
+        let factorisation_workspace =
+            MemBuffer::try_new(scratch).map_err(|_| SolverError::OutOfMemory)?;
         let values = vec![0.0; pattern.nnz()];
-        let residual_work = vec![0.0; pattern.n];
         Ok(Self {
-            pattern,
-            symbolic,
-            numeric: NumericLu::new(),
-            values,
-            factorised: false,
-            workspace,
-            residual_work,
-            tolerance,
+            forward: Workspace::new(&symbolic, pattern.n)?,
+            transposed: Workspace::new(&symbolic, pattern.n)?,
+            system: System {
+                pattern,
+                symbolic,
+                numeric: NumericLu::new(),
+                values,
+                factorised: false,
+                tolerance,
+            },
+            factorisation_workspace,
         })
     }
 
     /// The pattern of `A`.
     pub fn pattern(&self) -> &SparsePattern {
-        &self.pattern
+        &self.system.pattern
     }
 
     /// Numeric LU of `A` with `values` (aligned with the pattern's entries),
     /// reusing the symbolic analysis and the numeric storage.
     pub fn factorize(&mut self, values: &[f64]) -> Result<(), SolverError> {
-        check_values(&self.pattern, values)?;
-        self.values.copy_from_slice(values);
-        self.factorised = false;
-        let matrix = SparseColMatRef::new(transpose_view(&self.pattern), &self.values);
-        self.symbolic
+        let system = &mut self.system;
+        check_values(&system.pattern, values)?;
+        system.values.copy_from_slice(values);
+        system.factorised = false;
+        let matrix = SparseColMatRef::new(transpose_view(&system.pattern), &system.values);
+        system
+            .symbolic
             .factorize_numeric_lu(
-                &mut self.numeric,
+                &mut system.numeric,
                 matrix,
                 Par::Seq,
-                MemStack::new(&mut self.workspace),
+                MemStack::new(&mut self.factorisation_workspace),
                 Default::default(),
             )
             .map_err(|e| SolverError::Singular(format!("{e:?}")))?;
-        self.factorised = true;
+        system.factorised = true;
         Ok(())
     }
 
     /// Solves `A x = b` into `x` (whose entry value is ignored).
     pub fn solve(&mut self, b: &[f64], x: &mut [f64]) -> Result<SolveReport, SolverError> {
-        self.solve_checked(b, x, Direction::Forward)
+        let factors = self.system.factors()?;
+        factors.solve(&mut self.forward, b, x, Direction::Forward)
     }
 
     /// Solves `A^T y = c` into `y` (whose entry value is ignored).
@@ -88,39 +116,73 @@ impl LuSolver {
         c: &[f64],
         y: &mut [f64],
     ) -> Result<SolveReport, SolverError> {
-        self.solve_checked(c, y, Direction::Transposed)
+        let factors = self.system.factors()?;
+        factors.solve(&mut self.transposed, c, y, Direction::Transposed)
     }
 
-    fn solve_checked(
-        &mut self,
-        rhs: &[f64],
-        solution: &mut [f64],
-        direction: Direction,
-    ) -> Result<SolveReport, SolverError> {
+    /// [`Self::solve`] and [`Self::solve_transpose`] at once, on two threads.
+    pub fn solve_both(&mut self, b: &[f64], x: &mut [f64], c: &[f64], y: &mut [f64]) -> SolvePair {
+        let factors = match self.system.factors() {
+            Ok(factors) => factors,
+            Err(error) => return (Err(error.clone()), Err(error)),
+        };
+        let (forward, transposed) = (&mut self.forward, &mut self.transposed);
+        join_directions(
+            || factors.solve(forward, b, x, Direction::Forward),
+            || factors.solve(transposed, c, y, Direction::Transposed),
+        )
+    }
+}
+
+impl System {
+    fn factors(&self) -> Result<Factors<'_>, SolverError> {
         if !self.factorised {
             return Err(SolverError::Malformed(
                 "solve called before a successful factorisation".into(),
             ));
         }
+        Ok(Factors {
+            pattern: &self.pattern,
+            values: &self.values,
+            lu: LuRef::new_unchecked(&self.symbolic, &self.numeric),
+            tolerance: self.tolerance,
+        })
+    }
+}
+
+/// A successful factorisation, shared by the two directions' solves.
+#[derive(Clone, Copy)]
+struct Factors<'a> {
+    pattern: &'a SparsePattern,
+    values: &'a [f64],
+    lu: LuRef<'a, usize, f64>,
+    tolerance: f64,
+}
+
+impl Factors<'_> {
+    fn solve(
+        &self,
+        workspace: &mut Workspace,
+        rhs: &[f64],
+        solution: &mut [f64],
+        direction: Direction,
+    ) -> Result<SolveReport, SolverError> {
         let n = self.pattern.n;
         check_solve_inputs(n, rhs, solution)?;
         solution.copy_from_slice(rhs);
-        let lu = LuRef::new_unchecked(&self.symbolic, &self.numeric);
-        let stack = MemStack::new(&mut self.workspace);
+        let stack = MemStack::new(&mut workspace.solve);
         let column = MatMut::from_column_major_slice_mut(solution, n, 1);
         let residual = match direction {
             Direction::Forward => {
-                lu.solve_transpose_in_place_with_conj(Conj::No, column, Par::Seq, stack);
-                self.pattern.residual(&self.values, solution, rhs)
+                self.lu
+                    .solve_transpose_in_place_with_conj(Conj::No, column, Par::Seq, stack);
+                self.pattern.residual(self.values, solution, rhs)
             }
             Direction::Transposed => {
-                lu.solve_in_place_with_conj(Conj::No, column, Par::Seq, stack);
-                self.pattern.transposed_residual(
-                    &self.values,
-                    solution,
-                    rhs,
-                    &mut self.residual_work,
-                )
+                self.lu
+                    .solve_in_place_with_conj(Conj::No, column, Par::Seq, stack);
+                self.pattern
+                    .transposed_residual(self.values, solution, rhs, &mut workspace.product)
             }
         };
         let residual = accept(residual, solution, self.tolerance)?;

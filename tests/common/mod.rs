@@ -149,6 +149,8 @@ pub fn dense_product(game: &Posg, dra: &Dra, def: &Fsc, adv: &Fsc) -> DenseProdu
 /// The probability of phi computed from the dense product: reachability by
 /// transitive closure, recurrent states as those that every reachable state
 /// can return to, feasible classes by the Rabin pairs, then a dense solve.
+// The closure reads reach[a][k] and reach[k][b]: index loops are clearer.
+#[allow(clippy::needless_range_loop)]
 pub fn reference_value(game: &Posg, dra: &Dra, def: &Fsc, adv: &Fsc) -> f64 {
     let product = dense_product(game, dra, def, adv);
     let n = product.p.nrows();
