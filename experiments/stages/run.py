@@ -53,6 +53,7 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--no-run", action="store_true", help="only read existing criterion estimates")
     parser.add_argument("--max-states", type=int, help="POSG_FSC_BENCH_MAX_STATES for the run")
+    parser.add_argument("--note", help="a sentence added to the settings (e.g. which stages were re-run when)")
     args = parser.parse_args()
     command = ["cargo", "bench", "--bench", "stages"]
     env = dict(os.environ)
@@ -66,7 +67,8 @@ def main():
     rows = [{"size": size, **{stage: seconds(stage, size) for stage in STAGES}} for size in sizes]
     setting = (f"{'POSG_FSC_BENCH_MAX_STATES=' + str(args.max_states) + ' ' if args.max_states else ''}"
                f"{' '.join(command)}; {version()}; criterion means in seconds, release build, 2 cores shared "
-               "with other work; grids of the paper's family, '!unsafe U goal', uniform controllers")
+               "with other work; grids of the paper's family, '!unsafe U goal', uniform controllers"
+               + (f"; {args.note}" if args.note else ""))
     with open(os.path.join(ROOT, "results", "stages.csv"), "w", newline="") as handle:
         handle.write(f"# {setting}\n")
         writer = csv.DictWriter(handle, fieldnames=["size", *STAGES])
