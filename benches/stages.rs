@@ -24,6 +24,11 @@
 //! * `certify`: both certified bounds of the uniform pair
 //!   ([`lower_bound`] of the defender, [`upper_bound`] of the adversary).
 //!
+//! Where `--solver auto` picks BiCGSTAB (above 50000 unknowns), `value`
+//! and `value+gradient` repeat one point, so each solve starts from the
+//! solution (warm start): they time the refill, the ILU(0) and the residual
+//! checks rather than iterations; `optimiser iteration` moves the point.
+//!
 //! Each fixture checks its result before it is timed: values in `[0, 1]`,
 //! residuals within the tolerance, gradients finite, rows of `P` summing to
 //! 1, `lower <= V <= upper`.
