@@ -10,6 +10,9 @@
 //! * [`union`] and [`with_pending_monitor`]: for `G (l | (psi U (r | G
 //!   theta)))`, the union of an automaton of `G (l | (psi U r))` with one of
 //!   `(!m | psi) U G theta` read through the past monitor `m`;
+//! * [`normalise_marks`] and [`merge_bisimilar`]: language-preserving
+//!   simplifications of any of these automata before the state-based
+//!   conversion;
 //! * [`master`]: for every formula, the product of the `af`-tracker with the
 //!   co-Büchi and Büchi monitors of the Master Theorem, with a transition-based
 //!   generalised Rabin condition (one disjunct per guess `(X, Y)`).
