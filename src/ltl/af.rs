@@ -54,6 +54,14 @@ impl Context {
         self.bdd.var(id)
     }
 
+    /// The propositions in the bit order of the letters.
+    pub(crate) fn propositions(&self) -> Vec<String> {
+        let mut named: Vec<(&String, u32)> =
+            self.propositions.iter().map(|(p, &i)| (p, i)).collect();
+        named.sort_unstable_by_key(|&(_, i)| i);
+        named.into_iter().map(|(p, _)| p.clone()).collect()
+    }
+
     /// The class of an NNF formula.
     pub(crate) fn class(&mut self, formula: &Formula) -> Node {
         match formula {

@@ -7,6 +7,12 @@
 //!   the breakpoint automaton over copies of the weak automaton of `chi`;
 //! * [`wait_then`]: for `G (l | G psi)`, a waiting state in front of an
 //!   automaton of `G psi`;
+//! * [`union`] and [`with_pending_monitor`]: for `G (l | (psi U (r | G
+//!   theta)))`, the union of an automaton of `G (l | (psi U r))` with one of
+//!   `(!m | psi) U G theta` read through the past monitor `m`;
+//! * [`normalise_marks`] and [`merge_bisimilar`]: language-preserving
+//!   simplifications of any of these automata before the state-based
+//!   conversion;
 //! * [`master`]: for every formula, the product of the `af`-tracker with the
 //!   co-Büchi and Büchi monitors of the Master Theorem, with a transition-based
 //!   generalised Rabin condition (one disjunct per guess `(X, Y)`).
@@ -714,5 +720,201 @@ pub(crate) fn wait_then(context: &mut Context, l: &Formula, then: &Tgr) -> Tgr {
         edges,
         num_marks: wait_mark + 1,
         disjuncts,
+    }
+}
+
+/// The union of two automata over the same letters: their product, whose
+/// marks are those of `first` followed by those of `second` (shifted past
+/// `first`'s), accepting a run iff some disjunct of either automaton holds on
+/// its component. It accepts exactly the words one of them accepts.
+pub(crate) fn union(first: &Tgr, second: &Tgr) -> Result<Tgr, TranslateError> {
+    let letters = first.letters;
+    let shift = first.num_marks;
+    let num_marks = shift + second.num_marks;
+    if num_marks > MarkSet::BITS {
+        return Err(TranslateError::TooManyMarks {
+            count: num_marks as usize,
+            limit: MarkSet::BITS as usize,
+        });
+    }
+    let shifted = |marks: MarkSet| marks.checked_shl(shift).unwrap_or(0);
+    let (_, edges) = explore(
+        (first.initial as u32, second.initial as u32),
+        letters,
+        |&(p, q), a| {
+            let e = first.edges[p as usize * letters + a as usize];
+            let f = second.edges[q as usize * letters + a as usize];
+            ((e.target, f.target), e.marks | shifted(f.marks))
+        },
+    )?;
+    let disjuncts = first
+        .disjuncts
+        .iter()
+        .cloned()
+        .chain(second.disjuncts.iter().map(|d| Disjunct {
+            fin: shifted(d.fin),
+            inf: d.inf.iter().map(|&m| m + shift).collect(),
+        }))
+        .collect();
+    Ok(Tgr {
+        letters,
+        initial: 0,
+        edges,
+        num_marks,
+        disjuncts,
+    })
+}
+
+/// The automaton over `2^AP` accepting the words `w` whose extension `w^m`
+/// is accepted by `inner`, an automaton over `2^(AP + {m})` that reads the
+/// fresh proposition `m` as the highest letter bit; `w^m` adds `m` at every
+/// position `k` with `m_k = !r(w_k) & (!l(w_k) | m_{k-1})`, `m_{-1} = false`,
+/// for the propositional formulas `l` and `r` (classes of `context`, whose
+/// letters are those over `AP`).
+///
+/// `m_k` holds iff some position `j <= k` violates `l` and `r` holds
+/// nowhere in `j..=k`. The states are pairs of a state of `inner` and
+/// `m_{k-1}`; every transition is the one `inner` takes on `w_k` plus `m_k`.
+pub(crate) fn with_pending_monitor(
+    context: &mut Context,
+    l: &Formula,
+    r: &Formula,
+    inner: &Tgr,
+) -> Result<Tgr, TranslateError> {
+    let letters = inner.letters / 2;
+    let (l, r) = (context.class(l), context.class(r));
+    let pending: Vec<bool> = (0..letters as Letter)
+        .map(|a| context.after(r, a) != TRUE && context.after(l, a) != TRUE)
+        .collect();
+    let kept: Vec<bool> = (0..letters as Letter)
+        .map(|a| context.after(r, a) != TRUE)
+        .collect();
+    let (_, edges) = explore((inner.initial as u32, false), letters, |&(q, m), a| {
+        let m = pending[a as usize] || (m && kept[a as usize]);
+        let extended = a as usize | (usize::from(m) * letters);
+        let e = inner.edges[q as usize * inner.letters + extended];
+        ((e.target, m), e.marks)
+    })?;
+    Ok(Tgr {
+        letters,
+        initial: 0,
+        edges,
+        num_marks: inner.num_marks,
+        disjuncts: inner.disjuncts.clone(),
+    })
+}
+
+/// `tgr` with bisimilar states merged: the coarsest partition in which two
+/// states of a class have, on every letter, the same marks and targets in
+/// the same class. Corresponding runs of the two automata see the same
+/// marks, so they accept the same words.
+pub(crate) fn merge_bisimilar(tgr: &Tgr) -> Tgr {
+    let (n, letters) = (tgr.num_states(), tgr.letters);
+    let mut class: Vec<u32> = vec![0; n];
+    let mut count = 1;
+    loop {
+        let mut ids: FxHashMap<Vec<(u32, MarkSet)>, u32> = FxHashMap::default();
+        let next: Vec<u32> = (0..n)
+            .map(|q| {
+                let signature: Vec<(u32, MarkSet)> = std::iter::once((class[q], 0))
+                    .chain(
+                        tgr.edges[q * letters..(q + 1) * letters]
+                            .iter()
+                            .map(|e| (class[e.target as usize], e.marks)),
+                    )
+                    .collect();
+                let fresh = ids.len() as u32;
+                *ids.entry(signature).or_insert(fresh)
+            })
+            .collect();
+        class = next;
+        if ids.len() == count {
+            break;
+        }
+        count = ids.len();
+    }
+    let mut edges = vec![
+        Edge {
+            target: 0,
+            marks: 0
+        };
+        count * letters
+    ];
+    for q in 0..n {
+        let c = class[q] as usize;
+        for (a, e) in tgr.edges[q * letters..(q + 1) * letters].iter().enumerate() {
+            edges[c * letters + a] = Edge {
+                target: class[e.target as usize],
+                marks: e.marks,
+            };
+        }
+    }
+    Tgr {
+        letters,
+        initial: class[tgr.initial] as usize,
+        edges,
+        num_marks: tgr.num_marks,
+        disjuncts: tgr.disjuncts.clone(),
+    }
+}
+
+/// `tgr` with marks changed where they cannot affect acceptance, so that
+/// more states have the same marks on all outgoing transitions:
+///
+/// * a transition between two strongly connected components is taken at
+///   most once by a run, so it gets the marks shared by all transitions of
+///   its source inside the source's component, if they share them (no
+///   marks if there are none);
+/// * an `Inf` mark that no disjunct uses in a `Fin` set is cleared on the
+///   transitions of a state `q` if every disjunct using it has a `Fin` mark
+///   on every transition of `q` inside its component: a run that takes
+///   those transitions infinitely often satisfies none of these disjuncts
+///   anyway, and one that takes them finitely often does not depend on them.
+pub(crate) fn normalise_marks(tgr: &Tgr) -> Tgr {
+    let (n, letters) = (tgr.num_states(), tgr.letters);
+    let components = graph::strongly_connected_components(&Successors(tgr));
+    let inside =
+        |q: usize, e: &Edge| components.component[e.target as usize] == components.component[q];
+    let fin_all: MarkSet = tgr.disjuncts.iter().fold(0, |m, d| m | d.fin);
+    let mut edges = tgr.edges.clone();
+    for q in 0..n {
+        let out = &mut edges[q * letters..(q + 1) * letters];
+        let mut cleared: MarkSet = 0;
+        for m in 0..tgr.num_marks {
+            if (fin_all >> m) & 1 == 1 {
+                continue;
+            }
+            let mut users = tgr
+                .disjuncts
+                .iter()
+                .filter(|d| d.inf.contains(&m))
+                .peekable();
+            if users.peek().is_some()
+                && users.all(|d| {
+                    out.iter()
+                        .filter(|e| inside(q, e))
+                        .all(|e| e.marks & d.fin != 0)
+                })
+            {
+                cleared |= 1 << m;
+            }
+        }
+        for e in out.iter_mut() {
+            e.marks &= !cleared;
+        }
+        let mut shared = out.iter().filter(|e| inside(q, e)).map(|e| e.marks);
+        let first = shared.next().unwrap_or(0);
+        if shared.all(|m| m == first) {
+            for e in out.iter_mut() {
+                e.marks = first;
+            }
+        }
+    }
+    Tgr {
+        letters,
+        initial: tgr.initial,
+        edges,
+        num_marks: tgr.num_marks,
+        disjuncts: tgr.disjuncts.clone(),
     }
 }

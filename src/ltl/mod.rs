@@ -35,7 +35,15 @@
 //!   (`l` failed since the last `r`) requires `chi`;
 //! * **`G (l | G psi)`** for propositional `l` (`l W G psi`) gets a state
 //!   that waits for `l` to fail in front of the automata of `G psi`;
-//! * **every other formula**, and the two previous kinds as a further
+//! * **`G (l | (psi U (r | G theta)))`** for propositional `l`, `r` (the
+//!   Dwyer "constrained chain" patterns) gets the union (product) of the
+//!   automata of `G (l | (psi U r))` and of `(!m | psi) U G theta`, the
+//!   latter built over the propositions and a fresh one for the past
+//!   monitor `m` (`l` failed since the last `r`) and read through that
+//!   monitor: the formula is `G (!m | psi | G theta) & (FG theta | GF !m)`,
+//!   which is the first automaton's formula when `G theta` holds nowhere
+//!   and the second's otherwise (see `escaping_until`);
+//! * **every other formula**, and the previous kinds as a further
 //!   candidate, gets the construction of Esparza, Křetínský and Sickert, "A
 //!   Unified Translation of Linear Temporal Logic to ω-Automata", J. ACM
 //!   67(6), 2020 (the "Master Theorem"): the product of the `af`-tracker
@@ -45,8 +53,12 @@
 //!   often and almost always.
 //!
 //! Propositional equivalence classes are reduced ordered BDDs over the
-//! formula's temporal subformulas, so equivalent states coincide. Every
-//! candidate is turned into a state-based Rabin automaton by
+//! formula's temporal subformulas, so equivalent states coincide. In every
+//! candidate, marks that cannot matter (on transitions between strongly
+//! connected components, and `Inf` marks of disjuncts whose `Fin` marks lie
+//! on every transition of the state inside its component) are made uniform
+//! and bisimilar states are merged; then it is turned into a state-based
+//! Rabin automaton by
 //! [`crate::automaton::to_state_based_rabin`] and minimised by
 //! [`crate::automaton::minimise::minimise_with_free_start`]; the smallest
 //! one is kept.
@@ -136,6 +148,8 @@ fn build(
 ///   certified by [`construct::weak_agrees`]);
 /// * for `G (l | G psi)` with `l` propositional, the automata of `G psi`
 ///   behind a state waiting for `l` to fail ([`construct::wait_then`]);
+/// * for `G (l | (psi U (r | G theta)))` with `l` and `r` propositional,
+///   the unions of [`escaping_until`];
 /// * for `G chi` with `chi` an obligation or `chi = l | (psi W r)` with `l`
 ///   and `r` propositional and `psi` an obligation, the breakpoint automaton
 ///   ([`construct::guarded_globally`]);
@@ -161,6 +175,11 @@ fn build_nnf(
                 candidates.push(construct::wait_then(context, &l, &then));
             }
         } else {
+            if let Some((l, psi, r, theta)) = escape_form(chi)
+                && let Ok(unions) = escaping_until(context, &l, &psi, &r, &theta, letters)
+            {
+                candidates.extend(unions);
+            }
             if let Some((l, psi, r)) = guarded_form(chi)
                 && is_semantic_obligation(context, &psi, letters)
             {
@@ -207,6 +226,112 @@ fn guarded_form(chi: &Formula) -> Option<(Formula, Formula, Formula)> {
     rest.iter()
         .all(formula::is_propositional)
         .then(|| (formula::or(rest), (**psi).clone(), (**r).clone()))
+}
+
+/// `(l, psi, r, theta)` if `chi` is `l | (psi U (r | G theta))` with `l`
+/// and `r` propositional (either may be `false`).
+fn escape_form(chi: &Formula) -> Option<(Formula, Formula, Formula, Formula)> {
+    let parts = match chi {
+        Formula::Or(parts) => parts.as_slice(),
+        other => std::slice::from_ref(other),
+    };
+    let at = parts
+        .iter()
+        .position(|p| matches!(p, Formula::Until(_, g) if globally_form(g).is_some()))?;
+    let Formula::Until(psi, goal) = &parts[at] else {
+        return None;
+    };
+    let (r, theta) = globally_form(goal)?;
+    let rest: Vec<Formula> = parts
+        .iter()
+        .enumerate()
+        .filter(|&(i, _)| i != at)
+        .map(|(_, p)| p.clone())
+        .collect();
+    rest.iter()
+        .all(formula::is_propositional)
+        .then(|| (formula::or(rest), (**psi).clone(), r, theta))
+}
+
+/// `(r, theta)` if `goal` is `r | G theta` with `r` propositional (`r` may
+/// be `false`).
+fn globally_form(goal: &Formula) -> Option<(Formula, Formula)> {
+    let parts = match goal {
+        Formula::Or(parts) => parts.as_slice(),
+        other => std::slice::from_ref(other),
+    };
+    let at = parts
+        .iter()
+        .position(|p| matches!(p, Formula::Globally(_)))?;
+    let Formula::Globally(theta) = &parts[at] else {
+        return None;
+    };
+    let rest: Vec<Formula> = parts
+        .iter()
+        .enumerate()
+        .filter(|&(i, _)| i != at)
+        .map(|(_, p)| p.clone())
+        .collect();
+    rest.iter()
+        .all(formula::is_propositional)
+        .then(|| (formula::or(rest), (**theta).clone()))
+}
+
+/// Automata of `G (l | (psi U (r | G theta)))` for propositional `l` and
+/// `r`: the [`construct::union`] of every candidate automaton of
+///
+/// * `D1 = G (l | (psi U r))` with every one of
+/// * `D2 = (!m | psi) U G theta`, read through the past monitor `m` of
+///   [`construct::with_pending_monitor`] (`m_k` iff some `j <= k` violates
+///   `l` and `r` holds nowhere in `j..=k`).
+///
+/// Correctness: the positions `k` with `m_k` are those inside the window
+/// `[j, first r at or after j)` of some `j` violating `l`. So the formula is
+/// `G (!m | psi | G theta) & (FG theta | GF !m)` (a window that never
+/// closes needs `G theta` eventually; `G theta` at a position gives it at
+/// every later one). If `G theta` holds nowhere this is `G (!m | psi) & GF
+/// !m`, which is `D1`; otherwise, with `i` the first position where `G
+/// theta` holds, it is `!m | psi` at every position before `i`, which is
+/// `D2` (a later `i` only asks more). Both `D1` and `D2` imply the formula.
+/// (`D1` is `G (!m | psi) & GF !m`: every window closes.)
+fn escaping_until(
+    context: &mut af::Context,
+    l: &Formula,
+    psi: &Formula,
+    r: &Formula,
+    theta: &Formula,
+    letters: usize,
+) -> Result<Vec<construct::Tgr>, TranslateError> {
+    let closing = formula::globally(formula::or(vec![
+        l.clone(),
+        formula::until(psi.clone(), r.clone()),
+    ]));
+    let firsts = build_nnf(context, &closing, letters)?;
+    let mut extended = context.propositions();
+    if extended.len() >= MAX_PROPOSITIONS {
+        return Err(TranslateError::TooManyPropositions {
+            count: extended.len() + 1,
+        });
+    }
+    let mut fresh = String::from("pending");
+    while extended.contains(&fresh) {
+        fresh.push('_');
+    }
+    let m = Formula::prop(&fresh);
+    extended.push(fresh);
+    let escaping = formula::until(
+        formula::or(vec![formula::nnf(&m, false), psi.clone()]),
+        formula::globally(theta.clone()),
+    );
+    let mut inner_context = af::Context::new(&extended);
+    let mut unions = Vec::new();
+    for inner in build_nnf(&mut inner_context, &escaping, 2 * letters)? {
+        let second = construct::with_pending_monitor(context, l, r, &inner)?;
+        for first in &firsts {
+            unions.push(construct::union(first, &second)?);
+        }
+    }
+    Ok(unions)
 }
 
 /// `(l, psi)` if `chi` is `l | G psi` with `l` propositional.
@@ -259,7 +384,8 @@ fn is_semantic_obligation(context: &mut af::Context, chi: &Formula, letters: usi
 /// `AP` is `formula.propositions()` (sorted; bit `i` of a letter is the
 /// `i`-th), accepting exactly the infinite words that satisfy `formula`.
 ///
-/// Every candidate automaton of the module's construction is converted by
+/// Every candidate automaton of the module's construction is simplified by
+/// `construct::normalise_marks` and `construct::merge_bisimilar`, converted by
 /// [`crate::automaton::to_state_based_rabin`] and minimised by
 /// [`crate::automaton::minimise::minimise_with_free_start`]; the one with the fewest
 /// states is returned.
@@ -267,7 +393,10 @@ pub fn translate(formula: &Formula) -> Result<Dra, TranslateError> {
     let propositions = checked_propositions(formula)?;
     let mut best: Option<Dra> = None;
     for tgr in build(formula, &propositions)? {
-        let automaton = to_emerson_lei(tgr, propositions.clone())?;
+        let automaton = to_emerson_lei(
+            construct::merge_bisimilar(&construct::normalise_marks(&tgr)),
+            propositions.clone(),
+        )?;
         let dra = minimise_with_free_start(&to_state_based_rabin(&automaton)?);
         if best
             .as_ref()
