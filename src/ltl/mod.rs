@@ -260,6 +260,12 @@ fn globally_form(goal: &Formula) -> Option<(Formula, Formula)> {
         Formula::Or(parts) => parts.as_slice(),
         other => std::slice::from_ref(other),
     };
+    split_globally(parts)
+}
+
+/// `(r, theta)` if the disjuncts `parts` are one `G theta` and propositional
+/// formulas whose disjunction is `r`.
+fn split_globally(parts: &[Formula]) -> Option<(Formula, Formula)> {
     let at = parts
         .iter()
         .position(|p| matches!(p, Formula::Globally(_)))?;
@@ -339,21 +345,7 @@ fn waiting_form(chi: &Formula) -> Option<(Formula, Formula)> {
     let Formula::Or(parts) = chi else {
         return None;
     };
-    let at = parts
-        .iter()
-        .position(|p| matches!(p, Formula::Globally(_)))?;
-    let Formula::Globally(psi) = &parts[at] else {
-        return None;
-    };
-    let rest: Vec<Formula> = parts
-        .iter()
-        .enumerate()
-        .filter(|&(i, _)| i != at)
-        .map(|(_, p)| p.clone())
-        .collect();
-    rest.iter()
-        .all(formula::is_propositional)
-        .then(|| (formula::or(rest), (**psi).clone()))
+    split_globally(parts)
 }
 
 /// The weak automaton of the NNF formula `nnf` if it provably accepts the
