@@ -298,10 +298,20 @@ impl Evaluator {
         adversary: &Probabilities,
     ) -> Result<Evaluation, ValueError> {
         let _flush = FlushDenormals::on_this_thread();
-        self.gmc.refill(defender, adversary);
-        self.system.factorize(&self.gmc)?;
+        self.refill_and_factorize(defender, adversary)?;
         let report = self.system.solve_value()?;
         Ok(self.store_values(report))
+    }
+
+    /// Writes the GMC's numbers for the probabilities, then `I - Q` and `b`,
+    /// and factorises.
+    fn refill_and_factorize(
+        &mut self,
+        defender: &Probabilities,
+        adversary: &Probabilities,
+    ) -> Result<(), SolverError> {
+        self.gmc.refill(defender, adversary);
+        self.system.factorize(&self.gmc)
     }
 
     /// Copies `x` from `T` into the state values and computes `V`.
@@ -326,8 +336,7 @@ impl Evaluator {
         adversary: &Probabilities,
     ) -> Result<(Evaluation, Gradient), ValueError> {
         let _flush = FlushDenormals::on_this_thread();
-        self.gmc.refill(defender, adversary);
-        self.system.factorize(&self.gmc)?;
+        self.refill_and_factorize(defender, adversary)?;
         self.system.p0.fill(0.0);
         for (m, p) in self.gmc.initial() {
             let i = self.recurrence.transient_index[m];

@@ -207,71 +207,57 @@ fn build_nnf(
 /// `(l, psi, r)` if `chi` is `l | (psi W r)` with `l` and `r` propositional
 /// (`l` may be `false`).
 fn guarded_form(chi: &Formula) -> Option<(Formula, Formula, Formula)> {
-    let parts = match chi {
-        Formula::Or(parts) => parts.as_slice(),
-        other => std::slice::from_ref(other),
-    };
-    let at = parts
-        .iter()
-        .position(|p| matches!(p, Formula::WeakUntil(_, r) if formula::is_propositional(r)))?;
-    let Formula::WeakUntil(psi, r) = &parts[at] else {
-        return None;
-    };
-    let rest: Vec<Formula> = parts
-        .iter()
-        .enumerate()
-        .filter(|&(i, _)| i != at)
-        .map(|(_, p)| p.clone())
-        .collect();
-    rest.iter()
-        .all(formula::is_propositional)
-        .then(|| (formula::or(rest), (**psi).clone(), (**r).clone()))
+    let (l, (psi, r)) = split_disjuncts(disjuncts(chi), |part| match part {
+        Formula::WeakUntil(psi, r) if formula::is_propositional(r) => {
+            Some(((**psi).clone(), (**r).clone()))
+        }
+        _ => None,
+    })?;
+    Some((l, psi, r))
 }
 
 /// `(l, psi, r, theta)` if `chi` is `l | (psi U (r | G theta))` with `l`
 /// and `r` propositional (either may be `false`).
 fn escape_form(chi: &Formula) -> Option<(Formula, Formula, Formula, Formula)> {
-    let parts = match chi {
-        Formula::Or(parts) => parts.as_slice(),
-        other => std::slice::from_ref(other),
-    };
-    let at = parts
-        .iter()
-        .position(|p| matches!(p, Formula::Until(_, g) if globally_form(g).is_some()))?;
-    let Formula::Until(psi, goal) = &parts[at] else {
-        return None;
-    };
-    let (r, theta) = globally_form(goal)?;
-    let rest: Vec<Formula> = parts
-        .iter()
-        .enumerate()
-        .filter(|&(i, _)| i != at)
-        .map(|(_, p)| p.clone())
-        .collect();
-    rest.iter()
-        .all(formula::is_propositional)
-        .then(|| (formula::or(rest), (**psi).clone(), r, theta))
+    let (l, (psi, (r, theta))) = split_disjuncts(disjuncts(chi), |part| match part {
+        Formula::Until(psi, goal) => globally_form(goal).map(|found| ((**psi).clone(), found)),
+        _ => None,
+    })?;
+    Some((l, psi, r, theta))
 }
 
 /// `(r, theta)` if `goal` is `r | G theta` with `r` propositional (`r` may
 /// be `false`).
 fn globally_form(goal: &Formula) -> Option<(Formula, Formula)> {
-    let parts = match goal {
-        Formula::Or(parts) => parts.as_slice(),
-        other => std::slice::from_ref(other),
-    };
-    split_globally(parts)
+    split_disjuncts(disjuncts(goal), globally)
 }
 
-/// `(r, theta)` if the disjuncts `parts` are one `G theta` and propositional
-/// formulas whose disjunction is `r`.
-fn split_globally(parts: &[Formula]) -> Option<(Formula, Formula)> {
-    let at = parts
+/// `theta` if `part` is `G theta`.
+fn globally(part: &Formula) -> Option<Formula> {
+    match part {
+        Formula::Globally(theta) => Some((**theta).clone()),
+        _ => None,
+    }
+}
+
+/// The disjuncts of `chi`: its parts if it is a disjunction, else itself.
+fn disjuncts(chi: &Formula) -> &[Formula] {
+    match chi {
+        Formula::Or(parts) => parts,
+        other => std::slice::from_ref(other),
+    }
+}
+
+/// `(l, t)` for the first disjunct of `parts` that `pick` maps to `Some(t)`,
+/// if all the other disjuncts are propositional; `l` is their disjunction.
+fn split_disjuncts<T>(
+    parts: &[Formula],
+    pick: impl Fn(&Formula) -> Option<T>,
+) -> Option<(Formula, T)> {
+    let (at, picked) = parts
         .iter()
-        .position(|p| matches!(p, Formula::Globally(_)))?;
-    let Formula::Globally(theta) = &parts[at] else {
-        return None;
-    };
+        .enumerate()
+        .find_map(|(i, part)| pick(part).map(|t| (i, t)))?;
     let rest: Vec<Formula> = parts
         .iter()
         .enumerate()
@@ -280,7 +266,7 @@ fn split_globally(parts: &[Formula]) -> Option<(Formula, Formula)> {
         .collect();
     rest.iter()
         .all(formula::is_propositional)
-        .then(|| (formula::or(rest), (**theta).clone()))
+        .then(|| (formula::or(rest), picked))
 }
 
 /// Automata of `G (l | (psi U (r | G theta)))` for propositional `l` and
@@ -345,7 +331,7 @@ fn waiting_form(chi: &Formula) -> Option<(Formula, Formula)> {
     let Formula::Or(parts) = chi else {
         return None;
     };
-    split_globally(parts)
+    split_disjuncts(parts, globally)
 }
 
 /// The weak automaton of the NNF formula `nnf` if it provably accepts the
