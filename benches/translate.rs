@@ -6,7 +6,7 @@ use posg_fsc::ltl;
 fn dac_patterns() -> Vec<ltl::Formula> {
     let path = concat!(
         env!("CARGO_MANIFEST_DIR"),
-        "/../shared/ltl/dac-patterns.ltl"
+        "/tests/data/ltl/dac-patterns.ltl"
     );
     std::fs::read_to_string(path)
         .unwrap_or_else(|e| panic!("{path}: {e}"))

@@ -1,4 +1,4 @@
-//! HOA v1 input and output: the example automata in `shared/ltl/examples`,
+//! HOA v1 input and output: the example automata in `tests/data/ltl/examples`,
 //! round trips through the writer, and malformed inputs.
 
 use posg_fsc::automaton::emerson_lei::Edge;
@@ -8,9 +8,9 @@ use posg_fsc::automaton::{
 };
 use proptest::prelude::*;
 
-/// The text of an example file from `shared/ltl/examples`.
+/// The text of an example file from `tests/data/ltl/examples`.
 fn example(name: &str) -> String {
-    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/ltl/examples/");
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/ltl/examples/");
     std::fs::read_to_string(format!("{dir}{name}")).expect("example file present")
 }
 

@@ -10,7 +10,7 @@ use proptest::prelude::*;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-const SHARED: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/ltl/");
+const FIXTURES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/ltl/");
 
 /// Random lasso words over `propositions.len()` propositions, `|u|, |v| <= 6`.
 fn random_lassos(
@@ -123,8 +123,8 @@ proptest! {
     }
 }
 
-fn shared_formulas(file: &str) -> Vec<String> {
-    let path = format!("{SHARED}{file}");
+fn fixture_formulas(file: &str) -> Vec<String> {
+    let path = format!("{FIXTURES}{file}");
     std::fs::read_to_string(&path)
         .unwrap_or_else(|e| panic!("{path}: {e}"))
         .lines()
@@ -148,7 +148,7 @@ fn check_all(formulas: &[String], words_per_formula: usize) {
 
 #[test]
 fn dac_patterns_agree_with_the_evaluator() {
-    let patterns = shared_formulas("dac-patterns.ltl");
+    let patterns = fixture_formulas("dac-patterns.ltl");
     assert_eq!(patterns.len(), 55);
     check_all(&patterns, 300);
 }
@@ -156,7 +156,7 @@ fn dac_patterns_agree_with_the_evaluator() {
 #[test]
 fn dac_patterns_agree_with_the_evaluator_on_sparse_words() {
     let mut rng = ChaCha8Rng::seed_from_u64(1998);
-    let failures: Vec<String> = shared_formulas("dac-patterns.ltl")
+    let failures: Vec<String> = fixture_formulas("dac-patterns.ltl")
         .iter()
         .filter_map(|text| {
             let formula = ltl::parse(text).unwrap_or_else(|e| panic!("{text}: {e}"));
@@ -169,7 +169,7 @@ fn dac_patterns_agree_with_the_evaluator_on_sparse_words() {
 
 #[test]
 fn robotics_formulas_agree_with_the_evaluator() {
-    let all = shared_formulas("reference-sizes.tsv");
+    let all = fixture_formulas("reference-sizes.tsv");
     let robotics = &all[all.len() - 11..];
     check_all(robotics, 1000);
 }

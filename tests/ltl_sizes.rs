@@ -1,5 +1,5 @@
 //! Sizes of the translated automata against the reference state counts of
-//! `../shared/ltl/reference-sizes.tsv` (state-based deterministic parity
+//! `tests/data/ltl/reference-sizes.tsv` (state-based deterministic parity
 //! automata from a leading translator). Set `POSG_FSC_WRITE_RESULTS=1` to
 //! rewrite `results/ltl-sizes.tsv`.
 
@@ -7,7 +7,7 @@ use posg_fsc::ltl;
 
 const REFERENCE: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),
-    "/../shared/ltl/reference-sizes.tsv"
+    "/tests/data/ltl/reference-sizes.tsv"
 );
 const RESULTS: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/results/ltl-sizes.tsv");
 
