@@ -242,6 +242,21 @@ pub(crate) struct Analysis {
     pub accepting: Vec<AcceptingComponent>,
 }
 
+/// The reachable product MDP with `controller` playing for `fixed`, not
+/// analysed: `(s, q, node)` per state, the MDP, and `p0`.
+pub(crate) type ProductMdp = (Vec<(usize, usize, usize)>, Mdp, Vec<(usize, f64)>);
+
+/// Builds the product with `controller` playing for `fixed`.
+pub(crate) fn product_mdp(
+    game: &Posg,
+    dra: &Dra,
+    controller: &Fsc,
+    fixed: Role,
+) -> Result<ProductMdp, CertifyError> {
+    let product = Product::build(game, dra, controller, fixed)?;
+    Ok((product.states, product.mdp, product.initial))
+}
+
 /// Builds the product with `controller` playing for `fixed` and analyses it.
 pub(crate) fn analyse(
     game: &Posg,

@@ -11,7 +11,9 @@ use std::path::PathBuf;
 use anyhow::Context;
 use clap::Args;
 use posg_fsc::controller;
-use posg_fsc::synthesis::{self, Engine, Mode, RankEncoding, SatStatistics, Settings, Synthesis};
+use posg_fsc::synthesis::{
+    self, Confirmation, Engine, Mode, RankEncoding, SatStatistics, Settings, Synthesis,
+};
 use serde::Serialize;
 
 use super::common::{self, ObjectiveArgs, Provenance};
@@ -129,6 +131,8 @@ struct SupportFile<'a> {
     /// Whether `found: false` is a proof (one usable Rabin pair, exact rank bound).
     exact: bool,
     reason: &'a str,
+    /// How the certificate formula confirmed the support (lazy engine).
+    confirmation: Confirmation,
     sat: Option<SatStatistics>,
     game: String,
     objective: &'a str,
@@ -174,6 +178,7 @@ pub fn run(args: SupportArgs) -> anyhow::Result<()> {
         support_entries: result.support_entries(),
         exact: result.exact,
         reason: &result.reason,
+        confirmation: result.confirmation,
         sat: result.statistics,
         game: args.game.display().to_string(),
         objective: &objective,

@@ -52,6 +52,10 @@ pub enum Claim {
 pub struct Certificates {
     /// Per pair, `in_i[m]`.
     pub members: Vec<Vec<Lit>>,
+    /// Per pair, `lambda_i(m)` (none: all levels are 0).
+    pub levels: Vec<Option<Vec<Number>>>,
+    /// Per pair, `rho_i(m)` outside `K_i`.
+    pub ranks: Vec<Vec<Option<Number>>>,
 }
 
 /// The shared context of the constraints.
@@ -77,13 +81,19 @@ pub fn certificates(
     encoding: RankEncoding,
     rank_bound: usize,
 ) -> Result<Certificates, SynthesisError> {
-    let mut members = Vec::with_capacity(pairs.len());
+    let mut certificates = Certificates {
+        members: Vec::with_capacity(pairs.len()),
+        levels: Vec::with_capacity(pairs.len()),
+        ranks: Vec::with_capacity(pairs.len()),
+    };
     for pair in pairs {
         let mut certificate = Certificate::new(context, cnf, pair, claim, encoding, rank_bound)?;
         certificate.constrain(context, cnf, vars)?;
-        members.push(certificate.member);
+        certificates.members.push(certificate.member);
+        certificates.levels.push(certificate.levels);
+        certificates.ranks.push(certificate.ranks);
     }
-    Ok(Certificates { members })
+    Ok(certificates)
 }
 
 /// The claim on the initial product states (node 0): some is in some

@@ -10,8 +10,9 @@
 
 use rustc_hash::FxHashMap;
 
-use crate::automaton::{Dra, Letter};
+use crate::automaton::{Dra, Letter, RabinPair};
 use crate::game::Posg;
+use crate::graph::{Digraph, strongly_connected_components};
 
 /// The game's transitions `(s, v, s')` that some defender action allows:
 /// `T(s' | s, u, v) > 0` for some `u`.
@@ -155,5 +156,108 @@ impl CellGraph {
     pub fn steps(&self, cell: usize, v: usize) -> &[Step] {
         let i = cell * self.num_adversary_actions + v;
         &self.steps[self.step_offsets[i]..self.step_offsets[i + 1]]
+    }
+}
+
+impl CellGraph {
+    /// The cells every path from which satisfies the Rabin condition, under
+    /// any actions of both players: the union over pairs `j` of the
+    /// greatest set of cells outside `L_j`, closed under every step, in
+    /// which every cycle meets `K_j`. Computed by alternately removing
+    /// cells with a step out of the set and cells on a cycle that avoids
+    /// `K_j`, until neither removes anything.
+    pub fn surely_accepting(&self, pairs: &[RabinPair]) -> Vec<bool> {
+        let n = self.num_cells();
+        let mut predecessors: Vec<Vec<usize>> = vec![Vec::new(); n];
+        for cell in 0..n {
+            for v in 0..self.num_adversary_actions {
+                for step in self.steps(cell, v) {
+                    predecessors[step.cell].push(cell);
+                }
+            }
+        }
+        let mut sure = vec![false; n];
+        for pair in pairs {
+            let mut keep: Vec<bool> = self.cells.iter().map(|&(_, q)| !pair.fin[q]).collect();
+            loop {
+                self.close(&mut keep, &predecessors);
+                let avoiding: Vec<bool> = (0..n)
+                    .map(|c| keep[c] && !pair.inf[self.cells[c].1])
+                    .collect();
+                let on_cycle = self.on_cycle(&avoiding);
+                if !on_cycle.iter().any(|&c| c) {
+                    break;
+                }
+                for (k, c) in keep.iter_mut().zip(on_cycle) {
+                    *k &= !c;
+                }
+            }
+            for (s, k) in sure.iter_mut().zip(keep) {
+                *s |= k;
+            }
+        }
+        sure
+    }
+
+    /// Removes from `keep` every cell with a step out of it, until closed.
+    fn close(&self, keep: &mut [bool], predecessors: &[Vec<usize>]) {
+        let leaves = |cell: usize, keep: &[bool]| {
+            (0..self.num_adversary_actions)
+                .any(|v| self.steps(cell, v).iter().any(|step| !keep[step.cell]))
+        };
+        let mut queue: Vec<usize> = (0..keep.len())
+            .filter(|&c| keep[c] && leaves(c, keep))
+            .collect();
+        for &c in &queue {
+            keep[c] = false;
+        }
+        while let Some(c) = queue.pop() {
+            for &p in &predecessors[c] {
+                if keep[p] {
+                    keep[p] = false;
+                    queue.push(p);
+                }
+            }
+        }
+    }
+
+    /// The cells of `within` on a cycle of the graph restricted to `within`.
+    pub fn on_cycle(&self, within: &[bool]) -> Vec<bool> {
+        let view = Within {
+            graph: self,
+            within,
+        };
+        let components = strongly_connected_components(&view);
+        let mut size = vec![0usize; components.count];
+        for &c in &components.component {
+            size[c as usize] += 1;
+        }
+        (0..self.num_cells())
+            .map(|cell| {
+                within[cell]
+                    && (size[components.component[cell] as usize] > 1
+                        || view.successors(cell).any(|next| next == cell))
+            })
+            .collect()
+    }
+}
+
+/// A cell graph (all actions) restricted to the cells `within`.
+struct Within<'a> {
+    graph: &'a CellGraph,
+    within: &'a [bool],
+}
+
+impl Digraph for Within<'_> {
+    fn num_vertices(&self) -> usize {
+        self.graph.num_cells()
+    }
+
+    fn successors(&self, cell: usize) -> impl Iterator<Item = usize> + '_ {
+        let inside = self.within[cell];
+        (0..self.graph.num_adversary_actions())
+            .flat_map(move |v| self.graph.steps(cell, v))
+            .map(|step| step.cell)
+            .filter(move |&next| inside && self.within[next])
     }
 }

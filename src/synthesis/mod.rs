@@ -96,12 +96,15 @@
 //! independent route to the same fact; a disagreement is an error.
 
 mod cnf;
+mod confirm;
 mod encoding;
 mod graph;
 mod ranks;
 mod search;
 mod variables;
+mod witness;
 
+pub use confirm::Confirmation;
 pub use ranks::RankEncoding;
 
 use std::time::{Duration, Instant};
@@ -113,7 +116,6 @@ use crate::automaton::{Dra, RabinPair};
 use crate::certify::{CertifyError, Qualitative, lower_bound};
 use crate::controller::{Choice, Fsc, Role};
 use crate::game::{ModelError, Posg};
-use crate::graph::{Digraph, strongly_connected_components};
 
 use cnf::{Answer, Cnf, Lit, Solver};
 use encoding::{Claim, Context};
@@ -314,6 +316,8 @@ pub struct Synthesis {
     pub exact: bool,
     /// A sentence saying what was found or proved.
     pub reason: String,
+    /// How the support found was confirmed by the certificate formula.
+    pub confirmation: Confirmation,
     /// The SAT work (`None` when no SAT call was needed).
     pub statistics: Option<SatStatistics>,
 }
@@ -369,6 +373,10 @@ pub fn synthesise(
             Engine::Certificate => certificate_complete,
         },
         reason: String::new(),
+        confirmation: match settings.engine {
+            Engine::Lazy => Confirmation::Skipped,
+            Engine::Certificate => Confirmation::Confirmed,
+        },
         statistics: None,
     };
     if pairs.is_empty() {
@@ -423,13 +431,8 @@ pub fn synthesise(
         synthesis.certified_lower = Some(certify(game, dra_not_phi, &defender, settings.mode)?);
         if settings.engine == Engine::Lazy && settings.confirm_certificate {
             let start = Instant::now();
-            confirm(
-                &context,
-                &pairs,
-                support,
-                settings,
-                rank_bound,
-                certificate_complete,
+            synthesis.confirmation = confirm::confirm(
+                &context, dra, &pairs, &defender, support, settings, rank_bound,
             )?;
             confirm_seconds = start.elapsed().as_secs_f64();
         }
@@ -490,46 +493,6 @@ fn certify(
         )));
     }
     Ok(bound.value)
-}
-
-/// Checks `support` against the certificate formula with the support fixed.
-/// Without a certificate, that is a bug when the certificate is complete
-/// (one usable pair, exact rank bound); otherwise it is the known gap of
-/// the per-pair union and not an error.
-fn confirm(
-    context: &Context,
-    pairs: &[&RabinPair],
-    support: &[bool],
-    settings: &Settings,
-    rank_bound: usize,
-    complete: bool,
-) -> Result<(), SynthesisError> {
-    let mut cnf = Cnf::new(settings.clause_budget);
-    let mut vars = SupportVariables::new(&mut cnf, context.game, context.moves, context.nodes)?;
-    let certificates = encoding::certificates(
-        context,
-        &mut cnf,
-        &mut vars,
-        pairs,
-        settings.mode.claim(),
-        settings.rank_encoding,
-        rank_bound,
-    )?;
-    encoding::claim_initial(context, &mut cnf, &certificates, settings.mode.claim())?;
-    let fixed: Vec<Lit> = vars
-        .support
-        .iter()
-        .zip(support)
-        .map(|(&x, &present)| if present { x } else { -x })
-        .collect();
-    let mut solver = Solver::new(&cnf, None);
-    if solver.solve(&fixed)? == Answer::Unsatisfiable && complete {
-        return Err(SynthesisError::Internal(format!(
-            "certification accepts a {} support that has no certificate",
-            settings.mode.name()
-        )));
-    }
-    Ok(())
 }
 
 /// Writes the certificate formula (support, edges, certificates, claim) in
@@ -602,43 +565,14 @@ fn usable_pairs<'a>(graph: &CellGraph, pairs: &'a [RabinPair]) -> Vec<&'a RabinP
     pairs
         .iter()
         .filter(|pair| {
-            let keep: Vec<bool> = graph.cells.iter().map(|&(_, q)| !pair.fin[q]).collect();
-            let view = Restricted { graph, keep: &keep };
-            let components = strongly_connected_components(&view);
-            let mut size = vec![0usize; components.count];
-            for &c in &components.component {
-                size[c as usize] += 1;
-            }
-            (0..graph.num_cells()).any(|cell| {
-                let (_, q) = graph.cells[cell];
-                keep[cell]
-                    && pair.inf[q]
-                    && (size[components.component[cell] as usize] > 1
-                        || view.successors(cell).any(|next| next == cell))
-            })
+            let avoiding: Vec<bool> = graph.cells.iter().map(|&(_, q)| !pair.fin[q]).collect();
+            graph
+                .on_cycle(&avoiding)
+                .iter()
+                .zip(&graph.cells)
+                .any(|(&cycle, &(_, q))| cycle && pair.inf[q])
         })
         .collect()
-}
-
-/// The cell graph (all actions) restricted to the cells `keep`.
-struct Restricted<'a> {
-    graph: &'a CellGraph,
-    keep: &'a [bool],
-}
-
-impl Digraph for Restricted<'_> {
-    fn num_vertices(&self) -> usize {
-        self.graph.num_cells()
-    }
-
-    fn successors(&self, cell: usize) -> impl Iterator<Item = usize> + '_ {
-        let nv = self.graph.num_adversary_actions();
-        let inside = self.keep[cell];
-        (0..nv)
-            .flat_map(move |v| self.graph.steps(cell, v))
-            .map(|step| step.cell)
-            .filter(move |&next| inside && self.keep[next])
-    }
 }
 
 /// Enlarges a winning support to an inclusion-maximal one with `find`

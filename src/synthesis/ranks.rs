@@ -53,6 +53,31 @@ impl RankEncoding {
     }
 }
 
+impl Number {
+    /// Assumptions that fix the number to `value`, or `None` when `value`
+    /// does not fit.
+    pub fn fixed_to(&self, encoding: RankEncoding, value: usize) -> Option<Vec<Lit>> {
+        let width = self.literals.len();
+        let fits = match encoding {
+            RankEncoding::Binary => width >= usize::BITS as usize || value >> width == 0,
+            RankEncoding::Order => value <= width,
+        };
+        fits.then(|| {
+            self.literals
+                .iter()
+                .enumerate()
+                .map(|(k, &l)| {
+                    let set = match encoding {
+                        RankEncoding::Binary => value >> k & 1 == 1,
+                        RankEncoding::Order => value > k,
+                    };
+                    if set { l } else { -l }
+                })
+                .collect()
+        })
+    }
+}
+
 /// `ceil(log2(bound))`: the bits that hold `0..bound`.
 fn bits_for(bound: usize) -> usize {
     (usize::BITS - bound.saturating_sub(1).leading_zeros()) as usize
@@ -117,18 +142,7 @@ mod tests {
 
     /// Fixes `number` to `value` by assumptions.
     fn assume(encoding: RankEncoding, number: &Number, value: usize) -> Vec<Lit> {
-        number
-            .literals
-            .iter()
-            .enumerate()
-            .map(|(k, &l)| {
-                let set = match encoding {
-                    RankEncoding::Binary => value >> k & 1 == 1,
-                    RankEncoding::Order => value > k,
-                };
-                if set { l } else { -l }
-            })
-            .collect()
+        number.fixed_to(encoding, value).expect("the value fits")
     }
 
     #[test]

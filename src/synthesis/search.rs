@@ -31,10 +31,10 @@
 //! unsatisfiable formula proves that no support wins, whatever the number of
 //! Rabin pairs.
 
-use rustc_hash::FxHashMap;
+use rustc_hash::{FxHashMap, FxHashSet};
 
 use super::cnf::{Answer, Cnf, Lit, Solver};
-use super::graph::Moves;
+use super::graph::{CellGraph, Moves};
 use super::variables::SupportVariables;
 use super::{Mode, SynthesisError, defender_on};
 use crate::automaton::{Dra, Letter};
@@ -51,6 +51,10 @@ pub struct Oracle<'a> {
     nodes: usize,
     mode: Mode,
     letters: Vec<Letter>,
+    /// The cells `(s, q)` of the game and the automaton for `!phi` from which
+    /// every path is accepted ([`CellGraph::surely_accepting`]): reaching
+    /// one wins for the adversary whatever the support.
+    sure: FxHashSet<(usize, usize)>,
     /// Lemmas learnt so far.
     pub lemmas: usize,
     /// Supports judged so far.
@@ -69,6 +73,14 @@ impl<'a> Oracle<'a> {
         let letters = (0..game.num_states())
             .map(|s| dra_not_phi.letter_of(game.label_names(s)))
             .collect();
+        let cells = CellGraph::build(game, dra_not_phi, moves);
+        let sure = cells
+            .surely_accepting(dra_not_phi.pairs())
+            .into_iter()
+            .zip(&cells.cells)
+            .filter(|&(sure, _)| sure)
+            .map(|(_, &cell)| cell)
+            .collect();
         Self {
             game,
             dra_not_phi,
@@ -76,6 +88,7 @@ impl<'a> Oracle<'a> {
             nodes,
             mode,
             letters,
+            sure,
             lemmas: 0,
             judged: 0,
         }
@@ -268,6 +281,13 @@ impl LemmaBuilder<'_, '_, '_> {
         else {
             return Ok(false);
         };
+        let sure = |m: usize| self.is_sure(m);
+        if let Some(path) = shortest_path(&analysis.mdp, start, sure) {
+            for (m, v, to) in path {
+                self.keep(m, v, to)?;
+            }
+            return Ok(true);
+        }
         let n = analysis.states.len();
         let mut in_component = vec![usize::MAX; n];
         for (c, accepting) in analysis.accepting.iter().enumerate() {
@@ -333,19 +353,24 @@ impl LemmaBuilder<'_, '_, '_> {
         let mut i = 0;
         while i < order.len() {
             let m = order[i];
+            i += 1;
+            if self.is_sure(m) {
+                continue;
+            }
             for &(t, _) in analysis.mdp.distribution(m, strategy[m]) {
                 if !reached[t] {
                     reached[t] = true;
                     order.push(t);
                 }
             }
-            i += 1;
         }
+        let sure: Vec<bool> = (0..n).map(|m| reached[m] && self.is_sure(m)).collect();
         let chain = Chain {
             mdp: &analysis.mdp,
             strategy,
             states: &order,
             local: order.iter().enumerate().map(|(i, &m)| (m, i)).collect(),
+            stop: &sure,
         };
         let components = strongly_connected_components(&chain);
         let bottom = bottom_components(&chain, &components);
@@ -353,7 +378,7 @@ impl LemmaBuilder<'_, '_, '_> {
         let mut classes: Vec<Vec<usize>> = vec![Vec::new(); components.count];
         for (i, &m) in order.iter().enumerate() {
             let c = components.component[i] as usize;
-            if bottom[c] {
+            if bottom[c] && !sure[m] {
                 class_of[m] = c;
                 classes[c].push(m);
             }
@@ -365,7 +390,7 @@ impl LemmaBuilder<'_, '_, '_> {
         {
             return Ok(false);
         }
-        for &m in &order {
+        for &m in order.iter().filter(|&&m| !sure[m]) {
             self.seal(m, strategy[m], &reached)?;
         }
         for class in &classes {
@@ -385,11 +410,19 @@ impl LemmaBuilder<'_, '_, '_> {
                 self.seal(m, strategy[m], &inside)?;
             }
         }
-        let in_class: Vec<bool> = class_of.iter().map(|&c| c != usize::MAX).collect();
-        for (m, to) in towards_set(&analysis.mdp, strategy, &order, &in_class) {
+        let absorbing: Vec<bool> = (0..n)
+            .map(|m| class_of[m] != usize::MAX || sure[m])
+            .collect();
+        for (m, to) in towards_set(&analysis.mdp, strategy, &order, &absorbing) {
             self.keep(m, strategy[m], to)?;
         }
         Ok(true)
+    }
+
+    /// Whether product state `m` lies in a surely accepting cell.
+    fn is_sure(&self, m: usize) -> bool {
+        let (s, q, _) = self.analysis.states[m];
+        self.oracle.sure.contains(&(s, q))
     }
 
     /// Whether the adversary's Rabin condition holds on a closed class:
@@ -406,12 +439,14 @@ fn internal(what: &str) -> SynthesisError {
     SynthesisError::Internal(what.to_string())
 }
 
-/// The Markov chain of an MDP under a memoryless strategy, on `states`.
+/// The Markov chain of an MDP under a memoryless strategy, on `states`,
+/// with the states `stop` made absorbing (no successors).
 struct Chain<'a> {
     mdp: &'a crate::mdp::Mdp,
     strategy: &'a [usize],
     states: &'a [usize],
     local: FxHashMap<usize, usize>,
+    stop: &'a [bool],
 }
 
 impl Digraph for Chain<'_> {
@@ -421,10 +456,12 @@ impl Digraph for Chain<'_> {
 
     fn successors(&self, v: usize) -> impl Iterator<Item = usize> + '_ {
         let m = self.states[v];
-        self.mdp
-            .distribution(m, self.strategy[m])
-            .iter()
-            .map(|(t, _)| self.local[t])
+        let successors = if self.stop[m] {
+            &[][..]
+        } else {
+            self.mdp.distribution(m, self.strategy[m])
+        };
+        successors.iter().map(|(t, _)| self.local[t])
     }
 }
 
