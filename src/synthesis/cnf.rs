@@ -103,16 +103,21 @@ impl Cnf {
         self.clause([-a, b])
     }
 
-    /// A literal `d` with `d <-> (l_1 | ... | l_k)`; a single literal is its
-    /// own disjunction, an empty disjunction is [`FALSE`].
+    /// A literal `d` with `d <-> (l_1 | ... | l_k)`, simplified by the
+    /// constants: [`TRUE`] if some literal is, a single literal is its own
+    /// disjunction, an empty one is [`FALSE`].
     pub fn or(&mut self, literals: &[Lit]) -> Result<Lit, SynthesisError> {
-        match literals {
+        if literals.contains(&TRUE) {
+            return Ok(TRUE);
+        }
+        let literals: Vec<Lit> = literals.iter().copied().filter(|&l| l != FALSE).collect();
+        match literals.as_slice() {
             [] => Ok(FALSE),
             [single] => Ok(*single),
             _ => {
                 let d = self.fresh();
                 self.clause(std::iter::once(-d).chain(literals.iter().copied()))?;
-                for &l in literals {
+                for &l in &literals {
                     self.implies(l, d)?;
                 }
                 Ok(d)
@@ -122,10 +127,19 @@ impl Cnf {
 
     /// A literal `c` with `c -> (l_1 & ... & l_k)` (one direction: `c` may
     /// be false when the conjunction holds; use it only where `c` is wanted
-    /// true).
+    /// true), simplified by the constants.
     pub fn and_implied(&mut self, literals: &[Lit]) -> Result<Lit, SynthesisError> {
+        if literals.contains(&FALSE) {
+            return Ok(FALSE);
+        }
+        let literals: Vec<Lit> = literals.iter().copied().filter(|&l| l != TRUE).collect();
+        match literals.as_slice() {
+            [] => return Ok(TRUE),
+            [single] => return Ok(*single),
+            _ => {}
+        }
         let c = self.fresh();
-        for &l in literals {
+        for &l in &literals {
             self.implies(c, l)?;
         }
         Ok(c)

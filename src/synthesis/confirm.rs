@@ -6,8 +6,8 @@
 use rustc_hash::FxHashMap;
 use serde::Serialize;
 
-use super::cnf::{Answer, Cnf, Lit, Solver};
-use super::encoding::{self, Certificates, Context};
+use super::cnf::{Answer, Cnf, Solver};
+use super::encoding::{self, Context, FixedCertificate};
 use super::variables::SupportVariables;
 use super::witness::{Witness, construct};
 use super::{Mode, Settings, SynthesisError};
@@ -67,24 +67,6 @@ pub fn confirm(
             Ok(Confirmation::NotCovered)
         };
     }
-    let mut cnf = Cnf::new(settings.clause_budget);
-    let mut vars = SupportVariables::new(&mut cnf, context.game, context.moves, context.nodes)?;
-    let certificates = encoding::certificates(
-        context,
-        &mut cnf,
-        &mut vars,
-        pairs,
-        settings.mode.claim(),
-        settings.rank_encoding,
-        rank_bound,
-    )?;
-    encoding::claim_initial(context, &mut cnf, &certificates, settings.mode.claim())?;
-    let mut assumptions: Vec<Lit> = vars
-        .support
-        .iter()
-        .zip(support)
-        .map(|(&x, &present)| if present { x } else { -x })
-        .collect();
     let cell_of: FxHashMap<(usize, usize), usize> = context
         .graph
         .cells
@@ -96,13 +78,42 @@ pub fn confirm(
         let (s, q, g) = states[m];
         cell_of[&(s, q)] * context.nodes + g
     };
-    for (i, witness) in witnesses.iter().enumerate() {
-        match fix(&certificates, i, witness, settings, position) {
-            Some(fixed) => assumptions.extend(fixed),
-            None => return Ok(Confirmation::NotCovered),
+    let size = context.graph.num_cells() * context.nodes;
+    let fits = |value: usize| settings.rank_encoding.constant(rank_bound, value).is_ok();
+    let mut fixed = Vec::with_capacity(witnesses.len());
+    for witness in &witnesses {
+        let mut values = FixedCertificate {
+            member: vec![false; size],
+            level: vec![0; size],
+            rank: vec![0; size],
+        };
+        for (m, level) in witness.level.iter().enumerate() {
+            let Some(level) = *level else { continue };
+            let rank = witness.rank[m].saturating_sub(1);
+            if !fits(level) || !fits(rank) {
+                return Ok(Confirmation::NotCovered);
+            }
+            let at = position(m);
+            values.member[at] = true;
+            values.level[at] = level;
+            values.rank[at] = rank;
         }
+        fixed.push(values);
     }
-    match Solver::new(&cnf, None).solve(&assumptions)? {
+    let mut cnf = Cnf::new(settings.clause_budget);
+    let mut vars = SupportVariables::fixed(context.game, context.moves, context.nodes, support);
+    let certificates = encoding::certificates(
+        context,
+        &mut cnf,
+        &mut vars,
+        pairs,
+        settings.mode.claim(),
+        settings.rank_encoding,
+        rank_bound,
+        Some(&fixed),
+    )?;
+    encoding::claim_initial(context, &mut cnf, &certificates, settings.mode.claim())?;
+    match Solver::new(&cnf, None).solve(&[])? {
         Answer::Satisfiable => Ok(Confirmation::Confirmed),
         Answer::Unsatisfiable => Err(SynthesisError::Internal(format!(
             "the certificate constructed for a {} support violates the certificate formula",
@@ -111,35 +122,70 @@ pub fn confirm(
     }
 }
 
-/// Assumptions fixing pair `i`'s membership, levels and ranks to the
-/// witness (`position` maps product states to the formula's states); `None`
-/// when a level or rank does not fit the rank bound.
-fn fix(
-    certificates: &Certificates,
-    i: usize,
-    witness: &Witness,
-    settings: &Settings,
-    position: impl Fn(usize) -> usize,
-) -> Option<Vec<Lit>> {
-    let member = &certificates.members[i];
-    let mut inside = vec![false; member.len()];
-    let mut assumptions = Vec::new();
-    for (m, level) in witness.level.iter().enumerate() {
-        let Some(level) = *level else { continue };
-        let at = position(m);
-        inside[at] = true;
-        if let Some(levels) = &certificates.levels[i] {
-            assumptions.extend(levels[at].fixed_to(settings.rank_encoding, level)?);
-        }
-        if let Some(rank) = &certificates.ranks[i][at] {
-            assumptions.extend(rank.fixed_to(settings.rank_encoding, witness.rank[m] - 1)?);
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::game::file::from_json_str;
+    use crate::synthesis::graph::{CellGraph, Moves};
+    use crate::synthesis::{Mode, RankEncoding};
+
+    /// A certificate claiming every state at level 0 on a game where the
+    /// defender's only support can step into `bad`: the constant check
+    /// must leave an empty clause, and the true (empty) region must not
+    /// satisfy the claim either.
+    #[test]
+    fn a_false_certificate_violates_the_formula() {
+        let game = from_json_str(
+            r#"{"posg": 1, "states": ["s0", "bad"], "initial": {"s0": 1},
+                "labels": {"bad": ["bad"]},
+                "defender": {"actions": ["a", "b"], "observe": "full"},
+                "transitions": [
+                  {"state": "s0", "defender": "a", "next": {"s0": 1}},
+                  {"state": "s0", "defender": "b", "next": {"bad": 1}},
+                  {"state": "bad", "defender": "*", "next": {"bad": 1}}]}"#,
+            "test.posg.json",
+        )
+        .unwrap();
+        let dra = crate::ltl::translate(&crate::ltl::parse("G !bad").unwrap()).unwrap();
+        let moves = Moves::of(&game);
+        let graph = CellGraph::build(&game, &dra, &moves);
+        let context = Context {
+            game: &game,
+            moves: &moves,
+            graph: &graph,
+            nodes: 1,
+        };
+        let size = graph.num_cells();
+        let everything = FixedCertificate {
+            member: vec![true; size],
+            level: vec![0; size],
+            rank: vec![0; size],
+        };
+        let pairs: Vec<&RabinPair> = dra.pairs().iter().collect();
+        let support = [true; 4];
+        let verdict = |fixed: &FixedCertificate, mode: Mode| {
+            let mut cnf = Cnf::new(10_000);
+            let mut vars = SupportVariables::fixed(&game, &moves, 1, &support);
+            let certificates = encoding::certificates(
+                &context,
+                &mut cnf,
+                &mut vars,
+                &pairs,
+                mode.claim(),
+                RankEncoding::Binary,
+                size,
+                Some(std::slice::from_ref(fixed)),
+            )
+            .unwrap();
+            encoding::claim_initial(&context, &mut cnf, &certificates, mode.claim()).unwrap();
+            Solver::new(&cnf, None).solve(&[]).unwrap()
+        };
+        for mode in [Mode::Positive, Mode::AlmostSure] {
+            assert_eq!(
+                verdict(&everything, mode),
+                Answer::Unsatisfiable,
+                "{mode:?}"
+            );
         }
     }
-    assumptions.extend(
-        member
-            .iter()
-            .zip(&inside)
-            .map(|(&x, &inside)| if inside { x } else { -x }),
-    );
-    Some(assumptions)
 }

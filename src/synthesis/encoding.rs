@@ -58,6 +58,19 @@ pub struct Certificates {
     pub ranks: Vec<Vec<Option<Number>>>,
 }
 
+/// A certificate given as values (to check it against the constraints):
+/// per formula state `m`, membership, level and rank (for a state outside
+/// `K`, its number is the rank minus 1).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct FixedCertificate {
+    /// `in[m]`.
+    pub member: Vec<bool>,
+    /// `lambda(m)`.
+    pub level: Vec<usize>,
+    /// The value of `rho(m)`'s number.
+    pub rank: Vec<usize>,
+}
+
 /// The shared context of the constraints.
 pub struct Context<'a> {
     /// The game.
@@ -71,7 +84,10 @@ pub struct Context<'a> {
 }
 
 /// Adds one certificate per pair (module documentation) to `cnf`, with
-/// levels and ranks in `0..rank_bound` written as `encoding`.
+/// levels and ranks in `0..rank_bound` written as `encoding`; with `fixed`
+/// (one per pair, values that fit the bound), the certificates are those
+/// constants, and every clause they violate is left empty.
+#[allow(clippy::too_many_arguments)]
 pub fn certificates(
     context: &Context,
     cnf: &mut Cnf,
@@ -80,14 +96,17 @@ pub fn certificates(
     claim: Claim,
     encoding: RankEncoding,
     rank_bound: usize,
+    fixed: Option<&[FixedCertificate]>,
 ) -> Result<Certificates, SynthesisError> {
     let mut certificates = Certificates {
         members: Vec::with_capacity(pairs.len()),
         levels: Vec::with_capacity(pairs.len()),
         ranks: Vec::with_capacity(pairs.len()),
     };
-    for pair in pairs {
-        let mut certificate = Certificate::new(context, cnf, pair, claim, encoding, rank_bound)?;
+    for (i, pair) in pairs.iter().enumerate() {
+        let values = fixed.map(|all| &all[i]);
+        let mut certificate =
+            Certificate::new(context, cnf, pair, claim, (encoding, rank_bound), values)?;
         certificate.constrain(context, cnf, vars)?;
         certificates.members.push(certificate.member);
         certificates.levels.push(certificate.levels);
@@ -153,17 +172,28 @@ impl<'p> Certificate<'p> {
         cnf: &mut Cnf,
         pair: &'p RabinPair,
         claim: Claim,
-        encoding: RankEncoding,
-        bound: usize,
+        (encoding, bound): (RankEncoding, usize),
+        fixed: Option<&FixedCertificate>,
     ) -> Result<Self, SynthesisError> {
         let graph = context.graph;
         let n = graph.num_cells() * context.nodes;
-        let member = cnf.fresh_many(n);
+        let member = match fixed {
+            None => cnf.fresh_many(n),
+            Some(values) => values
+                .member
+                .iter()
+                .map(|&inside| if inside { TRUE } else { FALSE })
+                .collect(),
+        };
+        let number = |cnf: &mut Cnf, value: Option<usize>| match value {
+            None => encoding.number(cnf, bound),
+            Some(value) => encoding.constant(bound, value),
+        };
         let has_fin = graph.cells.iter().any(|&(_, q)| pair.fin[q]);
         let levels = if claim == Claim::Positive || has_fin {
             Some(
                 (0..n)
-                    .map(|_| encoding.number(cnf, bound))
+                    .map(|m| number(cnf, fixed.map(|f| f.level[m])))
                     .collect::<Result<_, _>>()?,
             )
         } else {
@@ -173,7 +203,7 @@ impl<'p> Certificate<'p> {
             .map(|m| {
                 let (_, q) = graph.cells[m / context.nodes];
                 (!pair.inf[q])
-                    .then(|| encoding.number(cnf, bound))
+                    .then(|| number(cnf, fixed.map(|f| f.rank[m])))
                     .transpose()
             })
             .collect::<Result<_, _>>()?;
@@ -239,6 +269,9 @@ impl<'p> Certificate<'p> {
         edges: &[(usize, Lit)],
     ) -> Result<(), SynthesisError> {
         let inside = self.member[m];
+        if inside == FALSE {
+            return Ok(());
+        }
         let mut progress = Vec::new();
         if self.levels.is_some() {
             for &(next, e) in edges {

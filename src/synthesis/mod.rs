@@ -399,6 +399,7 @@ pub fn synthesise(
             settings.mode.claim(),
             settings.rank_encoding,
             rank_bound,
+            None,
         )?;
         encoding::claim_initial(&context, &mut cnf, &certificates, settings.mode.claim())?;
     }
@@ -533,6 +534,7 @@ pub fn write_dimacs(
         settings.mode.claim(),
         settings.rank_encoding,
         rank_bound,
+        None,
     )?;
     encoding::claim_initial(&context, &mut cnf, &certificates, settings.mode.claim())?;
     let variables: Vec<String> = vars.support.iter().map(ToString::to_string).collect();

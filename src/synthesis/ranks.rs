@@ -53,7 +53,47 @@ impl RankEncoding {
     }
 }
 
+impl RankEncoding {
+    /// The constant number `value` in `0..bound` (an error if it does not
+    /// fit).
+    pub fn constant(self, bound: usize, value: usize) -> Result<Number, SynthesisError> {
+        let width = match self {
+            Self::Binary => bits_for(bound),
+            Self::Order => bound.saturating_sub(1),
+        };
+        let shape = Number {
+            literals: vec![TRUE; width],
+        };
+        let literals = shape.fixed_to(self, value).ok_or_else(|| {
+            SynthesisError::Internal(format!("the value {value} does not fit the bound {bound}"))
+        })?;
+        Ok(Number { literals })
+    }
+}
+
 impl Number {
+    /// The value, when every literal is a constant.
+    fn value(&self, encoding: RankEncoding) -> Option<usize> {
+        let bits: Option<Vec<bool>> = self
+            .literals
+            .iter()
+            .map(|&l| match l {
+                TRUE => Some(true),
+                FALSE => Some(false),
+                _ => None,
+            })
+            .collect();
+        let bits = bits?;
+        Some(match encoding {
+            RankEncoding::Binary => bits
+                .iter()
+                .enumerate()
+                .map(|(k, &b)| usize::from(b) << k)
+                .sum(),
+            RankEncoding::Order => bits.iter().filter(|&&b| b).count(),
+        })
+    }
+
     /// Assumptions that fix the number to `value`, or `None` when `value`
     /// does not fit.
     pub fn fixed_to(&self, encoding: RankEncoding, value: usize) -> Option<Vec<Lit>> {
@@ -93,6 +133,10 @@ pub fn less(
     strict: bool,
 ) -> Result<Lit, SynthesisError> {
     debug_assert_eq!(a.literals.len(), b.literals.len());
+    if let (Some(x), Some(y)) = (a.value(encoding), b.value(encoding)) {
+        let holds = if strict { x < y } else { x <= y };
+        return Ok(if holds { TRUE } else { FALSE });
+    }
     match encoding {
         RankEncoding::Binary => binary_less(cnf, &a.literals, &b.literals, strict),
         RankEncoding::Order => order_less(cnf, &a.literals, &b.literals, strict),

@@ -9,7 +9,7 @@
 //! built the first time it is asked for.
 
 use super::SynthesisError;
-use super::cnf::{Cnf, Lit};
+use super::cnf::{Cnf, FALSE, Lit, TRUE};
 use super::graph::Moves;
 use crate::game::Posg;
 
@@ -46,6 +46,23 @@ impl SupportVariables {
             support,
             edges: vec![0; moves.len() * nodes * nodes],
         })
+    }
+
+    /// The support fixed to `present` (indexed as
+    /// [`SupportVariables::support`]): every support literal is a constant,
+    /// so edge literals are constants too.
+    pub fn fixed(game: &Posg, moves: &Moves, nodes: usize, present: &[bool]) -> Self {
+        let player = game.defender();
+        Self {
+            nodes,
+            num_observations: player.num_observations(),
+            num_actions: player.num_actions(),
+            support: present
+                .iter()
+                .map(|&p| if p { TRUE } else { FALSE })
+                .collect(),
+            edges: vec![0; moves.len() * nodes * nodes],
+        }
     }
 
     /// The position of `x[g, o, g', u]` in [`SupportVariables::support`].
