@@ -28,7 +28,11 @@
 //!   tried.
 //!
 //! Both are [`crate::mdp::max_rabin_probability`] on the product, so the
-//! numbers are exact up to the reported residual.
+//! numbers are exact up to the reported `error_bound` (method.md section 8:
+//! every policy evaluation is a cancellation-free system with a bounded
+//! error). A lower bound above an upper bound beyond their error bounds is
+//! impossible for exact numbers: [`bracket`] and [`check_consistent`]
+//! report it as an error, never as a bracket.
 
 use std::time::Instant;
 
@@ -55,6 +59,23 @@ pub enum CertifyError {
     /// The MDP analysis failed.
     #[error(transparent)]
     Mdp(#[from] MdpError),
+    /// The certified lower bound exceeds the upper bound by more than their
+    /// error bounds: a numerical failure, never a valid bracket.
+    #[error(
+        "inconsistent bounds: the certified lower bound {lower} exceeds the upper bound {upper} \
+         by more than their error bounds ({lower_error:e} and {upper_error:e}); the numbers \
+         cannot be trusted"
+    )]
+    Inconsistent {
+        /// The lower bound.
+        lower: f64,
+        /// The upper bound.
+        upper: f64,
+        /// The lower bound's error bound.
+        lower_error: f64,
+        /// The upper bound's error bound.
+        upper_error: f64,
+    },
 }
 
 /// A certified bound on `P(trace |= phi)` and the strategy that attains it.
@@ -70,6 +91,10 @@ pub struct Bound {
     pub seconds: f64,
     /// The MDP solution's residual ([`crate::mdp::Reachability::residual`]).
     pub residual: f64,
+    /// A bound on the error of `value` from the linear solves
+    /// ([`crate::mdp::Reachability::error_bound`] plus the rounding of the
+    /// sum over the initial states).
+    pub error_bound: f64,
 }
 
 /// A memoryless deterministic strategy of the free player on the product of
@@ -118,15 +143,34 @@ pub fn bracket<'a>(
     defender: &Fsc,
     adversaries: impl IntoIterator<Item = &'a Fsc>,
 ) -> Result<Bracket, CertifyError> {
-    let certified_lower = lower_bound(game, dra_not_phi, defender)?.value;
+    let lower = lower_bound(game, dra_not_phi, defender)?;
     let mut upper = 1.0f64;
     for adversary in adversaries {
-        upper = upper.min(upper_bound(game, dra_phi, adversary)?.value);
+        let bound = upper_bound(game, dra_phi, adversary)?;
+        check_consistent(&lower, &bound)?;
+        upper = upper.min(bound.value);
     }
     Ok(Bracket {
-        certified_lower,
+        certified_lower: lower.value,
         upper_bound: upper,
     })
+}
+
+/// Checks `lower <= upper` up to their error bounds: for any defender and
+/// adversary, `lower_bound(defender) <= V(defender, adversary) <=
+/// upper_bound(adversary)`, so exact numbers always satisfy it.
+pub fn check_consistent(lower: &Bound, upper: &Bound) -> Result<(), CertifyError> {
+    let slack = lower.error_bound + upper.error_bound + 4.0 * f64::EPSILON;
+    if lower.value <= upper.value + slack {
+        Ok(())
+    } else {
+        Err(CertifyError::Inconsistent {
+            lower: lower.value,
+            upper: upper.value,
+            lower_error: lower.error_bound,
+            upper_error: upper.error_bound,
+        })
+    }
 }
 
 /// The defender's guaranteed probability of `phi` with controller
@@ -162,6 +206,7 @@ fn best_response(
         .iter()
         .map(|&(m, p)| p * result.values[m])
         .sum();
+    let rounding = 2.0 * product.initial.len() as f64 * f64::EPSILON;
     let free = free_player(game, fixed);
     let rules = product
         .states
@@ -184,6 +229,7 @@ fn best_response(
         mdp_states: product.states.len(),
         seconds: start.elapsed().as_secs_f64(),
         residual: result.residual,
+        error_bound: result.error_bound + rounding,
     })
 }
 

@@ -22,7 +22,7 @@ use posg_fsc::game::Posg;
 use posg_fsc::optimise::{
     self, Observer, Settings, Solution, Structure, StructureReport, UpdateRule,
 };
-use posg_fsc::output::{CurveCsv, CurvePlot, Progress};
+use posg_fsc::output::{CurveCsv, CurvePlot, OutputDirectory, Progress, create_dir, write_file};
 use posg_fsc::solver::SolverMethod;
 
 use super::common::{ObjectiveArgs, objective, print_text, read_game};
@@ -40,9 +40,13 @@ pub struct SolveArgs {
     /// Adversary FSC size (nodes).
     #[arg(long, default_value_t = 1)]
     adv_nodes: usize,
-    /// Directory for the output files (created if missing).
+    /// Directory for the output files (created if missing; written
+    /// atomically: the results appear there whole when the run ends).
     #[arg(long)]
     out: PathBuf,
+    /// Replace a non-empty --out whole (without it, a non-empty --out is refused).
+    #[arg(long)]
+    force: bool,
     /// Start the defender from this `*.fsc.json` (its support and logits)
     /// instead of the full uniform structure; use with `--initial-spread 0` to resume.
     #[arg(long)]
@@ -190,7 +194,8 @@ pub struct SolveJob<'a> {
     pub structures: Vec<Structure>,
     /// The optimiser's settings.
     pub settings: &'a Settings,
-    /// The output directory.
+    /// The directory to write into (a staging directory of an
+    /// [`OutputDirectory`], or a subdirectory of one).
     pub out: &'a Path,
     /// Whether to draw progress bars (stderr is a terminal and nothing else draws).
     pub progress: bool,
@@ -237,8 +242,7 @@ pub fn load(game: &Path, args: &ObjectiveArgs) -> anyhow::Result<(Posg, Dra, Opt
 /// `curve-<name>.csv`/`.svg`). Returns the solution and the best
 /// defender's certified bracket.
 pub fn run_job(job: &SolveJob) -> anyhow::Result<(Solution, Option<Bracket>)> {
-    std::fs::create_dir_all(job.out)
-        .with_context(|| format!("cannot create {}", job.out.display()))?;
+    create_dir(job.out)?;
     let clock = Instant::now();
     let title = format!("{}: {}", job.game.name().unwrap_or("game"), job.objective);
     let iterations = job.settings.max_iterations;
@@ -269,10 +273,9 @@ pub fn run_job(job: &SolveJob) -> anyhow::Result<(Solution, Option<Bracket>)> {
     if multiple {
         let best = &solution.best().report.name;
         for ext in ["csv", "svg"] {
-            std::fs::copy(
-                out.join(format!("curve-{best}.{ext}")),
-                out.join(format!("curve.{ext}")),
-            )?;
+            let from = out.join(format!("curve-{best}.{ext}"));
+            std::fs::copy(&from, out.join(format!("curve.{ext}")))
+                .with_context(|| format!("copying {}", from.display()))?;
         }
     }
     let best = solution.best();
@@ -307,8 +310,8 @@ pub fn run_job(job: &SolveJob) -> anyhow::Result<(Solution, Option<Bracket>)> {
             "summary.json",
         ],
     };
-    std::fs::write(
-        out.join("summary.json"),
+    write_file(
+        &out.join("summary.json"),
         serde_json::to_string_pretty(&summary)? + "\n",
     )?;
     Ok((solution, certified))
@@ -365,6 +368,7 @@ pub fn run(args: SolveArgs) -> anyhow::Result<()> {
         structure.adversary = controller::file::read(path, &game, Role::Adversary)?;
         structure.name = "from-files".into();
     }
+    let out = OutputDirectory::create(&args.out, args.force)?;
     let job = SolveJob {
         game: &game,
         dra: &dra,
@@ -372,10 +376,11 @@ pub fn run(args: SolveArgs) -> anyhow::Result<()> {
         objective: &description,
         structures: optimise::candidate_structures(&game, &dra, structure, &settings)?,
         settings: &settings,
-        out: &args.out,
+        out: out.path(),
         progress: std::io::stderr().is_terminal(),
     };
     let (solution, certified) = run_job(&job)?;
+    out.commit()?;
     let best = solution.best();
     let report = &best.report;
     let bracket = certified.map_or_else(

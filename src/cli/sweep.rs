@@ -9,7 +9,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use posg_fsc::optimise::{self, Structure};
-use posg_fsc::output::{SweepPoint, plot_sweep};
+use posg_fsc::output::{OutputDirectory, OutputError, SweepPoint, plot_sweep};
 
 use super::common::{ObjectiveArgs, print_text};
 use super::solve::{SettingsArgs, SolveJob, load, run_job};
@@ -28,9 +28,13 @@ pub struct SweepArgs {
     #[arg(long, default_value = "1..2", value_parser = parse_sizes)]
     adv_nodes: Sizes,
     /// Directory for `sweep.csv`, `sweep.svg` and one `solve` directory
-    /// `def<N>-adv<M>/` per size pair.
+    /// `def<N>-adv<M>/` per size pair (written atomically: the results
+    /// appear there whole when the run ends).
     #[arg(long)]
     out: PathBuf,
+    /// Replace a non-empty --out whole (without it, a non-empty --out is refused).
+    #[arg(long)]
+    force: bool,
     #[command(flatten)]
     settings: SettingsArgs,
 }
@@ -79,8 +83,7 @@ struct Row {
 pub fn run(args: SweepArgs) -> anyhow::Result<()> {
     let settings = args.settings.settings()?;
     let (game, dra, negated, description) = load(&args.game, &args.objective)?;
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("cannot create {}", args.out.display()))?;
+    let out = OutputDirectory::create(&args.out, args.force)?;
     let pairs: Vec<(usize, usize)> = args
         .def_nodes
         .0
@@ -90,7 +93,7 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
     let rows = pairs
         .par_iter()
         .map(|&(n, m)| {
-            let out = args.out.join(format!("def{n}-adv{m}"));
+            let out = out.join(format!("def{n}-adv{m}"));
             let job = SolveJob {
                 game: &game,
                 dra: &dra,
@@ -130,11 +133,18 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
             })
         })
         .collect::<anyhow::Result<Vec<Row>>>()?;
-    let mut writer = csv::Writer::from_path(args.out.join("sweep.csv"))?;
+    let table = out.join("sweep.csv");
+    let file =
+        std::fs::File::create(&table).map_err(|e| OutputError::io("creating", &table, e))?;
+    let mut writer = csv::Writer::from_writer(file);
     for row in &rows {
-        writer.serialize(row)?;
+        writer
+            .serialize(row)
+            .with_context(|| format!("writing {}", table.display()))?;
     }
-    writer.flush()?;
+    writer
+        .flush()
+        .map_err(|e| OutputError::io("writing", &table, e))?;
     let points: Vec<SweepPoint> = rows
         .iter()
         .map(|r| SweepPoint {
@@ -145,7 +155,10 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
         })
         .collect();
     let title = format!("{}: {}", game.name().unwrap_or("game"), description);
-    plot_sweep(&args.out.join("sweep.svg"), &title, &points).map_err(|e| anyhow::anyhow!(e))?;
+    let plot = out.join("sweep.svg");
+    plot_sweep(&plot, &title, &points)
+        .map_err(|e| anyhow::anyhow!("writing {}: {e}", plot.display()))?;
+    out.commit()?;
     print_text(&format!(
         "wrote sweep.csv and sweep.svg ({} size pairs) to {}\n",
         rows.len(),
