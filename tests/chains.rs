@@ -137,6 +137,10 @@ fn a_walk_too_slow_to_certify_is_an_error_or_right_never_wrong() {
             Err(other) => panic!("{method:?}: {other}"),
         }
     }
+    // Policy iteration's qualitative steps are quadratic on a path: a
+    // shorter, lazier walk is as slow to mix (about 5e17 expected steps).
+    let game = posg_fsc::game::file::from_json_str(&walk_json(2_001, 1e-12), "walk").unwrap();
+    let (def, adv) = (uniform(&game, Role::Defender), uniform(&game, Role::Adversary));
     let lower = lower_bound(&game, &formula("!F goal"), &def);
     let upper = upper_bound(&game, &dra, &adv);
     match (lower, upper) {

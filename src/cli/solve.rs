@@ -34,12 +34,12 @@ pub struct SolveArgs {
     game: PathBuf,
     #[command(flatten)]
     objective: ObjectiveArgs,
-    /// Defender FSC size (nodes).
-    #[arg(long, default_value_t = 1)]
-    def_nodes: usize,
-    /// Adversary FSC size (nodes).
-    #[arg(long, default_value_t = 1)]
-    adv_nodes: usize,
+    /// Defender FSC size (nodes; default 1, or the size of --defender).
+    #[arg(long)]
+    def_nodes: Option<usize>,
+    /// Adversary FSC size (nodes; default 1, or the size of --adversary).
+    #[arg(long)]
+    adv_nodes: Option<usize>,
     /// Directory for the output files (created if missing; written
     /// atomically: the results appear there whole when the run ends).
     #[arg(long)]
@@ -350,23 +350,65 @@ impl Observer for Failed {
     }
 }
 
+/// Checks controller sizes given on the command line: at least one node,
+/// within the resource budget ([`posg_fsc::limits`]), and one adversary
+/// node for a game without an adversary (a POMDP).
+pub fn check_sizes(game: &Posg, def_nodes: usize, adv_nodes: usize) -> anyhow::Result<()> {
+    let (def, adv) = (game.defender(), game.adversary());
+    controller::Fsc::check_uniform_size(
+        "--def-nodes",
+        def_nodes,
+        def.num_observations(),
+        def.num_actions(),
+    )?;
+    controller::Fsc::check_uniform_size(
+        "--adv-nodes",
+        adv_nodes,
+        adv.num_observations(),
+        adv.num_actions(),
+    )?;
+    if !game.has_adversary() && adv_nodes != 1 {
+        anyhow::bail!(
+            "--adv-nodes {adv_nodes}: the game has no adversary (it is a POMDP), whose controller \
+             has exactly one node; drop --adv-nodes"
+        );
+    }
+    Ok(())
+}
+
+/// A size option given beside a controller file must match the file.
+fn agree(
+    option: &str,
+    nodes: Option<usize>,
+    path: &Path,
+    controller: &controller::Fsc,
+) -> anyhow::Result<()> {
+    match nodes {
+        Some(n) if n != controller.num_nodes() => anyhow::bail!(
+            "{option} {n} disagrees with {}, which has {} nodes; drop {option} (the file's size is used)",
+            path.display(),
+            controller.num_nodes()
+        ),
+        _ => Ok(()),
+    }
+}
+
 /// Runs `solve`.
 pub fn run(args: SolveArgs) -> anyhow::Result<()> {
     let settings = args.settings.settings()?;
     let (game, dra, negated, description) = load(&args.game, &args.objective)?;
-    let mut structure = Structure::full(
-        &game,
-        args.def_nodes,
-        args.adv_nodes,
-        settings.optimise_initial,
-    );
+    let (def_nodes, adv_nodes) = (args.def_nodes.unwrap_or(1), args.adv_nodes.unwrap_or(1));
+    check_sizes(&game, def_nodes, adv_nodes)?;
+    let mut structure = Structure::full(&game, def_nodes, adv_nodes, settings.optimise_initial);
     if let Some(path) = &args.defender {
         structure.defender = controller::file::read(path, &game, Role::Defender)?;
         structure.name = "from-files".into();
+        agree("--def-nodes", args.def_nodes, path, &structure.defender)?;
     }
     if let Some(path) = &args.adversary {
         structure.adversary = controller::file::read(path, &game, Role::Adversary)?;
         structure.name = "from-files".into();
+        agree("--adv-nodes", args.adv_nodes, path, &structure.adversary)?;
     }
     let out = OutputDirectory::create(&args.out, args.force)?;
     let job = SolveJob {

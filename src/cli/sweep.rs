@@ -8,11 +8,12 @@ use clap::Args;
 use rayon::prelude::*;
 use serde::Serialize;
 
+use posg_fsc::limits;
 use posg_fsc::optimise::{self, Structure};
 use posg_fsc::output::{OutputDirectory, OutputError, SweepPoint, plot_sweep};
 
 use super::common::{ObjectiveArgs, print_text};
-use super::solve::{SettingsArgs, SolveJob, load, run_job};
+use super::solve::{SettingsArgs, SolveJob, check_sizes, load, run_job};
 
 /// Arguments of `sweep`.
 #[derive(Debug, Args)]
@@ -49,7 +50,20 @@ fn parse_sizes(text: &str) -> Result<Sizes, String> {
         _ => Err(format!("`{t}` is not a positive integer")),
     };
     let sizes = match text.split_once("..") {
-        Some((a, b)) => (positive(a)?..=positive(b)?).collect(),
+        Some((a, b)) => {
+            let (a, b) = (positive(a)?, positive(b)?);
+            let count = (b as u128 + 1).saturating_sub(a as u128);
+            if let Some(message) = limits::exceeded(
+                &format!("the range `{text}`"),
+                count,
+                limits::MAX_SWEEP_PAIRS,
+                "sizes",
+                "MAX_SWEEP_PAIRS",
+            ) {
+                return Err(message);
+            }
+            (a..=b).collect()
+        }
         None => text
             .split(',')
             .map(positive)
@@ -83,6 +97,21 @@ struct Row {
 pub fn run(args: SweepArgs) -> anyhow::Result<()> {
     let settings = args.settings.settings()?;
     let (game, dra, negated, description) = load(&args.game, &args.objective)?;
+    let count = args.def_nodes.0.len() as u128 * args.adv_nodes.0.len() as u128;
+    if let Some(message) = limits::exceeded(
+        "--def-nodes x --adv-nodes",
+        count,
+        limits::MAX_SWEEP_PAIRS,
+        "size pairs",
+        "MAX_SWEEP_PAIRS",
+    ) {
+        anyhow::bail!(message);
+    }
+    for &n in &args.def_nodes.0 {
+        for &m in &args.adv_nodes.0 {
+            check_sizes(&game, n, m)?;
+        }
+    }
     let out = OutputDirectory::create(&args.out, args.force)?;
     let pairs: Vec<(usize, usize)> = args
         .def_nodes
