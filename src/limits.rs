@@ -20,7 +20,7 @@ pub const MAX_TRANSITION_ENTRIES: u128 = 200_000_000;
 
 /// The most edges (`states * 2^AP`) a deterministic automaton may have,
 /// read from HOA or built from a formula.
-pub const MAX_AUTOMATON_EDGES: u128 = 1 << 25;
+pub const MAX_AUTOMATON_EDGES: u128 = 1 << 24;
 
 /// The most transitions of a global Markov chain (or of a certification
 /// product MDP's state-action distributions).

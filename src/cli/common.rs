@@ -29,6 +29,21 @@ pub struct ObjectiveArgs {
     /// state of the game (by default that is an error: usually a misspelling).
     #[arg(long)]
     pub allow_unused_propositions: bool,
+    /// Time budget of the translation of --ltl (and of its negation) into an
+    /// automaton, in seconds; a formula that needs more is an error naming
+    /// the subformula that blew up.
+    #[arg(long, default_value_t = posg_fsc::ltl::DEFAULT_TRANSLATION_SECONDS, value_parser = positive_tolerance)]
+    pub translate_seconds: f64,
+}
+
+impl ObjectiveArgs {
+    /// The automaton of `formula` within the translation budget.
+    pub fn translate(&self, formula: &posg_fsc::ltl::Formula) -> anyhow::Result<Dra> {
+        let budget = posg_fsc::ltl::TranslationBudget {
+            seconds: self.translate_seconds,
+        };
+        Ok(posg_fsc::ltl::translate_within(formula, &budget)?)
+    }
 }
 
 /// The two controllers.
@@ -99,7 +114,7 @@ pub fn objective(args: &ObjectiveArgs, game: &Posg) -> anyhow::Result<(Dra, Stri
         (Some(text), _) => {
             let formula =
                 posg_fsc::ltl::parse(text).with_context(|| format!("in the formula '{text}'"))?;
-            (posg_fsc::ltl::translate(&formula)?, text.clone())
+            (args.translate(&formula)?, text.clone())
         }
         (None, Some(path)) => {
             let text = std::fs::read_to_string(path)

@@ -229,9 +229,10 @@ pub fn load(game: &Path, args: &ObjectiveArgs) -> anyhow::Result<(Posg, Dra, Opt
     let game = read_game(game)?;
     let (dra, description) = objective(args, &game)?;
     let negated = match &args.ltl {
-        Some(text) => Some(posg_fsc::ltl::translate(
-            &posg_fsc::ltl::parse(text)?.negate(),
-        )?),
+        Some(text) => Some(
+            args.translate(&posg_fsc::ltl::parse(text)?.negate())
+                .context("translating !phi")?,
+        ),
         None => None,
     };
     Ok((game, dra, negated, description))
