@@ -93,8 +93,9 @@ fn mutate(text: &str, rng: &mut StdRng) -> String {
         _ => {
             let other = rng.random_range(0..n);
             out.extend(&chars);
+            let last = out.len().saturating_sub(1);
             if !out.is_empty() {
-                out.swap(at.min(out.len() - 1), other.min(out.len() - 1));
+                out.swap(at.min(last), other.min(last));
             }
         }
     }
