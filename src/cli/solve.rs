@@ -213,6 +213,9 @@ struct Summary<'a> {
     settings: &'a Settings,
     structure_used: &'a str,
     worst_case: f64,
+    /// The largest error bound of the values computed on the best structure
+    /// (method.md section 8).
+    error_bound: f64,
     /// The best defender's guaranteed value against every adversary, and
     /// the smallest game upper bound over the best responses found
     /// (method.md section 6); absent when the objective came as an automaton.
@@ -299,6 +302,7 @@ pub fn run_job(job: &SolveJob) -> anyhow::Result<(Solution, Option<Bracket>)> {
         settings: job.settings,
         structure_used: &best.report.name,
         worst_case: best.report.worst_case,
+        error_bound: best.report.error_bound,
         certified,
         last_value: best.report.last_value,
         seconds: clock.elapsed().as_secs_f64(),
