@@ -59,6 +59,9 @@ pub enum CertifyError {
     /// The MDP analysis failed.
     #[error(transparent)]
     Mdp(#[from] MdpError),
+    /// The product MDP exceeds the resource budget ([`crate::limits`]).
+    #[error("{0}")]
+    Budget(String),
     /// The certified lower bound exceeds the upper bound by more than their
     /// error bounds: a numerical failure, never a valid bracket.
     #[error(
@@ -344,6 +347,7 @@ impl Product {
         }
         let mut builder = MdpBuilder::new();
         let mut terms = Vec::new();
+        let mut total_terms = 0u128;
         while builder.num_states() < explorer.states.len() {
             let (s, q, g) = explorer.states[builder.num_states()];
             for w in 0..num_free_actions {
@@ -352,6 +356,16 @@ impl Product {
                     for &(s2, t) in transition(s, f, w) {
                         terms.push(((s2, dra.successor(q, letters[s2]), next), a * t));
                     }
+                }
+                total_terms += terms.len() as u128;
+                if let Some(message) = crate::limits::exceeded(
+                    "the certification product MDP",
+                    total_terms,
+                    crate::limits::MAX_CHAIN_TRANSITIONS,
+                    "transitions or more",
+                    "MAX_CHAIN_TRANSITIONS",
+                ) {
+                    return Err(CertifyError::Budget(message));
                 }
                 builder.add_action(terms.iter().map(|&(key, p)| (explorer.id(key), p)));
             }

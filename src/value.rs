@@ -353,7 +353,11 @@ impl Evaluator {
         }
         let value = self.gmc.initial().map(|(m, p)| p * self.values[m]).sum();
         let terms = self.gmc.initial().count() as f64;
-        let magnitude: f64 = self.gmc.initial().map(|(m, p)| p * self.values[m].abs()).sum();
+        let magnitude: f64 = self
+            .gmc
+            .initial()
+            .map(|(m, p)| p * self.values[m].abs())
+            .sum();
         let rounding = 2.0 * terms * f64::EPSILON * magnitude;
         Evaluation {
             value,

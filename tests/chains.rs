@@ -49,7 +49,10 @@ fn eval_gives_the_closed_form_values_within_its_error_bound() {
     let dra = formula("F goal");
     for (name, exact) in fixtures() {
         let game = read(name);
-        let (def, adv) = (uniform(&game, Role::Defender), uniform(&game, Role::Adversary));
+        let (def, adv) = (
+            uniform(&game, Role::Defender),
+            uniform(&game, Role::Adversary),
+        );
         for method in methods() {
             let settings = SolverSettings {
                 method,
@@ -58,7 +61,11 @@ fn eval_gives_the_closed_form_values_within_its_error_bound() {
             let (_, evaluation) = evaluate_controllers(&game, &dra, &def, &adv, &settings)
                 .unwrap_or_else(|e| panic!("{name} ({method:?}): {e}"));
             let error = (evaluation.value - exact).abs();
-            assert!(error < 1e-9, "{name} ({method:?}): {} vs {exact}", evaluation.value);
+            assert!(
+                error < 1e-9,
+                "{name} ({method:?}): {} vs {exact}",
+                evaluation.value
+            );
             assert!(
                 error <= evaluation.error_bound + 4.0 * f64::EPSILON,
                 "{name} ({method:?}): error {error:e} above the bound {:e}",
@@ -119,7 +126,10 @@ fn walk_json(n: usize, step: f64) -> String {
 fn a_walk_too_slow_to_certify_is_an_error_or_right_never_wrong() {
     let game = posg_fsc::game::file::from_json_str(&walk_json(60_001, 1e-9), "walk").unwrap();
     let dra = formula("F goal");
-    let (def, adv) = (uniform(&game, Role::Defender), uniform(&game, Role::Adversary));
+    let (def, adv) = (
+        uniform(&game, Role::Defender),
+        uniform(&game, Role::Adversary),
+    );
     for method in methods() {
         let settings = SolverSettings {
             method,
@@ -140,7 +150,10 @@ fn a_walk_too_slow_to_certify_is_an_error_or_right_never_wrong() {
     // Policy iteration's qualitative steps are quadratic on a path: a
     // shorter, lazier walk is as slow to mix (about 5e17 expected steps).
     let game = posg_fsc::game::file::from_json_str(&walk_json(2_001, 1e-12), "walk").unwrap();
-    let (def, adv) = (uniform(&game, Role::Defender), uniform(&game, Role::Adversary));
+    let (def, adv) = (
+        uniform(&game, Role::Defender),
+        uniform(&game, Role::Adversary),
+    );
     let lower = lower_bound(&game, &formula("!F goal"), &def);
     let upper = upper_bound(&game, &dra, &adv);
     match (lower, upper) {
@@ -152,7 +165,10 @@ fn a_walk_too_slow_to_certify_is_an_error_or_right_never_wrong() {
                 assert!(
                     matches!(
                         result,
-                        Ok(_) | Err(CertifyError::Mdp(MdpError::Solver(SolverError::Unbounded { .. })))
+                        Ok(_)
+                            | Err(CertifyError::Mdp(MdpError::Solver(
+                                SolverError::Unbounded { .. }
+                            )))
                     ),
                     "{result:?}"
                 );
@@ -165,13 +181,20 @@ fn a_walk_too_slow_to_certify_is_an_error_or_right_never_wrong() {
 fn a_looser_tolerance_gets_the_walk_within_the_bound_it_states() {
     let game = posg_fsc::game::file::from_json_str(&walk_json(20_001, 1e-9), "walk").unwrap();
     let dra = formula("F goal");
-    let (def, adv) = (uniform(&game, Role::Defender), uniform(&game, Role::Adversary));
+    let (def, adv) = (
+        uniform(&game, Role::Defender),
+        uniform(&game, Role::Adversary),
+    );
     let settings = SolverSettings {
         method: SolverMethod::Lu,
         tolerance: 1e-6,
         ..SolverSettings::default()
     };
     let (_, evaluation) = evaluate_controllers(&game, &dra, &def, &adv, &settings).unwrap();
-    assert!(evaluation.error_bound > 1e-12, "{:e}", evaluation.error_bound);
+    assert!(
+        evaluation.error_bound > 1e-12,
+        "{:e}",
+        evaluation.error_bound
+    );
     assert!((evaluation.value - 0.5).abs() <= evaluation.error_bound);
 }

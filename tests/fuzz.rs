@@ -137,12 +137,8 @@ fn mutated_controllers_are_read_or_refused_with_the_file_and_path() {
     let valid = posg_fsc::controller::file::resolve("uniform:2", &game, Role::Defender).unwrap();
     let text = posg_fsc::controller::file::to_json_string(&valid, &game);
     without_panics(&mutants(&text, 1500, 2), |text| {
-        let read = posg_fsc::controller::file::from_json_str(
-            text,
-            "fuzz.fsc.json",
-            &game,
-            Role::Defender,
-        );
+        let read =
+            posg_fsc::controller::file::from_json_str(text, "fuzz.fsc.json", &game, Role::Defender);
         if let Err(error) = read {
             assert!(error.to_string().contains("fuzz.fsc.json"), "{error}");
         }
@@ -168,14 +164,15 @@ fn mutated_automata_are_read_or_refused_with_a_position() {
 fn mutated_formulas_are_translated_or_refused_with_a_column_or_subformula() {
     let budget = TranslationBudget { seconds: 0.5 };
     for (k, seed) in FORMULAS.iter().enumerate() {
-        without_panics(&mutants(seed, 60, 20 + k as u64), |text| {
-            match posg_fsc::ltl::parse(text) {
+        without_panics(
+            &mutants(seed, 60, 20 + k as u64),
+            |text| match posg_fsc::ltl::parse(text) {
                 Err(error) => assert!(error.to_string().contains("column"), "{error}"),
                 Ok(formula) => {
                     let _ = posg_fsc::ltl::translate_within(&formula, &budget);
                 }
-            }
-        });
+            },
+        );
     }
 }
 

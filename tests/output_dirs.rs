@@ -65,12 +65,19 @@ fn existing_files_are_kept_without_force_and_replaced_whole_with_it() {
     assert!(!refused.status.success());
     assert!(stderr(&refused).contains("--force"), "{}", stderr(&refused));
     assert!(stderr(&refused).contains(out.to_str().unwrap()));
-    assert_eq!(std::fs::read_to_string(out.join("notes.txt")).unwrap(), "mine");
+    assert_eq!(
+        std::fs::read_to_string(out.join("notes.txt")).unwrap(),
+        "mine"
+    );
     assert!(!out.join("chain.tra").exists());
     let forced = posg_fsc(&["export-gmc", GRID, "--force"], &out);
     assert!(forced.status.success(), "{}", stderr(&forced));
     let names: Vec<String> = snapshot(&out).into_iter().map(|(n, _)| n).collect();
-    assert_eq!(names, ["chain.lab", "chain.sta", "chain.tra"], "never a mixture");
+    assert_eq!(
+        names,
+        ["chain.lab", "chain.sta", "chain.tra"],
+        "never a mixture"
+    );
     let leftovers = std::fs::read_dir(&base).unwrap().count();
     assert_eq!(leftovers, 1, "no staging directory or lock file is left");
     std::fs::remove_dir_all(&base).unwrap();
@@ -83,11 +90,22 @@ fn a_failing_run_leaves_the_old_results_intact() {
     let first = posg_fsc(&solve_args(&[]), &out);
     assert!(first.status.success(), "{}", stderr(&first));
     let before = snapshot(&out);
-    assert!(before.iter().any(|(n, c)| n == "curve.csv" && !c.is_empty()));
+    assert!(
+        before
+            .iter()
+            .any(|(n, c)| n == "curve.csv" && !c.is_empty())
+    );
     // No solve is that accurate: the optimiser's first evaluation fails.
-    let failing = posg_fsc(&solve_args(&["--force", "--solver-tolerance", "1e-30"]), &out);
+    let failing = posg_fsc(
+        &solve_args(&["--force", "--solver-tolerance", "1e-30"]),
+        &out,
+    );
     assert!(!failing.status.success());
-    assert!(stderr(&failing).contains("tolerance 1e-30"), "{}", stderr(&failing));
+    assert!(
+        stderr(&failing).contains("tolerance 1e-30"),
+        "{}",
+        stderr(&failing)
+    );
     assert_eq!(snapshot(&out), before, "the old results are untouched");
     assert_eq!(std::fs::read_dir(&base).unwrap().count(), 1);
     std::fs::remove_dir_all(&base).unwrap();
@@ -98,7 +116,12 @@ fn two_concurrent_runs_into_one_directory_one_refuses() {
     let base = scratch("concurrent");
     let out = base.join("run");
     let first = Command::new(env!("CARGO_BIN_EXE_posg-fsc"))
-        .args(solve_args(&["--max-iterations", "100000000", "--time-budget", "3"]))
+        .args(solve_args(&[
+            "--max-iterations",
+            "100000000",
+            "--time-budget",
+            "3",
+        ]))
         .arg("--out")
         .arg(&out)
         .stderr(std::process::Stdio::piped())

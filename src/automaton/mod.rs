@@ -183,7 +183,8 @@ impl Dra {
             let graph = LetterGraph::new(self, &letters, &keep);
             let components = crate::graph::strongly_connected_components(&graph);
             components.members().iter().any(|members| {
-                let cyclic = members.len() > 1 || graph.successors[members[0]].contains(&members[0]);
+                let cyclic =
+                    members.len() > 1 || graph.successors[members[0]].contains(&members[0]);
                 keep[members[0]] && cyclic && members.iter().any(|&q| pair.inf[q])
             })
         })

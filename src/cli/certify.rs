@@ -111,7 +111,10 @@ pub fn run(args: CertifyArgs) -> anyhow::Result<()> {
 fn negated_objective(args: &CertifyArgs, game: &Posg) -> anyhow::Result<Dra> {
     if let Some(text) = &args.objective.ltl {
         let phi = posg_fsc::ltl::parse(text).with_context(|| format!("in the formula '{text}'"))?;
-        return args.objective.translate(&phi.negate()).context("translating !phi");
+        return args
+            .objective
+            .translate(&phi.negate())
+            .context("translating !phi");
     }
     let path = args.negated_automaton.as_ref().ok_or_else(|| {
         anyhow::anyhow!(

@@ -330,18 +330,34 @@ fn observers(
     progress: Option<(&MultiProgress, &str, usize)>,
 ) -> Box<dyn Observer + Send> {
     let mut list: Vec<Box<dyn Observer + Send>> = Vec::new();
-    match CurveCsv::create(&out.join(format!("{stem}.csv"))) {
-        Ok(csv) => list.push(Box::new(csv)),
+    let (table, plot) = (
+        out.join(format!("{stem}.csv")),
+        out.join(format!("{stem}.svg")),
+    );
+    match CurveCsv::create(&table) {
+        Ok(csv) => list.push(Box::new(Named(table, csv))),
         Err(error) => list.push(Box::new(Failed(Some(error.into())))),
     }
-    list.push(Box::new(CurvePlot::new(
-        &out.join(format!("{stem}.svg")),
-        title,
-    )));
+    list.push(Box::new(Named(plot.clone(), CurvePlot::new(&plot, title))));
     if let Some((bars, label, iterations)) = progress {
         list.push(Box::new(Progress::new(bars, label, iterations)));
     }
     Box::new(list)
+}
+
+/// An observer writing the file at `.0`, whose failure names that file.
+struct Named<O>(PathBuf, O);
+
+impl<O: Observer> Observer for Named<O> {
+    fn observe(&mut self, record: &optimise::IterationRecord) {
+        self.1.observe(record);
+    }
+
+    fn finish(&mut self) -> Result<(), optimise::ObserverError> {
+        self.1
+            .finish()
+            .map_err(|e| format!("writing {}: {e}", self.0.display()).into())
+    }
 }
 
 /// An observer that could not be created: reports its error at the end.

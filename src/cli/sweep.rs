@@ -165,8 +165,7 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
         })
         .collect::<anyhow::Result<Vec<Row>>>()?;
     let table = out.join("sweep.csv");
-    let file =
-        std::fs::File::create(&table).map_err(|e| OutputError::io("creating", &table, e))?;
+    let file = std::fs::File::create(&table).map_err(|e| OutputError::io("creating", &table, e))?;
     let mut writer = csv::Writer::from_writer(file);
     for row in &rows {
         writer

@@ -212,9 +212,13 @@ fn blocks(raw: &RawFsc, at: &Located, player: &Player) -> Result<Vec<Vec<Choice>
     }
     let missing = blocks.iter().filter(|b| b.is_none()).count();
     if missing > 0 && raw.default == MissingRule::Uniform {
-        let choices = (missing as u128).saturating_mul(raw.nodes as u128 * player.num_actions() as u128);
+        let choices =
+            (missing as u128).saturating_mul(raw.nodes as u128 * player.num_actions() as u128);
         if let Some(message) = crate::limits::exceeded(
-            &format!("{missing} uniform rules of {} choices each", raw.nodes * player.num_actions()),
+            &format!(
+                "{missing} uniform rules of {} choices each",
+                raw.nodes * player.num_actions()
+            ),
             choices,
             crate::limits::MAX_CONTROLLER_CHOICES,
             "choices",

@@ -16,8 +16,8 @@ use std::fmt;
 use std::marker::PhantomData;
 use std::path::Path;
 
-use rustc_hash::FxHashMap;
 use crate::limits;
+use rustc_hash::FxHashMap;
 use serde::de::{self, DeserializeSeed, Deserializer, MapAccess, Visitor};
 use serde::ser::{SerializeMap, Serializer};
 use serde::{Deserialize, Serialize};

@@ -114,7 +114,9 @@ pub(crate) mod budget {
 
     /// Whether the current thread's deadline has passed.
     pub(crate) fn out_of_time() -> bool {
-        DEADLINE.with(|d| d.get()).is_some_and(|deadline| Instant::now() > deadline)
+        DEADLINE
+            .with(|d| d.get())
+            .is_some_and(|deadline| Instant::now() > deadline)
     }
 }
 

@@ -515,8 +515,9 @@ pub fn translate_within(
     budget: &TranslationBudget,
 ) -> Result<Dra, TranslateError> {
     let propositions = checked_propositions(formula)?;
-    let deadline = std::time::Instant::now()
-        .checked_add(std::time::Duration::try_from_secs_f64(budget.seconds).unwrap_or(std::time::Duration::MAX));
+    let deadline = std::time::Instant::now().checked_add(
+        std::time::Duration::try_from_secs_f64(budget.seconds).unwrap_or(std::time::Duration::MAX),
+    );
     let _deadline = construct::budget::Deadline::set(deadline, budget.seconds);
     if is_boolean(formula) {
         return boolean_automaton(formula, propositions);
@@ -562,7 +563,10 @@ pub fn translate_within(
 /// round, and *finite* (in `L`) when that transition carried a mark of `F`.
 /// A run visits `K` infinitely often iff every `m_j` recurs, and `L`
 /// finitely often iff `F` does. `None` for other conditions.
-fn degeneralise(tgr: &construct::Tgr, propositions: &[String]) -> Result<Option<Dra>, TranslateError> {
+fn degeneralise(
+    tgr: &construct::Tgr,
+    propositions: &[String],
+) -> Result<Option<Dra>, TranslateError> {
     let [disjunct] = tgr.disjuncts.as_slice() else {
         return Ok(None);
     };
@@ -682,7 +686,9 @@ fn nnf_size(formula: &Formula) -> u128 {
             .saturating_add(nnf_size(r))
             .saturating_mul(2)
             .saturating_add(3),
-        Formula::Next(g) | Formula::Finally(g) | Formula::Globally(g) => nnf_size(g).saturating_add(1),
+        Formula::Next(g) | Formula::Finally(g) | Formula::Globally(g) => {
+            nnf_size(g).saturating_add(1)
+        }
         Formula::Implies(l, r)
         | Formula::Until(l, r)
         | Formula::WeakUntil(l, r)
