@@ -36,7 +36,9 @@
 //! * [`limits`]: the resource budget checked before large allocations;
 //! * [`mdp`] and [`certify`]: MDP analysis (maximal end components, Rabin
 //!   acceptance, maximum reachability) and the two certified bounds of
-//!   method.md section 6.
+//!   method.md section 6;
+//! * [`synthesis`]: defender supports that win positively or almost surely
+//!   against the certification adversary, found by SAT (method.md section 7).
 #![warn(missing_docs)]
 
 pub mod analysis;
@@ -56,4 +58,5 @@ pub mod prune;
 pub mod sensitivity;
 pub mod simulate;
 pub mod solver;
+pub mod synthesis;
 pub mod value;

@@ -613,7 +613,7 @@ impl LinearSolver {
             );
             let error_bound = scale * bounded;
             report.residual = residual.iter().fold(0.0, |m: f64, r| m.max(r.abs()));
-            let stalled = !(error_bound < 0.5 * previous);
+            let stalled = error_bound.is_nan() || error_bound >= 0.5 * previous;
             if error_bound <= self.tolerance || round == bound::MAX_REFINEMENTS || stalled {
                 return Ok(error_bound);
             }
