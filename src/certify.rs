@@ -28,7 +28,11 @@
 //!   tried.
 //!
 //! Both are [`crate::mdp::max_rabin_probability`] on the product, so the
-//! numbers are exact up to the reported residual.
+//! numbers are exact up to the reported `error_bound` (method.md section 8:
+//! every policy evaluation is a cancellation-free system with a bounded
+//! error). A lower bound above an upper bound beyond their error bounds is
+//! impossible for exact numbers: [`bracket`] and [`check_consistent`]
+//! report it as an error, never as a bracket.
 
 use std::time::Instant;
 
@@ -55,6 +59,26 @@ pub enum CertifyError {
     /// The MDP analysis failed.
     #[error(transparent)]
     Mdp(#[from] MdpError),
+    /// The product MDP exceeds the resource budget ([`crate::limits`]).
+    #[error("{0}")]
+    Budget(String),
+    /// The certified lower bound exceeds the upper bound by more than their
+    /// error bounds: a numerical failure, never a valid bracket.
+    #[error(
+        "inconsistent bounds: the certified lower bound {lower} exceeds the upper bound {upper} \
+         by more than their error bounds ({lower_error:e} and {upper_error:e}); the numbers \
+         cannot be trusted"
+    )]
+    Inconsistent {
+        /// The lower bound.
+        lower: f64,
+        /// The upper bound.
+        upper: f64,
+        /// The lower bound's error bound.
+        lower_error: f64,
+        /// The upper bound's error bound.
+        upper_error: f64,
+    },
 }
 
 /// A certified bound on `P(trace |= phi)` and the strategy that attains it.
@@ -70,6 +94,10 @@ pub struct Bound {
     pub seconds: f64,
     /// The MDP solution's residual ([`crate::mdp::Reachability::residual`]).
     pub residual: f64,
+    /// A bound on the error of `value` from the linear solves
+    /// ([`crate::mdp::Reachability::error_bound`] plus the rounding of the
+    /// sum over the initial states).
+    pub error_bound: f64,
     /// Whether the bound is exactly 0, exactly 1 or strictly between,
     /// decided on the product's graph (not by comparing `value` with 0 or 1).
     pub qualitative: Qualitative,
@@ -149,15 +177,34 @@ pub fn bracket<'a>(
     defender: &Fsc,
     adversaries: impl IntoIterator<Item = &'a Fsc>,
 ) -> Result<Bracket, CertifyError> {
-    let certified_lower = lower_bound(game, dra_not_phi, defender)?.value;
+    let lower = lower_bound(game, dra_not_phi, defender)?;
     let mut upper = 1.0f64;
     for adversary in adversaries {
-        upper = upper.min(upper_bound(game, dra_phi, adversary)?.value);
+        let bound = upper_bound(game, dra_phi, adversary)?;
+        check_consistent(&lower, &bound)?;
+        upper = upper.min(bound.value);
     }
     Ok(Bracket {
-        certified_lower,
+        certified_lower: lower.value,
         upper_bound: upper,
     })
+}
+
+/// Checks `lower <= upper` up to their error bounds: for any defender and
+/// adversary, `lower_bound(defender) <= V(defender, adversary) <=
+/// upper_bound(adversary)`, so exact numbers always satisfy it.
+pub fn check_consistent(lower: &Bound, upper: &Bound) -> Result<(), CertifyError> {
+    let slack = lower.error_bound + upper.error_bound + 4.0 * f64::EPSILON;
+    if lower.value <= upper.value + slack {
+        Ok(())
+    } else {
+        Err(CertifyError::Inconsistent {
+            lower: lower.value,
+            upper: upper.value,
+            lower_error: lower.error_bound,
+            upper_error: upper.error_bound,
+        })
+    }
 }
 
 /// The defender's guaranteed probability of `phi` with controller
@@ -193,6 +240,7 @@ fn best_response(
         .iter()
         .map(|&(m, p)| p * result.values[m])
         .sum();
+    let rounding = 2.0 * analysis.initial.len() as f64 * f64::EPSILON;
     let qualitative = if analysis.initial.iter().all(|&(m, _)| !result.possible[m]) {
         Qualitative::Zero
     } else if analysis.initial.iter().all(|&(m, _)| result.almost_sure[m]) {
@@ -222,6 +270,7 @@ fn best_response(
         mdp_states: analysis.states.len(),
         seconds: start.elapsed().as_secs_f64(),
         residual: result.residual,
+        error_bound: result.error_bound + rounding,
         qualitative,
     })
 }
@@ -387,6 +436,7 @@ impl Product {
         }
         let mut builder = MdpBuilder::new();
         let mut terms = Vec::new();
+        let mut total_terms = 0u128;
         while builder.num_states() < explorer.states.len() {
             let (s, q, g) = explorer.states[builder.num_states()];
             for w in 0..num_free_actions {
@@ -395,6 +445,16 @@ impl Product {
                     for &(s2, t) in transition(s, f, w) {
                         terms.push(((s2, dra.successor(q, letters[s2]), next), a * t));
                     }
+                }
+                total_terms += terms.len() as u128;
+                if let Some(message) = crate::limits::exceeded(
+                    "the certification product MDP",
+                    total_terms,
+                    crate::limits::MAX_CHAIN_TRANSITIONS,
+                    "transitions or more",
+                    "MAX_CHAIN_TRANSITIONS",
+                ) {
+                    return Err(CertifyError::Budget(message));
                 }
                 builder.add_action(terms.iter().map(|&(key, p)| (explorer.id(key), p)));
             }

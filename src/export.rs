@@ -22,6 +22,7 @@ use std::path::Path;
 use crate::automaton::{Dra, RabinPair};
 use crate::controller::{Fsc, Support};
 use crate::game::Posg;
+use crate::output::{OutputError, create_dir, write_file};
 use crate::product::{Gmc, ProductError};
 
 /// Sizes of an exported chain.
@@ -112,10 +113,11 @@ pub fn explicit_chain(
     })
 }
 
-/// Writes `chain.tra`, `chain.lab` and `chain.sta` into `dir` (created if needed).
-pub fn write_explicit_chain(chain: &ExplicitChain, dir: &Path) -> std::io::Result<()> {
-    std::fs::create_dir_all(dir)?;
-    std::fs::write(dir.join("chain.tra"), &chain.tra)?;
-    std::fs::write(dir.join("chain.lab"), &chain.lab)?;
-    std::fs::write(dir.join("chain.sta"), &chain.sta)
+/// Writes `chain.tra`, `chain.lab` and `chain.sta` into `dir` (created if
+/// needed); an error names the path.
+pub fn write_explicit_chain(chain: &ExplicitChain, dir: &Path) -> Result<(), OutputError> {
+    create_dir(dir)?;
+    write_file(&dir.join("chain.tra"), &chain.tra)?;
+    write_file(&dir.join("chain.lab"), &chain.lab)?;
+    write_file(&dir.join("chain.sta"), &chain.sta)
 }

@@ -33,6 +33,7 @@
 //! * [`optimise`]: softmax parameters, alternating projected gradient
 //!   ascent-descent and best-response checks (method.md sections 3-4);
 //! * [`output`]: observers and plots that write the optimiser's results;
+//! * [`limits`]: the resource budget checked before large allocations;
 //! * [`mdp`] and [`certify`]: MDP analysis (maximal end components, Rabin
 //!   acceptance, maximum reachability) and the two certified bounds of
 //!   method.md section 6;
@@ -47,6 +48,7 @@ pub mod controller;
 pub mod export;
 pub mod game;
 pub mod graph;
+pub mod limits;
 pub mod ltl;
 pub mod mdp;
 pub mod optimise;

@@ -68,6 +68,9 @@ pub enum ProductError {
     /// The chain has more states than 32-bit indices allow.
     #[error("the global Markov chain exceeds 2^32 - 1 states")]
     TooLarge,
+    /// The chain exceeds the resource budget ([`crate::limits`]).
+    #[error("the global Markov chain: {0}")]
+    Budget(String),
 }
 
 /// One player's action mixture `A(g', u | s, g) = sum_o O(o | s) mu(g', u | g, o)`
@@ -292,12 +295,23 @@ impl Gmc {
         let defender_mixture = Mixture::build(game.defender(), defender, game.num_states());
         let adversary_mixture = Mixture::build(game.adversary(), adversary, game.num_states());
         let (num_g, num_h) = (defender.num_nodes(), adversary.num_nodes());
-        let max_cells = (0..game.num_states())
+        let max_successors = (0..game.num_states())
             .map(|s| tables.successors(s).len())
             .max()
-            .unwrap_or(0)
-            * num_g
-            * num_h;
+            .unwrap_or(0);
+        let cells = [max_successors, num_g, num_h]
+            .into_iter()
+            .fold(1u128, |product, n| product.saturating_mul(n as u128));
+        if let Some(message) = crate::limits::exceeded(
+            "one row (successor states x defender nodes x adversary nodes)",
+            cells,
+            crate::limits::MAX_CHAIN_TRANSITIONS,
+            "transitions",
+            "MAX_CHAIN_TRANSITIONS",
+        ) {
+            return Err(ProductError::Budget(message));
+        }
+        let max_cells = max_successors * num_g * num_h;
         let mut game_initial = vec![0.0; game.num_states()];
         for &(s, p) in game.initial() {
             game_initial[s] = p;
@@ -370,6 +384,15 @@ impl Gmc {
                 row.push((self.intern(target)?, cell));
             }
             row.sort_unstable();
+            if let Some(message) = crate::limits::exceeded(
+                "the reachable transitions",
+                (self.columns.len() + row.len()) as u128,
+                crate::limits::MAX_CHAIN_TRANSITIONS,
+                "transitions or more",
+                "MAX_CHAIN_TRANSITIONS",
+            ) {
+                return Err(ProductError::Budget(message));
+            }
             self.columns.extend(row.iter().map(|&(column, _)| column));
             self.cells.extend(row.iter().map(|&(_, cell)| cell));
             self.row_offsets.push(self.columns.len());

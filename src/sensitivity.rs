@@ -132,6 +132,7 @@ impl ForwardSensitivities {
             let report = SolveReport {
                 residual: 0.0,
                 iterations: 0,
+                error_bound: None,
             };
             return Ok((0.0, report));
         }

@@ -51,6 +51,11 @@ pub struct Evaluation {
     pub residual: f64,
     /// BiCGSTAB iterations of the solve (0 for LU or when `T` is empty).
     pub iterations: usize,
+    /// A bound on `|V - V_exact|` and on every `|x(m) - x_exact(m)|`, with
+    /// `x_exact` the exact solution of the system as stored: `max(t)
+    /// ||r||_inf` plus the rounding in computing `r` and `V` (method.md
+    /// section 8). At most the solver's tolerance.
+    pub error_bound: f64,
 }
 
 /// Partial derivatives of `V` with respect to every controller probability,
@@ -77,7 +82,7 @@ pub struct Gradient {
 struct TransientSystem {
     solver: LinearSolver,
     sources: Vec<u32>,
-    diagonal: Vec<bool>,
+    diagonal: Vec<Diagonal>,
     matrix_values: Vec<f64>,
     target_offsets: Vec<usize>,
     target_sources: Vec<u32>,
@@ -88,6 +93,14 @@ struct TransientSystem {
 }
 
 const NO_SOURCE: u32 = u32::MAX;
+
+/// Where row `i`'s diagonal entry of `I - Q` lies and which GMC state `m`
+/// the row belongs to: the entry is the sum of the probabilities that leave
+/// `m` (method.md section 8), never `1 - P(m | m)`.
+struct Diagonal {
+    entry: usize,
+    state: u32,
+}
 
 impl TransientSystem {
     fn build(
@@ -119,9 +132,14 @@ impl TransientSystem {
                 entries.sort_unstable();
             }
             for &(c, source) in &entries {
+                if c == i {
+                    diagonal.push(Diagonal {
+                        entry: columns.len(),
+                        state: m as u32,
+                    });
+                }
                 columns.push(c);
                 sources.push(source);
-                diagonal.push(c == i);
             }
             row_offsets.push(columns.len());
             target_offsets.push(target_sources.len());
@@ -154,16 +172,27 @@ impl TransientSystem {
         self.b.len()
     }
 
-    /// Writes `I - Q` and `b` from the GMC's numbers and factorises.
+    /// Writes `I - Q` and `b` from the GMC's numbers and factorises. The
+    /// diagonal entry of row `m` is `sum_{m' != m} P(m' | m)`, the
+    /// probability of leaving `m` (to `T`, `B` or `Z`): it keeps every digit
+    /// when `P(m | m)` is within rounding of 1, where `1 - P(m | m)` keeps
+    /// none (method.md section 8).
     fn factorize(&mut self, gmc: &Gmc) -> Result<(), SolverError> {
         let p = gmc.values();
-        for (k, value) in self.matrix_values.iter_mut().enumerate() {
-            let q = if self.sources[k] == NO_SOURCE {
+        for (value, &source) in self.matrix_values.iter_mut().zip(&self.sources) {
+            *value = if source == NO_SOURCE {
                 0.0
             } else {
-                p[self.sources[k] as usize]
+                -p[source as usize]
             };
-            *value = if self.diagonal[k] { 1.0 - q } else { -q };
+        }
+        for diagonal in &self.diagonal {
+            let stay = self.sources[diagonal.entry] as usize;
+            self.matrix_values[diagonal.entry] = gmc
+                .row_range(diagonal.state as usize)
+                .filter(|&k| k != stay)
+                .map(|k| p[k])
+                .sum();
         }
         for (b, w) in self.b.iter_mut().zip(self.target_offsets.windows(2)) {
             *b = self.target_sources[w[0]..w[1]]
@@ -202,6 +231,7 @@ impl TransientSystem {
 const NO_SOLVE: SolveReport = SolveReport {
     residual: 0.0,
     iterations: 0,
+    error_bound: Some(0.0),
 };
 
 /// The evaluator for the supports of two controllers and the value of
@@ -314,16 +344,26 @@ impl Evaluator {
         self.system.factorize(&self.gmc)
     }
 
-    /// Copies `x` from `T` into the state values and computes `V`.
+    /// Copies `x` from `T` into the state values and computes `V`; its
+    /// error bound adds the rounding of the sum `sum_m p0(m) x(m)` (at most
+    /// `gamma_k sum_m p0(m) |x(m)|` for `k` initial states) to the solve's.
     fn store_values(&mut self, report: SolveReport) -> Evaluation {
         for (&m, &xm) in self.recurrence.transient.iter().zip(&self.system.x) {
             self.values[m] = xm;
         }
         let value = self.gmc.initial().map(|(m, p)| p * self.values[m]).sum();
+        let terms = self.gmc.initial().count() as f64;
+        let magnitude: f64 = self
+            .gmc
+            .initial()
+            .map(|(m, p)| p * self.values[m].abs())
+            .sum();
+        let rounding = 2.0 * terms * f64::EPSILON * magnitude;
         Evaluation {
             value,
             residual: report.residual,
             iterations: report.iterations,
+            error_bound: report.error_bound.unwrap_or(f64::INFINITY) + rounding,
         }
     }
 

@@ -202,7 +202,7 @@ pub const MAX_DNF_DISJUNCTS: usize = 4096;
 
 /// The largest transition table (states times letters) that
 /// [`to_state_based_rabin`] builds.
-pub const MAX_TABLE_ENTRIES: usize = 1 << 26;
+pub const MAX_TABLE_ENTRIES: usize = crate::limits::MAX_AUTOMATON_EDGES as usize;
 
 /// Converts a transition-based Emerson-Lei automaton into an equivalent
 /// deterministic, complete, state-based Rabin automaton.

@@ -156,6 +156,40 @@ impl Dra {
             .fold(0, |letter, bit| letter | (1 << bit))
     }
 
+    /// Whether the automaton accepts some infinite word whose letters all
+    /// satisfy `allowed`: for some pair `(L_i, K_i)`, a state reachable from
+    /// `q_0` by allowed letters lies on a cycle of allowed letters that
+    /// avoids `L_i` and meets `K_i` (a strongly connected component of the
+    /// reachable graph without `L_i` that contains a `K_i` state and a cycle).
+    pub fn accepts_some_word(&self, allowed: impl Fn(Letter) -> bool) -> bool {
+        let letters: Vec<Letter> = (0..1 << self.propositions.len())
+            .filter(|&a| allowed(a))
+            .collect();
+        let n = self.num_states();
+        let mut reachable = vec![false; n];
+        reachable[self.initial] = true;
+        let mut frontier = vec![self.initial];
+        while let Some(q) = frontier.pop() {
+            for &a in &letters {
+                let t = self.successor(q, a);
+                if !reachable[t] {
+                    reachable[t] = true;
+                    frontier.push(t);
+                }
+            }
+        }
+        self.pairs.iter().any(|pair| {
+            let keep: Vec<bool> = (0..n).map(|q| reachable[q] && !pair.fin[q]).collect();
+            let graph = LetterGraph::new(self, &letters, &keep);
+            let components = crate::graph::strongly_connected_components(&graph);
+            components.members().iter().any(|members| {
+                let cyclic =
+                    members.len() > 1 || graph.successors[members[0]].contains(&members[0]);
+                keep[members[0]] && cyclic && members.iter().any(|&q| pair.inf[q])
+            })
+        })
+    }
+
     /// Whether the automaton accepts the ultimately periodic word
     /// `prefix cycle^omega` (`cycle` must be non-empty): runs until a
     /// (state, cycle position) pair repeats, then checks the Rabin pairs on the
@@ -184,5 +218,42 @@ impl Dra {
         self.pairs.iter().any(|pair| {
             recurring.iter().all(|&q| !pair.fin[q]) && recurring.iter().any(|&q| pair.inf[q])
         })
+    }
+}
+
+/// The transition graph of an automaton restricted to some letters and to
+/// the states of `keep` (other states have no edges).
+struct LetterGraph {
+    successors: Vec<Vec<usize>>,
+}
+
+impl LetterGraph {
+    fn new(dra: &Dra, letters: &[Letter], keep: &[bool]) -> Self {
+        let successors = (0..dra.num_states())
+            .map(|q| {
+                if !keep[q] {
+                    return Vec::new();
+                }
+                let mut next: Vec<usize> = letters
+                    .iter()
+                    .map(|&a| dra.successor(q, a))
+                    .filter(|&t| keep[t])
+                    .collect();
+                next.sort_unstable();
+                next.dedup();
+                next
+            })
+            .collect();
+        Self { successors }
+    }
+}
+
+impl crate::graph::Digraph for LetterGraph {
+    fn num_vertices(&self) -> usize {
+        self.successors.len()
+    }
+
+    fn successors(&self, v: usize) -> impl Iterator<Item = usize> + '_ {
+        self.successors[v].iter().copied()
     }
 }

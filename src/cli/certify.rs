@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 use clap::Args;
-use posg_fsc::certify::{Bound, lower_bound, upper_bound};
+use posg_fsc::certify::{Bound, check_consistent, lower_bound, upper_bound};
 use posg_fsc::controller::Role;
 use posg_fsc::controller::file::resolve;
 use serde::Serialize;
@@ -60,6 +60,8 @@ struct BoundSummary {
     mdp_states: usize,
     seconds: f64,
     residual: f64,
+    /// A bound on the error of `value` (method.md section 8).
+    error_bound: f64,
 }
 
 impl From<&Bound> for BoundSummary {
@@ -69,6 +71,7 @@ impl From<&Bound> for BoundSummary {
             mdp_states: bound.mdp_states,
             seconds: bound.seconds,
             residual: bound.residual,
+            error_bound: bound.error_bound,
         }
     }
 }
@@ -86,6 +89,7 @@ pub fn run(args: CertifyArgs) -> anyhow::Result<()> {
         Some(spec) => {
             let adversary = resolve(spec, &game, Role::Adversary)?;
             let upper = upper_bound(&game, &phi_dra, &adversary)?;
+            check_consistent(&lower, &upper)?;
             write_strategy(args.response.as_deref(), &upper)?;
             Some(upper)
         }

@@ -25,6 +25,25 @@ pub struct ObjectiveArgs {
     /// A deterministic automaton for phi in HOA v1 (instead of --ltl).
     #[arg(long, value_name = "FILE.hoa")]
     pub automaton: Option<PathBuf>,
+    /// Accept a formula that can never hold because a proposition labels no
+    /// state of the game (by default that is an error: usually a misspelling).
+    #[arg(long)]
+    pub allow_unused_propositions: bool,
+    /// Time budget of the translation of --ltl (and of its negation) into an
+    /// automaton, in seconds; a formula that needs more is an error naming
+    /// the subformula that blew up.
+    #[arg(long, default_value_t = posg_fsc::ltl::DEFAULT_TRANSLATION_SECONDS, value_parser = positive_tolerance)]
+    pub translate_seconds: f64,
+}
+
+impl ObjectiveArgs {
+    /// The automaton of `formula` within the translation budget.
+    pub fn translate(&self, formula: &posg_fsc::ltl::Formula) -> anyhow::Result<Dra> {
+        let budget = posg_fsc::ltl::TranslationBudget {
+            seconds: self.translate_seconds,
+        };
+        Ok(posg_fsc::ltl::translate_within(formula, &budget)?)
+    }
 }
 
 /// The two controllers.
@@ -86,13 +105,16 @@ pub fn read_game(path: &Path) -> anyhow::Result<Posg> {
 
 /// The automaton for the objective, with a description of where it came
 /// from. Warns on stderr about propositions that label no state of the game
-/// (they are false everywhere: formats.md section 3).
+/// (they are false everywhere: formats.md section 3), with the closest
+/// proposition of the game as a hint; when the objective is then
+/// unsatisfiable (every value would be 0) that is an error unless
+/// `--allow-unused-propositions`.
 pub fn objective(args: &ObjectiveArgs, game: &Posg) -> anyhow::Result<(Dra, String)> {
     let (dra, description) = match (&args.ltl, &args.automaton) {
         (Some(text), _) => {
             let formula =
                 posg_fsc::ltl::parse(text).with_context(|| format!("in the formula '{text}'"))?;
-            (posg_fsc::ltl::translate(&formula)?, text.clone())
+            (args.translate(&formula)?, text.clone())
         }
         (None, Some(path)) => {
             let text = std::fs::read_to_string(path)
@@ -102,14 +124,44 @@ pub fn objective(args: &ObjectiveArgs, game: &Posg) -> anyhow::Result<(Dra, Stri
         }
         (None, None) => anyhow::bail!("give --ltl or --automaton"),
     };
-    for name in dra.propositions() {
-        if !game.propositions().contains(name) {
-            eprintln!(
-                "warning: proposition '{name}' labels no state of the game; it is false everywhere"
-            );
-        }
-    }
+    check_propositions(&dra, game, &description, args.allow_unused_propositions)?;
     Ok((dra, description))
+}
+
+/// Warns about each proposition of `dra` that labels no state of the game
+/// (with a `did you mean` hint) and refuses an objective that those
+/// propositions, false everywhere, make unsatisfiable, unless `allow`.
+pub fn check_propositions(
+    dra: &Dra,
+    game: &Posg,
+    objective: &str,
+    allow: bool,
+) -> anyhow::Result<()> {
+    let mut unused_mask = 0;
+    let mut hints = Vec::new();
+    for (bit, name) in dra.propositions().iter().enumerate() {
+        if game.propositions().contains(name) {
+            continue;
+        }
+        unused_mask |= 1 << bit;
+        let hint = game
+            .closest_proposition(name)
+            .map(|p| format!(" (did you mean {p}?)"))
+            .unwrap_or_default();
+        eprintln!(
+            "warning: proposition '{name}' labels no state of the game; it is false everywhere{hint}"
+        );
+        hints.push(format!("'{name}'{hint}"));
+    }
+    if unused_mask != 0 && !allow && !dra.accepts_some_word(|a| a & unused_mask == 0) {
+        anyhow::bail!(
+            "the objective {objective} can never hold: {} labels no state of the game, and false \
+             everywhere it makes every value 0. Fix the name, or pass \
+             --allow-unused-propositions to compute with it anyway",
+            hints.join(", ")
+        );
+    }
+    Ok(())
 }
 
 /// The automaton for `!phi`: translated from `--ltl`, or read from
@@ -121,7 +173,9 @@ pub fn negated_objective(
 ) -> anyhow::Result<Dra> {
     if let Some(text) = &objective.ltl {
         let phi = posg_fsc::ltl::parse(text).with_context(|| format!("in the formula '{text}'"))?;
-        return posg_fsc::ltl::translate(&phi.negate()).context("translating !phi");
+        return objective
+            .translate(&phi.negate())
+            .context("translating !phi");
     }
     let path = negated_automaton.ok_or_else(|| {
         anyhow::anyhow!(

@@ -53,6 +53,8 @@ struct Report {
     transient_states: usize,
     solver: &'static str,
     residual: f64,
+    /// A bound on `|value - exact value|` (method.md section 8).
+    error_bound: f64,
     solver_iterations: usize,
     seconds: f64,
     phase_seconds: PhaseSeconds,
@@ -177,6 +179,7 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
         transient_states: recurrence.transient.len(),
         solver: evaluator.solver_method().name(),
         residual: evaluation.residual,
+        error_bound: evaluation.error_bound,
         solver_iterations: evaluation.iterations,
         seconds: common::seconds_since(start),
         phase_seconds,

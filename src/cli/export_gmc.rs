@@ -5,6 +5,7 @@ use std::path::PathBuf;
 
 use clap::Args;
 use posg_fsc::export::{explicit_chain, write_explicit_chain};
+use posg_fsc::output::OutputDirectory;
 use serde::Serialize;
 
 use super::common::{self, ControllerArgs, Provenance};
@@ -16,10 +17,14 @@ pub struct ExportGmcArgs {
     pub game: PathBuf,
     #[command(flatten)]
     pub controllers: ControllerArgs,
-    /// Directory for chain.tra, chain.lab and chain.sta (created if needed).
-    /// State 0 is a fresh initial state: check `X phi` there (see README).
+    /// Directory for chain.tra, chain.lab and chain.sta (created if needed,
+    /// written atomically). State 0 is a fresh initial state: check `X phi`
+    /// there (see README).
     #[arg(long)]
     pub out: PathBuf,
+    /// Replace a non-empty --out whole (without it, a non-empty --out is refused).
+    #[arg(long)]
+    pub force: bool,
 }
 
 #[derive(Serialize)]
@@ -45,8 +50,10 @@ pub fn run(args: ExportGmcArgs) -> anyhow::Result<()> {
         );
     }
     let (defender, adversary) = common::controllers(&args.controllers, &game)?;
+    let out = OutputDirectory::create(&args.out, args.force)?;
     let chain = explicit_chain(&game, &defender, &adversary)?;
-    write_explicit_chain(&chain, &args.out)?;
+    write_explicit_chain(&chain, out.path())?;
+    out.commit()?;
     common::print_json(&Report {
         provenance: Provenance::current(),
         directory: args.out.display().to_string(),

@@ -9,13 +9,13 @@
 
 use std::path::{Path, PathBuf};
 
-use anyhow::Context;
 use clap::Args;
 use serde_json::{Value, json};
 
 use posg_fsc::automaton::Dra;
 use posg_fsc::controller::{Fsc, Role, file};
 use posg_fsc::game::Posg;
+use posg_fsc::output::{OutputDirectory, write_file};
 use posg_fsc::product::GmcState;
 use posg_fsc::prune::{Attempt, LastOptionStop, PruneReport, PruneSettings, prune};
 use posg_fsc::solver::SolverSettings;
@@ -49,9 +49,12 @@ pub struct PruneArgs {
     /// must not restrict the adversary).
     #[arg(long)]
     prune_adversary: bool,
-    /// The output directory (created if missing).
+    /// The output directory (created if missing, written atomically).
     #[arg(long)]
     out: PathBuf,
+    /// Replace a non-empty --out whole (without it, a non-empty --out is refused).
+    #[arg(long)]
+    force: bool,
 }
 
 /// Runs Algorithm 1 and writes the structures and `structures.json`.
@@ -74,13 +77,12 @@ pub fn run(args: PruneArgs) -> anyhow::Result<()> {
         paper_literal: args.paper_literal,
         prune_adversary: args.prune_adversary,
     };
+    let out = OutputDirectory::create(&args.out, args.force)?;
     let report = prune(&game, &dra, &defender, &adversary, &settings)?;
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("creating {}", args.out.display()))?;
     let mut structures = Vec::new();
     for (k, structure) in report.structures.iter().enumerate() {
         let names = write_structure(
-            &args.out,
+            out.path(),
             k,
             &game,
             &structure.defender,
@@ -116,9 +118,11 @@ pub fn run(args: PruneArgs) -> anyhow::Result<()> {
         "attempts": report.attempts.iter().map(attempt_json).collect::<Vec<_>>(),
         "stops": stops_json(&game, &report),
     });
-    let path = args.out.join("structures.json");
-    std::fs::write(&path, serde_json::to_string_pretty(&summary)? + "\n")
-        .with_context(|| format!("writing {}", path.display()))?;
+    write_file(
+        &out.join("structures.json"),
+        serde_json::to_string_pretty(&summary)? + "\n",
+    )?;
+    out.commit()?;
     print_summary(&report);
     Ok(())
 }

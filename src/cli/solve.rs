@@ -22,7 +22,7 @@ use posg_fsc::game::Posg;
 use posg_fsc::optimise::{
     self, Observer, Settings, Solution, Structure, StructureReport, UpdateRule,
 };
-use posg_fsc::output::{CurveCsv, CurvePlot, Progress};
+use posg_fsc::output::{CurveCsv, CurvePlot, OutputDirectory, Progress, create_dir, write_file};
 use posg_fsc::solver::SolverMethod;
 
 use super::common::{ObjectiveArgs, objective, print_text, read_game};
@@ -34,15 +34,19 @@ pub struct SolveArgs {
     game: PathBuf,
     #[command(flatten)]
     objective: ObjectiveArgs,
-    /// Defender FSC size (nodes).
-    #[arg(long, default_value_t = 1)]
-    def_nodes: usize,
-    /// Adversary FSC size (nodes).
-    #[arg(long, default_value_t = 1)]
-    adv_nodes: usize,
-    /// Directory for the output files (created if missing).
+    /// Defender FSC size (nodes; default 1, or the size of --defender).
+    #[arg(long)]
+    def_nodes: Option<usize>,
+    /// Adversary FSC size (nodes; default 1, or the size of --adversary).
+    #[arg(long)]
+    adv_nodes: Option<usize>,
+    /// Directory for the output files (created if missing; written
+    /// atomically: the results appear there whole when the run ends).
     #[arg(long)]
     out: PathBuf,
+    /// Replace a non-empty --out whole (without it, a non-empty --out is refused).
+    #[arg(long)]
+    force: bool,
     /// Start the defender from this `*.fsc.json` (its support and logits)
     /// instead of the full uniform structure; use with `--initial-spread 0` to resume.
     #[arg(long)]
@@ -190,7 +194,8 @@ pub struct SolveJob<'a> {
     pub structures: Vec<Structure>,
     /// The optimiser's settings.
     pub settings: &'a Settings,
-    /// The output directory.
+    /// The directory to write into (a staging directory of an
+    /// [`OutputDirectory`], or a subdirectory of one).
     pub out: &'a Path,
     /// Whether to draw progress bars (stderr is a terminal and nothing else draws).
     pub progress: bool,
@@ -208,6 +213,9 @@ struct Summary<'a> {
     settings: &'a Settings,
     structure_used: &'a str,
     worst_case: f64,
+    /// The largest error bound of the values computed on the best structure
+    /// (method.md section 8).
+    error_bound: f64,
     /// The best defender's guaranteed value against every adversary, and
     /// the smallest game upper bound over the best responses found
     /// (method.md section 6); absent when the objective came as an automaton.
@@ -224,9 +232,10 @@ pub fn load(game: &Path, args: &ObjectiveArgs) -> anyhow::Result<(Posg, Dra, Opt
     let game = read_game(game)?;
     let (dra, description) = objective(args, &game)?;
     let negated = match &args.ltl {
-        Some(text) => Some(posg_fsc::ltl::translate(
-            &posg_fsc::ltl::parse(text)?.negate(),
-        )?),
+        Some(text) => Some(
+            args.translate(&posg_fsc::ltl::parse(text)?.negate())
+                .context("translating !phi")?,
+        ),
         None => None,
     };
     Ok((game, dra, negated, description))
@@ -237,8 +246,7 @@ pub fn load(game: &Path, args: &ObjectiveArgs) -> anyhow::Result<(Posg, Dra, Opt
 /// `curve-<name>.csv`/`.svg`). Returns the solution and the best
 /// defender's certified bracket.
 pub fn run_job(job: &SolveJob) -> anyhow::Result<(Solution, Option<Bracket>)> {
-    std::fs::create_dir_all(job.out)
-        .with_context(|| format!("cannot create {}", job.out.display()))?;
+    create_dir(job.out)?;
     let clock = Instant::now();
     let title = format!("{}: {}", job.game.name().unwrap_or("game"), job.objective);
     let iterations = job.settings.max_iterations;
@@ -269,10 +277,9 @@ pub fn run_job(job: &SolveJob) -> anyhow::Result<(Solution, Option<Bracket>)> {
     if multiple {
         let best = &solution.best().report.name;
         for ext in ["csv", "svg"] {
-            std::fs::copy(
-                out.join(format!("curve-{best}.{ext}")),
-                out.join(format!("curve.{ext}")),
-            )?;
+            let from = out.join(format!("curve-{best}.{ext}"));
+            std::fs::copy(&from, out.join(format!("curve.{ext}")))
+                .with_context(|| format!("copying {}", from.display()))?;
         }
     }
     let best = solution.best();
@@ -295,6 +302,7 @@ pub fn run_job(job: &SolveJob) -> anyhow::Result<(Solution, Option<Bracket>)> {
         settings: job.settings,
         structure_used: &best.report.name,
         worst_case: best.report.worst_case,
+        error_bound: best.report.error_bound,
         certified,
         last_value: best.report.last_value,
         seconds: clock.elapsed().as_secs_f64(),
@@ -307,8 +315,8 @@ pub fn run_job(job: &SolveJob) -> anyhow::Result<(Solution, Option<Bracket>)> {
             "summary.json",
         ],
     };
-    std::fs::write(
-        out.join("summary.json"),
+    write_file(
+        &out.join("summary.json"),
         serde_json::to_string_pretty(&summary)? + "\n",
     )?;
     Ok((solution, certified))
@@ -322,18 +330,34 @@ fn observers(
     progress: Option<(&MultiProgress, &str, usize)>,
 ) -> Box<dyn Observer + Send> {
     let mut list: Vec<Box<dyn Observer + Send>> = Vec::new();
-    match CurveCsv::create(&out.join(format!("{stem}.csv"))) {
-        Ok(csv) => list.push(Box::new(csv)),
+    let (table, plot) = (
+        out.join(format!("{stem}.csv")),
+        out.join(format!("{stem}.svg")),
+    );
+    match CurveCsv::create(&table) {
+        Ok(csv) => list.push(Box::new(Named(table, csv))),
         Err(error) => list.push(Box::new(Failed(Some(error.into())))),
     }
-    list.push(Box::new(CurvePlot::new(
-        &out.join(format!("{stem}.svg")),
-        title,
-    )));
+    list.push(Box::new(Named(plot.clone(), CurvePlot::new(&plot, title))));
     if let Some((bars, label, iterations)) = progress {
         list.push(Box::new(Progress::new(bars, label, iterations)));
     }
     Box::new(list)
+}
+
+/// An observer writing the file at `.0`, whose failure names that file.
+struct Named<O>(PathBuf, O);
+
+impl<O: Observer> Observer for Named<O> {
+    fn observe(&mut self, record: &optimise::IterationRecord) {
+        self.1.observe(record);
+    }
+
+    fn finish(&mut self) -> Result<(), optimise::ObserverError> {
+        self.1
+            .finish()
+            .map_err(|e| format!("writing {}: {e}", self.0.display()).into())
+    }
 }
 
 /// An observer that could not be created: reports its error at the end.
@@ -347,24 +371,67 @@ impl Observer for Failed {
     }
 }
 
+/// Checks controller sizes given on the command line: at least one node,
+/// within the resource budget ([`posg_fsc::limits`]), and one adversary
+/// node for a game without an adversary (a POMDP).
+pub fn check_sizes(game: &Posg, def_nodes: usize, adv_nodes: usize) -> anyhow::Result<()> {
+    let (def, adv) = (game.defender(), game.adversary());
+    controller::Fsc::check_uniform_size(
+        "--def-nodes",
+        def_nodes,
+        def.num_observations(),
+        def.num_actions(),
+    )?;
+    controller::Fsc::check_uniform_size(
+        "--adv-nodes",
+        adv_nodes,
+        adv.num_observations(),
+        adv.num_actions(),
+    )?;
+    if !game.has_adversary() && adv_nodes != 1 {
+        anyhow::bail!(
+            "--adv-nodes {adv_nodes}: the game has no adversary (it is a POMDP), whose controller \
+             has exactly one node; drop --adv-nodes"
+        );
+    }
+    Ok(())
+}
+
+/// A size option given beside a controller file must match the file.
+fn agree(
+    option: &str,
+    nodes: Option<usize>,
+    path: &Path,
+    controller: &controller::Fsc,
+) -> anyhow::Result<()> {
+    match nodes {
+        Some(n) if n != controller.num_nodes() => anyhow::bail!(
+            "{option} {n} disagrees with {}, which has {} nodes; drop {option} (the file's size is used)",
+            path.display(),
+            controller.num_nodes()
+        ),
+        _ => Ok(()),
+    }
+}
+
 /// Runs `solve`.
 pub fn run(args: SolveArgs) -> anyhow::Result<()> {
     let settings = args.settings.settings()?;
     let (game, dra, negated, description) = load(&args.game, &args.objective)?;
-    let mut structure = Structure::full(
-        &game,
-        args.def_nodes,
-        args.adv_nodes,
-        settings.optimise_initial,
-    );
+    let (def_nodes, adv_nodes) = (args.def_nodes.unwrap_or(1), args.adv_nodes.unwrap_or(1));
+    check_sizes(&game, def_nodes, adv_nodes)?;
+    let mut structure = Structure::full(&game, def_nodes, adv_nodes, settings.optimise_initial);
     if let Some(path) = &args.defender {
         structure.defender = controller::file::read(path, &game, Role::Defender)?;
         structure.name = "from-files".into();
+        agree("--def-nodes", args.def_nodes, path, &structure.defender)?;
     }
     if let Some(path) = &args.adversary {
         structure.adversary = controller::file::read(path, &game, Role::Adversary)?;
         structure.name = "from-files".into();
+        agree("--adv-nodes", args.adv_nodes, path, &structure.adversary)?;
     }
+    let out = OutputDirectory::create(&args.out, args.force)?;
     let job = SolveJob {
         game: &game,
         dra: &dra,
@@ -372,10 +439,11 @@ pub fn run(args: SolveArgs) -> anyhow::Result<()> {
         objective: &description,
         structures: optimise::candidate_structures(&game, &dra, structure, &settings)?,
         settings: &settings,
-        out: &args.out,
+        out: out.path(),
         progress: std::io::stderr().is_terminal(),
     };
     let (solution, certified) = run_job(&job)?;
+    out.commit()?;
     let best = solution.best();
     let report = &best.report;
     let bracket = certified.map_or_else(

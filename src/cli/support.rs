@@ -11,6 +11,7 @@ use std::path::PathBuf;
 use anyhow::Context;
 use clap::Args;
 use posg_fsc::controller;
+use posg_fsc::output::{OutputDirectory, write_file};
 use posg_fsc::synthesis::{
     self, Confirmation, Engine, Mode, RankEncoding, SatStatistics, Settings, Synthesis,
 };
@@ -36,9 +37,13 @@ pub struct SupportArgs {
     /// positive winning (certified lower bound > 0).
     #[arg(long)]
     almost_sure: bool,
-    /// Directory for support.json and defender.fsc.json (created if missing).
+    /// Directory for support.json and defender.fsc.json (created if
+    /// missing, written atomically).
     #[arg(long)]
     out: PathBuf,
+    /// Replace a non-empty --out whole (without it, a non-empty --out is refused).
+    #[arg(long)]
+    force: bool,
     #[command(flatten)]
     settings: SynthesisArgs,
     /// Also write the SAT instance (before maximisation) in DIMACS CNF here.
@@ -150,6 +155,14 @@ pub fn run(args: SupportArgs) -> anyhow::Result<()> {
     };
     let settings = args.settings.settings(mode)?;
     let game = common::read_game(&args.game)?;
+    let defender = game.defender();
+    controller::Fsc::check_uniform_size(
+        "--def-nodes",
+        args.def_nodes,
+        defender.num_observations(),
+        defender.num_actions(),
+    )?;
+    let out = OutputDirectory::create(&args.out, args.force)?;
     let (dra, objective) = common::objective(&args.objective, &game)?;
     let negated =
         common::negated_objective(&args.objective, args.negated_automaton.as_deref(), &game)?;
@@ -163,10 +176,8 @@ pub fn run(args: SupportArgs) -> anyhow::Result<()> {
             .with_context(|| format!("writing {}", path.display()))?;
     }
     let result = synthesis::synthesise(&game, &dra, &negated, args.def_nodes, &settings)?;
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("cannot create {}", args.out.display()))?;
     if let Some(defender) = &result.defender {
-        let path = args.out.join("defender.fsc.json");
+        let path = out.join("defender.fsc.json");
         controller::file::write(&path, defender, &game)?;
     }
     let file = SupportFile {
@@ -185,9 +196,11 @@ pub fn run(args: SupportArgs) -> anyhow::Result<()> {
         settings: &settings,
         provenance: Provenance::current(),
     };
-    let path = args.out.join("support.json");
-    std::fs::write(&path, serde_json::to_string_pretty(&file)? + "\n")
-        .with_context(|| format!("writing {}", path.display()))?;
+    write_file(
+        &out.join("support.json"),
+        serde_json::to_string_pretty(&file)? + "\n",
+    )?;
+    out.commit()?;
     eprintln!("{}", summary_line(&result));
     Ok(())
 }

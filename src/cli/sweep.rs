@@ -8,11 +8,12 @@ use clap::Args;
 use rayon::prelude::*;
 use serde::Serialize;
 
+use posg_fsc::limits;
 use posg_fsc::optimise::{self, Structure};
-use posg_fsc::output::{SweepPoint, plot_sweep};
+use posg_fsc::output::{OutputDirectory, OutputError, SweepPoint, plot_sweep};
 
 use super::common::{ObjectiveArgs, print_text};
-use super::solve::{SettingsArgs, SolveJob, load, run_job};
+use super::solve::{SettingsArgs, SolveJob, check_sizes, load, run_job};
 
 /// Arguments of `sweep`.
 #[derive(Debug, Args)]
@@ -28,9 +29,13 @@ pub struct SweepArgs {
     #[arg(long, default_value = "1..2", value_parser = parse_sizes)]
     adv_nodes: Sizes,
     /// Directory for `sweep.csv`, `sweep.svg` and one `solve` directory
-    /// `def<N>-adv<M>/` per size pair.
+    /// `def<N>-adv<M>/` per size pair (written atomically: the results
+    /// appear there whole when the run ends).
     #[arg(long)]
     out: PathBuf,
+    /// Replace a non-empty --out whole (without it, a non-empty --out is refused).
+    #[arg(long)]
+    force: bool,
     #[command(flatten)]
     settings: SettingsArgs,
 }
@@ -45,7 +50,20 @@ fn parse_sizes(text: &str) -> Result<Sizes, String> {
         _ => Err(format!("`{t}` is not a positive integer")),
     };
     let sizes = match text.split_once("..") {
-        Some((a, b)) => (positive(a)?..=positive(b)?).collect(),
+        Some((a, b)) => {
+            let (a, b) = (positive(a)?, positive(b)?);
+            let count = (b as u128 + 1).saturating_sub(a as u128);
+            if let Some(message) = limits::exceeded(
+                &format!("the range `{text}`"),
+                count,
+                limits::MAX_SWEEP_PAIRS,
+                "sizes",
+                "MAX_SWEEP_PAIRS",
+            ) {
+                return Err(message);
+            }
+            (a..=b).collect()
+        }
         None => text
             .split(',')
             .map(positive)
@@ -69,6 +87,7 @@ struct Row {
     adversary_parameters: usize,
     last_value: f64,
     worst_case: f64,
+    error_bound: f64,
     certified_lower: Option<f64>,
     upper_bound: Option<f64>,
     iterations: usize,
@@ -79,8 +98,22 @@ struct Row {
 pub fn run(args: SweepArgs) -> anyhow::Result<()> {
     let settings = args.settings.settings()?;
     let (game, dra, negated, description) = load(&args.game, &args.objective)?;
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("cannot create {}", args.out.display()))?;
+    let count = args.def_nodes.0.len() as u128 * args.adv_nodes.0.len() as u128;
+    if let Some(message) = limits::exceeded(
+        "--def-nodes x --adv-nodes",
+        count,
+        limits::MAX_SWEEP_PAIRS,
+        "size pairs",
+        "MAX_SWEEP_PAIRS",
+    ) {
+        anyhow::bail!(message);
+    }
+    for &n in &args.def_nodes.0 {
+        for &m in &args.adv_nodes.0 {
+            check_sizes(&game, n, m)?;
+        }
+    }
+    let out = OutputDirectory::create(&args.out, args.force)?;
     let pairs: Vec<(usize, usize)> = args
         .def_nodes
         .0
@@ -90,7 +123,7 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
     let rows = pairs
         .par_iter()
         .map(|&(n, m)| {
-            let out = args.out.join(format!("def{n}-adv{m}"));
+            let out = out.join(format!("def{n}-adv{m}"));
             let job = SolveJob {
                 game: &game,
                 dra: &dra,
@@ -123,6 +156,7 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
                 adversary_parameters: report.adversary_parameters,
                 last_value: report.last_value,
                 worst_case: report.worst_case,
+                error_bound: report.error_bound,
                 certified_lower: certified.map(|b| b.certified_lower),
                 upper_bound: certified.map(|b| b.upper_bound),
                 iterations: report.iterations,
@@ -130,11 +164,17 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
             })
         })
         .collect::<anyhow::Result<Vec<Row>>>()?;
-    let mut writer = csv::Writer::from_path(args.out.join("sweep.csv"))?;
+    let table = out.join("sweep.csv");
+    let file = std::fs::File::create(&table).map_err(|e| OutputError::io("creating", &table, e))?;
+    let mut writer = csv::Writer::from_writer(file);
     for row in &rows {
-        writer.serialize(row)?;
+        writer
+            .serialize(row)
+            .with_context(|| format!("writing {}", table.display()))?;
     }
-    writer.flush()?;
+    writer
+        .flush()
+        .map_err(|e| OutputError::io("writing", &table, e))?;
     let points: Vec<SweepPoint> = rows
         .iter()
         .map(|r| SweepPoint {
@@ -145,7 +185,10 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
         })
         .collect();
     let title = format!("{}: {}", game.name().unwrap_or("game"), description);
-    plot_sweep(&args.out.join("sweep.svg"), &title, &points).map_err(|e| anyhow::anyhow!(e))?;
+    let plot = out.join("sweep.svg");
+    plot_sweep(&plot, &title, &points)
+        .map_err(|e| anyhow::anyhow!("writing {}: {e}", plot.display()))?;
+    out.commit()?;
     print_text(&format!(
         "wrote sweep.csv and sweep.svg ({} size pairs) to {}\n",
         rows.len(),

@@ -68,6 +68,14 @@ pub fn resolve(spec: &str, game: &Posg, role: Role) -> Result<Fsc, ModelError> {
             )
         })?;
     let p = player(game, role);
+    Fsc::check_uniform_size(spec, nodes, p.num_observations(), p.num_actions())?;
+    if role == Role::Adversary && !game.has_adversary() && nodes != 1 {
+        return Err(ModelError::new(
+            spec,
+            "the game has no adversary (it is a POMDP), whose controller is the trivial \
+             `uniform:1`; drop --adversary",
+        ));
+    }
     Ok(Fsc::uniform(
         role,
         nodes,
@@ -181,6 +189,15 @@ fn initial(raw: &[f64], nodes: usize, at: &Located) -> Result<Vec<f64>, ModelErr
 /// One block per (node, observation), in the order `g * |O| + o`.
 fn blocks(raw: &RawFsc, at: &Located, player: &Player) -> Result<Vec<Vec<Choice>>, ModelError> {
     let num_obs = player.num_observations();
+    if let Some(message) = crate::limits::exceeded(
+        &format!("{} nodes x {num_obs} observations", raw.nodes),
+        raw.nodes as u128 * num_obs as u128,
+        crate::limits::MAX_CONTROLLER_CHOICES,
+        "rules",
+        "MAX_CONTROLLER_CHOICES",
+    ) {
+        return Err(at.error(message));
+    }
     let mut blocks: Vec<Option<Vec<Choice>>> = vec![None; raw.nodes * num_obs];
     for (i, rule) in raw.rules.iter().enumerate() {
         let here = at.index(i);
@@ -193,18 +210,50 @@ fn blocks(raw: &RawFsc, at: &Located, player: &Player) -> Result<Vec<Vec<Choice>
         }
         blocks[g * num_obs + o] = Some(choices(rule, raw.nodes, &here.key("choices"), player)?);
     }
-    let uniform = Fsc::uniform(Role::Defender, raw.nodes, 1, player.num_actions()).blocks;
+    let missing = blocks.iter().filter(|b| b.is_none()).count();
+    if missing > 0 && raw.default == MissingRule::Uniform {
+        let choices =
+            (missing as u128).saturating_mul(raw.nodes as u128 * player.num_actions() as u128);
+        if let Some(message) = crate::limits::exceeded(
+            &format!(
+                "{missing} uniform rules of {} choices each",
+                raw.nodes * player.num_actions()
+            ),
+            choices,
+            crate::limits::MAX_CONTROLLER_CHOICES,
+            "choices",
+            "MAX_CONTROLLER_CHOICES",
+        ) {
+            return Err(at.error(message));
+        }
+    }
+    let uniform = uniform_block(raw.nodes, player.num_actions());
     blocks
         .into_iter()
         .enumerate()
         .map(|(b, block)| match (block, raw.default) {
             (Some(block), _) => Ok(block),
-            (None, MissingRule::Uniform) => Ok(uniform[0].clone()),
+            (None, MissingRule::Uniform) => Ok(uniform.clone()),
             (None, MissingRule::Error) => Err(at.error(format!(
                 "no rule for node {}, observation `{}` (and \"default\" is \"error\")",
                 b / num_obs,
                 player.observations()[b % num_obs]
             ))),
+        })
+        .collect()
+}
+
+/// The block uniform over every `(next node, action)` pair.
+fn uniform_block(nodes: usize, actions: usize) -> Vec<Choice> {
+    let probability = 1.0 / (nodes * actions) as f64;
+    (0..nodes)
+        .flat_map(|next| {
+            (0..actions).map(move |action| Choice {
+                next,
+                action,
+                probability,
+                logit: None,
+            })
         })
         .collect()
 }

@@ -76,6 +76,8 @@ impl Fsc {
 
     /// The controller with `num_nodes` nodes that starts in node 0 and is
     /// uniform over all `(next node, action)` pairs in every block (`uniform:K`).
+    /// Check the size first with [`Fsc::check_uniform_size`]: `num_nodes`
+    /// must be at least 1.
     pub fn uniform(
         role: Role,
         num_nodes: usize,
@@ -102,6 +104,28 @@ impl Fsc {
             num_actions,
             initial,
             blocks: vec![block; num_nodes * num_observations],
+        }
+    }
+
+    /// Checks that a full-support controller of `num_nodes` nodes can be
+    /// built: at least one node, and at most
+    /// [`crate::limits::MAX_CONTROLLER_CHOICES`] choices in all. `input`
+    /// names what asked for it (`uniform:K`, `--def-nodes`, a file).
+    pub fn check_uniform_size(
+        input: &str,
+        num_nodes: usize,
+        num_observations: usize,
+        num_actions: usize,
+    ) -> Result<(), ModelError> {
+        if num_nodes == 0 {
+            return Err(ModelError::new(
+                input,
+                "a controller needs at least one node, not 0",
+            ));
+        }
+        match crate::limits::uniform_controller(num_nodes, num_observations, num_actions) {
+            Some(message) => Err(ModelError::new(input, message)),
+            None => Ok(()),
         }
     }
 

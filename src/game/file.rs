@@ -16,6 +16,7 @@ use std::fmt;
 use std::marker::PhantomData;
 use std::path::Path;
 
+use crate::limits;
 use rustc_hash::FxHashMap;
 use serde::de::{self, DeserializeSeed, Deserializer, MapAccess, Visitor};
 use serde::ser::{SerializeMap, Serializer};
@@ -583,6 +584,21 @@ impl<'a> Builder<'a> {
             )?);
         }
         let (nu, nv) = (game.defender.num_actions(), game.adversary.num_actions());
+        let triples = [game.states.len(), nu, nv]
+            .into_iter()
+            .fold(1u128, |product, n| product.saturating_mul(n as u128));
+        if let Some(message) = limits::exceeded(
+            &format!(
+                "{} states x {nu} defender actions x {nv} adversary actions",
+                game.states.len()
+            ),
+            triples,
+            limits::MAX_TRANSITION_TRIPLES,
+            "transition triples",
+            "MAX_TRANSITION_TRIPLES",
+        ) {
+            return Err(at.error(message));
+        }
         game.transition_offsets = Vec::with_capacity(game.states.len() * nu * nv + 1);
         game.transition_offsets.push(0);
         for s in 0..game.states.len() {
@@ -590,6 +606,16 @@ impl<'a> Builder<'a> {
                 for v in 0..nv {
                     let entry = resolve_triple(&keyed, s, u, v)
                         .map_err(|m| at.error(m.describe(game, s, u, v)))?;
+                    let total = game.transition_entries.len() as u128 + nexts[entry].len() as u128;
+                    if let Some(message) = limits::exceeded(
+                        "the transitions with their wildcards expanded",
+                        total,
+                        limits::MAX_TRANSITION_ENTRIES,
+                        "entries or more",
+                        "MAX_TRANSITION_ENTRIES",
+                    ) {
+                        return Err(at.error(message));
+                    }
                     game.transition_entries.extend_from_slice(&nexts[entry]);
                     game.transition_offsets.push(game.transition_entries.len());
                 }

@@ -129,6 +129,18 @@ impl Posg {
         &self.propositions
     }
 
+    /// The game's proposition closest to `name` by edit distance, if one is
+    /// within two edits (and closer than `name` is long): the hint for a
+    /// misspelt proposition.
+    pub fn closest_proposition(&self, name: &str) -> Option<&str> {
+        self.propositions
+            .iter()
+            .map(|p| (edit_distance(name, p), p))
+            .filter(|&(d, _)| d <= 2 && d < name.chars().count())
+            .min_by_key(|&(d, _)| d)
+            .map(|(_, p)| p.as_str())
+    }
+
     /// `L(s)` as indices into [`Posg::propositions`].
     pub fn label(&self, s: StateId) -> &[usize] {
         &self.labels[s]
@@ -161,5 +173,36 @@ impl Posg {
     pub fn transition(&self, s: StateId, u: usize, v: usize) -> &[(StateId, f64)] {
         let t = (s * self.defender.num_actions() + u) * self.adversary.num_actions() + v;
         &self.transition_entries[self.transition_offsets[t]..self.transition_offsets[t + 1]]
+    }
+}
+
+/// The Levenshtein distance between two names (insertions, deletions and
+/// substitutions of characters).
+fn edit_distance(a: &str, b: &str) -> usize {
+    let b: Vec<char> = b.chars().collect();
+    let mut row: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.chars().enumerate() {
+        let mut diagonal = row[0];
+        row[0] = i + 1;
+        for (j, &cb) in b.iter().enumerate() {
+            let substitution = diagonal + usize::from(ca != cb);
+            diagonal = row[j + 1];
+            row[j + 1] = substitution.min(row[j] + 1).min(diagonal + 1);
+        }
+    }
+    row[b.len()]
+}
+
+#[cfg(test)]
+mod edit_tests {
+    use super::edit_distance;
+
+    #[test]
+    fn edit_distances_of_misspellings() {
+        assert_eq!(edit_distance("goal", "goal"), 0);
+        assert_eq!(edit_distance("gaol", "goal"), 2);
+        assert_eq!(edit_distance("goals", "goal"), 1);
+        assert_eq!(edit_distance("", "abc"), 3);
+        assert_eq!(edit_distance("unsafe", "unsave"), 1);
     }
 }

@@ -71,6 +71,55 @@ impl Digraph for Successors<'_> {
 /// The largest number of product states built before giving up.
 pub(crate) const MAX_STATES: usize = 200_000;
 
+/// The time budget of a translation: a deadline for the current thread,
+/// set by [`super::translate_within`] and checked by every exploration.
+pub(crate) mod budget {
+    use std::cell::Cell;
+    use std::time::Instant;
+
+    thread_local! {
+        static DEADLINE: Cell<Option<Instant>> = const { Cell::new(None) };
+        static SECONDS: Cell<f64> = const { Cell::new(f64::INFINITY) };
+    }
+
+    /// Sets the deadline (and the budget it came from) while alive;
+    /// restores the previous ones on drop.
+    pub(crate) struct Deadline(Option<Instant>, f64);
+
+    impl Deadline {
+        pub(crate) fn set(deadline: Option<Instant>, seconds: f64) -> Self {
+            Self(
+                DEADLINE.with(|d| d.replace(deadline)),
+                SECONDS.with(|s| s.replace(seconds)),
+            )
+        }
+    }
+
+    impl Drop for Deadline {
+        fn drop(&mut self) {
+            DEADLINE.with(|d| d.set(self.0));
+            SECONDS.with(|s| s.set(self.1));
+        }
+    }
+
+    /// The current budget in words.
+    pub(crate) fn describe() -> String {
+        format!(
+            "{} s, {} states and {} edges per automaton",
+            SECONDS.with(|s| s.get()),
+            super::MAX_STATES,
+            crate::limits::MAX_AUTOMATON_EDGES
+        )
+    }
+
+    /// Whether the current thread's deadline has passed.
+    pub(crate) fn out_of_time() -> bool {
+        DEADLINE
+            .with(|d| d.get())
+            .is_some_and(|deadline| Instant::now() > deadline)
+    }
+}
+
 /// Explores the states reachable from `initial` under `step`, which gives the
 /// successor and the marks of a state on a letter.
 fn explore<S: Clone + Eq + std::hash::Hash>(
@@ -84,6 +133,12 @@ fn explore<S: Clone + Eq + std::hash::Hash>(
     let mut edges = Vec::new();
     let mut next = 0;
     while next < states.len() {
+        if budget::out_of_time() {
+            return Err(TranslateError::OutOfTime);
+        }
+        if (states.len() as u128) * (letters as u128) > crate::limits::MAX_AUTOMATON_EDGES {
+            return Err(TranslateError::TooLarge { limit: MAX_STATES });
+        }
         let state = states[next].clone();
         for letter in 0..letters as Letter {
             let (target, marks) = step(&state, letter);
@@ -756,6 +811,87 @@ pub(crate) fn union(first: &Tgr, second: &Tgr) -> Result<Tgr, TranslateError> {
             inf: d.inf.iter().map(|&m| m + shift).collect(),
         }))
         .collect();
+    Ok(Tgr {
+        letters,
+        initial: 0,
+        edges,
+        num_marks,
+        disjuncts,
+    })
+}
+
+/// Removes every disjunct that another one subsumes (its `Fin` marks and
+/// its `Inf` marks include the other's: every run it accepts, the other
+/// accepts too), and duplicates: the condition accepts the same runs.
+pub(crate) fn drop_subsumed_disjuncts(disjuncts: &mut Vec<Disjunct>) {
+    for d in disjuncts.iter_mut() {
+        d.inf.sort_unstable();
+        d.inf.dedup();
+    }
+    disjuncts.sort();
+    disjuncts.dedup();
+    let subsumes = |weaker: &Disjunct, stronger: &Disjunct| {
+        weaker.fin & !stronger.fin == 0 && weaker.inf.iter().all(|m| stronger.inf.contains(m))
+    };
+    let kept: Vec<Disjunct> = disjuncts
+        .iter()
+        .enumerate()
+        .filter(|&(i, d)| {
+            !disjuncts
+                .iter()
+                .enumerate()
+                .any(|(j, other)| j != i && subsumes(other, d))
+        })
+        .map(|(_, d)| d.clone())
+        .collect();
+    *disjuncts = kept;
+}
+
+/// The largest number of disjuncts an [`intersection`] may have.
+pub(crate) const MAX_PRODUCT_DISJUNCTS: usize = 4096;
+
+/// The product of two automata over the same letters accepting the words
+/// both accept: a run satisfies the disjunct pair `(d1, d2)` iff it avoids
+/// the `Fin` marks of both and visits every `Inf` mark of both infinitely
+/// often, so the condition is the disjunction over all pairs (a generalised
+/// Rabin condition again; for conjunctions of `GF`, `FG` and `G (a -> F b)`
+/// terms the states multiply, the marks add up and no guess is enumerated).
+pub(crate) fn intersection(first: &Tgr, second: &Tgr) -> Result<Tgr, TranslateError> {
+    let letters = first.letters;
+    let shift = first.num_marks;
+    let num_marks = shift + second.num_marks;
+    if num_marks > MarkSet::BITS {
+        return Err(TranslateError::TooManyMarks {
+            count: num_marks as usize,
+            limit: MarkSet::BITS as usize,
+        });
+    }
+    let count = first.disjuncts.len() * second.disjuncts.len();
+    if count > MAX_PRODUCT_DISJUNCTS {
+        return Err(TranslateError::TooLarge { limit: MAX_STATES });
+    }
+    let shifted = |marks: MarkSet| marks.checked_shl(shift).unwrap_or(0);
+    let (_, edges) = explore(
+        (first.initial as u32, second.initial as u32),
+        letters,
+        |&(p, q), a| {
+            let e = first.edges[p as usize * letters + a as usize];
+            let f = second.edges[q as usize * letters + a as usize];
+            ((e.target, f.target), e.marks | shifted(f.marks))
+        },
+    )?;
+    let mut disjuncts = Vec::with_capacity(count);
+    for d in &first.disjuncts {
+        for e in &second.disjuncts {
+            let mut inf = d.inf.clone();
+            inf.extend(e.inf.iter().map(|&m| m + shift));
+            disjuncts.push(Disjunct {
+                fin: d.fin | shifted(e.fin),
+                inf,
+            });
+        }
+    }
+    drop_subsumed_disjuncts(&mut disjuncts);
     Ok(Tgr {
         letters,
         initial: 0,

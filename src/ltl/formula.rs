@@ -260,18 +260,46 @@ pub(crate) fn or(parts: Vec<Formula>) -> Formula {
     junction(merged, false)
 }
 
-/// `G f & G g = G (f & g)`, `X f & X g = X (f & g)` and dually
-/// `F f | F g = F (f | g)`, `X f | X g = X (f | g)`: fewer temporal atoms.
+/// `G f & G g = G (f & g)`, `X f & X g = X (f & g)`, `F G f & F G g =
+/// F G (f & g)` and dually `F f | F g = F (f | g)`, `X f | X g = X (f | g)`,
+/// `G F f | G F g = G F (f | g)`: fewer temporal atoms (a conjunction of
+/// `n` persistence formulas is one, not `n` independent guesses).
 fn merge_temporal(parts: Vec<Formula>, conjunction: bool) -> Vec<Formula> {
     let mut next_parts = Vec::new();
     let mut modal_parts = Vec::new();
+    let mut limit_parts = Vec::new();
     let mut rest = Vec::new();
     for part in parts {
         match part {
             Next(g) => next_parts.push(*g),
+            Finally(g) if conjunction && matches!(*g, Globally(_)) => match *g {
+                Globally(h) => limit_parts.push(*h),
+                other => rest.push(Finally(Box::new(other))),
+            },
+            Globally(g) if !conjunction && matches!(*g, Finally(_)) => match *g {
+                Finally(h) => limit_parts.push(*h),
+                other => rest.push(Globally(Box::new(other))),
+            },
             Globally(g) if conjunction => modal_parts.push(*g),
             Finally(g) if !conjunction => modal_parts.push(*g),
             p => rest.push(p),
+        }
+    }
+    match limit_parts.len() {
+        0 => {}
+        1 if conjunction => rest.push(Finally(Box::new(Globally(Box::new(limit_parts.remove(0)))))),
+        1 => rest.push(Globally(Box::new(Finally(Box::new(limit_parts.remove(0)))))),
+        _ => {
+            let inner = if conjunction {
+                and(limit_parts)
+            } else {
+                or(limit_parts)
+            };
+            rest.push(if conjunction {
+                finally(globally(inner))
+            } else {
+                globally(finally(inner))
+            });
         }
     }
     let combine = |gs: Vec<Formula>| junction(gs, conjunction);

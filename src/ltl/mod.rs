@@ -78,9 +78,10 @@ use thiserror::Error;
 
 use crate::automaton::emerson_lei::Acceptance;
 use crate::automaton::{
-    AutomatonError, Dra, EmersonLeiAutomaton, MAX_PROPOSITIONS, minimise::minimise_with_free_start,
-    to_state_based_rabin,
+    AutomatonError, Dra, EmersonLeiAutomaton, Letter, MAX_PROPOSITIONS, RabinPair,
+    minimise::minimise_with_free_start, to_state_based_rabin,
 };
+use construct::budget;
 
 /// Why a formula could not be translated.
 #[derive(Debug, Error, Clone, PartialEq, Eq)]
@@ -113,6 +114,22 @@ pub enum TranslateError {
         /// The largest number of states built.
         limit: usize,
     },
+    /// The translation ran past its time budget.
+    #[error("the translation ran out of time")]
+    OutOfTime,
+    /// A construction exceeded the translation budget; `subformula` is the
+    /// (simplified, negation normal form) formula whose automaton blew up.
+    #[error(
+        "translating {subformula} {problem} (budget: {budget}); simplify the formula or split it"
+    )]
+    Budget {
+        /// The subformula, printed (shortened past 200 characters).
+        subformula: String,
+        /// What was exceeded.
+        problem: String,
+        /// The budget, as a reader would state it.
+        budget: String,
+    },
     /// The automaton could not be assembled.
     #[error(transparent)]
     Automaton(#[from] AutomatonError),
@@ -135,10 +152,61 @@ fn build(
     formula: &Formula,
     propositions: &[String],
 ) -> Result<Vec<construct::Tgr>, TranslateError> {
+    check_nnf_size(formula)?;
     let nnf = formula::nnf(formula, true);
     let letters = 1usize << propositions.len();
     let mut context = af::Context::new(propositions);
     build_nnf(&mut context, &nnf, letters)
+}
+
+/// The resources one translation may use: `seconds` of wall-clock time
+/// (checked between automaton states) and at most
+/// [`crate::limits::MAX_AUTOMATON_EDGES`] edges and 200,000 states per
+/// construction.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TranslationBudget {
+    /// The wall-clock budget in seconds (infinite: none).
+    pub seconds: f64,
+}
+
+/// The default time budget of a translation, in seconds.
+pub const DEFAULT_TRANSLATION_SECONDS: f64 = 60.0;
+
+impl Default for TranslationBudget {
+    fn default() -> Self {
+        Self {
+            seconds: DEFAULT_TRANSLATION_SECONDS,
+        }
+    }
+}
+
+/// [`build_candidates`], with a construction that ran out of its budget
+/// reported as [`TranslateError::Budget`] naming `nnf` (the innermost
+/// formula whose construction failed keeps its name).
+fn build_nnf(
+    context: &mut af::Context,
+    nnf: &Formula,
+    letters: usize,
+) -> Result<Vec<construct::Tgr>, TranslateError> {
+    build_candidates(context, nnf, letters).map_err(|error| {
+        let problem = match &error {
+            TranslateError::TooLarge { limit } => format!(
+                "needs more than {limit} automaton states or {} edges",
+                crate::limits::MAX_AUTOMATON_EDGES
+            ),
+            TranslateError::OutOfTime => "runs past its time budget".to_string(),
+            _ => return error,
+        };
+        let mut subformula = nnf.to_string();
+        if subformula.chars().count() > 200 {
+            subformula = subformula.chars().take(200).collect::<String>() + "...";
+        }
+        TranslateError::Budget {
+            subformula,
+            problem,
+            budget: budget::describe(),
+        }
+    })
 }
 
 /// Transition-based generalised Rabin automata for the NNF formula `nnf`,
@@ -154,7 +222,7 @@ fn build(
 ///   and `r` propositional and `psi` an obligation, the breakpoint automaton
 ///   ([`construct::guarded_globally`]);
 /// * the Master Theorem automaton ([`construct::master`]).
-fn build_nnf(
+fn build_candidates(
     context: &mut af::Context,
     nnf: &Formula,
     letters: usize,
@@ -169,6 +237,11 @@ fn build_nnf(
         return Ok(vec![weak]);
     }
     let mut candidates = Vec::new();
+    if let Some(parts) = conjuncts(nnf)
+        && let Ok(product) = conjunction_product(context, &parts, letters)
+    {
+        candidates.push(product);
+    }
     if let Formula::Globally(chi) = nnf {
         if let Some((l, psi)) = waiting_form(chi) {
             for then in build_nnf(context, &formula::globally(psi), letters)? {
@@ -183,16 +256,25 @@ fn build_nnf(
             if let Some((l, psi, r)) = guarded_form(chi)
                 && is_semantic_obligation(context, &psi, letters)
             {
-                candidates.push(construct::guarded_globally(context, &l, &psi, &r, letters)?);
+                match construct::guarded_globally(context, &l, &psi, &r, letters) {
+                    Ok(automaton) => candidates.push(automaton),
+                    Err(e) if !is_budget(&e) => return Err(e),
+                    Err(_) => {}
+                }
             }
             if is_semantic_obligation(context, chi, letters) {
-                candidates.push(construct::guarded_globally(
+                let breakpoint = construct::guarded_globally(
                     context,
                     &Formula::False,
                     chi,
                     &Formula::False,
                     letters,
-                )?);
+                );
+                match breakpoint {
+                    Ok(automaton) => candidates.push(automaton),
+                    Err(e) if !is_budget(&e) => return Err(e),
+                    Err(_) => {}
+                }
             }
         }
     }
@@ -202,6 +284,57 @@ fn build_nnf(
         Err(_) => {}
     }
     Ok(candidates)
+}
+
+/// Whether a construction failed for want of budget (states, edges, time).
+fn is_budget(error: &TranslateError) -> bool {
+    matches!(
+        error,
+        TranslateError::TooLarge { .. } | TranslateError::OutOfTime | TranslateError::Budget { .. }
+    )
+}
+
+/// The formulas whose conjunction `nnf` is, when it is one of at least two:
+/// the parts of `f_1 & ... & f_n`, and `G f_1, ..., G f_n` for
+/// `G (f_1 & ... & f_n)`.
+fn conjuncts(nnf: &Formula) -> Option<Vec<Formula>> {
+    match nnf {
+        Formula::And(parts) => Some(parts.clone()),
+        Formula::Globally(chi) => match &**chi {
+            Formula::And(parts) => Some(parts.iter().cloned().map(formula::globally).collect()),
+            _ => None,
+        },
+        _ => None,
+    }
+}
+
+/// The [`construct::intersection`] of the smallest candidate automaton of
+/// every part: an automaton of their conjunction.
+fn conjunction_product(
+    context: &mut af::Context,
+    parts: &[Formula],
+    letters: usize,
+) -> Result<construct::Tgr, TranslateError> {
+    let mut product: Option<construct::Tgr> = None;
+    for part in parts {
+        let smallest = build_nnf(context, part, letters)?
+            .into_iter()
+            .map(|mut tgr| {
+                construct::drop_subsumed_disjuncts(&mut tgr.disjuncts);
+                tgr
+            })
+            .min_by_key(|tgr| (tgr.disjuncts.len(), tgr.num_states()))
+            .ok_or(TranslateError::TooLarge {
+                limit: construct::MAX_STATES,
+            })?;
+        product = Some(match product {
+            None => smallest,
+            Some(so_far) => construct::intersection(&so_far, &smallest)?,
+        });
+    }
+    product.ok_or(TranslateError::TooLarge {
+        limit: construct::MAX_STATES,
+    })
 }
 
 /// `(l, psi, r)` if `chi` is `l | (psi W r)` with `l` and `r` propositional
@@ -368,24 +501,125 @@ fn is_semantic_obligation(context: &mut af::Context, chi: &Formula, letters: usi
 /// [`crate::automaton::minimise::minimise_with_free_start`]; the one with the fewest
 /// states is returned.
 pub fn translate(formula: &Formula) -> Result<Dra, TranslateError> {
+    translate_within(formula, &TranslationBudget::default())
+}
+
+/// [`translate`] within `budget`: a construction that exceeds it is a
+/// [`TranslateError::Budget`] naming the subformula whose automaton blew up.
+/// A formula without temporal operators gets its automaton directly
+/// (two sinks behind an initial state, by evaluating it on every letter),
+/// however long its Boolean structure (a chain of `xor` or `<->` is not
+/// expanded into a disjunctive form).
+pub fn translate_within(
+    formula: &Formula,
+    budget: &TranslationBudget,
+) -> Result<Dra, TranslateError> {
     let propositions = checked_propositions(formula)?;
+    let deadline = std::time::Instant::now().checked_add(
+        std::time::Duration::try_from_secs_f64(budget.seconds).unwrap_or(std::time::Duration::MAX),
+    );
+    let _deadline = construct::budget::Deadline::set(deadline, budget.seconds);
+    if is_boolean(formula) {
+        return boolean_automaton(formula, propositions);
+    }
     let mut best: Option<Dra> = None;
+    let mut failure = None;
     for tgr in build(formula, &propositions)? {
-        let automaton = to_emerson_lei(
-            construct::merge_bisimilar(&construct::normalise_marks(&tgr)),
-            propositions.clone(),
-        )?;
-        let dra = minimise_with_free_start(&to_state_based_rabin(&automaton)?);
-        if best
-            .as_ref()
-            .is_none_or(|b| dra.num_states() < b.num_states())
-        {
-            best = Some(dra);
+        let simplified = construct::merge_bisimilar(&construct::normalise_marks(&tgr));
+        let mut found = Vec::new();
+        if let Some(degeneralised) = degeneralise(&simplified, &propositions)? {
+            found.push(minimise_with_free_start(&degeneralised));
+        }
+        let converted = to_emerson_lei(simplified, propositions.clone())
+            .and_then(|automaton| Ok(to_state_based_rabin(&automaton)?));
+        match converted {
+            Ok(dra) => found.push(minimise_with_free_start(&dra)),
+            Err(e) => failure = Some(e),
+        }
+        for dra in found {
+            if best
+                .as_ref()
+                .is_none_or(|b| dra.num_states() < b.num_states())
+            {
+                best = Some(dra);
+            }
         }
     }
-    best.ok_or(TranslateError::TooLarge {
-        limit: construct::MAX_STATES,
-    })
+    match (best, failure) {
+        (Some(best), _) => Ok(best),
+        (None, Some(failure)) => Err(failure),
+        (None, None) => Err(TranslateError::TooLarge {
+            limit: construct::MAX_STATES,
+        }),
+    }
+}
+
+/// For an automaton whose condition is one disjunct `Fin(F) & Inf(m_1) &
+/// ... & Inf(m_k)`, the state-based Rabin automaton of the classic
+/// degeneralisation: states `(q, i, accepting, finite)` where `i` is the
+/// next mark awaited (marks are awaited in turn; a transition carrying
+/// `m_i` moves on to `m_{i+1}`, several at once if it carries them), a
+/// state is *accepting* (in `K`) when the transition into it completed the
+/// round, and *finite* (in `L`) when that transition carried a mark of `F`.
+/// A run visits `K` infinitely often iff every `m_j` recurs, and `L`
+/// finitely often iff `F` does. `None` for other conditions.
+fn degeneralise(
+    tgr: &construct::Tgr,
+    propositions: &[String],
+) -> Result<Option<Dra>, TranslateError> {
+    let [disjunct] = tgr.disjuncts.as_slice() else {
+        return Ok(None);
+    };
+    let marks = &disjunct.inf;
+    let letters = tgr.letters;
+    type Key = (u32, u32, bool, bool);
+    let mut index: rustc_hash::FxHashMap<Key, u32> = rustc_hash::FxHashMap::default();
+    let mut states: Vec<Key> = vec![(tgr.initial as u32, 0, false, false)];
+    index.insert(states[0], 0);
+    let mut successors = Vec::new();
+    let mut next = 0;
+    while next < states.len() {
+        if (states.len() as u128) * (letters as u128) > crate::limits::MAX_AUTOMATON_EDGES
+            || states.len() > construct::MAX_STATES
+        {
+            return Err(TranslateError::TooLarge {
+                limit: construct::MAX_STATES,
+            });
+        }
+        let (q, awaited, _, _) = states[next];
+        for letter in 0..letters {
+            let edge = tgr.edges[q as usize * letters + letter];
+            let mut i = awaited as usize;
+            while i < marks.len() && (edge.marks >> marks[i]) & 1 == 1 {
+                i += 1;
+            }
+            let completed = i == marks.len();
+            let key = (
+                edge.target,
+                if completed { 0 } else { i as u32 },
+                completed,
+                edge.marks & disjunct.fin != 0,
+            );
+            let fresh = states.len() as u32;
+            let target = *index.entry(key).or_insert_with(|| {
+                states.push(key);
+                fresh
+            });
+            successors.push(target);
+        }
+        next += 1;
+    }
+    let pair = RabinPair {
+        fin: states.iter().map(|s| s.3).collect(),
+        inf: states.iter().map(|s| s.2).collect(),
+    };
+    Ok(Some(Dra::new(
+        propositions.to_vec(),
+        states.len(),
+        0,
+        successors,
+        vec![pair],
+    )?))
 }
 
 /// A deterministic, complete automaton over `2^AP` (`AP` as in
@@ -432,4 +666,138 @@ fn to_emerson_lei(
         tgr.num_marks,
         acceptance,
     )?)
+}
+
+/// The most nodes the negation normal form of a formula may have: `xor`
+/// and `<->` duplicate both operands (in both polarities), so a chain of
+/// them over temporal formulas grows exponentially when written out.
+pub const MAX_NNF_NODES: u128 = 1_000_000;
+
+/// An upper bound on the number of nodes of the negation normal form of
+/// `formula` (either polarity), saturating.
+fn nnf_size(formula: &Formula) -> u128 {
+    match formula {
+        Formula::True | Formula::False | Formula::Prop(_) => 1,
+        Formula::Not(g) => nnf_size(g),
+        Formula::And(parts) | Formula::Or(parts) => parts
+            .iter()
+            .fold(1u128, |total, part| total.saturating_add(nnf_size(part))),
+        Formula::Equiv(l, r) | Formula::Xor(l, r) => nnf_size(l)
+            .saturating_add(nnf_size(r))
+            .saturating_mul(2)
+            .saturating_add(3),
+        Formula::Next(g) | Formula::Finally(g) | Formula::Globally(g) => {
+            nnf_size(g).saturating_add(1)
+        }
+        Formula::Implies(l, r)
+        | Formula::Until(l, r)
+        | Formula::WeakUntil(l, r)
+        | Formula::Release(l, r)
+        | Formula::StrongRelease(l, r) => nnf_size(l).saturating_add(nnf_size(r)).saturating_add(1),
+    }
+}
+
+/// Refuses a formula whose negation normal form would exceed
+/// [`MAX_NNF_NODES`], naming its smallest subformula that does.
+fn check_nnf_size(formula: &Formula) -> Result<(), TranslateError> {
+    if nnf_size(formula) <= MAX_NNF_NODES {
+        return Ok(());
+    }
+    let mut culprit = formula;
+    loop {
+        let children: Vec<&Formula> = match culprit {
+            Formula::Not(g) | Formula::Next(g) | Formula::Finally(g) | Formula::Globally(g) => {
+                vec![g]
+            }
+            Formula::And(parts) | Formula::Or(parts) => parts.iter().collect(),
+            Formula::Implies(l, r)
+            | Formula::Equiv(l, r)
+            | Formula::Xor(l, r)
+            | Formula::Until(l, r)
+            | Formula::WeakUntil(l, r)
+            | Formula::Release(l, r)
+            | Formula::StrongRelease(l, r) => vec![l, r],
+            _ => Vec::new(),
+        };
+        match children.into_iter().find(|c| nnf_size(c) > MAX_NNF_NODES) {
+            Some(child) => culprit = child,
+            None => break,
+        }
+    }
+    let mut subformula = culprit.to_string();
+    if subformula.chars().count() > 200 {
+        subformula = subformula.chars().take(200).collect::<String>() + "...";
+    }
+    Err(TranslateError::Budget {
+        subformula,
+        problem: format!(
+            "has a negation normal form of more than {MAX_NNF_NODES} nodes (`xor` and `<->` \
+             over temporal formulas double it per operator)"
+        ),
+        budget: budget::describe(),
+    })
+}
+
+/// Whether `formula` has no temporal operator.
+fn is_boolean(formula: &Formula) -> bool {
+    match formula {
+        Formula::True | Formula::False | Formula::Prop(_) => true,
+        Formula::Not(g) => is_boolean(g),
+        Formula::And(parts) | Formula::Or(parts) => parts.iter().all(is_boolean),
+        Formula::Implies(l, r) | Formula::Equiv(l, r) | Formula::Xor(l, r) => {
+            is_boolean(l) && is_boolean(r)
+        }
+        _ => false,
+    }
+}
+
+/// The truth of a Boolean formula in the letter (bit `i`: `propositions[i]`).
+fn holds_in(formula: &Formula, letter: Letter, propositions: &[String]) -> bool {
+    let holds = |g: &Formula| holds_in(g, letter, propositions);
+    match formula {
+        Formula::True => true,
+        Formula::Prop(name) => propositions
+            .iter()
+            .position(|p| p == name)
+            .is_some_and(|bit| (letter >> bit) & 1 == 1),
+        Formula::Not(g) => !holds(g),
+        Formula::And(parts) => parts.iter().all(holds),
+        Formula::Or(parts) => parts.iter().any(holds),
+        Formula::Implies(l, r) => !holds(l) || holds(r),
+        Formula::Equiv(l, r) => holds(l) == holds(r),
+        Formula::Xor(l, r) => holds(l) != holds(r),
+        _ => false,
+    }
+}
+
+/// The automaton of a Boolean formula: from the initial state, the first
+/// letter leads to an accepting sink if it satisfies the formula and to a
+/// rejecting sink otherwise; then minimised.
+fn boolean_automaton(formula: &Formula, propositions: Vec<String>) -> Result<Dra, TranslateError> {
+    const ACCEPT: u32 = 1;
+    const REJECT: u32 = 2;
+    let letters = 1usize << propositions.len();
+    let mut successors = Vec::with_capacity(3 * letters);
+    for letter in 0..letters as Letter {
+        if construct::budget::out_of_time() {
+            return Err(TranslateError::Budget {
+                subformula: "the Boolean formula".into(),
+                problem: "runs past its time budget".into(),
+                budget: construct::budget::describe(),
+            });
+        }
+        successors.push(if holds_in(formula, letter, &propositions) {
+            ACCEPT
+        } else {
+            REJECT
+        });
+    }
+    successors.extend(std::iter::repeat_n(ACCEPT, letters));
+    successors.extend(std::iter::repeat_n(REJECT, letters));
+    let pair = RabinPair {
+        fin: vec![false; 3],
+        inf: vec![false, true, false],
+    };
+    let dra = Dra::new(propositions, 3, 0, successors, vec![pair])?;
+    Ok(minimise_with_free_start(&dra))
 }

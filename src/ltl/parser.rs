@@ -168,6 +168,18 @@ struct Parser {
 /// The deepest nesting accepted, so that parsing cannot overflow the stack.
 const MAX_DEPTH: usize = 1000;
 
+/// `xor` chains with more operands than this become balanced trees.
+const BALANCED_XOR: usize = 3;
+
+/// `f_1 xor ... xor f_n` as a balanced tree of depth `ceil(log2 n)`.
+fn balanced_xor(mut parts: Vec<Formula>) -> Formula {
+    if parts.len() == 1 {
+        return parts.remove(0);
+    }
+    let right = parts.split_off(parts.len() / 2);
+    Formula::Xor(Box::new(balanced_xor(parts)), Box::new(balanced_xor(right)))
+}
+
 impl Parser {
     fn peek(&self) -> &Token {
         &self.tokens[self.position].0
@@ -236,14 +248,24 @@ impl Parser {
         })
     }
 
-    /// `exclusive := conjunction (xor conjunction)*`
+    /// `exclusive := conjunction (xor conjunction)*`, associating to the
+    /// left; a chain longer than [`BALANCED_XOR`] is built as a balanced
+    /// tree (`xor` is associative), so that its depth, and the recursion of
+    /// everything that walks it, grows with the logarithm of its length.
     fn exclusive(&mut self, depth: usize) -> Result<Formula, ParseError> {
-        let mut left = self.conjunction(depth)?;
+        let mut parts = vec![self.conjunction(depth)?];
         while *self.peek() == Token::Xor {
             self.advance();
-            left = Formula::Xor(Box::new(left), Box::new(self.conjunction(depth)?));
+            parts.push(self.conjunction(depth)?);
         }
-        Ok(left)
+        if parts.len() > BALANCED_XOR {
+            return Ok(balanced_xor(parts));
+        }
+        let mut parts = parts.into_iter();
+        let first = parts.next().expect("at least one operand");
+        Ok(parts.fold(first, |left, right| {
+            Formula::Xor(Box::new(left), Box::new(right))
+        }))
     }
 
     /// `conjunction := temporal (& temporal)*`

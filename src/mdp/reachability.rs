@@ -23,10 +23,20 @@
 //!    P_sigma` restricted to `M x M` and `b_sigma(s) = P_sigma(B | s)`, by
 //!    sparse LU or, above [`crate::solver::DEFAULT_LU_LIMIT`] unknowns,
 //!    BiCGSTAB warm-started from the previous policy's values
-//!    ([`crate::solver::LinearSolver`], residual checked).
+//!    ([`crate::solver::LinearSolver`]: residual checked, error bounded).
+//!    The diagonal of `I - Q_sigma` is the probability of leaving `s`,
+//!    `sum_{t != s} P_sigma(t | s)`, never `1 - P_sigma(s | s)` (method.md
+//!    section 8): a lazy action keeps every digit.
 //! 4. **Improvement.** In each state of `M` switch to an action with the
-//!    largest `sum_t P(t | s, a) x(t)` only if it beats the current action's
-//!    by more than [`IMPROVEMENT_THRESHOLD`]; keep the current action on ties.
+//!    largest *self-loop-free* expectation `E'_a x = sum_{t != s} P(t | s, a)
+//!    x(t) / sum_{t != s} P(t | s, a)` (the expectation on leaving `s`; an
+//!    action that never leaves `s` scores 0) only if it beats the current
+//!    action's by more than the threshold, the larger of
+//!    [`IMPROVEMENT_THRESHOLD`] and four times the evaluation's error bound;
+//!    keep the current action on ties. Removing self-loops and renormalising
+//!    changes neither the reachability probabilities nor the optimal
+//!    strategies, and `E'_a x - x(s)` has the sign of `E_a x - x(s)` without
+//!    losing the digits of a lazy action to the `P(s | s)` near 1.
 //!    The new policy is again proper: a closed class `C` inside `M` under the
 //!    new policy with no switched state would be closed under the old one,
 //!    which is proper; with a switched state, its stationary distribution
@@ -63,9 +73,13 @@ pub struct Reachability {
     /// reaches `B` almost surely.
     pub strategy: Vec<usize>,
     /// The larger of the final linear solve's residual
-    /// `max_s |((I - Q) x - b)(s)|` and the Bellman gap
-    /// `max_s (F x - x)(s)` (below [`IMPROVEMENT_THRESHOLD`] at the end).
+    /// `max_s |((I - Q) x - b)(s)|` and the self-loop-free Bellman gap
+    /// `max_s (max_a E'_a x - E'_sigma(s) x)` (below the improvement
+    /// threshold at the end).
     pub residual: f64,
+    /// A bound on `|values(s) - x_sigma(s)|` for every `s`, `x_sigma` the
+    /// exact reachability probabilities of `strategy` (method.md section 8).
+    pub error_bound: f64,
     /// The number of policy evaluations.
     pub iterations: usize,
     /// `x*(s) > 0` exactly: `s` can reach the target in the graph of all
@@ -96,13 +110,15 @@ pub fn max_reachability(mdp: &Mdp, target: &[bool]) -> Result<Reachability, MdpE
     }
     let mut previous: Vec<f64> = almost_sure.iter().map(|&t| f64::from(t)).collect();
     for iterations in 1..=MAX_ITERATIONS {
-        let (values, solve_residual) = evaluate(mdp, &almost_sure, &maybe, &strategy, &previous)?;
-        let (switched, gap) = improve(mdp, &values, &maybe, &mut strategy);
+        let (values, report) = evaluate(mdp, &almost_sure, &maybe, &strategy, &previous)?;
+        let threshold = IMPROVEMENT_THRESHOLD.max(4.0 * report.error_bound);
+        let (switched, gap) = improve(mdp, &values, &maybe, &mut strategy, threshold);
         if !switched {
             return Ok(Reachability {
                 values,
                 strategy,
-                residual: solve_residual.max(gap),
+                residual: report.residual.max(gap),
+                error_bound: report.error_bound,
                 iterations,
                 possible: positive,
                 almost_sure,
@@ -167,9 +183,17 @@ fn attractor(n: usize, predecessors: &Predecessors, target: &[bool]) -> Vec<usiz
     strategy
 }
 
+/// The residual and error bound of a policy evaluation.
+#[derive(Debug, Clone, Copy)]
+struct EvaluationReport {
+    residual: f64,
+    error_bound: f64,
+}
+
 /// The reachability probabilities of the policy: 1 on `target`, the solution
-/// of `(I - Q) x = b` on `maybe`, 0 elsewhere; and the solve's residual.
-/// The linear solver is chosen by size ([`SolverSettings::default`]); an
+/// of `(I - Q) x = b` on `maybe` (diagonal: the probability of leaving the
+/// state), 0 elsewhere; and the solve's residual and error bound. The
+/// linear solver is chosen by size ([`SolverSettings::default`]); an
 /// iterative one starts from `start` (the previous policy's values).
 fn evaluate(
     mdp: &Mdp,
@@ -177,11 +201,15 @@ fn evaluate(
     maybe: &[usize],
     strategy: &[usize],
     start: &[f64],
-) -> Result<(Vec<f64>, f64), MdpError> {
+) -> Result<(Vec<f64>, EvaluationReport), MdpError> {
     let n = mdp.num_states();
     let mut values: Vec<f64> = target.iter().map(|&t| f64::from(t)).collect();
     if maybe.is_empty() {
-        return Ok((values, 0.0));
+        let exact = EvaluationReport {
+            residual: 0.0,
+            error_bound: 0.0,
+        };
+        return Ok((values, exact));
     }
     let mut index = vec![usize::MAX; n];
     for (i, &s) in maybe.iter().enumerate() {
@@ -194,8 +222,14 @@ fn evaluate(
     let mut row = Vec::new();
     for (i, &s) in maybe.iter().enumerate() {
         row.clear();
-        row.push((i, 1.0));
-        for &(t, p) in mdp.distribution(s, strategy[s]) {
+        let distribution = mdp.distribution(s, strategy[s]);
+        let leaving: f64 = distribution
+            .iter()
+            .filter(|&&(t, _)| t != s)
+            .map(|&(_, p)| p)
+            .sum();
+        row.push((i, leaving));
+        for &(t, p) in distribution.iter().filter(|&&(t, _)| t != s) {
             if index[t] != usize::MAX {
                 row.push((index[t], -p));
             } else if target[t] {
@@ -221,23 +255,50 @@ fn evaluate(
     let mut solver = LinearSolver::new(pattern, &SolverSettings::default())?;
     solver.factorize(&coefficients)?;
     let mut solution: Vec<f64> = maybe.iter().map(|&s| start[s]).collect();
-    let residual = solver.solve(&rhs, &mut solution)?.residual;
+    let report = solver.solve(&rhs, &mut solution)?;
     for (&s, &x) in maybe.iter().zip(&solution) {
         values[s] = x;
     }
-    Ok((values, residual))
+    let report = EvaluationReport {
+        residual: report.residual,
+        error_bound: report.error_bound.unwrap_or(f64::INFINITY),
+    };
+    Ok((values, report))
 }
 
-/// One greedy improvement step on `maybe` (see the module documentation).
-/// Returns whether some action was switched and the Bellman gap
-/// `max_s (max_a E_a x - E_sigma(s) x)` before switching.
-fn improve(mdp: &Mdp, values: &[f64], maybe: &[usize], strategy: &mut [usize]) -> (bool, f64) {
+/// `E'_a x = sum_{t != s} P(t | s, a) x(t) / sum_{t != s} P(t | s, a)`,
+/// the expectation of `x` on leaving `s` by action `a`; 0 for an action
+/// that never leaves `s` (it never reaches the target).
+fn leaving_expectation(mdp: &Mdp, s: usize, a: usize, x: &[f64]) -> f64 {
+    let (mut leaving, mut expectation) = (0.0, 0.0);
+    for &(t, p) in mdp.distribution(s, a).iter().filter(|&&(t, _)| t != s) {
+        leaving += p;
+        expectation += p * x[t];
+    }
+    if leaving > 0.0 {
+        expectation / leaving
+    } else {
+        0.0
+    }
+}
+
+/// One greedy improvement step on `maybe` (see the module documentation),
+/// switching only for gains above `threshold`. Returns whether some action
+/// was switched and the self-loop-free Bellman gap
+/// `max_s (max_a E'_a x - E'_sigma(s) x)` before switching.
+fn improve(
+    mdp: &Mdp,
+    values: &[f64],
+    maybe: &[usize],
+    strategy: &mut [usize],
+    threshold: f64,
+) -> (bool, f64) {
     let mut switched = false;
     let mut gap: f64 = 0.0;
     for &s in maybe {
-        let current = mdp.expectation(s, strategy[s], values);
+        let current = leaving_expectation(mdp, s, strategy[s], values);
         let (best_action, best) = (0..mdp.num_actions(s))
-            .map(|a| (a, mdp.expectation(s, a, values)))
+            .map(|a| (a, leaving_expectation(mdp, s, a, values)))
             .fold((strategy[s], current), |best, candidate| {
                 if candidate.1 > best.1 {
                     candidate
@@ -246,7 +307,7 @@ fn improve(mdp: &Mdp, values: &[f64], maybe: &[usize], strategy: &mut [usize]) -
                 }
             });
         gap = gap.max(best - current);
-        if best > current + IMPROVEMENT_THRESHOLD {
+        if best > current + threshold {
             strategy[s] = best_action;
             switched = true;
         }

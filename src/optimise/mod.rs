@@ -159,6 +159,9 @@ pub struct StructureReport {
     pub best_iteration: usize,
     /// The value at the last iterate.
     pub last_value: f64,
+    /// The largest error bound of the values computed in the run (method.md
+    /// section 8): `worst_case` and `last_value` are within it.
+    pub error_bound: f64,
     /// Outer iterations run.
     pub iterations: usize,
     /// Best-response checks run.
@@ -286,6 +289,7 @@ pub fn optimise_structure(
             worst_case: run.best.worst_case,
             best_iteration: run.best.iteration,
             last_value: run.last_value,
+            error_bound: objective.largest_error_bound(),
             iterations: run.iterations,
             checks: run.checks,
             status: run.status,

@@ -33,6 +33,7 @@ pub struct Objective {
     defender: Softmax,
     adversary: Softmax,
     cache: Option<(Vec<f64>, Vec<f64>, Point)>,
+    largest_error_bound: f64,
 }
 
 /// The size of a structure's GMC.
@@ -69,7 +70,15 @@ impl Objective {
             defender,
             adversary,
             cache: None,
+            largest_error_bound: 0.0,
         })
+    }
+
+    /// The largest error bound of any value computed so far (method.md
+    /// section 8): every value this objective returned is within it of the
+    /// exact value.
+    pub fn largest_error_bound(&self) -> f64 {
+        self.largest_error_bound
     }
 
     /// The defender's softmax map.
@@ -102,7 +111,9 @@ impl Objective {
         }
         let mu_def = self.defender.probabilities(defender);
         let mu_adv = self.adversary.probabilities(adversary);
-        Ok(self.evaluator.evaluate(&mu_def, &mu_adv)?.value)
+        let evaluation = self.evaluator.evaluate(&mu_def, &mu_adv)?;
+        self.largest_error_bound = self.largest_error_bound.max(evaluation.error_bound);
+        Ok(evaluation.value)
     }
 
     /// `V` and both logit gradients (one factorisation, two solves, one pass
@@ -116,6 +127,7 @@ impl Objective {
         let mu_def = self.defender.probabilities(defender);
         let mu_adv = self.adversary.probabilities(adversary);
         let (evaluation, gradient) = self.evaluator.evaluate_with_gradient(&mu_def, &mu_adv)?;
+        self.largest_error_bound = self.largest_error_bound.max(evaluation.error_bound);
         let point = Point {
             value: evaluation.value,
             defender: self.defender.chain_rule(

@@ -7,10 +7,14 @@
 //! * [`Progress`]: a progress bar on stderr (the caller creates it only when
 //!   stderr is a terminal);
 //! * [`plot_sweep`]: `sweep.svg`, the worst-case value against the defender's
-//!   size, one line per adversary size.
+//!   size, one line per adversary size;
+//! * [`OutputDirectory`]: the directory a command writes its results into,
+//!   atomically, under a lock, never mixing old and new results.
 
+mod directory;
 mod plot;
 
+pub use directory::{OutputDirectory, OutputError, create_dir, write_file};
 pub use plot::{CurvePlot, SweepPoint, plot_sweep};
 
 use std::fs::File;
@@ -31,10 +35,11 @@ pub struct CurveCsv {
 }
 
 impl CurveCsv {
-    /// Creates (truncates) the file at `path`.
-    pub fn create(path: &Path) -> Result<Self, csv::Error> {
+    /// Creates (truncates) the file at `path`; an error names the path.
+    pub fn create(path: &Path) -> Result<Self, OutputError> {
+        let file = File::create(path).map_err(|e| OutputError::io("creating", path, e))?;
         Ok(Self {
-            writer: csv::Writer::from_path(path)?,
+            writer: csv::Writer::from_writer(file),
             error: None,
         })
     }

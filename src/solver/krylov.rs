@@ -134,8 +134,19 @@ impl KrylovSolver {
     /// Solves `A x = b` starting from `x` (see the module documentation for
     /// starts that are zero or not finite).
     pub fn solve(&mut self, b: &[f64], x: &mut [f64]) -> Result<SolveReport, SolverError> {
+        let tolerance = self.system.tolerance;
+        self.solve_within(b, x, tolerance)
+    }
+
+    /// [`Self::solve`] to the residual `tolerance` instead of the solver's own.
+    pub fn solve_within(
+        &mut self,
+        b: &[f64],
+        x: &mut [f64],
+        tolerance: f64,
+    ) -> Result<SolveReport, SolverError> {
         self.system
-            .solve(&mut self.forward, b, x, Direction::Forward)
+            .solve(&mut self.forward, b, x, Direction::Forward, tolerance)
     }
 
     /// Solves `A^T y = c` starting from `y`, as [`Self::solve`].
@@ -144,17 +155,19 @@ impl KrylovSolver {
         c: &[f64],
         y: &mut [f64],
     ) -> Result<SolveReport, SolverError> {
+        let tolerance = self.system.tolerance;
         self.system
-            .solve(&mut self.transposed, c, y, Direction::Transposed)
+            .solve(&mut self.transposed, c, y, Direction::Transposed, tolerance)
     }
 
     /// [`Self::solve`] and [`Self::solve_transpose`] at once, on two threads.
     pub fn solve_both(&mut self, b: &[f64], x: &mut [f64], c: &[f64], y: &mut [f64]) -> SolvePair {
         let system = &self.system;
         let (forward, transposed) = (&mut self.forward, &mut self.transposed);
+        let tolerance = system.tolerance;
         join_directions(
-            || system.solve(forward, b, x, Direction::Forward),
-            || system.solve(transposed, c, y, Direction::Transposed),
+            || system.solve(forward, b, x, Direction::Forward, tolerance),
+            || system.solve(transposed, c, y, Direction::Transposed, tolerance),
         )
     }
 }
@@ -200,6 +213,7 @@ impl System {
         rhs: &[f64],
         solution: &mut [f64],
         direction: Direction,
+        tolerance: f64,
     ) -> Result<SolveReport, SolverError> {
         if !self.factorised {
             return Err(SolverError::Malformed(
@@ -210,7 +224,7 @@ impl System {
         if solution.iter().all(|&v| v == 0.0) || solution.iter().any(|v| !v.is_finite()) {
             self.preconditioned_start(rhs, solution, direction);
         }
-        let target = ACCURACY_MARGIN * self.tolerance;
+        let target = ACCURACY_MARGIN * tolerance;
         let mut threshold = target;
         let mut iterations = 0;
         let mut residual = self.true_residual(workspace, rhs, solution, direction);
@@ -232,7 +246,7 @@ impl System {
             residual = self.true_residual(workspace, rhs, solution, direction);
             if residual.is_finite() && residual < previous {
                 workspace.best.copy_from_slice(solution);
-                if residual > 0.5 * previous && residual <= self.tolerance {
+                if residual > 0.5 * previous && residual <= tolerance {
                     break;
                 }
                 if converged && residual > target {
@@ -244,17 +258,18 @@ impl System {
                 break;
             }
         }
-        if residual.is_nan() || residual > self.tolerance {
+        if residual.is_nan() || residual > tolerance {
             return Err(SolverError::NotConverged {
                 iterations,
                 residual,
-                tolerance: self.tolerance,
+                tolerance,
             });
         }
-        let residual = accept(residual, solution, self.tolerance)?;
+        let residual = accept(residual, solution, tolerance)?;
         Ok(SolveReport {
             residual,
             iterations,
+            error_bound: None,
         })
     }
 

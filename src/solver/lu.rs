@@ -104,10 +104,27 @@ impl LuSolver {
         Ok(())
     }
 
+    /// The values of `A` as of the last factorisation.
+    pub fn values(&self) -> &[f64] {
+        &self.system.values
+    }
+
     /// Solves `A x = b` into `x` (whose entry value is ignored).
     pub fn solve(&mut self, b: &[f64], x: &mut [f64]) -> Result<SolveReport, SolverError> {
+        let tolerance = self.system.tolerance;
+        self.solve_within(b, x, tolerance)
+    }
+
+    /// [`Self::solve`], accepting a residual up to `tolerance` instead of
+    /// the solver's own.
+    pub fn solve_within(
+        &mut self,
+        b: &[f64],
+        x: &mut [f64],
+        tolerance: f64,
+    ) -> Result<SolveReport, SolverError> {
         let factors = self.system.factors()?;
-        factors.solve(&mut self.forward, b, x, Direction::Forward)
+        factors.solve(&mut self.forward, b, x, Direction::Forward, tolerance)
     }
 
     /// Solves `A^T y = c` into `y` (whose entry value is ignored).
@@ -117,7 +134,8 @@ impl LuSolver {
         y: &mut [f64],
     ) -> Result<SolveReport, SolverError> {
         let factors = self.system.factors()?;
-        factors.solve(&mut self.transposed, c, y, Direction::Transposed)
+        let tolerance = self.system.tolerance;
+        factors.solve(&mut self.transposed, c, y, Direction::Transposed, tolerance)
     }
 
     /// [`Self::solve`] and [`Self::solve_transpose`] at once, on two threads.
@@ -127,9 +145,10 @@ impl LuSolver {
             Err(error) => return (Err(error.clone()), Err(error)),
         };
         let (forward, transposed) = (&mut self.forward, &mut self.transposed);
+        let tolerance = self.system.tolerance;
         join_directions(
-            || factors.solve(forward, b, x, Direction::Forward),
-            || factors.solve(transposed, c, y, Direction::Transposed),
+            || factors.solve(forward, b, x, Direction::Forward, tolerance),
+            || factors.solve(transposed, c, y, Direction::Transposed, tolerance),
         )
     }
 }
@@ -145,7 +164,6 @@ impl System {
             pattern: &self.pattern,
             values: &self.values,
             lu: LuRef::new_unchecked(&self.symbolic, &self.numeric),
-            tolerance: self.tolerance,
         })
     }
 }
@@ -156,7 +174,6 @@ struct Factors<'a> {
     pattern: &'a SparsePattern,
     values: &'a [f64],
     lu: LuRef<'a, usize, f64>,
-    tolerance: f64,
 }
 
 impl Factors<'_> {
@@ -166,6 +183,7 @@ impl Factors<'_> {
         rhs: &[f64],
         solution: &mut [f64],
         direction: Direction,
+        tolerance: f64,
     ) -> Result<SolveReport, SolverError> {
         let n = self.pattern.n;
         check_solve_inputs(n, rhs, solution)?;
@@ -185,10 +203,11 @@ impl Factors<'_> {
                     .transposed_residual(self.values, solution, rhs, &mut workspace.product)
             }
         };
-        let residual = accept(residual, solution, self.tolerance)?;
+        let residual = accept(residual, solution, tolerance)?;
         Ok(SolveReport {
             residual,
             iterations: 0,
+            error_bound: None,
         })
     }
 }

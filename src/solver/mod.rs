@@ -19,12 +19,21 @@
 //! number. `A` is an M-matrix (`Q` substochastic, every transient state
 //! leaves `T` eventually), so both the LU and ILU(0) exist without pivoting
 //! breakdown; a singular `A` is reported, not solved.
+//!
+//! The residual alone does not bound the error of `x` (method.md section 8):
+//! [`LinearSolver::solve`] also bounds it, `|x - A^{-1} b| <= max(t) ||r||_inf`
+//! with `t = A^{-1} 1` the expected time in `T` ([`bound`]), refines `x`
+//! with the same factors while that bound exceeds the tolerance, and
+//! reports the bound as [`SolveReport::error_bound`]; a bound it cannot
+//! bring under the tolerance is an error ([`SolverError::Unbounded`]).
 
+pub mod bound;
 mod denormals;
 mod ilu;
 mod krylov;
 mod lu;
 
+use bound::ExpectedTime;
 pub use denormals::FlushDenormals;
 pub use ilu::Ilu0;
 pub use krylov::KrylovSolver;
@@ -83,6 +92,23 @@ pub enum SolverError {
         residual: f64,
         /// The tolerance asked for.
         tolerance: f64,
+    },
+    /// The bound on the solution's error, `max(t) ||r||_inf` (method.md
+    /// section 8), exceeds the tolerance even after iterative refinement.
+    #[error(
+        "the error bound {error_bound:e} exceeds the tolerance {tolerance:e}: the chain spends \
+         up to {expected_time:e} expected steps in the transient states, so even a residual of \
+         rounding size allows an error that large (a slowly mixing chain); the value is not \
+         reported (a larger tolerance, `--tolerance` where a command offers it, accepts a looser \
+         bound)"
+    )]
+    Unbounded {
+        /// The smallest bound reached.
+        error_bound: f64,
+        /// The tolerance asked for.
+        tolerance: f64,
+        /// The bound on `max(t)`, infinite when none could be certified.
+        expected_time: f64,
     },
     /// The tolerance is not a finite positive number.
     #[error("the tolerance must be finite and positive, not {0}")]
@@ -192,8 +218,14 @@ impl SolverSettings {
 pub struct SolveReport {
     /// `max_i |(A x - b)_i|` (or `|(A^T y - c)_i|`) of the returned solution.
     pub residual: f64,
-    /// BiCGSTAB iterations (0 for LU).
+    /// BiCGSTAB iterations (0 for LU), refinements included (not those of
+    /// the solve for the expected time of the error bound).
     pub iterations: usize,
+    /// For [`LinearSolver::solve`]: a bound on `max_i |x_i - (A^{-1} b)_i|`,
+    /// `max(t) ||r||_inf` plus the rounding in computing `r` (method.md
+    /// section 8). `None` for the solves that bound nothing (transposed
+    /// solves and the methods' own).
+    pub error_bound: Option<f64>,
 }
 
 /// A square sparse matrix `A` in compressed sparse row form with sorted,
@@ -374,7 +406,22 @@ pub struct LinearSolver {
     fall_back_to_lu: bool,
     krylov_budget: usize,
     tolerance: f64,
+    expected_time: ExpectedTime,
+    scratch: BoundScratch,
 }
+
+/// Vectors of the error bound: all ones (the right-hand side of `A t = 1`),
+/// the residual and the correction of a refinement.
+#[derive(Default)]
+struct BoundScratch {
+    ones: Vec<f64>,
+    residual: Vec<f64>,
+    correction: Vec<f64>,
+}
+
+/// Residual tolerance of the solve for the expected time `A t = 1`: its
+/// bound needs `||A t_hat - 1||_inf` well below 1 only.
+const EXPECTED_TIME_TOLERANCE: f64 = 0.01;
 
 enum Backend {
     Lu(Box<LuSolver>),
@@ -411,7 +458,17 @@ impl LinearSolver {
             fall_back_to_lu: auto,
             krylov_budget: krylov_settings.max_iterations,
             tolerance: settings.tolerance,
+            expected_time: ExpectedTime::new(),
+            scratch: BoundScratch::default(),
         })
+    }
+
+    /// The values of `A` as of the last factorisation.
+    fn values(&self) -> &[f64] {
+        match &self.backend {
+            Backend::Lu(lu) => lu.values(),
+            Backend::Krylov(krylov) => krylov.values(),
+        }
     }
 
     /// The method in use ([`SolverMethod::Lu`] or [`SolverMethod::Krylov`]).
@@ -439,10 +496,142 @@ impl LinearSolver {
         }
     }
 
-    /// Solves `A x = b`. On entry `x` is the starting point of an iterative
-    /// solve (ignored by LU); on return it is the solution.
+    /// Solves `A x = b` and bounds the error of `x` (method.md section 8,
+    /// [`SolveReport::error_bound`]), refining `x` while the bound exceeds
+    /// the tolerance; a bound that stays above it is an error. On entry `x`
+    /// is the starting point of an iterative solve (ignored by LU); on
+    /// return it is the solution.
     pub fn solve(&mut self, b: &[f64], x: &mut [f64]) -> Result<SolveReport, SolverError> {
-        self.solve_in(Direction::Forward, b, x)
+        let report = self.solve_in(Direction::Forward, b, x, None)?;
+        self.bound_error(b, x, report)
+    }
+
+    /// `max(t)` for `t = A^{-1} 1` (module [`bound`]): re-certified from the
+    /// previous estimate when it still fits the matrix, solved for otherwise.
+    fn expected_time_bound(&mut self) -> Result<f64, SolverError> {
+        if let Some(largest) =
+            self.expected_time
+                .certify(self.pattern(), self.values(), bound::REUSE_LIMIT)
+        {
+            return Ok(largest);
+        }
+        let n = self.pattern().n;
+        self.scratch.ones.resize(n, 1.0);
+        let ones = std::mem::take(&mut self.scratch.ones);
+        let mut time = std::mem::take(&mut self.expected_time);
+        let solved = self.solve_in(
+            Direction::Forward,
+            &ones,
+            time.estimate_mut(n),
+            Some(EXPECTED_TIME_TOLERANCE),
+        );
+        time.store();
+        self.scratch.ones = ones;
+        self.expected_time = time;
+        solved?;
+        self.expected_time
+            .certify(self.pattern(), self.values(), 1.0)
+            .ok_or(SolverError::Unbounded {
+                error_bound: f64::INFINITY,
+                tolerance: self.tolerance,
+                expected_time: f64::INFINITY,
+            })
+    }
+
+    /// Adds the error bound to the report of a forward solve, refining `x`
+    /// (iterative refinement with a compensated residual, each correction
+    /// solved with the same factors) while the bound exceeds the tolerance.
+    fn bound_error(
+        &mut self,
+        b: &[f64],
+        x: &mut [f64],
+        mut report: SolveReport,
+    ) -> Result<SolveReport, SolverError> {
+        let n = self.pattern().n;
+        if n == 0 {
+            report.error_bound = Some(0.0);
+            return Ok(report);
+        }
+        let largest_time = self.expected_time_bound()?;
+        let scale = largest_time * (1.0 + 4.0 * f64::EPSILON);
+        let plain = bound::residual_bound(
+            self.pattern(),
+            self.values(),
+            x,
+            |i| b[i],
+            bound::Evaluation::Plain,
+            None,
+        );
+        let mut error_bound = scale * plain;
+        if error_bound <= self.tolerance {
+            report.error_bound = Some(error_bound);
+            return Ok(report);
+        }
+        let mut residual = std::mem::take(&mut self.scratch.residual);
+        let mut correction = std::mem::take(&mut self.scratch.correction);
+        residual.resize(n, 0.0);
+        correction.resize(n, 0.0);
+        let outcome = self.refine(b, x, scale, &mut residual, &mut correction, &mut report);
+        self.scratch.residual = residual;
+        self.scratch.correction = correction;
+        error_bound = outcome?;
+        if error_bound <= self.tolerance {
+            report.error_bound = Some(error_bound);
+            Ok(report)
+        } else {
+            Err(SolverError::Unbounded {
+                error_bound,
+                tolerance: self.tolerance,
+                expected_time: largest_time,
+            })
+        }
+    }
+
+    /// Iterative refinement: at most [`bound::MAX_REFINEMENTS`] corrections
+    /// `x <- x - A^{-1} r` (solved for `r / ||r||` and scaled back, so that
+    /// an iterative method's absolute tolerance becomes a relative one),
+    /// while the bound `scale * ||r||` exceeds the tolerance and halves per
+    /// round. Returns the last bound.
+    fn refine(
+        &mut self,
+        b: &[f64],
+        x: &mut [f64],
+        scale: f64,
+        residual: &mut [f64],
+        correction: &mut [f64],
+        report: &mut SolveReport,
+    ) -> Result<f64, SolverError> {
+        let mut previous = f64::INFINITY;
+        for round in 0..=bound::MAX_REFINEMENTS {
+            let bounded = bound::residual_bound(
+                self.pattern(),
+                self.values(),
+                x,
+                |i| b[i],
+                bound::Evaluation::Compensated,
+                Some(residual),
+            );
+            let error_bound = scale * bounded;
+            report.residual = residual.iter().fold(0.0, |m: f64, r| m.max(r.abs()));
+            let stalled = error_bound.is_nan() || error_bound >= 0.5 * previous;
+            if error_bound <= self.tolerance || round == bound::MAX_REFINEMENTS || stalled {
+                return Ok(error_bound);
+            }
+            previous = error_bound;
+            let size = report.residual;
+            if size == 0.0 || !size.is_finite() {
+                return Ok(error_bound);
+            }
+            residual.iter_mut().for_each(|r| *r /= size);
+            correction.fill(0.0);
+            report.iterations += self
+                .solve_in(Direction::Forward, residual, correction, None)?
+                .iterations;
+            for (xi, di) in x.iter_mut().zip(correction.iter()) {
+                *xi -= size * di;
+            }
+        }
+        Ok(previous)
     }
 
     /// Solves `A^T y = c`, `y` as `x` in [`Self::solve`].
@@ -451,40 +640,61 @@ impl LinearSolver {
         c: &[f64],
         y: &mut [f64],
     ) -> Result<SolveReport, SolverError> {
-        self.solve_in(Direction::Transposed, c, y)
+        self.solve_in(Direction::Transposed, c, y, None)
     }
 
+    /// One solve by the backend (residual `tolerance`, or the solver's own
+    /// when `None`), with `auto`'s fall-back to LU.
     fn solve_in(
         &mut self,
         direction: Direction,
         rhs: &[f64],
         solution: &mut [f64],
+        tolerance: Option<f64>,
     ) -> Result<SolveReport, SolverError> {
+        let tolerance = tolerance.unwrap_or(self.tolerance);
         let result = match (&mut self.backend, direction) {
-            (Backend::Lu(lu), Direction::Forward) => return lu.solve(rhs, solution),
+            (Backend::Lu(lu), Direction::Forward) => {
+                return lu.solve_within(rhs, solution, tolerance);
+            }
             (Backend::Lu(lu), Direction::Transposed) => return lu.solve_transpose(rhs, solution),
-            (Backend::Krylov(krylov), Direction::Forward) => krylov.solve(rhs, solution),
+            (Backend::Krylov(krylov), Direction::Forward) => {
+                krylov.solve_within(rhs, solution, tolerance)
+            }
             (Backend::Krylov(krylov), Direction::Transposed) => {
                 krylov.solve_transpose(rhs, solution)
             }
         };
         if self.should_fall_back(&result) {
             self.fall_back()?;
-            return self.solve_in(direction, rhs, solution);
+            return self.solve_in(direction, rhs, solution, Some(tolerance));
         }
         result
     }
 
     /// [`Self::solve`] and [`Self::solve_transpose`] at once, on two threads
-    /// (the two solves share the factorisation and nothing else).
+    /// (the two solves share the factorisation and nothing else); the
+    /// forward solve's error is then bounded as by [`Self::solve`].
     pub fn solve_both(&mut self, b: &[f64], x: &mut [f64], c: &[f64], y: &mut [f64]) -> SolvePair {
+        let (forward, transposed) = self.solve_both_unbounded(b, x, c, y);
+        let forward = forward.and_then(|report| self.bound_error(b, x, report));
+        (forward, transposed)
+    }
+
+    fn solve_both_unbounded(
+        &mut self,
+        b: &[f64],
+        x: &mut [f64],
+        c: &[f64],
+        y: &mut [f64],
+    ) -> SolvePair {
         let (forward, transposed) = match &mut self.backend {
             Backend::Lu(lu) => return lu.solve_both(b, x, c, y),
             Backend::Krylov(krylov) => krylov.solve_both(b, x, c, y),
         };
         if self.should_fall_back(&forward) || self.should_fall_back(&transposed) {
             return match self.fall_back() {
-                Ok(()) => self.solve_both(b, x, c, y),
+                Ok(()) => self.solve_both_unbounded(b, x, c, y),
                 Err(error) => (Err(error.clone()), Err(error)),
             };
         }
@@ -673,10 +883,14 @@ mod tests {
                 let (mut x_both, mut y_both) = (vec![0.0; 300], vec![0.0; 300]);
                 let (both_forward, both_backward) =
                     solver.solve_both(&b, &mut x_both, &b, &mut y_both);
+                let both_forward = both_forward.unwrap();
                 assert_eq!(
-                    (both_forward.unwrap(), both_backward.unwrap()),
-                    (forward, backward)
+                    (both_forward.residual, both_forward.iterations),
+                    (forward.residual, forward.iterations)
                 );
+                assert!(forward.error_bound.unwrap() <= 1e-12);
+                assert!(both_forward.error_bound.unwrap() <= 1e-12);
+                assert_eq!(both_backward.unwrap(), backward);
                 assert_eq!((&x_both, &y_both), (&x, &y));
                 solutions.push((x, y));
             }

@@ -1,0 +1,73 @@
+//! The resource budget: sizes that are checked *before* memory is allocated
+//! for them, so that an input too large for the machine is an error naming
+//! the input, never an aborted allocation. Each limit is far above what the
+//! method can use in practice (the GMC of the largest inputs measured has
+//! about 10^6 states) and well below what would exhaust memory; each is
+//! counted in the units named, which take a few dozen bytes each.
+
+/// The most choices a controller may hold: `nodes * observations * nodes *
+/// actions` for a uniform (full-support) controller (`uniform:K`, the
+/// optimiser's starting structures, a file with `"default": "uniform"`).
+pub const MAX_CONTROLLER_CHOICES: u128 = 50_000_000;
+
+/// The most `(state, defender action, adversary action)` triples a game may
+/// have (the transition table has one entry per triple).
+pub const MAX_TRANSITION_TRIPLES: u128 = 50_000_000;
+
+/// The most transition entries `T(s' | s, u, v) > 0` a game may have once
+/// its `"*"` wildcards are expanded.
+pub const MAX_TRANSITION_ENTRIES: u128 = 200_000_000;
+
+/// The most edges (`states * 2^AP`) a deterministic automaton may have,
+/// read from HOA or built from a formula.
+pub const MAX_AUTOMATON_EDGES: u128 = 1 << 24;
+
+/// The most transitions of a global Markov chain (or of a certification
+/// product MDP's state-action distributions).
+pub const MAX_CHAIN_TRANSITIONS: u128 = 1_000_000_000;
+
+/// The most `(defender size, adversary size)` pairs one `sweep` may run.
+pub const MAX_SWEEP_PAIRS: u128 = 10_000;
+
+/// `Some(message)` when `size` exceeds `limit`: "`what` would need `size`
+/// `unit`, above the budget of `limit` (`name`)". The caller adds the input.
+pub fn exceeded(what: &str, size: u128, limit: u128, unit: &str, name: &str) -> Option<String> {
+    (size > limit).then(|| {
+        format!(
+            "{what} would need {size} {unit}, above the budget of {limit} \
+             (posg_fsc::limits::{name}); use a smaller input"
+        )
+    })
+}
+
+/// `nodes * observations * nodes * actions` against
+/// [`MAX_CONTROLLER_CHOICES`]: `Some(message)` when too large.
+pub fn uniform_controller(nodes: usize, observations: usize, actions: usize) -> Option<String> {
+    let choices = [nodes, nodes, observations, actions]
+        .into_iter()
+        .fold(1u128, |product, n| product.saturating_mul(n as u128));
+    exceeded(
+        &format!(
+            "a full-support controller of {nodes} nodes ({observations} observations, {actions} actions)"
+        ),
+        choices,
+        MAX_CONTROLLER_CHOICES,
+        "choices",
+        "MAX_CONTROLLER_CHOICES",
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sizes_at_the_limit_pass_and_one_more_is_refused_with_the_name() {
+        assert_eq!(exceeded("x", 10, 10, "units", "LIMIT"), None);
+        let message = exceeded("x", 11, 10, "units", "LIMIT").unwrap();
+        assert!(message.contains("11 units") && message.contains("limits::LIMIT"));
+        assert!(uniform_controller(100_000, 4, 4).is_some());
+        assert!(uniform_controller(10, 4, 4).is_none());
+        assert!(uniform_controller(usize::MAX, usize::MAX, usize::MAX).is_some());
+    }
+}

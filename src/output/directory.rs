@@ -1,0 +1,344 @@
+//! [`OutputDirectory`]: the one way commands write a directory of results.
+//!
+//! A run writes into a fresh *staging* directory beside the target
+//! (`.NAME.partial-PID` in the same parent, so that a rename moves it) and
+//! [`OutputDirectory::commit`] renames it into place at the end: readers
+//! see the old results or the new ones, never a mixture, and a run that
+//! fails (or is killed) leaves the old results as they were. A target that
+//! is not empty is refused unless the caller allows replacing it, and then
+//! it is replaced whole. A lock file beside the target (`.NAME.lock`,
+//! created exclusively, holding the owner's process id) keeps two runs from
+//! sharing one target; a lock whose process no longer exists (a killed run)
+//! is taken over. Every error names the path it concerns.
+
+use std::fs::{self, OpenOptions};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use thiserror::Error;
+
+/// Why an output directory or file could not be written.
+#[derive(Debug, Error)]
+pub enum OutputError {
+    /// An I/O operation on `path` failed.
+    #[error("{action} {path}: {source}")]
+    Io {
+        /// What was being done (`creating`, `writing`, ...).
+        action: &'static str,
+        /// The path it was done to.
+        path: PathBuf,
+        /// The operating system's error.
+        source: std::io::Error,
+    },
+    /// The target exists and holds files, and replacing it was not allowed.
+    #[error(
+        "refusing to write into {path}: it is not empty (results of an earlier run?); \
+         choose another directory or give --force to replace it whole"
+    )]
+    NotEmpty {
+        /// The target directory.
+        path: PathBuf,
+    },
+    /// The target exists and is not a directory.
+    #[error("{path} exists and is not a directory")]
+    NotADirectory {
+        /// The target.
+        path: PathBuf,
+    },
+    /// Another run holds the target's lock.
+    #[error(
+        "{path} is being written by another run (process {owner} holds the lock file {lock}); \
+         wait for it to finish, or delete the lock file if no such run exists"
+    )]
+    Locked {
+        /// The target directory.
+        path: PathBuf,
+        /// The lock file.
+        lock: PathBuf,
+        /// The process id recorded in the lock file.
+        owner: String,
+    },
+}
+
+impl OutputError {
+    /// An I/O error of `action` on `path`.
+    pub fn io(action: &'static str, path: &Path, source: std::io::Error) -> Self {
+        Self::Io {
+            action,
+            path: path.to_path_buf(),
+            source,
+        }
+    }
+}
+
+/// Writes `contents` to `path`, naming the path in any error.
+pub fn write_file(path: &Path, contents: impl AsRef<[u8]>) -> Result<(), OutputError> {
+    fs::write(path, contents).map_err(|e| OutputError::io("writing", path, e))
+}
+
+/// Creates the directory `path` and its parents, naming the path in any error.
+pub fn create_dir(path: &Path) -> Result<(), OutputError> {
+    fs::create_dir_all(path).map_err(|e| OutputError::io("creating", path, e))
+}
+
+/// A directory of results being written: files go into [`Self::path`], a
+/// staging directory, until [`Self::commit`] renames it to the target
+/// (module documentation). Dropped without a commit, it removes the
+/// staging directory and leaves the target untouched.
+#[derive(Debug)]
+pub struct OutputDirectory {
+    target: PathBuf,
+    staging: PathBuf,
+    lock: PathBuf,
+    replace: bool,
+    committed: bool,
+}
+
+impl OutputDirectory {
+    /// Takes the lock of `target` and creates an empty staging directory.
+    /// A `target` that exists and is not empty is an error unless `replace`
+    /// (then [`Self::commit`] replaces it whole); one that is not a
+    /// directory is always an error.
+    pub fn create(target: &Path, replace: bool) -> Result<Self, OutputError> {
+        let name = target
+            .file_name()
+            .ok_or_else(|| OutputError::NotADirectory {
+                path: target.to_path_buf(),
+            })?
+            .to_string_lossy()
+            .into_owned();
+        let parent = match target.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+            _ => PathBuf::from("."),
+        };
+        create_dir(&parent)?;
+        check_target(target, replace)?;
+        let lock = parent.join(format!(".{name}.lock"));
+        take_lock(target, &lock)?;
+        let staging = parent.join(format!(".{name}.partial-{}", std::process::id()));
+        let directory = Self {
+            target: target.to_path_buf(),
+            staging,
+            lock,
+            replace,
+            committed: false,
+        };
+        if directory.staging.exists() {
+            fs::remove_dir_all(&directory.staging)
+                .map_err(|e| OutputError::io("removing", &directory.staging, e))?;
+        }
+        fs::create_dir(&directory.staging)
+            .map_err(|e| OutputError::io("creating", &directory.staging, e))?;
+        Ok(directory)
+    }
+
+    /// The staging directory, where the run writes its files.
+    pub fn path(&self) -> &Path {
+        &self.staging
+    }
+
+    /// The path of `name` in the staging directory.
+    pub fn join(&self, name: impl AsRef<Path>) -> PathBuf {
+        self.staging.join(name)
+    }
+
+    /// The target directory the results go to.
+    pub fn target(&self) -> &Path {
+        &self.target
+    }
+
+    /// Renames the staging directory to the target (replacing an old
+    /// target whole when allowed) and releases the lock.
+    pub fn commit(mut self) -> Result<PathBuf, OutputError> {
+        check_target(&self.target, self.replace)?;
+        if is_empty_dir(&self.target) {
+            fs::remove_dir(&self.target)
+                .map_err(|e| OutputError::io("replacing", &self.target, e))?;
+        }
+        if self.target.exists() {
+            let old = self.staging.with_extension("old");
+            fs::rename(&self.target, &old)
+                .map_err(|e| OutputError::io("moving aside", &self.target, e))?;
+            self.rename_staging()?;
+            fs::remove_dir_all(&old).map_err(|e| OutputError::io("removing", &old, e))?;
+        } else {
+            self.rename_staging()?;
+        }
+        self.committed = true;
+        Ok(self.target.clone())
+    }
+
+    fn rename_staging(&self) -> Result<(), OutputError> {
+        fs::rename(&self.staging, &self.target).map_err(|e| OutputError::Io {
+            action: "renaming the finished results into",
+            path: self.target.clone(),
+            source: e,
+        })
+    }
+}
+
+impl Drop for OutputDirectory {
+    fn drop(&mut self) {
+        if !self.committed {
+            let _ = fs::remove_dir_all(&self.staging);
+        }
+        let _ = fs::remove_file(&self.lock);
+    }
+}
+
+/// Whether `path` is a directory without entries.
+fn is_empty_dir(path: &Path) -> bool {
+    fs::read_dir(path).is_ok_and(|mut entries| entries.next().is_none())
+}
+
+/// The target may be written: missing, an empty directory, or (when
+/// `replace`) any directory.
+fn check_target(target: &Path, replace: bool) -> Result<(), OutputError> {
+    match fs::metadata(target) {
+        Err(_) => Ok(()),
+        Ok(meta) if !meta.is_dir() => Err(OutputError::NotADirectory {
+            path: target.to_path_buf(),
+        }),
+        Ok(_) if replace || is_empty_dir(target) => Ok(()),
+        Ok(_) => Err(OutputError::NotEmpty {
+            path: target.to_path_buf(),
+        }),
+    }
+}
+
+/// Creates the lock file exclusively and writes this process's id into
+/// it; a lock left by a process that no longer runs is taken over once.
+fn take_lock(target: &Path, lock: &Path) -> Result<(), OutputError> {
+    for attempt in 0..2 {
+        match OpenOptions::new().write(true).create_new(true).open(lock) {
+            Ok(mut file) => {
+                return write!(file, "{}", std::process::id())
+                    .map_err(|e| OutputError::io("writing", lock, e));
+            }
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
+                let owner = fs::read_to_string(lock).unwrap_or_default();
+                if attempt == 0 && is_stale(owner.trim()) {
+                    let _ = fs::remove_file(lock);
+                    continue;
+                }
+                return Err(OutputError::Locked {
+                    path: target.to_path_buf(),
+                    lock: lock.to_path_buf(),
+                    owner: owner.trim().to_string(),
+                });
+            }
+            Err(e) => return Err(OutputError::io("creating the lock file", lock, e)),
+        }
+    }
+    Err(OutputError::Locked {
+        path: target.to_path_buf(),
+        lock: lock.to_path_buf(),
+        owner: "unknown".into(),
+    })
+}
+
+/// Whether the lock's owner is known not to run: a process id with no
+/// `/proc` entry where `/proc` exists (Linux). Unknown owners are not stale.
+fn is_stale(owner: &str) -> bool {
+    let proc = Path::new("/proc");
+    match owner.parse::<u32>() {
+        Ok(pid) => proc.join("self").exists() && !proc.join(pid.to_string()).exists(),
+        Err(_) => false,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn scratch(name: &str) -> PathBuf {
+        let dir = std::env::temp_dir().join(format!(
+            "posg-fsc-output-{name}-{}-{:?}",
+            std::process::id(),
+            std::thread::current().id()
+        ));
+        let _ = fs::remove_dir_all(&dir);
+        fs::create_dir_all(&dir).unwrap();
+        dir
+    }
+
+    #[test]
+    fn results_appear_only_on_commit() {
+        let base = scratch("commit");
+        let target = base.join("out");
+        let out = OutputDirectory::create(&target, false).unwrap();
+        write_file(&out.join("a.txt"), "new").unwrap();
+        assert!(!target.exists(), "nothing is visible before the commit");
+        out.commit().unwrap();
+        assert_eq!(fs::read_to_string(target.join("a.txt")).unwrap(), "new");
+        let leftovers: Vec<_> = fs::read_dir(&base).unwrap().collect();
+        assert_eq!(leftovers.len(), 1, "no staging directory or lock remains");
+    }
+
+    #[test]
+    fn a_non_empty_target_is_refused_without_replace_and_replaced_whole_with_it() {
+        let base = scratch("replace");
+        let target = base.join("out");
+        fs::create_dir_all(&target).unwrap();
+        fs::write(target.join("old.txt"), "old").unwrap();
+        assert!(matches!(
+            OutputDirectory::create(&target, false),
+            Err(OutputError::NotEmpty { .. })
+        ));
+        let out = OutputDirectory::create(&target, true).unwrap();
+        write_file(&out.join("new.txt"), "new").unwrap();
+        out.commit().unwrap();
+        assert!(!target.join("old.txt").exists(), "never a mixture");
+        assert_eq!(fs::read_to_string(target.join("new.txt")).unwrap(), "new");
+    }
+
+    #[test]
+    fn an_abandoned_run_leaves_the_old_results_and_no_staging() {
+        let base = scratch("abandon");
+        let target = base.join("out");
+        fs::create_dir_all(&target).unwrap();
+        fs::write(target.join("old.txt"), "old").unwrap();
+        {
+            let out = OutputDirectory::create(&target, true).unwrap();
+            write_file(&out.join("old.txt"), "").unwrap();
+        }
+        assert_eq!(fs::read_to_string(target.join("old.txt")).unwrap(), "old");
+        assert_eq!(fs::read_dir(&base).unwrap().count(), 1);
+    }
+
+    #[test]
+    fn a_second_writer_of_the_same_target_is_refused_until_the_first_ends() {
+        let base = scratch("lock");
+        let target = base.join("out");
+        let first = OutputDirectory::create(&target, false).unwrap();
+        let second = OutputDirectory::create(&target, false);
+        assert!(
+            matches!(&second, Err(OutputError::Locked { owner, .. }) if *owner == std::process::id().to_string()),
+            "{second:?}"
+        );
+        drop(first);
+        OutputDirectory::create(&target, false).unwrap();
+    }
+
+    #[test]
+    fn a_lock_of_a_process_that_no_longer_runs_is_taken_over() {
+        if !Path::new("/proc/self").exists() {
+            return;
+        }
+        let base = scratch("stale");
+        let target = base.join("out");
+        fs::write(base.join(".out.lock"), u32::MAX.to_string()).unwrap();
+        OutputDirectory::create(&target, false).unwrap();
+    }
+
+    #[test]
+    fn errors_name_the_path() {
+        let base = scratch("errors");
+        let file = base.join("plain-file");
+        fs::write(&file, "x").unwrap();
+        let error = OutputDirectory::create(&file, true).unwrap_err();
+        assert!(error.to_string().contains("plain-file"), "{error}");
+        let error = write_file(&base.join("missing/dir/a.txt"), "x").unwrap_err();
+        assert!(error.to_string().contains("missing/dir/a.txt"), "{error}");
+    }
+}
