@@ -60,19 +60,28 @@ pub struct SettingsArgs {
     /// Seed of every random choice (initial logits, best-response restarts).
     #[arg(long, default_value_t = Settings::default().seed)]
     seed: u64,
-    /// Logit bound c: logits stay in [-c, c], so every supported choice keeps
-    /// probability >= exp(-2c)/|block| and the GMC graph never changes.
+    /// Widest logit bound c_max: logits stay in [-c_max, c_max], so every
+    /// supported choice keeps probability >= exp(-2 c_max)/|block| and the
+    /// GMC graph never changes.
     #[arg(long, default_value_t = Settings::default().logit_bound)]
     logit_bound: f64,
+    /// First logit bound c_0 of the max-min loop; it doubles up to
+    /// --logit-bound when progress stalls with a logit on the bound.
+    #[arg(long, default_value_t = Settings::default().initial_logit_bound)]
+    initial_logit_bound: f64,
     /// Initial logits are uniform in [-spread, spread] around the start (0: exactly the start).
     #[arg(long, default_value_t = Settings::default().initial_spread)]
     initial_spread: f64,
     /// Also optimise the initial node distributions.
     #[arg(long)]
     optimise_initial: bool,
-    /// Outer iterations (one defender step each) at most.
+    /// Outer iterations (one defender step, or one L-BFGS step for a
+    /// single-player game) at most: a cap; runs stop on the certified gap or a stall.
     #[arg(long, default_value_t = Settings::default().max_iterations)]
     max_iterations: usize,
+    /// Independent starts per structure, run in parallel; the best certified is kept.
+    #[arg(long, default_value_t = Settings::default().starts)]
+    starts: usize,
     /// Wall-clock budget per structure in seconds (0: none).
     #[arg(long, default_value_t = Settings::default().time_budget)]
     time_budget: f64,
@@ -91,6 +100,10 @@ pub struct SettingsArgs {
     /// Update rule of both players: plain gradient steps or Adam.
     #[arg(long, value_enum, default_value = "adam")]
     update: UpdateArg,
+    /// Optimism o of both players' steps: d_t + o (d_t - d_{t-1}) (0: plain
+    /// alternating play, 1: optimistic gradient).
+    #[arg(long, default_value_t = Settings::default().optimism)]
+    optimism: f64,
     /// A best-response check every this many iterations (and at the end).
     #[arg(long, default_value_t = Settings::default().check_every)]
     check_every: usize,
@@ -103,13 +116,25 @@ pub struct SettingsArgs {
     /// L-BFGS memory.
     #[arg(long, default_value_t = Settings::default().lbfgs_memory)]
     lbfgs_memory: usize,
-    /// Stop when the best worst-case estimate gained less than --stall-tolerance
-    /// over this many checks (0: never).
+    /// Stop when the best score (certified lower bound, else worst-case
+    /// estimate) gained less than --stall-tolerance over this many checks at
+    /// the widest logit bound (0: never).
     #[arg(long, default_value_t = Settings::default().stall_checks)]
     stall_checks: usize,
     /// See --stall-checks.
     #[arg(long, default_value_t = Settings::default().stall_tolerance)]
     stall_tolerance: f64,
+    /// Stop when the certified gap (game upper bound minus certified lower
+    /// bound) is at most this.
+    #[arg(long, default_value_t = Settings::default().gap_tolerance)]
+    gap_tolerance: f64,
+    /// Run the max-min loop with best-response checks on single-player
+    /// games too, instead of the L-BFGS ascent.
+    #[arg(long)]
+    no_single_player_ascent: bool,
+    /// Do not evaluate the rounded defenders at the end.
+    #[arg(long)]
+    no_round: bool,
     /// Largest residual accepted from a linear solve.
     #[arg(long, default_value_t = Settings::default().solver_tolerance, value_parser = super::common::positive_tolerance)]
     solver_tolerance: f64,
@@ -146,9 +171,11 @@ impl SettingsArgs {
         let settings = Settings {
             seed: self.seed,
             logit_bound: self.logit_bound,
+            initial_logit_bound: self.initial_logit_bound,
             initial_spread: self.initial_spread,
             optimise_initial: self.optimise_initial,
             max_iterations: self.max_iterations,
+            starts: self.starts,
             time_budget: self.time_budget,
             adversary_steps: self.adversary_steps,
             defender_step: self.defender_step,
@@ -158,12 +185,16 @@ impl SettingsArgs {
                 UpdateArg::Plain => UpdateRule::Plain,
                 UpdateArg::Adam => UpdateRule::Adam,
             },
+            optimism: self.optimism,
             check_every: self.check_every,
             restarts: self.restarts,
             best_response_iterations: self.best_response_iterations,
             lbfgs_memory: self.lbfgs_memory,
             stall_checks: self.stall_checks,
             stall_tolerance: self.stall_tolerance,
+            gap_tolerance: self.gap_tolerance,
+            single_player_ascent: !self.no_single_player_ascent,
+            round: !self.no_round,
             solver_tolerance: self.solver_tolerance,
             solver: self.solver,
             prune: !self.no_prune,
@@ -392,12 +423,17 @@ pub fn run(args: SolveArgs) -> anyhow::Result<()> {
         },
     );
     print_text(&format!(
-        "structure {}: worst-case estimate {:.6} (last iterate value {:.6}) after {} iterations, {:.1} s; \
+        "structure {}: worst-case estimate {:.6} (last iterate value {:.6}) after {} iterations \
+         ({}, {}; best of {} starts; {} defender), {:.1} s; \
          GMC {} states{bracket}\nwrote curve.csv, curve.svg, defender.fsc.json, adversary.fsc.json, summary.json to {}\n",
         report.name,
         report.worst_case,
         report.last_value,
         report.iterations,
+        serde_json::to_value(report.method)?.as_str().unwrap_or("?"),
+        serde_json::to_value(report.status)?.as_str().unwrap_or("?"),
+        report.starts.len(),
+        report.rounding,
         report.seconds,
         report.gmc.states,
         args.out.display()
