@@ -20,7 +20,7 @@ use posg_fsc::certify::{self, Bracket};
 use posg_fsc::controller::{self, Role};
 use posg_fsc::game::Posg;
 use posg_fsc::optimise::{
-    self, Observer, Settings, Solution, Structure, StructureReport, UpdateRule,
+    self, Observer, Settings, Solution, Structure, StructureOutcome, StructureReport, UpdateRule,
 };
 use posg_fsc::output::{CurveCsv, CurvePlot, Progress};
 use posg_fsc::solver::SolverMethod;
@@ -225,6 +225,9 @@ pub struct SolveJob<'a> {
     pub out: &'a Path,
     /// Whether to draw progress bars (stderr is a terminal and nothing else draws).
     pub progress: bool,
+    /// The best outcome of a smaller defender size (`sweep`): the result
+    /// is kept at least as good ([`optimise::keep_better`]).
+    pub floor: Option<&'a StructureOutcome>,
 }
 
 /// `summary.json`.
@@ -276,7 +279,7 @@ pub fn run_job(job: &SolveJob) -> anyhow::Result<(Solution, Option<Bracket>)> {
     let multiple = job.structures.len() > 1;
     let out = job.out.to_path_buf();
     let bars = job.progress.then(MultiProgress::new);
-    let solution = optimise::optimise_structures(
+    let mut solution = optimise::optimise_structures(
         job.game,
         job.dra,
         job.negated_dra,
@@ -297,13 +300,14 @@ pub fn run_job(job: &SolveJob) -> anyhow::Result<(Solution, Option<Bracket>)> {
             )
         },
     )?;
-    if multiple {
-        let best = &solution.best().report.name;
+    if let Some(floor) = job.floor {
+        let nodes = solution.best().defender.num_nodes();
+        optimise::keep_better(&mut solution, floor, nodes)?;
+    }
+    let best_curve = |ext: &str| out.join(format!("curve-{}.{ext}", solution.best().report.name));
+    if multiple && best_curve("csv").exists() {
         for ext in ["csv", "svg"] {
-            std::fs::copy(
-                out.join(format!("curve-{best}.{ext}")),
-                out.join(format!("curve.{ext}")),
-            )?;
+            std::fs::copy(best_curve(ext), out.join(format!("curve.{ext}")))?;
         }
     }
     let best = solution.best();
@@ -405,6 +409,7 @@ pub fn run(args: SolveArgs) -> anyhow::Result<()> {
         settings: &settings,
         out: &args.out,
         progress: std::io::stderr().is_terminal(),
+        floor: None,
     };
     let (solution, certified) = run_job(&job)?;
     let best = solution.best();

@@ -43,7 +43,7 @@ pub use optimiser::{Certifier, Incumbent, Optimiser, PhaseSeconds, RunOutcome};
 pub use rounding::{TRUNCATION_THRESHOLDS, rounded_candidates, truncated};
 pub use settings::{MAX_LOGIT_BOUND, Settings, UpdateRule};
 pub use softmax::{Softmax, clip};
-pub use warm_start::{WARM_START_MIX, embed};
+pub use warm_start::{WARM_START_MIX, embed, keep_better, pad, score, warm_started};
 
 use std::time::Instant;
 

@@ -144,6 +144,9 @@ pub struct Certifier<'a> {
     pub not_phi: &'a Dra,
 }
 
+/// A logit `phi` presses on the bound `c` when `|phi| >= NEAR_BOUND * c`.
+pub const NEAR_BOUND: f64 = 0.95;
+
 /// The numbers of one best-response check that the iteration record shows.
 struct Check {
     worst_case: f64,
@@ -321,7 +324,7 @@ impl<'a> Optimiser<'a> {
 impl Optimiser<'_> {
     /// After a check: [`Status::GapClosed`] when the certified gap is at
     /// most `gap_tolerance`; on a stall, the doubled logit bound when some
-    /// defender or adversary logit sits on it and it is below
+    /// defender or adversary logit is within [`NEAR_BOUND`] of it and it is below
     /// `logit_bound`, else [`Status::Stalled`].
     fn stop_or_widen(
         &self,
@@ -339,7 +342,7 @@ impl Optimiser<'_> {
         if !stalled(history, s) {
             return None;
         }
-        let on_bound = |logits: &[f64]| logits.iter().any(|phi| phi.abs() >= *bound - 1e-9);
+        let on_bound = |logits: &[f64]| logits.iter().any(|phi| phi.abs() >= NEAR_BOUND * *bound);
         if *bound < s.logit_bound && (on_bound(&self.defender) || on_bound(&self.adversary)) {
             *bound = (2.0 * *bound).min(s.logit_bound);
             history.clear();
