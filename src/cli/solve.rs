@@ -124,6 +124,10 @@ pub struct SettingsArgs {
     /// See --stall-checks.
     #[arg(long, default_value_t = Settings::default().stall_tolerance)]
     stall_tolerance: f64,
+    /// The single-player ascent stops when the value gained at most
+    /// --stall-tolerance of itself over this many iterations (0: never).
+    #[arg(long, default_value_t = Settings::default().ascent_stall_iterations)]
+    ascent_stall_iterations: usize,
     /// Stop when the certified gap (game upper bound minus certified lower
     /// bound) is at most this.
     #[arg(long, default_value_t = Settings::default().gap_tolerance)]
@@ -192,6 +196,7 @@ impl SettingsArgs {
             lbfgs_memory: self.lbfgs_memory,
             stall_checks: self.stall_checks,
             stall_tolerance: self.stall_tolerance,
+            ascent_stall_iterations: self.ascent_stall_iterations,
             gap_tolerance: self.gap_tolerance,
             single_player_ascent: !self.no_single_player_ascent,
             round: !self.no_round,

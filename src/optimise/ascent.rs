@@ -21,6 +21,7 @@ use super::objective::Objective;
 use super::observer::{IterationRecord, Observer};
 use super::optimiser::{Incumbent, PhaseSeconds, RunOutcome, gained_little, norm};
 use super::{OptimiseError, Settings, Status};
+use crate::value::ValueError;
 
 /// The largest change of any `z` coordinate in one trial step.
 const MAX_STEP: f64 = 1.0;
@@ -55,7 +56,7 @@ pub fn ascend(
     let mut memory = Memory::new(settings.lbfgs_memory);
     let mut history = vec![here.value];
     let mut best = (here.value, squash(&z, c), 0);
-    let window = settings.stall_checks;
+    let window = settings.ascent_stall_iterations;
     let mut t = 0;
     let status = loop {
         let seconds = clock.elapsed().as_secs_f64();
@@ -170,7 +171,10 @@ impl Evaluated {
 
 /// A step along the L-BFGS direction (steepest ascent when that is not an
 /// ascent direction) with Armijo backtracking; `None` when no step of the
-/// line search increases `V` enough (a stationary point to working precision).
+/// line search increases `V` enough (a stationary point to working
+/// precision). A trial point whose linear system cannot be solved to the
+/// tolerance (nearly deterministic choices can make `I - Q` nearly
+/// singular) is rejected like one that does not increase `V`.
 fn line_search(
     objective: &mut Objective,
     z: &[f64],
@@ -197,9 +201,12 @@ fn line_search(
             .zip(&direction)
             .map(|(zi, d)| zi + step * d)
             .collect();
-        let next = Evaluated::at(objective, &trial, adversary, c)?;
-        if next.log_value >= here.log_value + ARMIJO * step * slope {
-            return Ok(Some((trial, next, step)));
+        match Evaluated::at(objective, &trial, adversary, c) {
+            Ok(next) if next.log_value >= here.log_value + ARMIJO * step * slope => {
+                return Ok(Some((trial, next, step)));
+            }
+            Ok(_) | Err(OptimiseError::Value(ValueError::Solver(_))) => {}
+            Err(error) => return Err(error),
         }
         step /= 2.0;
     }

@@ -75,9 +75,12 @@ pub struct Settings {
     /// Stop when the best score (certified lower bound, or worst-case
     /// estimate without an automaton for !phi) has improved by at most
     /// `stall_tolerance` times its magnitude over the last `stall_checks`
-    /// checks, at the widest logit bound (0: never). The single-player
-    /// ascent counts `stall_checks` iterations instead of checks.
+    /// checks, at the widest logit bound (0: never).
     pub stall_checks: usize,
+    /// The single-player ascent's stall window: it stops when `V` has
+    /// gained at most `stall_tolerance` times itself over this many
+    /// iterations (0: never).
+    pub ascent_stall_iterations: usize,
     /// See `stall_checks`.
     pub stall_tolerance: f64,
     /// Stop when the certified gap, the game upper bound minus the best
@@ -116,7 +119,7 @@ impl Default for Settings {
             initial_spread: 1.0,
             optimise_initial: false,
             max_iterations: 3000,
-            starts: 2,
+            starts: 4,
             time_budget: 0.0,
             adversary_steps: 10,
             defender_step: 0.05,
@@ -128,7 +131,8 @@ impl Default for Settings {
             restarts: 4,
             best_response_iterations: 100,
             lbfgs_memory: 7,
-            stall_checks: 100,
+            stall_checks: 200,
+            ascent_stall_iterations: 100,
             stall_tolerance: 1e-5,
             gap_tolerance: 1e-4,
             single_player_ascent: true,
