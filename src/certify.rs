@@ -39,7 +39,7 @@ use thiserror::Error;
 use crate::automaton::{Dra, Letter, RabinPair};
 use crate::controller::{Fsc, Role};
 use crate::game::{Player, Posg};
-use crate::mdp::{Mdp, MdpBuilder, MdpError, max_rabin_probability};
+use crate::mdp::{AcceptingComponent, Mdp, MdpBuilder, MdpError, Reachability, max_rabin_analysis};
 
 /// Why a bound could not be computed.
 #[derive(Debug, Error, Clone, PartialEq)]
@@ -70,6 +70,37 @@ pub struct Bound {
     pub seconds: f64,
     /// The MDP solution's residual ([`crate::mdp::Reachability::residual`]).
     pub residual: f64,
+    /// Whether the bound is exactly 0, exactly 1 or strictly between,
+    /// decided on the product's graph (not by comparing `value` with 0 or 1).
+    pub qualitative: Qualitative,
+}
+
+/// Where a probability lies, decided exactly by graph analysis.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Qualitative {
+    /// Exactly 0.
+    Zero,
+    /// Strictly between 0 and 1.
+    Between,
+    /// Exactly 1.
+    One,
+}
+
+impl Qualitative {
+    /// The class of `1 - p` for `p` in class `self`.
+    pub fn complement(self) -> Self {
+        match self {
+            Self::Zero => Self::One,
+            Self::Between => Self::Between,
+            Self::One => Self::Zero,
+        }
+    }
+
+    /// Whether the probability is positive.
+    pub fn is_positive(self) -> bool {
+        self != Self::Zero
+    }
 }
 
 /// A memoryless deterministic strategy of the free player on the product of
@@ -135,6 +166,7 @@ pub fn bracket<'a>(
 pub fn lower_bound(game: &Posg, dra_not_phi: &Dra, defender: &Fsc) -> Result<Bound, CertifyError> {
     let mut bound = best_response(game, dra_not_phi, defender, Role::Defender)?;
     bound.value = (1.0 - bound.value).clamp(0.0, 1.0);
+    bound.qualitative = bound.qualitative.complement();
     Ok(bound)
 }
 
@@ -154,16 +186,22 @@ fn best_response(
     fixed: Role,
 ) -> Result<Bound, CertifyError> {
     let start = Instant::now();
-    let product = Product::build(game, dra, controller, fixed)?;
-    let pairs = product.lift(dra.pairs());
-    let result = max_rabin_probability(&product.mdp, &pairs)?;
-    let value: f64 = product
+    let analysis = analyse(game, dra, controller, fixed)?;
+    let result = &analysis.result;
+    let value: f64 = analysis
         .initial
         .iter()
         .map(|&(m, p)| p * result.values[m])
         .sum();
+    let qualitative = if analysis.initial.iter().all(|&(m, _)| !result.possible[m]) {
+        Qualitative::Zero
+    } else if analysis.initial.iter().all(|&(m, _)| result.almost_sure[m]) {
+        Qualitative::One
+    } else {
+        Qualitative::Between
+    };
     let free = free_player(game, fixed);
-    let rules = product
+    let rules = analysis
         .states
         .iter()
         .enumerate()
@@ -181,9 +219,60 @@ fn best_response(
             player: other(fixed),
             rules,
         },
-        mdp_states: product.states.len(),
+        mdp_states: analysis.states.len(),
         seconds: start.elapsed().as_secs_f64(),
         residual: result.residual,
+        qualitative,
+    })
+}
+
+/// The product MDP of a game, an automaton and one player's controller,
+/// analysed for the free player's maximum probability of the automaton's
+/// language (what [`lower_bound`] and [`upper_bound`] are computed from).
+pub(crate) struct Analysis {
+    /// `(s, q, node)` of each MDP state.
+    pub states: Vec<(usize, usize, usize)>,
+    /// The MDP: state `m`'s action `w` is the free player's action `w`.
+    pub mdp: Mdp,
+    /// `p0` as `(MDP state, probability)`.
+    pub initial: Vec<(usize, f64)>,
+    /// Maximum reachability of the accepting end components.
+    pub result: Reachability,
+    /// The accepting end components, per Rabin pair of the automaton.
+    pub accepting: Vec<AcceptingComponent>,
+}
+
+/// The reachable product MDP with `controller` playing for `fixed`, not
+/// analysed: `(s, q, node)` per state, the MDP, and `p0`.
+pub(crate) type ProductMdp = (Vec<(usize, usize, usize)>, Mdp, Vec<(usize, f64)>);
+
+/// Builds the product with `controller` playing for `fixed`.
+pub(crate) fn product_mdp(
+    game: &Posg,
+    dra: &Dra,
+    controller: &Fsc,
+    fixed: Role,
+) -> Result<ProductMdp, CertifyError> {
+    let product = Product::build(game, dra, controller, fixed)?;
+    Ok((product.states, product.mdp, product.initial))
+}
+
+/// Builds the product with `controller` playing for `fixed` and analyses it.
+pub(crate) fn analyse(
+    game: &Posg,
+    dra: &Dra,
+    controller: &Fsc,
+    fixed: Role,
+) -> Result<Analysis, CertifyError> {
+    let product = Product::build(game, dra, controller, fixed)?;
+    let pairs = product.lift(dra.pairs());
+    let (result, accepting) = max_rabin_analysis(&product.mdp, &pairs)?;
+    Ok(Analysis {
+        states: product.states,
+        mdp: product.mdp,
+        initial: product.initial,
+        result,
+        accepting,
     })
 }
 

@@ -35,7 +35,9 @@
 //! * [`output`]: observers and plots that write the optimiser's results;
 //! * [`mdp`] and [`certify`]: MDP analysis (maximal end components, Rabin
 //!   acceptance, maximum reachability) and the two certified bounds of
-//!   method.md section 6.
+//!   method.md section 6;
+//! * [`synthesis`]: defender supports that win positively or almost surely
+//!   against the certification adversary, found by SAT (method.md section 7).
 #![warn(missing_docs)]
 
 pub mod analysis;
@@ -54,4 +56,5 @@ pub mod prune;
 pub mod sensitivity;
 pub mod simulate;
 pub mod solver;
+pub mod synthesis;
 pub mod value;

@@ -11,12 +11,9 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 use clap::Args;
-use posg_fsc::automaton::Dra;
-use posg_fsc::automaton::hoa::read_hoa_dra;
 use posg_fsc::certify::{Bound, lower_bound, upper_bound};
 use posg_fsc::controller::Role;
 use posg_fsc::controller::file::resolve;
-use posg_fsc::game::Posg;
 use serde::Serialize;
 
 use super::common::{self, ObjectiveArgs, Provenance};
@@ -80,7 +77,8 @@ impl From<&Bound> for BoundSummary {
 pub fn run(args: CertifyArgs) -> anyhow::Result<()> {
     let game = common::read_game(&args.game)?;
     let (phi_dra, formula) = common::objective(&args.objective, &game)?;
-    let not_phi_dra = negated_objective(&args, &game)?;
+    let not_phi_dra =
+        common::negated_objective(&args.objective, args.negated_automaton.as_deref(), &game)?;
     let defender = resolve(&args.defender, &game, Role::Defender)?;
     let lower = lower_bound(&game, &not_phi_dra, &defender)?;
     write_strategy(args.attack.as_deref(), &lower)?;
@@ -100,33 +98,6 @@ pub fn run(args: CertifyArgs) -> anyhow::Result<()> {
         lower: (&lower).into(),
         upper: upper.as_ref().map(BoundSummary::from),
     })
-}
-
-/// The automaton for `!phi`: translated from `--ltl`, or read from
-/// `--negated-automaton` when phi was given as `--automaton`.
-fn negated_objective(args: &CertifyArgs, game: &Posg) -> anyhow::Result<Dra> {
-    if let Some(text) = &args.objective.ltl {
-        let phi = posg_fsc::ltl::parse(text).with_context(|| format!("in the formula '{text}'"))?;
-        return posg_fsc::ltl::translate(&phi.negate()).context("translating !phi");
-    }
-    let path = args.negated_automaton.as_ref().ok_or_else(|| {
-        anyhow::anyhow!(
-            "with --automaton, give --negated-automaton (an automaton for !phi) for the lower bound"
-        )
-    })?;
-    let text =
-        std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
-    let dra = read_hoa_dra(&text).with_context(|| format!("in {}", path.display()))?;
-    if dra
-        .propositions()
-        .iter()
-        .any(|p| !game.propositions().contains(p))
-    {
-        eprintln!(
-            "warning: the negated automaton uses propositions that label no state of the game"
-        );
-    }
-    Ok(dra)
 }
 
 fn write_strategy(path: Option<&Path>, bound: &Bound) -> anyhow::Result<()> {

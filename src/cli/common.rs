@@ -112,6 +112,37 @@ pub fn objective(args: &ObjectiveArgs, game: &Posg) -> anyhow::Result<(Dra, Stri
     Ok((dra, description))
 }
 
+/// The automaton for `!phi`: translated from `--ltl`, or read from
+/// `negated_automaton` when phi was given as `--automaton`.
+pub fn negated_objective(
+    objective: &ObjectiveArgs,
+    negated_automaton: Option<&Path>,
+    game: &Posg,
+) -> anyhow::Result<Dra> {
+    if let Some(text) = &objective.ltl {
+        let phi = posg_fsc::ltl::parse(text).with_context(|| format!("in the formula '{text}'"))?;
+        return posg_fsc::ltl::translate(&phi.negate()).context("translating !phi");
+    }
+    let path = negated_automaton.ok_or_else(|| {
+        anyhow::anyhow!(
+            "with --automaton, give --negated-automaton (an automaton for !phi): certification needs it"
+        )
+    })?;
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let dra = read_hoa_dra(&text).with_context(|| format!("in {}", path.display()))?;
+    if dra
+        .propositions()
+        .iter()
+        .any(|p| !game.propositions().contains(p))
+    {
+        eprintln!(
+            "warning: the negated automaton uses propositions that label no state of the game"
+        );
+    }
+    Ok(dra)
+}
+
 /// Both controllers, read or built from their specifications.
 pub fn controllers(args: &ControllerArgs, game: &Posg) -> anyhow::Result<(Fsc, Fsc)> {
     let defender = posg_fsc::controller::file::resolve(&args.defender, game, Role::Defender)?;

@@ -12,6 +12,7 @@ mod export_gmc;
 mod prune;
 mod simulate;
 pub(crate) mod solve;
+mod support;
 mod sweep;
 mod translate;
 
@@ -49,6 +50,10 @@ enum Command {
     /// checks) and write curve.csv, curve.svg, defender.fsc.json,
     /// adversary.fsc.json and summary.json.
     Solve(solve::SolveArgs),
+    /// A defender support that wins positively or almost surely against every
+    /// adversary, found by SAT, or a proof that none of that size exists; writes
+    /// support.json and defender.fsc.json.
+    Support(support::SupportArgs),
     /// Run `solve` for every pair of controller sizes in parallel and write
     /// sweep.csv and sweep.svg.
     Sweep(sweep::SweepArgs),
@@ -68,6 +73,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Prune(args) => prune::run(args),
         Command::Certify(args) => certify::run(args),
         Command::Solve(args) => solve::run(args),
+        Command::Support(args) => support::run(args),
         Command::Sweep(args) => sweep::run(args),
         Command::Translate(args) => translate::run(args),
     }

@@ -24,7 +24,9 @@ pub mod rabin;
 pub mod reachability;
 
 pub use end_components::{EndComponent, maximal_end_components};
-pub use rabin::{AcceptingComponent, accepting_end_components, max_rabin_probability};
+pub use rabin::{
+    AcceptingComponent, accepting_end_components, max_rabin_analysis, max_rabin_probability,
+};
 pub use reachability::{Reachability, max_reachability};
 
 use thiserror::Error;

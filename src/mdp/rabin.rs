@@ -69,6 +69,15 @@ pub fn accepting_end_components(
 /// `residual` are those of the reachability problem for the union of the
 /// accepting end components.
 pub fn max_rabin_probability(mdp: &Mdp, pairs: &[RabinPair]) -> Result<Reachability, MdpError> {
+    Ok(max_rabin_analysis(mdp, pairs)?.0)
+}
+
+/// [`max_rabin_probability`] together with the accepting end components
+/// ([`accepting_end_components`]) whose union is the reachability target.
+pub fn max_rabin_analysis(
+    mdp: &Mdp,
+    pairs: &[RabinPair],
+) -> Result<(Reachability, Vec<AcceptingComponent>), MdpError> {
     let accepting = accepting_end_components(mdp, pairs)?;
     let mut target = vec![false; mdp.num_states()];
     for c in &accepting {
@@ -90,7 +99,7 @@ pub fn max_rabin_probability(mdp: &Mdp, pairs: &[RabinPair]) -> Result<Reachabil
             &mut result.strategy,
         );
     }
-    Ok(result)
+    Ok((result, accepting))
 }
 
 /// Writes the in-component attractor towards `inf` of `component` into

@@ -68,6 +68,12 @@ pub struct Reachability {
     pub residual: f64,
     /// The number of policy evaluations.
     pub iterations: usize,
+    /// `x*(s) > 0` exactly: `s` can reach the target in the graph of all
+    /// actions (decided on the graph, not on the computed `values`).
+    pub possible: Vec<bool>,
+    /// `x*(s) = 1` exactly: some strategy reaches the target from `s`
+    /// almost surely (decided on the graph).
+    pub almost_sure: Vec<bool>,
 }
 
 /// `sup_sigma P^sigma(reach target)` from every state of `mdp`, with an
@@ -98,6 +104,8 @@ pub fn max_reachability(mdp: &Mdp, target: &[bool]) -> Result<Reachability, MdpE
                 strategy,
                 residual: solve_residual.max(gap),
                 iterations,
+                possible: positive,
+                almost_sure,
             });
         }
         previous = values;

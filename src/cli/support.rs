@@ -1,0 +1,212 @@
+//! `posg-fsc support`: a defender support that wins positively or almost
+//! surely against the certification adversary, by SAT (method.md section
+//! 7), or a proof that none of that size exists.
+//!
+//! Writes `support.json` (formats.md section 5) and, when a support is
+//! found, `defender.fsc.json` (uniform on the maximised support) into the
+//! output directory, and one summary line on stderr.
+
+use std::path::PathBuf;
+
+use anyhow::Context;
+use clap::Args;
+use posg_fsc::controller;
+use posg_fsc::synthesis::{
+    self, Confirmation, Engine, Mode, RankEncoding, SatStatistics, Settings, Synthesis,
+};
+use serde::Serialize;
+
+use super::common::{self, ObjectiveArgs, Provenance};
+
+/// Arguments of `support`.
+#[derive(Debug, Args)]
+pub struct SupportArgs {
+    /// The game (`*.posg.json`).
+    game: PathBuf,
+    #[command(flatten)]
+    objective: ObjectiveArgs,
+    /// With --automaton: a deterministic automaton for !phi (HOA), for the
+    /// certification of the support found (with --ltl, !phi is translated).
+    #[arg(long, value_name = "FILE.hoa", requires = "automaton")]
+    negated_automaton: Option<PathBuf>,
+    /// Defender FSC size (nodes).
+    #[arg(long, default_value_t = 1)]
+    def_nodes: usize,
+    /// Ask for almost-sure winning (certified lower bound 1) instead of
+    /// positive winning (certified lower bound > 0).
+    #[arg(long)]
+    almost_sure: bool,
+    /// Directory for support.json and defender.fsc.json (created if missing).
+    #[arg(long)]
+    out: PathBuf,
+    #[command(flatten)]
+    settings: SynthesisArgs,
+    /// Also write the SAT instance (before maximisation) in DIMACS CNF here.
+    #[arg(long, value_name = "FILE.cnf")]
+    dimacs: Option<PathBuf>,
+}
+
+/// Support synthesis settings as command-line options (defaults:
+/// [`Settings::default`]); shared with `solve` and `sweep`.
+#[derive(Debug, Clone, Args)]
+pub struct SynthesisArgs {
+    /// `lazy`: SAT over supports, each judged by exact certification, losses
+    /// learnt as lemmas; `certificate`: supports and their certificates in one
+    /// formula (docs/method.md, support synthesis).
+    #[arg(long, value_enum, default_value = "lazy")]
+    engine: EngineArg,
+    /// Bound on the certificate's levels and ranks (default: the number of
+    /// product states, which makes "impossible" a proof for one Rabin pair).
+    #[arg(long)]
+    rank_bound: Option<usize>,
+    /// How levels and ranks are written in CNF.
+    #[arg(long, value_enum, default_value = "binary")]
+    rank_encoding: RankEncodingArg,
+    /// Return the first support found instead of an inclusion-maximal one.
+    #[arg(long)]
+    no_maximise: bool,
+    /// Do not confirm a support found by the lazy engine with the certificate
+    /// formula (certification still checks it).
+    #[arg(long)]
+    no_confirm: bool,
+    /// Refuse SAT instances with more clauses than this.
+    #[arg(long, default_value_t = Settings::default().clause_budget)]
+    clause_budget: usize,
+    /// Seconds the SAT solver may take (0: no limit); running out is an error.
+    #[arg(long, default_value_t = Settings::default().time_budget)]
+    synthesis_time_budget: f64,
+}
+
+/// `--engine`.
+#[derive(Debug, Clone, Copy, clap::ValueEnum)]
+pub enum EngineArg {
+    /// Counterexample-guided: supports only, exact judgement, lemmas.
+    Lazy,
+    /// Supports and certificates in one formula.
+    Certificate,
+}
+
+/// `--rank-encoding`.
+#[derive(Debug, Clone, Copy, clap::ValueEnum)]
+pub enum RankEncodingArg {
+    /// Binary numbers with comparator chains (log2 R variables per number).
+    Binary,
+    /// Unary order encoding (R - 1 variables per number).
+    Order,
+}
+
+impl SynthesisArgs {
+    /// The settings for `mode`, validated.
+    pub fn settings(&self, mode: Mode) -> anyhow::Result<Settings> {
+        let settings = Settings {
+            mode,
+            engine: match self.engine {
+                EngineArg::Lazy => Engine::Lazy,
+                EngineArg::Certificate => Engine::Certificate,
+            },
+            confirm_certificate: !self.no_confirm,
+            rank_bound: self.rank_bound,
+            rank_encoding: match self.rank_encoding {
+                RankEncodingArg::Binary => RankEncoding::Binary,
+                RankEncodingArg::Order => RankEncoding::Order,
+            },
+            maximise: !self.no_maximise,
+            clause_budget: self.clause_budget,
+            time_budget: self.synthesis_time_budget,
+        };
+        settings.validate()?;
+        Ok(settings)
+    }
+}
+
+/// `support.json` (formats.md section 5).
+#[derive(Debug, Serialize)]
+struct SupportFile<'a> {
+    found: bool,
+    mode: Mode,
+    defender_nodes: usize,
+    defender: Option<&'static str>,
+    certified_lower: Option<f64>,
+    support_entries: usize,
+    /// Whether `found: false` is a proof (one usable Rabin pair, exact rank bound).
+    exact: bool,
+    reason: &'a str,
+    /// How the certificate formula confirmed the support (lazy engine).
+    confirmation: Confirmation,
+    sat: Option<SatStatistics>,
+    game: String,
+    objective: &'a str,
+    settings: &'a Settings,
+    #[serde(flatten)]
+    provenance: Provenance,
+}
+
+/// Runs `support`.
+pub fn run(args: SupportArgs) -> anyhow::Result<()> {
+    let mode = if args.almost_sure {
+        Mode::AlmostSure
+    } else {
+        Mode::Positive
+    };
+    let settings = args.settings.settings(mode)?;
+    let game = common::read_game(&args.game)?;
+    let (dra, objective) = common::objective(&args.objective, &game)?;
+    let negated =
+        common::negated_objective(&args.objective, args.negated_automaton.as_deref(), &game)?;
+    if let Some(path) = &args.dimacs {
+        let mut file = std::io::BufWriter::new(
+            std::fs::File::create(path)
+                .with_context(|| format!("cannot create {}", path.display()))?,
+        );
+        synthesis::write_dimacs(&game, &dra, args.def_nodes, &settings, &mut file)
+            .map_err(|e| anyhow::anyhow!("{e}"))
+            .with_context(|| format!("writing {}", path.display()))?;
+    }
+    let result = synthesis::synthesise(&game, &dra, &negated, args.def_nodes, &settings)?;
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("cannot create {}", args.out.display()))?;
+    if let Some(defender) = &result.defender {
+        let path = args.out.join("defender.fsc.json");
+        controller::file::write(&path, defender, &game)?;
+    }
+    let file = SupportFile {
+        found: result.defender.is_some(),
+        mode,
+        defender_nodes: args.def_nodes,
+        defender: result.defender.as_ref().map(|_| "defender.fsc.json"),
+        certified_lower: result.certified_lower,
+        support_entries: result.support_entries(),
+        exact: result.exact,
+        reason: &result.reason,
+        confirmation: result.confirmation,
+        sat: result.statistics,
+        game: args.game.display().to_string(),
+        objective: &objective,
+        settings: &settings,
+        provenance: Provenance::current(),
+    };
+    let path = args.out.join("support.json");
+    std::fs::write(&path, serde_json::to_string_pretty(&file)? + "\n")
+        .with_context(|| format!("writing {}", path.display()))?;
+    eprintln!("{}", summary_line(&result));
+    Ok(())
+}
+
+/// One line for a person: found or not, the bound, the instance's size and time.
+fn summary_line(synthesis: &Synthesis) -> String {
+    let outcome = match synthesis.certified_lower {
+        Some(lower) => format!(
+            "{}; certified lower bound {lower:.6} ({} support entries)",
+            synthesis.reason,
+            synthesis.support_entries()
+        ),
+        None => synthesis.reason.clone(),
+    };
+    match &synthesis.statistics {
+        Some(sat) => format!(
+            "{outcome}; SAT: {} variables, {} clauses, {} calls, {} lemmas, {:.2} s",
+            sat.variables, sat.clauses, sat.calls, sat.lemmas, sat.seconds
+        ),
+        None => outcome,
+    }
+}

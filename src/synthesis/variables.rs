@@ -1,0 +1,81 @@
+//! The support variables `x[g, o, g', u]` and the edge literals built on
+//! them, shared by both engines.
+//!
+//! An edge from `(s, q, g)` to `(s', q', g')` under adversary action `v`
+//! exists iff some observation `o` with `O(o | s) > 0` and some action `u`
+//! with `T(s' | s, u, v) > 0` have `x[g, o, g', u]`; the edge literal is
+//! that disjunction (Tseitin). It does not depend on `q`, so it is keyed by
+//! the transition `(s, v, s')` ([`Moves`]) and the nodes `g -> g'`, and
+//! built the first time it is asked for.
+
+use super::SynthesisError;
+use super::cnf::{Cnf, Lit};
+use super::graph::Moves;
+use crate::game::Posg;
+
+/// The support variables and the edge literals built so far.
+pub struct SupportVariables {
+    nodes: usize,
+    num_observations: usize,
+    num_actions: usize,
+    /// `x[g, o, g', u]` at [`SupportVariables::index`].
+    pub support: Vec<Lit>,
+    /// The edge literal per `(transition, g, g')`, 0 until built.
+    edges: Vec<Lit>,
+}
+
+impl SupportVariables {
+    /// Fresh support variables for `nodes` defender nodes, with "at least
+    /// one entry per block `(g, o)`".
+    pub fn new(
+        cnf: &mut Cnf,
+        game: &Posg,
+        moves: &Moves,
+        nodes: usize,
+    ) -> Result<Self, SynthesisError> {
+        let player = game.defender();
+        let (no, nu) = (player.num_observations(), player.num_actions());
+        let support = cnf.fresh_many(nodes * no * nodes * nu);
+        for block in support.chunks(nodes * nu) {
+            cnf.clause(block.iter().copied())?;
+        }
+        Ok(Self {
+            nodes,
+            num_observations: no,
+            num_actions: nu,
+            support,
+            edges: vec![0; moves.len() * nodes * nodes],
+        })
+    }
+
+    /// The position of `x[g, o, g', u]` in [`SupportVariables::support`].
+    pub fn index(&self, g: usize, o: usize, next: usize, u: usize) -> usize {
+        ((g * self.num_observations + o) * self.nodes + next) * self.num_actions + u
+    }
+
+    /// The edge literal for game state `s`, transition `t` (from `s`) and
+    /// nodes `g -> next`.
+    pub fn edge(
+        &mut self,
+        cnf: &mut Cnf,
+        game: &Posg,
+        moves: &Moves,
+        s: usize,
+        t: usize,
+        g: usize,
+        next: usize,
+    ) -> Result<Lit, SynthesisError> {
+        let key = (t * self.nodes + g) * self.nodes + next;
+        if self.edges[key] == 0 {
+            let terms: Vec<Lit> = game
+                .defender()
+                .observation_distribution(s)
+                .iter()
+                .flat_map(|&(o, _)| moves.actions(t).iter().map(move |&u| (o, u)))
+                .map(|(o, u)| self.support[self.index(g, o, next, u)])
+                .collect();
+            self.edges[key] = cnf.or(&terms)?;
+        }
+        Ok(self.edges[key])
+    }
+}

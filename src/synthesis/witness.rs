@@ -1,0 +1,187 @@
+//! Certificates constructed directly for a fixed support: the constructive
+//! side of the completeness argument of [`super`], used to confirm a
+//! support with the certificate formula by propagation alone.
+//!
+//! On the product MDP of the game, an automaton for phi and the defender
+//! (the adversary choosing), for one Rabin pair `(L, K)`, levels are
+//! assigned from 0 upwards. Level `l` gets the greatest set `S` of
+//! unassigned states such that, for every `m` in `S` and every action `v`
+//! (with "lower" meaning "assigned a level below `l`"):
+//!
+//! * some successor is lower, or every successor is lower or in `S`
+//!   (almost-sure claim: every successor is lower or in `S`);
+//! * if `m` is in `L`: some successor is lower;
+//! * if `m` is not in `K`: some successor is lower, or one in `S` has a
+//!   lower rank, ranks inside `S` being the attractor layers towards `K`.
+//!
+//! The union of two such sets is one, so the greatest exists; it is found
+//! by removing violating states until none is left. If any certificate
+//! gives a state level `l`, this construction gives it level `l` or lower
+//! (induction on `l`: the certificate's states of level `l` not yet
+//! assigned form such a set), so the levels found cover every region a
+//! certificate can cover.
+
+use crate::mdp::Mdp;
+
+/// A certificate region with its levels and ranks.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Witness {
+    /// The level of each state in the region (`None` outside).
+    pub level: Vec<Option<usize>>,
+    /// The rank of each state in the region (0 on `K` and outside).
+    pub rank: Vec<usize>,
+}
+
+/// The greatest certificate region of `mdp` for the pair with `fin` (`L`)
+/// and `inf` (`K`) per state; `closed` asks for the almost-sure kind.
+pub fn construct(mdp: &Mdp, fin: &[bool], inf: &[bool], closed: bool) -> Witness {
+    let n = mdp.num_states();
+    let mut level: Vec<Option<usize>> = vec![None; n];
+    let mut rank = vec![0; n];
+    let mut current = 0;
+    loop {
+        let mut in_set: Vec<bool> = level.iter().map(Option::is_none).collect();
+        loop {
+            let mut changed = false;
+            for m in 0..n {
+                if in_set[m] && !levels_hold(mdp, m, &level, &in_set, fin[m], closed) {
+                    in_set[m] = false;
+                    changed = true;
+                }
+            }
+            changed |= rank_within(mdp, &level, &mut in_set, inf, &mut rank);
+            if !changed {
+                break;
+            }
+        }
+        if !in_set.iter().any(|&s| s) {
+            return Witness { level, rank };
+        }
+        for m in (0..n).filter(|&m| in_set[m]) {
+            level[m] = Some(current);
+        }
+        current += 1;
+    }
+}
+
+/// The level conditions of `m` against the assigned states (`level`) and
+/// the candidate set.
+fn levels_hold(
+    mdp: &Mdp,
+    m: usize,
+    level: &[Option<usize>],
+    in_set: &[bool],
+    fin: bool,
+    closed: bool,
+) -> bool {
+    (0..mdp.num_actions(m)).all(|v| {
+        let successors = mdp.distribution(m, v);
+        let lower = successors.iter().any(|&(t, _)| level[t].is_some());
+        let stays = successors
+            .iter()
+            .all(|&(t, _)| level[t].is_some() || in_set[t]);
+        if closed && !stays {
+            return false;
+        }
+        if fin { lower } else { lower || stays }
+    })
+}
+
+/// Ranks the candidate set by attractor layers towards `K` (rank 0),
+/// where a lower successor also counts; removes the states without a rank
+/// and returns whether any was removed.
+fn rank_within(
+    mdp: &Mdp,
+    level: &[Option<usize>],
+    in_set: &mut [bool],
+    inf: &[bool],
+    rank: &mut [usize],
+) -> bool {
+    let n = in_set.len();
+    let mut ranked: Vec<bool> = (0..n).map(|m| in_set[m] && inf[m]).collect();
+    for m in (0..n).filter(|&m| ranked[m]) {
+        rank[m] = 0;
+    }
+    let mut layer = 1;
+    loop {
+        let next: Vec<usize> = (0..n)
+            .filter(|&m| in_set[m] && !ranked[m])
+            .filter(|&m| {
+                (0..mdp.num_actions(m)).all(|v| {
+                    mdp.distribution(m, v)
+                        .iter()
+                        .any(|&(t, _)| level[t].is_some() || (in_set[t] && ranked[t]))
+                })
+            })
+            .collect();
+        if next.is_empty() {
+            break;
+        }
+        for &m in &next {
+            ranked[m] = true;
+            rank[m] = layer;
+        }
+        layer += 1;
+    }
+    let mut removed = false;
+    for m in 0..n {
+        if in_set[m] && !ranked[m] {
+            in_set[m] = false;
+            removed = true;
+        }
+    }
+    removed
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mdp::MdpBuilder;
+
+    fn mdp(actions: &[&[&[usize]]]) -> Mdp {
+        let mut builder = MdpBuilder::new();
+        for state in actions {
+            for &successors in *state {
+                let p = 1.0 / successors.len() as f64;
+                builder.add_action(successors.iter().map(|&t| (t, p)));
+            }
+            builder.end_state();
+        }
+        builder.build().unwrap()
+    }
+
+    /// `FG a` with a choice: state 0 (a, K) may stay (action 0) or visit 1
+    /// (!a, L) once and end in 2 (a, K). Every play wins, through at most
+    /// one visit to L: 2 gets level 0, and 0 and 1 level 1 (1 has the
+    /// lower successor 2).
+    #[test]
+    fn a_single_visit_to_l_is_allowed() {
+        let m = mdp(&[&[&[0], &[1]], &[&[2]], &[&[2]]]);
+        let fin = [false, true, false];
+        let inf = [true, false, true];
+        let witness = construct(&m, &fin, &inf, true);
+        assert_eq!(witness.level, vec![Some(1), Some(1), Some(0)]);
+    }
+
+    /// A cycle 0 <-> 1 through L (1): the adversary revisits L forever.
+    #[test]
+    fn an_l_state_on_a_forced_cycle_has_no_level() {
+        let m = mdp(&[&[&[1]], &[&[0]]]);
+        let witness = construct(&m, &[false, true], &[true, false], false);
+        assert_eq!(witness.level, vec![None, None]);
+    }
+
+    /// Büchi: in 0 (K) the adversary may stay forever (action 0) or enter
+    /// the lottery 1, which ends in 2 (K, absorbing) or 3 (no K, absorbing).
+    /// The minimum probability from 0 is 1/2: positive, though the adversary
+    /// can keep the play away from the sure region {2} forever; not 1.
+    #[test]
+    fn an_end_component_the_adversary_may_leave_counts_for_positive() {
+        let m = mdp(&[&[&[0], &[1]], &[&[2, 3]], &[&[2]], &[&[3]]]);
+        let inf = [true, false, true, false];
+        let positive = construct(&m, &[false; 4], &inf, false);
+        assert_eq!(positive.level, vec![Some(1), Some(1), Some(0), None]);
+        let almost_sure = construct(&m, &[false; 4], &inf, true);
+        assert_eq!(almost_sure.level, vec![None, None, Some(0), None]);
+    }
+}
