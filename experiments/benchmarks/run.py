@@ -26,7 +26,7 @@ from common.games import BINARY, ROOT, build  # noqa: E402
 # The former defaults (before issue 12), as options of today's solve.
 BASELINE = ["--no-single-player-ascent", "--starts", "1", "--logit-bound", "4",
             "--initial-logit-bound", "4", "--max-iterations", "500", "--stall-checks", "0",
-            "--no-round"]
+            "--gap-tolerance", "0", "--no-round"]
 
 # Figures quoted in issue 12 for the issue author's 8x8 grid (Storm's
 # gradient descent, Heck et al. 2022, 60 s CPU; PAYNT's optimal
@@ -43,8 +43,8 @@ def cpu_run(command):
     return (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
 
 
-def solve(game_path, out, def_nodes, adv_nodes, extra):
-    command = [BINARY, "solve", game_path, "--ltl", "F goal", "--def-nodes", str(def_nodes),
+def solve(game_path, out, def_nodes, adv_nodes, extra, formula="F goal"):
+    command = [BINARY, "solve", game_path, "--ltl", formula, "--def-nodes", str(def_nodes),
                "--adv-nodes", str(adv_nodes), "--seed", "1", "--out", out, *extra]
     cpu = cpu_run(command)
     with open(os.path.join(out, "summary.json")) as handle:
@@ -67,7 +67,8 @@ def solve(game_path, out, def_nodes, adv_nodes, extra):
 
 
 def game_set(directory, quick):
-    """(name, path, defender sizes, adversary sizes, reference, reference source) per game."""
+    """(name, path, defender size, adversary size, reference, reference
+    source, formula) per run."""
     entries = []
     sizes = [4, 8] if quick else range(4, 11)
     for n in sizes:
@@ -80,14 +81,14 @@ def game_set(directory, quick):
                         f"PAYNT deterministic {paynt}")
             else:
                 note = ""
-            entries.append((f"grid{n}", path, k, 1, None, note))
+            entries.append((f"grid{n}", path, k, 1, None, note, "F goal"))
     path = os.path.join(directory, "maze.posg.json")
     write(maze(), path)
     for k in (1, 2, 3):
         entries.append(("maze", path, k, 1, 11 / 13,
                         "optimum 11/13, attained by a deterministic 2-node controller"
                         if k >= 2 else "supremum 11/13, not attained: one node must go north in the "
-                        "corridors with probability 1 - e and south with e, e -> 0"))
+                        "corridors with probability 1 - e and south with e, e -> 0", "F goal"))
     seed, found = 0, 0
     while found < (2 if quick else 6):
         game = concurrent_game(seed)
@@ -95,22 +96,25 @@ def game_set(directory, quick):
         if 0.1 < value < 0.95:
             path = os.path.join(directory, f"concurrent-{seed}.posg.json")
             write(game, path)
-            entries.append((f"concurrent-{seed}", path, 1, 1, value, "Shapley value iteration + LP (scipy)"))
+            entries.append((f"concurrent-{seed}", path, 1, 1, value,
+                            "Shapley value iteration + LP (scipy)", "F goal"))
             found += 1
         seed += 1
     for name, matrix in (("matching-pennies", (1, 0, 0, 1)), ("matrix-0.48", (0.9, 0.2, 0.3, 0.6))):
         game = matrix_game(*matrix)
         path = os.path.join(directory, f"{name}.posg.json")
         write(game, path)
-        entries.append((name, path, 1, 1, game_value(game), "2x2 matrix game LP (scipy)"))
-    for width, height, unsafe, goal in ((3, 2, "s4", "s5"), (5, 5, "s7,s12,s16", "s24")):
+        entries.append((name, path, 1, 1, game_value(game), "2x2 matrix game LP (scipy)", "F goal"))
+    for width, height, unsafe, goal, sizes in ((3, 2, "s4", "s5", (1, 2)),
+                                               (5, 5, "s7,s12,s16", "s24", (1,))):
         path = os.path.join(directory, f"paper-grid-{width}x{height}.posg.json")
         subprocess.run([BINARY, "example", "grid", "--width", str(width), "--height", str(height),
                         "--unsafe", unsafe, "--goal", goal, "--out", path], check=True,
                        stdout=subprocess.DEVNULL)
-        for k in (1, 2):
+        for k in sizes:
             entries.append((f"paper-grid-{width}x{height}", path, k, 1, None,
-                            "no reference; the certified bracket is the distance to optimal"))
+                            "no reference; the certified bracket is the distance to optimal",
+                            "!unsafe U goal"))
     return entries
 
 
@@ -123,12 +127,12 @@ def main():
     build()
     rows = []
     with tempfile.TemporaryDirectory() as directory:
-        for name, path, k, m, reference, note in game_set(directory, args.quick):
+        for name, path, k, m, reference, note, formula in game_set(directory, args.quick):
             configurations = [("defaults", [])] + ([("former-defaults", BASELINE)] if args.baseline else [])
             for label, extra in configurations:
                 out = os.path.join(directory, f"{name}-{k}-{m}-{label}")
-                result = solve(path, out, k, m, extra)
-                row = {"game": name, "defender_nodes": k, "adversary_nodes": m, "settings": label,
+                result = solve(path, out, k, m, extra, formula)
+                row = {"game": name, "formula": formula, "defender_nodes": k, "adversary_nodes": m, "settings": label,
                        **result, "reference": reference, "reference_source": note}
                 rows.append(row)
                 print(json.dumps(row), flush=True)

@@ -34,10 +34,10 @@ def main():
         grids = [(pomdps, "logit-bound", [6, 8, 10, 14]), (games, "stall-checks", [25, 50, 100, 200])]
         for subset, option, values in grids:
             for value, starts in itertools.product(values, [1, 2, 4]):
-                for name, path, k, m, reference, _ in subset:
+                for name, path, k, m, reference, _, formula in subset:
                     out = os.path.join(directory, f"{name}-{k}-{option}-{value}-{starts}")
                     extra = [f"--{option}", str(value), "--starts", str(starts)]
-                    result = solve(path, out, k, m, extra)
+                    result = solve(path, out, k, m, extra, formula)
                     lower = result["certified_lower"]
                     rows.append({"game": name, "defender_nodes": k, "option": option, "value": value,
                                  "starts": starts, "certified_lower": lower,

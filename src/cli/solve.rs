@@ -322,7 +322,15 @@ pub fn run_job(job: &SolveJob) -> anyhow::Result<(Solution, Option<Bracket>)> {
             let adversaries = solution.structures.iter().map(|s| &s.adversary);
             certify::bracket(job.game, job.dra, negated, &best.defender, adversaries)
         })
-        .transpose()?;
+        .transpose()?
+        .map(|bracket| Bracket {
+            upper_bound: solution
+                .structures
+                .iter()
+                .filter_map(|s| s.report.upper_bound)
+                .fold(bracket.upper_bound, f64::min),
+            ..bracket
+        });
     controller::file::write(&out.join("defender.fsc.json"), &best.defender, job.game)?;
     controller::file::write(&out.join("adversary.fsc.json"), &best.adversary, job.game)?;
     let summary = Summary {
