@@ -14,16 +14,26 @@
 //! * [`best_response`]: the adversary's best response by L-BFGS (argmin) in
 //!   the coordinates `phi = c tanh(z)`, from several starts;
 //! * [`Optimiser`]: alternating projected gradient ascent-descent with a fast
-//!   adversary time scale, plain or Adam updates, periodic best-response checks,
-//!   keeping the best defender by its worst-case estimate (section 4);
-//! * [`optimise_structures`]: the optimiser on several structures in
-//!   parallel (rayon), the best worst-case estimate chosen;
-//!   [`candidate_structures`] adds the structures pruning keeps (method.md
-//!   section 5) to a starting structure; [`solve`] does both from the full
-//!   support structure of given sizes.
+//!   adversary time scale, plain or Adam (optionally optimistic) updates,
+//!   periodic best-response checks that also certify, a logit bound that
+//!   widens when progress stalls on it, stopping on the certified gap or a
+//!   stall (section 4);
+//! * [`ascend`]: the single-player fast path (the adversary has one action,
+//!   so max-min is max): L-BFGS on `ln V`;
+//! * [`rounded_candidates`]: partial and argmax roundings of the result,
+//!   each scored exactly on its own support;
+//! * [`optimise_structure`]: parallel seeded starts on one structure, the
+//!   best certified kept, then rounded; [`optimise_structures`] does it on
+//!   several structures in parallel (rayon), the best worst-case estimate
+//!   chosen; [`candidate_structures`] adds the structures pruning keeps
+//!   (method.md section 5) to a starting structure; [`solve`] does both from
+//!   the full support structure of given sizes;
+//! * [`embed`], [`pad`], [`warm_started`], [`keep_better`]: warm starts
+//!   across defender sizes, results monotone in size by construction.
 //!
 //! [`Settings`] holds every number; [`Observer`]s receive one
-//! [`IterationRecord`] per outer iteration and write all output.
+//! [`IterationRecord`] per outer iteration (of the kept start) and write all
+//! output.
 
 mod ascent;
 mod best_response;
