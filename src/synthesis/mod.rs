@@ -419,7 +419,9 @@ pub fn synthesise(
         }
     };
     let mut support = find(&mut cnf, &mut vars, &mut solver, &[])?;
-    if let (true, Some(found)) = (settings.maximise, support.take()) {
+    if settings.maximise
+        && let Some(found) = support.take()
+    {
         let literals = vars.support.clone();
         let grow = |assumptions: &[Lit]| find(&mut cnf, &mut vars, &mut solver, assumptions);
         support = Some(maximise(found, grow, &literals)?);

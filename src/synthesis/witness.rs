@@ -8,8 +8,8 @@
 //! unassigned states such that, for every `m` in `S` and every action `v`
 //! (with "lower" meaning "assigned a level below `l`"):
 //!
-//! * some successor is lower, or every successor is lower or in `S`
-//!   (almost-sure claim: every successor is lower or in `S`);
+//! * some successor is lower, or every successor is lower or in `S`;
+//! * almost-sure claim: every successor is in the region `R`;
 //! * if `m` is in `L`: some successor is lower;
 //! * if `m` is not in `K`: some successor is lower, or one in `S` has a
 //!   lower rank, ranks inside `S` being the attractor layers towards `K`.
@@ -19,7 +19,10 @@
 //! gives a state level `l`, this construction gives it level `l` or lower
 //! (induction on `l`: the certificate's states of level `l` not yet
 //! assigned form such a set), so the levels found cover every region a
-//! certificate can cover.
+//! certificate can cover. For the almost-sure claim the region `R` starts
+//! as every state and shrinks to the states that got a level until it is
+//! stable; a certificate's region, inside `R` at the start, stays inside
+//! by the same induction.
 
 use crate::mdp::Mdp;
 
@@ -35,6 +38,20 @@ pub struct Witness {
 /// The greatest certificate region of `mdp` for the pair with `fin` (`L`)
 /// and `inf` (`K`) per state; `closed` asks for the almost-sure kind.
 pub fn construct(mdp: &Mdp, fin: &[bool], inf: &[bool], closed: bool) -> Witness {
+    let mut region = vec![true; mdp.num_states()];
+    loop {
+        let witness = assign_levels(mdp, fin, inf, closed.then_some(&region[..]));
+        let assigned: Vec<bool> = witness.level.iter().map(Option::is_some).collect();
+        if !closed || assigned == region {
+            return witness;
+        }
+        region = assigned;
+    }
+}
+
+/// The levels and ranks, with every successor required in `region` when
+/// one is given.
+fn assign_levels(mdp: &Mdp, fin: &[bool], inf: &[bool], region: Option<&[bool]>) -> Witness {
     let n = mdp.num_states();
     let mut level: Vec<Option<usize>> = vec![None; n];
     let mut rank = vec![0; n];
@@ -44,7 +61,7 @@ pub fn construct(mdp: &Mdp, fin: &[bool], inf: &[bool], closed: bool) -> Witness
         loop {
             let mut changed = false;
             for m in 0..n {
-                if in_set[m] && !levels_hold(mdp, m, &level, &in_set, fin[m], closed) {
+                if in_set[m] && !levels_hold(mdp, m, &level, &in_set, fin[m], region) {
                     in_set[m] = false;
                     changed = true;
                 }
@@ -64,25 +81,25 @@ pub fn construct(mdp: &Mdp, fin: &[bool], inf: &[bool], closed: bool) -> Witness
     }
 }
 
-/// The level conditions of `m` against the assigned states (`level`) and
-/// the candidate set.
+/// The level conditions of `m` against the assigned states (`level`), the
+/// candidate set and, when given, the region every successor must be in.
 fn levels_hold(
     mdp: &Mdp,
     m: usize,
     level: &[Option<usize>],
     in_set: &[bool],
     fin: bool,
-    closed: bool,
+    region: Option<&[bool]>,
 ) -> bool {
     (0..mdp.num_actions(m)).all(|v| {
         let successors = mdp.distribution(m, v);
+        if region.is_some_and(|r| successors.iter().any(|&(t, _)| !r[t])) {
+            return false;
+        }
         let lower = successors.iter().any(|&(t, _)| level[t].is_some());
         let stays = successors
             .iter()
             .all(|&(t, _)| level[t].is_some() || in_set[t]);
-        if closed && !stays {
-            return false;
-        }
         if fin { lower } else { lower || stays }
     })
 }
@@ -161,6 +178,17 @@ mod tests {
         let inf = [true, false, true];
         let witness = construct(&m, &fin, &inf, true);
         assert_eq!(witness.level, vec![Some(1), Some(1), Some(0)]);
+    }
+
+    /// The closed kind may lean on higher levels: 1 (L) must move to 0 (a,
+    /// K, absorbing) or 2 (L), and 2 may loop or return to 1. Every play
+    /// ends in 0 almost surely, so all three get levels: 0, then 1 (its
+    /// successor 0 is lower), then 2 (its successor 1 is lower).
+    #[test]
+    fn closure_may_rely_on_higher_levels() {
+        let m = mdp(&[&[&[0]], &[&[0, 2]], &[&[1, 2]]]);
+        let witness = construct(&m, &[false, true, true], &[true, false, false], true);
+        assert_eq!(witness.level, vec![Some(0), Some(1), Some(2)]);
     }
 
     /// A cycle 0 <-> 1 through L (1): the adversary revisits L forever.
