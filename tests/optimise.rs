@@ -304,6 +304,7 @@ fn same_seed_and_settings_give_the_same_curve_except_wall_clock_seconds() {
         seed: 11,
         max_iterations: 40,
         check_every: 7,
+        single_player_ascent: false,
         ..Settings::default()
     };
     let structure = Structure::full(&g, 2, 1, false);
@@ -319,7 +320,7 @@ fn same_seed_and_settings_give_the_same_curve_except_wall_clock_seconds() {
         .collect();
     assert_eq!(
         curves[0][0],
-        "iteration,value,defender_gradient_norm,adversary_gradient_norm,defender_step,adversary_step,worst_case,certified_lower,upper_bound"
+        "iteration,value,defender_gradient_norm,adversary_gradient_norm,defender_step,adversary_step,worst_case,certified_lower,upper_bound,logit_bound"
     );
     assert_eq!(curves[0].len(), 41);
     assert_eq!(curves[0], curves[1]);
@@ -409,6 +410,7 @@ fn runs_stop_on_the_time_budget_and_on_stalled_progress() {
         stall_checks: 1,
         stall_tolerance: 1.0,
         check_every: 3,
+        initial_logit_bound: Settings::default().logit_bound,
         ..Settings::default()
     };
     let report = solve(&g, &dra, None, 1, 1, &stalling, |_, _| Box::new(()))

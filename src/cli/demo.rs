@@ -83,6 +83,7 @@ fn solve_reach_avoid(game: &Posg, dir: &std::path::Path, out: &mut String) -> an
         settings: &settings,
         out: dir,
         progress: false,
+        floor: None,
     };
     let (solution, certified) = run_job(&job)?;
     let best = solution.best();

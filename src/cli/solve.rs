@@ -20,7 +20,7 @@ use posg_fsc::certify::{self, Bracket};
 use posg_fsc::controller::{self, Role};
 use posg_fsc::game::Posg;
 use posg_fsc::optimise::{
-    self, Observer, Settings, Solution, Structure, StructureReport, UpdateRule,
+    self, Observer, Settings, Solution, Structure, StructureOutcome, StructureReport, UpdateRule,
 };
 use posg_fsc::output::{CurveCsv, CurvePlot, OutputDirectory, Progress, create_dir, write_file};
 use posg_fsc::solver::SolverMethod;
@@ -64,19 +64,28 @@ pub struct SettingsArgs {
     /// Seed of every random choice (initial logits, best-response restarts).
     #[arg(long, default_value_t = Settings::default().seed)]
     seed: u64,
-    /// Logit bound c: logits stay in [-c, c], so every supported choice keeps
-    /// probability >= exp(-2c)/|block| and the GMC graph never changes.
+    /// Widest logit bound c_max: logits stay in [-c_max, c_max], so every
+    /// supported choice keeps probability >= exp(-2 c_max)/|block| and the
+    /// GMC graph never changes.
     #[arg(long, default_value_t = Settings::default().logit_bound)]
     logit_bound: f64,
+    /// First logit bound c_0 of the max-min loop; it doubles up to
+    /// --logit-bound when progress stalls with a logit on the bound.
+    #[arg(long, default_value_t = Settings::default().initial_logit_bound)]
+    initial_logit_bound: f64,
     /// Initial logits are uniform in [-spread, spread] around the start (0: exactly the start).
     #[arg(long, default_value_t = Settings::default().initial_spread)]
     initial_spread: f64,
     /// Also optimise the initial node distributions.
     #[arg(long)]
     optimise_initial: bool,
-    /// Outer iterations (one defender step each) at most.
+    /// Outer iterations (one defender step, or one L-BFGS step for a
+    /// single-player game) at most: a cap; runs stop on the certified gap or a stall.
     #[arg(long, default_value_t = Settings::default().max_iterations)]
     max_iterations: usize,
+    /// Independent starts per structure, run in parallel; the best certified is kept.
+    #[arg(long, default_value_t = Settings::default().starts)]
+    starts: usize,
     /// Wall-clock budget per structure in seconds (0: none).
     #[arg(long, default_value_t = Settings::default().time_budget)]
     time_budget: f64,
@@ -95,6 +104,10 @@ pub struct SettingsArgs {
     /// Update rule of both players: plain gradient steps or Adam.
     #[arg(long, value_enum, default_value = "adam")]
     update: UpdateArg,
+    /// Optimism o of both players' steps: d_t + o (d_t - d_{t-1}) (0: plain
+    /// alternating play, 1: optimistic gradient).
+    #[arg(long, default_value_t = Settings::default().optimism)]
+    optimism: f64,
     /// A best-response check every this many iterations (and at the end).
     #[arg(long, default_value_t = Settings::default().check_every)]
     check_every: usize,
@@ -107,13 +120,29 @@ pub struct SettingsArgs {
     /// L-BFGS memory.
     #[arg(long, default_value_t = Settings::default().lbfgs_memory)]
     lbfgs_memory: usize,
-    /// Stop when the best worst-case estimate gained less than --stall-tolerance
-    /// over this many checks (0: never).
+    /// Stop when the best score (certified lower bound, else worst-case
+    /// estimate) gained less than --stall-tolerance over this many checks at
+    /// the widest logit bound (0: never).
     #[arg(long, default_value_t = Settings::default().stall_checks)]
     stall_checks: usize,
     /// See --stall-checks.
     #[arg(long, default_value_t = Settings::default().stall_tolerance)]
     stall_tolerance: f64,
+    /// The single-player ascent stops when the value gained at most
+    /// --stall-tolerance of itself over this many iterations (0: never).
+    #[arg(long, default_value_t = Settings::default().ascent_stall_iterations)]
+    ascent_stall_iterations: usize,
+    /// Stop when the certified gap (game upper bound minus certified lower
+    /// bound) is at most this.
+    #[arg(long, default_value_t = Settings::default().gap_tolerance)]
+    gap_tolerance: f64,
+    /// Run the max-min loop with best-response checks on single-player
+    /// games too, instead of the L-BFGS ascent.
+    #[arg(long)]
+    no_single_player_ascent: bool,
+    /// Do not evaluate the rounded defenders at the end.
+    #[arg(long)]
+    no_round: bool,
     /// Largest residual accepted from a linear solve.
     #[arg(long, default_value_t = Settings::default().solver_tolerance, value_parser = super::common::positive_tolerance)]
     solver_tolerance: f64,
@@ -150,9 +179,11 @@ impl SettingsArgs {
         let settings = Settings {
             seed: self.seed,
             logit_bound: self.logit_bound,
+            initial_logit_bound: self.initial_logit_bound,
             initial_spread: self.initial_spread,
             optimise_initial: self.optimise_initial,
             max_iterations: self.max_iterations,
+            starts: self.starts,
             time_budget: self.time_budget,
             adversary_steps: self.adversary_steps,
             defender_step: self.defender_step,
@@ -162,12 +193,17 @@ impl SettingsArgs {
                 UpdateArg::Plain => UpdateRule::Plain,
                 UpdateArg::Adam => UpdateRule::Adam,
             },
+            optimism: self.optimism,
             check_every: self.check_every,
             restarts: self.restarts,
             best_response_iterations: self.best_response_iterations,
             lbfgs_memory: self.lbfgs_memory,
             stall_checks: self.stall_checks,
             stall_tolerance: self.stall_tolerance,
+            ascent_stall_iterations: self.ascent_stall_iterations,
+            gap_tolerance: self.gap_tolerance,
+            single_player_ascent: !self.no_single_player_ascent,
+            round: !self.no_round,
             solver_tolerance: self.solver_tolerance,
             solver: self.solver,
             prune: !self.no_prune,
@@ -199,6 +235,9 @@ pub struct SolveJob<'a> {
     pub out: &'a Path,
     /// Whether to draw progress bars (stderr is a terminal and nothing else draws).
     pub progress: bool,
+    /// The best outcome of a smaller defender size (`sweep`): the result
+    /// is kept at least as good ([`optimise::keep_better`]).
+    pub floor: Option<&'a StructureOutcome>,
 }
 
 /// `summary.json`.
@@ -253,7 +292,7 @@ pub fn run_job(job: &SolveJob) -> anyhow::Result<(Solution, Option<Bracket>)> {
     let multiple = job.structures.len() > 1;
     let out = job.out.to_path_buf();
     let bars = job.progress.then(MultiProgress::new);
-    let solution = optimise::optimise_structures(
+    let mut solution = optimise::optimise_structures(
         job.game,
         job.dra,
         job.negated_dra,
@@ -274,10 +313,14 @@ pub fn run_job(job: &SolveJob) -> anyhow::Result<(Solution, Option<Bracket>)> {
             )
         },
     )?;
-    if multiple {
-        let best = &solution.best().report.name;
+    if let Some(floor) = job.floor {
+        let nodes = solution.best().defender.num_nodes();
+        optimise::keep_better(&mut solution, floor, nodes)?;
+    }
+    let best_curve = |ext: &str| out.join(format!("curve-{}.{ext}", solution.best().report.name));
+    if multiple && best_curve("csv").exists() {
         for ext in ["csv", "svg"] {
-            let from = out.join(format!("curve-{best}.{ext}"));
+            let from = best_curve(ext);
             std::fs::copy(&from, out.join(format!("curve.{ext}")))
                 .with_context(|| format!("copying {}", from.display()))?;
         }
@@ -289,7 +332,15 @@ pub fn run_job(job: &SolveJob) -> anyhow::Result<(Solution, Option<Bracket>)> {
             let adversaries = solution.structures.iter().map(|s| &s.adversary);
             certify::bracket(job.game, job.dra, negated, &best.defender, adversaries)
         })
-        .transpose()?;
+        .transpose()?
+        .map(|bracket| Bracket {
+            upper_bound: solution
+                .structures
+                .iter()
+                .filter_map(|s| s.report.upper_bound)
+                .fold(bracket.upper_bound, f64::min),
+            ..bracket
+        });
     controller::file::write(&out.join("defender.fsc.json"), &best.defender, job.game)?;
     controller::file::write(&out.join("adversary.fsc.json"), &best.adversary, job.game)?;
     let summary = Summary {
@@ -441,6 +492,7 @@ pub fn run(args: SolveArgs) -> anyhow::Result<()> {
         settings: &settings,
         out: out.path(),
         progress: std::io::stderr().is_terminal(),
+        floor: None,
     };
     let (solution, certified) = run_job(&job)?;
     out.commit()?;
@@ -460,12 +512,17 @@ pub fn run(args: SolveArgs) -> anyhow::Result<()> {
         },
     );
     print_text(&format!(
-        "structure {}: worst-case estimate {:.6} (last iterate value {:.6}) after {} iterations, {:.1} s; \
+        "structure {}: worst-case estimate {:.6} (last iterate value {:.6}) after {} iterations \
+         ({}, {}; best of {} starts; {} defender), {:.1} s; \
          GMC {} states{bracket}\nwrote curve.csv, curve.svg, defender.fsc.json, adversary.fsc.json, summary.json to {}\n",
         report.name,
         report.worst_case,
         report.last_value,
         report.iterations,
+        serde_json::to_value(report.method)?.as_str().unwrap_or("?"),
+        serde_json::to_value(report.status)?.as_str().unwrap_or("?"),
+        report.starts.len(),
+        report.rounding,
         report.seconds,
         report.gmc.states,
         args.out.display()

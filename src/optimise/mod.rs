@@ -14,31 +14,50 @@
 //! * [`best_response`]: the adversary's best response by L-BFGS (argmin) in
 //!   the coordinates `phi = c tanh(z)`, from several starts;
 //! * [`Optimiser`]: alternating projected gradient ascent-descent with a fast
-//!   adversary time scale, plain or Adam updates, periodic best-response checks,
-//!   keeping the best defender by its worst-case estimate (section 4);
-//! * [`optimise_structures`]: the optimiser on several structures in
-//!   parallel (rayon), the best worst-case estimate chosen;
-//!   [`candidate_structures`] adds the structures pruning keeps (method.md
-//!   section 5) to a starting structure; [`solve`] does both from the full
-//!   support structure of given sizes.
+//!   adversary time scale, plain or Adam (optionally optimistic) updates,
+//!   periodic best-response checks that also certify, a logit bound that
+//!   widens when progress stalls on it, stopping on the certified gap or a
+//!   stall (section 4);
+//! * [`ascend`]: the single-player fast path (the adversary has one action,
+//!   so max-min is max): L-BFGS on `ln V`;
+//! * [`rounded_candidates`]: partial and argmax roundings of the result,
+//!   each scored exactly on its own support;
+//! * [`optimise_structure`]: parallel seeded starts on one structure, the
+//!   best certified kept, then rounded; [`optimise_structures`] does it on
+//!   several structures in parallel (rayon), the best worst-case estimate
+//!   chosen; [`candidate_structures`] adds the structures pruning keeps
+//!   (method.md section 5) to a starting structure; [`solve`] does both from
+//!   the full support structure of given sizes;
+//! * [`embed`], [`pad`], [`warm_started`], [`keep_better`]: warm starts
+//!   across defender sizes, results monotone in size by construction.
 //!
 //! [`Settings`] holds every number; [`Observer`]s receive one
-//! [`IterationRecord`] per outer iteration and write all output.
+//! [`IterationRecord`] per outer iteration (of the kept start) and write all
+//! output.
 
+mod ascent;
 mod best_response;
 mod objective;
 mod observer;
 mod optimiser;
+mod rounding;
 mod settings;
 mod softmax;
+mod warm_start;
 
+pub use ascent::ascend;
 pub use best_response::{BestResponse, best_response};
 pub use objective::{GmcSize, Objective, Point};
 pub use observer::{IterationRecord, Observer, ObserverError};
-pub use optimiser::{Certifier, Incumbent, Optimiser, RunOutcome};
-pub use settings::{Settings, UpdateRule};
+pub use optimiser::{Certifier, Incumbent, Optimiser, PhaseSeconds, RunOutcome};
+pub use rounding::{TRUNCATION_THRESHOLDS, rounded_candidates, truncated};
+pub use settings::{MAX_LOGIT_BOUND, Settings, UpdateRule};
 pub use softmax::{Softmax, clip};
+pub use warm_start::{WARM_START_MIX, embed, keep_better, pad, score, warm_started};
 
+use std::time::Instant;
+
+use optimiser::perturbed;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
@@ -46,6 +65,7 @@ use serde::Serialize;
 use thiserror::Error;
 
 use crate::automaton::Dra;
+use crate::certify::{self, lower_bound};
 use crate::controller::{Fsc, Role};
 use crate::game::{ModelError, Posg};
 use crate::prune::{PruneError, PruneSettings, prune};
@@ -94,8 +114,55 @@ pub enum Status {
     MaxIterations,
     /// The time budget ran out.
     TimeBudget,
-    /// The best worst-case estimate stopped improving.
+    /// The best score stopped improving (at the widest logit bound).
     Stalled,
+    /// The certified gap closed to `gap_tolerance`.
+    GapClosed,
+    /// The single-player ascent found no ascent step (a stationary point).
+    Converged,
+}
+
+/// How a structure was optimised.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Method {
+    /// Alternating projected gradient ascent-descent with best-response
+    /// checks (method.md section 4).
+    MaxMin,
+    /// The single-player L-BFGS ascent ([`ascend`]): the adversary has one
+    /// action, so max-min is max.
+    Ascent,
+}
+
+/// One start's numbers (every start is recorded, not only the best).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct StartReport {
+    /// The start's index.
+    pub start: usize,
+    /// Its random stream of `seed` (`structure stream + (start << 32)`).
+    pub stream: u64,
+    /// Its best defender's worst-case estimate.
+    pub worst_case: f64,
+    /// Its best defender's certified lower bound (with an automaton for !phi).
+    pub certified_lower: Option<f64>,
+    /// Iterations run.
+    pub iterations: usize,
+    /// Why it stopped.
+    pub status: Status,
+    /// Its wall-clock seconds.
+    pub seconds: f64,
+    /// Its logit bound `c` at the end.
+    pub logit_bound: f64,
+}
+
+/// One candidate of the final rounding and its score.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct CandidateReport {
+    /// `unrounded`, `truncated-<d>` or `argmax` ([`rounded_candidates`]).
+    pub name: String,
+    /// Its certified lower bound (with an automaton for !phi), exact value
+    /// (single player) or worst-case estimate.
+    pub score: f64,
 }
 
 /// A support structure to optimise on: starting controllers whose supports
@@ -151,7 +218,8 @@ pub struct StructureReport {
     pub defender_parameters: usize,
     /// The number of adversary logits.
     pub adversary_parameters: usize,
-    /// The seed of this structure's random stream (`seed`, stream = index).
+    /// The seed of this structure's random streams (`seed`; stream = index
+    /// for start 0, see [`StartReport::stream`]).
     pub seed: u64,
     /// The best defender's worst-case estimate.
     pub worst_case: f64,
@@ -170,6 +238,28 @@ pub struct StructureReport {
     pub status: Status,
     /// Wall-clock seconds.
     pub seconds: f64,
+    /// The returned defender's certified lower bound against every
+    /// adversary (method.md section 6), when an automaton for !phi was given.
+    pub certified_lower: Option<f64>,
+    /// The smallest game upper bound over the best responses found (for a
+    /// single-player game: the fully observable optimum), with `certified_lower`.
+    pub upper_bound: Option<f64>,
+    /// How the structure was optimised.
+    pub method: Method,
+    /// Which candidate was returned: `unrounded`, `truncated-<d>` or `argmax`.
+    pub rounding: String,
+    /// Every rounding candidate scored, the unrounded defender first.
+    pub candidates: Vec<CandidateReport>,
+    /// Every start's numbers.
+    pub starts: Vec<StartReport>,
+    /// The start whose defender was kept.
+    pub best_start: usize,
+    /// The kept start's logit bound `c` at the end.
+    pub logit_bound: f64,
+    /// The largest residual of any linear solve of the kept start.
+    pub max_residual: f64,
+    /// Seconds per phase, summed over the starts (thread seconds).
+    pub phases: PhaseSeconds,
 }
 
 /// The outcome on one structure: its report and the controllers.
@@ -177,7 +267,8 @@ pub struct StructureReport {
 pub struct StructureOutcome {
     /// The numbers.
     pub report: StructureReport,
-    /// The best defender by worst-case estimate, with its logits.
+    /// The returned defender: the best start's best defender or one of its
+    /// roundings (then with a smaller support and no logits).
     pub defender: Fsc,
     /// The best response found to it, with its logits.
     pub adversary: Fsc,
@@ -250,8 +341,16 @@ where
     })
 }
 
-/// Optimises on one structure with random stream `stream` of `settings.seed`;
-/// with an automaton `negated` for !phi the checks also certify ([`Certifier`]).
+/// Optimises on one structure: `settings.starts` independent starts in
+/// parallel (rayon), start `i` with random stream `stream + (i << 32)` of
+/// `settings.seed`; each runs the max-min loop ([`Optimiser`]) or, when the
+/// adversary has one action and `settings.single_player_ascent`, the
+/// single-player L-BFGS ascent ([`ascend`]). The start with the best score
+/// (certified lower bound with an automaton `negated` for !phi, else
+/// worst-case estimate; the first of equals) is kept and its iteration
+/// records are replayed to `observer`; then its rounded candidates
+/// ([`rounded_candidates`]) are scored alike and the best of the unrounded
+/// defender and its roundings is returned.
 pub fn optimise_structure(
     game: &Posg,
     dra: &Dra,
@@ -262,42 +361,339 @@ pub fn optimise_structure(
     observer: &mut dyn Observer,
 ) -> Result<StructureOutcome, OptimiseError> {
     settings.validate()?;
-    let defender = Softmax::new(&structure.defender, settings.optimise_initial);
-    let adversary = Softmax::new(&structure.adversary, settings.optimise_initial);
-    let objective = Objective::new(game, dra, defender, adversary, &settings.solver_settings())?;
-    let gmc = objective.gmc_size();
-    let mut rng = ChaCha8Rng::seed_from_u64(settings.seed);
-    rng.set_stream(stream);
-    let mut optimiser = Optimiser::new(objective, settings, rng);
-    if let Some(not_phi) = negated {
-        optimiser = optimiser.with_certifier(Certifier {
-            game,
-            phi: dra,
-            not_phi,
-        });
+    let clock = Instant::now();
+    let method = if settings.single_player_ascent && game.adversary().num_actions() == 1 {
+        Method::Ascent
+    } else {
+        Method::MaxMin
+    };
+    let certifier = negated.map(|not_phi| Certifier {
+        game,
+        phi: dra,
+        not_phi,
+    });
+    let mut runs = (0..settings.starts)
+        .into_par_iter()
+        .map(|start| {
+            let start_stream = stream + ((start as u64) << 32);
+            run_start(
+                game,
+                dra,
+                certifier,
+                structure,
+                settings,
+                start_stream,
+                method,
+            )
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    let starts: Vec<StartReport> = runs
+        .iter()
+        .enumerate()
+        .map(|(start, run)| StartReport {
+            start,
+            stream: stream + ((start as u64) << 32),
+            worst_case: run.outcome.best.worst_case,
+            certified_lower: run.outcome.best.certified_lower,
+            iterations: run.outcome.iterations,
+            status: run.outcome.status,
+            seconds: run.outcome.seconds,
+            logit_bound: run.outcome.logit_bound,
+        })
+        .collect();
+    let best_start = (0..runs.len())
+        .reduce(|b, i| {
+            if runs[i].outcome.best.score() > runs[b].outcome.best.score() {
+                i
+            } else {
+                b
+            }
+        })
+        .ok_or(OptimiseError::Settings {
+            field: "starts",
+            problem: "must be at least 1".into(),
+        })?;
+    let mut phases = PhaseSeconds::default();
+    for run in &runs {
+        phases.add(&run.outcome.phases);
     }
-    let run = optimiser.run(observer)?;
+    let upper_bound = runs
+        .iter()
+        .filter_map(|r| r.outcome.upper_bound)
+        .reduce(f64::min);
+    let mut run = runs.swap_remove(best_start);
+    for record in &run.records {
+        observer.observe(record);
+    }
     observer.finish().map_err(OptimiseError::Observer)?;
-    let objective = optimiser.objective();
+    let chosen = finalise(
+        game,
+        dra,
+        certifier,
+        &mut run,
+        upper_bound,
+        settings,
+        method,
+        &mut phases,
+    )?;
+    let objective = &run.objective;
+    let outcome = &run.outcome;
     Ok(StructureOutcome {
         report: StructureReport {
             name: structure.name.clone(),
-            gmc,
+            gmc: objective.gmc_size(),
             defender_parameters: objective.defender().num_parameters(),
             adversary_parameters: objective.adversary().num_parameters(),
             seed: settings.seed,
-            worst_case: run.best.worst_case,
-            best_iteration: run.best.iteration,
-            last_value: run.last_value,
+            worst_case: chosen.worst_case,
+            best_iteration: outcome.best.iteration,
+            last_value: outcome.last_value,
             error_bound: objective.largest_error_bound(),
-            iterations: run.iterations,
-            checks: run.checks,
-            status: run.status,
-            seconds: run.seconds,
+            iterations: outcome.iterations,
+            checks: outcome.checks,
+            status: outcome.status,
+            seconds: clock.elapsed().as_secs_f64(),
+            certified_lower: chosen.certified_lower,
+            upper_bound: chosen.upper_bound,
+            method,
+            rounding: chosen.name,
+            candidates: chosen.candidates,
+            starts,
+            best_start,
+            logit_bound: outcome.logit_bound,
+            max_residual: outcome.max_residual,
+            phases,
         },
-        defender: objective.defender().controller(&run.best.defender)?,
-        adversary: objective.adversary().controller(&run.best.adversary)?,
+        defender: chosen.defender,
+        adversary: chosen.adversary,
     })
+}
+
+/// One start's run, its records and the objective it ran on.
+struct StartRun {
+    outcome: RunOutcome,
+    records: Vec<IterationRecord>,
+    objective: Objective,
+    rng: ChaCha8Rng,
+}
+
+/// Keeps every record, to replay the chosen start's.
+#[derive(Default)]
+struct Recorder(Vec<IterationRecord>);
+
+impl Observer for Recorder {
+    fn observe(&mut self, record: &IterationRecord) {
+        self.0.push(*record);
+    }
+}
+
+/// One start on its own objective and random stream.
+fn run_start(
+    game: &Posg,
+    dra: &Dra,
+    certifier: Option<Certifier<'_>>,
+    structure: &Structure,
+    settings: &Settings,
+    stream: u64,
+    method: Method,
+) -> Result<StartRun, OptimiseError> {
+    let defender = Softmax::new(&structure.defender, settings.optimise_initial);
+    let adversary = Softmax::new(&structure.adversary, settings.optimise_initial);
+    let objective = Objective::new(game, dra, defender, adversary, &settings.solver_settings())?;
+    let mut rng = ChaCha8Rng::seed_from_u64(settings.seed);
+    rng.set_stream(stream);
+    let mut recorder = Recorder::default();
+    let (outcome, objective, rng) = match method {
+        Method::MaxMin => {
+            let mut optimiser = Optimiser::new(objective, settings, rng);
+            if let Some(certifier) = certifier {
+                optimiser = optimiser.with_certifier(certifier);
+            }
+            let outcome = optimiser.run(&mut recorder)?;
+            let (objective, rng) = optimiser.into_parts();
+            (outcome, objective, rng)
+        }
+        Method::Ascent => {
+            let mut objective = objective;
+            let bound = settings.logit_bound;
+            let start = perturbed(
+                objective.defender().logits_of_template(bound),
+                settings.initial_spread,
+                bound,
+                &mut rng,
+            );
+            let adversary = objective.adversary().logits_of_template(bound);
+            let outcome = ascend(&mut objective, &start, &adversary, settings, &mut recorder)?;
+            (outcome, objective, rng)
+        }
+    };
+    Ok(StartRun {
+        outcome,
+        records: recorder.0,
+        objective,
+        rng,
+    })
+}
+
+/// The defender a structure's run returns, after rounding, with its numbers.
+struct Chosen {
+    name: String,
+    defender: Fsc,
+    adversary: Fsc,
+    worst_case: f64,
+    certified_lower: Option<f64>,
+    upper_bound: Option<f64>,
+    candidates: Vec<CandidateReport>,
+}
+
+/// Scores the rounded candidates of the run's best defender like the run
+/// scored its candidates (single player: the exact value; else the
+/// certified lower bound with a certifier, the worst-case estimate
+/// without), keeps the best (the unrounded defender wins ties), and
+/// completes its numbers: worst-case estimate, certified lower bound and
+/// the smallest game upper bound.
+#[allow(clippy::too_many_arguments)]
+fn finalise(
+    game: &Posg,
+    dra: &Dra,
+    certifier: Option<Certifier<'_>>,
+    run: &mut StartRun,
+    upper_bound: Option<f64>,
+    settings: &Settings,
+    method: Method,
+    phases: &mut PhaseSeconds,
+) -> Result<Chosen, OptimiseError> {
+    let best = &run.outcome.best;
+    let objective = &run.objective;
+    let adversary_logits = best.adversary.clone();
+    let mut chosen = Chosen {
+        name: "unrounded".into(),
+        defender: objective.defender().controller(&best.defender)?,
+        adversary: objective.adversary().controller(&best.adversary)?,
+        worst_case: best.worst_case,
+        certified_lower: best.certified_lower,
+        upper_bound,
+        candidates: vec![CandidateReport {
+            name: "unrounded".into(),
+            score: best.score(),
+        }],
+    };
+    let mut chosen_score = best.score();
+    let mut worst_case_known = true;
+    let clock = Instant::now();
+    if settings.round {
+        let judge = Judge {
+            game,
+            dra,
+            adversary: objective.adversary().template(),
+            adversary_logits: &adversary_logits,
+            settings,
+        };
+        for (name, candidate) in rounded_candidates(&chosen.defender)? {
+            let (score, found) = match (method, certifier) {
+                (Method::Ascent, _) => (judge.value(&candidate)?, None),
+                (Method::MaxMin, Some(c)) => {
+                    (lower_bound(game, c.not_phi, &candidate)?.value, None)
+                }
+                (Method::MaxMin, None) => {
+                    let found = judge.best_response(&candidate, &mut run.rng)?;
+                    (found.0, Some(found))
+                }
+            };
+            chosen.candidates.push(CandidateReport {
+                name: name.clone(),
+                score,
+            });
+            if score > chosen_score {
+                chosen_score = score;
+                chosen.name = name;
+                chosen.defender = candidate;
+                match found {
+                    Some((worst_case, adversary)) => {
+                        chosen.worst_case = worst_case;
+                        chosen.adversary = adversary;
+                        worst_case_known = true;
+                    }
+                    None if method == Method::Ascent => {
+                        chosen.worst_case = score;
+                        worst_case_known = true;
+                    }
+                    None => worst_case_known = false,
+                }
+                chosen.certified_lower = certifier
+                    .filter(|_| method == Method::MaxMin)
+                    .map(|_| score);
+            }
+        }
+        if !worst_case_known {
+            let (worst_case, adversary) = judge.best_response(&chosen.defender, &mut run.rng)?;
+            chosen.worst_case = worst_case;
+            chosen.adversary = adversary;
+        }
+    }
+    phases.rounding += clock.elapsed().as_secs_f64();
+    if let (Method::Ascent, Some(c)) = (method, certifier) {
+        let clock = Instant::now();
+        chosen.certified_lower = Some(lower_bound(game, c.not_phi, &chosen.defender)?.value);
+        chosen.upper_bound = Some(certify::upper_bound(game, c.phi, &chosen.adversary)?.value);
+        phases.certification += clock.elapsed().as_secs_f64();
+    }
+    Ok(chosen)
+}
+
+/// Evaluates candidate defenders (with their own supports) against the
+/// structure's adversary support.
+struct Judge<'a> {
+    game: &'a Posg,
+    dra: &'a Dra,
+    adversary: &'a Fsc,
+    adversary_logits: &'a [f64],
+    settings: &'a Settings,
+}
+
+impl Judge<'_> {
+    /// The exact value against the adversary with the run's logits.
+    fn value(&self, defender: &Fsc) -> Result<f64, OptimiseError> {
+        let mut objective = self.objective(defender)?;
+        let logits = objective
+            .defender()
+            .logits_of_template(self.settings.logit_bound);
+        Ok(objective.value(&logits, self.adversary_logits)?)
+    }
+
+    /// The best-response value ([`best_response`], started from the run's
+    /// adversary) and the adversary reaching it.
+    fn best_response(
+        &self,
+        defender: &Fsc,
+        rng: &mut ChaCha8Rng,
+    ) -> Result<(f64, Fsc), OptimiseError> {
+        let mut objective = self.objective(defender)?;
+        let logits = objective
+            .defender()
+            .logits_of_template(self.settings.logit_bound);
+        let found = best_response(
+            &mut objective,
+            &logits,
+            self.adversary_logits,
+            self.settings,
+            rng,
+        )?;
+        Ok((
+            found.value,
+            objective.adversary().controller(&found.adversary)?,
+        ))
+    }
+
+    fn objective(&self, defender: &Fsc) -> Result<Objective, OptimiseError> {
+        Ok(Objective::new(
+            self.game,
+            self.dra,
+            Softmax::new(defender, self.settings.optimise_initial),
+            Softmax::new(self.adversary, self.settings.optimise_initial),
+            &self.settings.solver_settings(),
+        )?)
+    }
 }
 
 /// The structures to optimise on: `start` and, when `settings.prune`, every

@@ -25,6 +25,9 @@ pub struct Point {
     pub defender: Vec<f64>,
     /// `dV/dphi_adv`.
     pub adversary: Vec<f64>,
+    /// The larger residual of the two linear solves (value and adjoint):
+    /// `max_i |((I - Q) x - b)_i|` and its transposed counterpart.
+    pub residual: f64,
 }
 
 /// The value as a function of both players' logits on one structure.
@@ -140,6 +143,7 @@ impl Objective {
                 &gradient.adversary,
                 &gradient.adversary_initial,
             ),
+            residual: evaluation.residual.max(gradient.adjoint_residual),
         };
         self.cache = Some((defender.to_vec(), adversary.to_vec(), point.clone()));
         Ok(point)

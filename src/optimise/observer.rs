@@ -4,7 +4,9 @@
 
 use serde::Serialize;
 
-/// One outer iteration of the max-min optimiser (method.md section 4).
+/// One outer iteration of the max-min optimiser (method.md section 4), or
+/// one quasi-Newton iteration of the single-player ascent (where the
+/// adversary fields are 0 and `worst_case` is the exact value).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct IterationRecord {
     /// The outer iteration `t`, from 0.
@@ -29,6 +31,9 @@ pub struct IterationRecord {
     /// With `certified_lower`: the smallest game upper bound over the best
     /// responses found so far (no defender of any size does better).
     pub upper_bound: Option<f64>,
+    /// The logit bound `c` in force (method.md section 3): it widens from
+    /// `initial_logit_bound` towards `logit_bound` in the max-min loop.
+    pub logit_bound: f64,
 }
 
 /// An observer's failure (an output file could not be written, say).

@@ -24,15 +24,28 @@ pub enum UpdateRule {
 pub struct Settings {
     /// Seed of every random choice (initial logits, best-response restarts).
     pub seed: u64,
-    /// Logit bound `c`: every logit stays in `[-c, c]`, so every supported
-    /// entry keeps probability at least `exp(-2c) / |block|` (method.md section 3).
+    /// Logit bound `c_max`: every logit stays in `[-c_max, c_max]`, so every
+    /// supported entry keeps probability at least `exp(-2 c_max) / |block|`
+    /// (method.md section 3): the support, hence the GMC graph, never changes.
     pub logit_bound: f64,
+    /// The max-min run's first logit bound `c_0 <= c_max`: the bound doubles
+    /// (up to `logit_bound`) whenever progress stalls while some logit sits
+    /// on it, so determinism is capped only by `c_max` (the single-player
+    /// ascent uses `c_max` from the start).
+    pub initial_logit_bound: f64,
     /// Initial logits are drawn uniformly from `[-spread, spread]` (0: uniform controllers).
     pub initial_spread: f64,
     /// Also optimise the initial node distributions (softmax over the initial support).
     pub optimise_initial: bool,
-    /// Outer iterations (one defender step each) at most.
+    /// Outer iterations (one defender step, or one quasi-Newton step of the
+    /// single-player ascent) at most: a cap; runs normally stop on the
+    /// certified gap or on stalled progress.
     pub max_iterations: usize,
+    /// Independent starts of the optimiser per structure, run in parallel
+    /// (rayon), each with its own seeded random stream; the best by
+    /// certified lower bound (by worst-case estimate without an automaton
+    /// for !phi) is kept.
+    pub starts: usize,
     /// Wall-clock budget in seconds for one structure (0: none).
     pub time_budget: f64,
     /// Adversary descent steps per defender ascent step (the fast time scale).
@@ -45,6 +58,11 @@ pub struct Settings {
     pub defender_decay: f64,
     /// The update rule of both players.
     pub update: UpdateRule,
+    /// Optimism `o` of both players' updates: each step moves along
+    /// `d_t + o (d_t - d_{t-1})` (0: plain alternating play; 1: the
+    /// optimistic gradient method, which converges to mixed saddle points
+    /// where plain play cycles).
+    pub optimism: f64,
     /// A best-response check every this many outer iterations (and at the end).
     pub check_every: usize,
     /// Random restarts of each best-response minimisation (besides the
@@ -54,11 +72,29 @@ pub struct Settings {
     pub best_response_iterations: u64,
     /// L-BFGS memory `m`.
     pub lbfgs_memory: usize,
-    /// Stop when the best worst-case estimate has improved by less than
-    /// `stall_tolerance` over the last `stall_checks` checks (0: never).
+    /// Stop when the best score (certified lower bound, or worst-case
+    /// estimate without an automaton for !phi) has improved by at most
+    /// `stall_tolerance` times its magnitude over the last `stall_checks`
+    /// checks, at the widest logit bound (0: never).
     pub stall_checks: usize,
+    /// The single-player ascent's stall window: it stops when `V` has
+    /// gained at most `stall_tolerance` times itself over this many
+    /// iterations (0: never).
+    pub ascent_stall_iterations: usize,
     /// See `stall_checks`.
     pub stall_tolerance: f64,
+    /// Stop when the certified gap, the game upper bound minus the best
+    /// certified lower bound (method.md section 6), is at most this: the
+    /// defender is then optimal within it against every adversary.
+    pub gap_tolerance: f64,
+    /// Single-player games (the adversary has one action) are optimised by
+    /// L-BFGS ascent on the defender's logits, `max V`, with no
+    /// best-response checks; off: the max-min loop runs on them too.
+    pub single_player_ascent: bool,
+    /// At the end, also evaluate the argmax-rounded defender and its partial
+    /// roundings (entries below a threshold dropped) and keep whichever
+    /// scores best (the unrounded one included).
+    pub round: bool,
     /// Largest residual accepted from a linear solve.
     pub solver_tolerance: f64,
     /// How the linear systems are solved (LU, BiCGSTAB, or by size).
@@ -78,22 +114,29 @@ impl Default for Settings {
     fn default() -> Self {
         Self {
             seed: 0,
-            logit_bound: 4.0,
+            logit_bound: 10.0,
+            initial_logit_bound: 4.0,
             initial_spread: 1.0,
             optimise_initial: false,
-            max_iterations: 500,
+            max_iterations: 3000,
+            starts: 4,
             time_budget: 0.0,
             adversary_steps: 10,
             defender_step: 0.05,
             adversary_step: 0.5,
             defender_decay: 0.05,
             update: UpdateRule::Adam,
+            optimism: 0.0,
             check_every: 5,
             restarts: 4,
             best_response_iterations: 100,
             lbfgs_memory: 7,
-            stall_checks: 0,
-            stall_tolerance: 1e-6,
+            stall_checks: 200,
+            ascent_stall_iterations: 100,
+            stall_tolerance: 1e-5,
+            gap_tolerance: 1e-4,
+            single_player_ascent: true,
+            round: true,
             solver_tolerance: crate::solver::DEFAULT_TOLERANCE,
             solver: SolverMethod::Auto,
             prune: true,
@@ -117,6 +160,7 @@ impl Settings {
     pub fn validate(&self) -> Result<(), OptimiseError> {
         let positive = [
             ("logit_bound", self.logit_bound),
+            ("initial_logit_bound", self.initial_logit_bound),
             ("defender_step", self.defender_step),
             ("adversary_step", self.adversary_step),
             ("solver_tolerance", self.solver_tolerance),
@@ -134,6 +178,8 @@ impl Settings {
             ("time_budget", self.time_budget),
             ("defender_decay", self.defender_decay),
             ("stall_tolerance", self.stall_tolerance),
+            ("gap_tolerance", self.gap_tolerance),
+            ("optimism", self.optimism),
         ];
         for (name, value) in non_negative {
             if !(value.is_finite() && value >= 0.0) {
@@ -143,14 +189,30 @@ impl Settings {
                 ));
             }
         }
-        if self.initial_spread > self.logit_bound {
+        if self.initial_spread > self.initial_logit_bound {
             return Err(invalid(
                 "initial_spread",
+                "must not exceed initial_logit_bound".into(),
+            ));
+        }
+        if self.initial_logit_bound > self.logit_bound {
+            return Err(invalid(
+                "initial_logit_bound",
                 "must not exceed logit_bound".into(),
+            ));
+        }
+        if self.logit_bound > MAX_LOGIT_BOUND {
+            return Err(invalid(
+                "logit_bound",
+                format!(
+                    "must be at most {MAX_LOGIT_BOUND} (exp(-2c) must stay far above the \
+                     smallest double, or a supported choice would get probability 0)"
+                ),
             ));
         }
         let at_least_one = [
             ("max_iterations", self.max_iterations),
+            ("starts", self.starts),
             ("adversary_steps", self.adversary_steps),
             ("check_every", self.check_every),
             ("lbfgs_memory", self.lbfgs_memory),
@@ -163,6 +225,9 @@ impl Settings {
         Ok(())
     }
 }
+
+/// The largest accepted `logit_bound`: `exp(-2 * 100)` is about `1e-87`.
+pub const MAX_LOGIT_BOUND: f64 = 100.0;
 
 fn invalid(field: &'static str, problem: String) -> OptimiseError {
     OptimiseError::Settings { field, problem }

@@ -115,14 +115,20 @@ impl Softmax {
     }
 
     /// Logits whose softmax is `mu` where the bound allows: `ln mu` centred
-    /// per block (and for the initial distribution), clipped to `[-c, c]`.
+    /// per block (and for the initial distribution), shifted down when the
+    /// largest exceeds `c` so that it is `c`, then clipped to `[-c, c]`: the
+    /// ratios among the largest entries (those within `exp(2c)` of the
+    /// maximum) stay exact, and only the smallest are raised.
     pub fn logits_of(&self, mu: &Probabilities, bound: f64) -> Vec<f64> {
         let mut logits: Vec<f64> = Vec::with_capacity(self.num_parameters());
         for block in &self.blocks {
-            logits.extend(centred_logs(mu.entries[block.clone()].iter().copied()));
+            logits.extend(bounded_logs(
+                mu.entries[block.clone()].iter().copied(),
+                bound,
+            ));
         }
         if let Some(nodes) = &self.initial_nodes {
-            logits.extend(centred_logs(nodes.iter().map(|&g| mu.initial[g])));
+            logits.extend(bounded_logs(nodes.iter().map(|&g| mu.initial[g]), bound));
         }
         clip(&mut logits, bound);
         logits
@@ -185,8 +191,11 @@ fn chain_rule_into(mu: &[f64], d_mu: &[f64], out: &mut [f64]) {
     }
 }
 
-fn centred_logs(weights: impl Iterator<Item = f64>) -> Vec<f64> {
+/// `ln w` centred, then shifted down so that the largest is at most `bound`.
+fn bounded_logs(weights: impl Iterator<Item = f64>, bound: f64) -> Vec<f64> {
     let logs: Vec<f64> = weights.map(f64::ln).collect();
     let mean = logs.iter().sum::<f64>() / logs.len().max(1) as f64;
-    logs.into_iter().map(|l| l - mean).collect()
+    let top = logs.iter().copied().fold(f64::NEG_INFINITY, f64::max) - mean;
+    let shift = mean + (top - bound).max(0.0);
+    logs.into_iter().map(|l| l - shift).collect()
 }

@@ -26,9 +26,9 @@ use crate::optimise::{IterationRecord, Observer, ObserverError};
 
 /// Writes one CSV row per [`IterationRecord`]: `iteration, seconds, value,
 /// defender_gradient_norm, adversary_gradient_norm, defender_step,
-/// adversary_step, worst_case, certified_lower, upper_bound` (the last three
-/// empty where no check ran; the last two also when no automaton for !phi
-/// was given).
+/// adversary_step, worst_case, certified_lower, upper_bound, logit_bound`
+/// (`worst_case`, `certified_lower` and `upper_bound` empty where no check
+/// ran; the last two also when no automaton for !phi was given).
 pub struct CurveCsv {
     writer: csv::Writer<File>,
     error: Option<csv::Error>,

@@ -1,0 +1,283 @@
+//! The single-player fast path: `max over phi_def of V(phi_def)` when the
+//! adversary cannot influence the game (it has one action), so max-min
+//! reduces to max and no best-response check is needed.
+//!
+//! L-BFGS (two-loop recursion, memory `lbfgs_memory`) with a backtracking
+//! Armijo line search, in the unconstrained coordinates `z` of the smooth
+//! reparametrisation `phi = c tanh(z)` with `c = logit_bound`
+//! (method.md section 3: every supported choice keeps probability at least
+//! `exp(-2c) / |block|`, so the support never changes). The chain rule is
+//! `dV/dz = c (1 - tanh(z)^2) dV/dphi`. Each trial step moves no
+//! coordinate of `z` by more than [`MAX_STEP`].
+//!
+//! Requirements on the problem: `V` smooth in `phi` on the fixed support
+//! (it is: a rational function without poles there). Reference: Nocedal
+//! and Wright, Numerical Optimization (2006), algorithms 7.4 and 3.1.
+
+use std::collections::VecDeque;
+use std::time::Instant;
+
+use super::objective::Objective;
+use super::observer::{IterationRecord, Observer};
+use super::optimiser::{Incumbent, PhaseSeconds, RunOutcome, gained_little, norm};
+use super::{OptimiseError, Settings, Status};
+use crate::value::ValueError;
+
+/// The largest change of any `z` coordinate in one trial step.
+const MAX_STEP: f64 = 1.0;
+
+/// Armijo's sufficient-increase constant.
+const ARMIJO: f64 = 1e-4;
+
+/// Backtracking halvings before the line search gives up.
+const HALVINGS: usize = 30;
+
+/// Logits at or beyond `c * START_CLAMP` start at the `z` of that point
+/// (where `tanh` still has slope `1 - START_CLAMP^2`).
+const START_CLAMP: f64 = 0.99;
+
+/// Maximises `V` (as `ln V`) over the defender's logits from `start` (adversary fixed at
+/// `adversary`), reporting one record per iteration to `observer`.
+pub fn ascend(
+    objective: &mut Objective,
+    start: &[f64],
+    adversary: &[f64],
+    settings: &Settings,
+    observer: &mut dyn Observer,
+) -> Result<RunOutcome, OptimiseError> {
+    let clock = Instant::now();
+    let c = settings.logit_bound;
+    let mut z: Vec<f64> = start
+        .iter()
+        .map(|&phi| (phi / c).clamp(-START_CLAMP, START_CLAMP).atanh())
+        .collect();
+    let mut here = Evaluated::at(objective, &z, adversary, c)?;
+    let mut max_residual = here.residual;
+    let mut memory = Memory::new(settings.lbfgs_memory);
+    let mut history = vec![here.value];
+    let mut best = (here.value, squash(&z, c), 0);
+    let window = settings.ascent_stall_iterations;
+    let mut t = 0;
+    let status = loop {
+        let seconds = clock.elapsed().as_secs_f64();
+        let mut status = if t + 1 >= settings.max_iterations {
+            Some(Status::MaxIterations)
+        } else if settings.time_budget > 0.0 && seconds >= settings.time_budget {
+            Some(Status::TimeBudget)
+        } else if window > 0 && gained_little(&history, window, settings.stall_tolerance) {
+            Some(Status::Stalled)
+        } else {
+            None
+        };
+        let step = if status.is_none() {
+            match line_search(objective, &z, &here, &mut memory, adversary, c)? {
+                Some((next_z, next, step)) => {
+                    memory.remember(&next_z, &z, &next.ascent, &here.ascent);
+                    z = next_z;
+                    here = next;
+                    max_residual = max_residual.max(here.residual);
+                    step
+                }
+                None => {
+                    status = Some(Status::Converged);
+                    0.0
+                }
+            }
+        } else {
+            0.0
+        };
+        if here.value > best.0 {
+            best = (here.value, squash(&z, c), t + 1);
+        }
+        history.push(here.value);
+        observer.observe(&IterationRecord {
+            iteration: t,
+            seconds,
+            value: here.value,
+            defender_gradient_norm: norm(&here.phi_gradient),
+            adversary_gradient_norm: 0.0,
+            defender_step: step,
+            adversary_step: 0.0,
+            worst_case: Some(here.value),
+            certified_lower: None,
+            upper_bound: None,
+            logit_bound: c,
+        });
+        if let Some(status) = status {
+            break status;
+        }
+        t += 1;
+    };
+    let seconds = clock.elapsed().as_secs_f64();
+    Ok(RunOutcome {
+        best: Incumbent {
+            defender: best.1,
+            adversary: adversary.to_vec(),
+            worst_case: best.0,
+            certified_lower: None,
+            iteration: best.2,
+        },
+        upper_bound: None,
+        last_value: here.value,
+        iterations: t + 1,
+        checks: 0,
+        status,
+        seconds,
+        phases: PhaseSeconds {
+            optimisation: seconds,
+            ..PhaseSeconds::default()
+        },
+        logit_bound: c,
+        max_residual,
+    })
+}
+
+/// The value, the ascent objective `ln V` and its `z`-gradient at one point.
+struct Evaluated {
+    value: f64,
+    /// `ln V` (maximising `ln V` maximises `V`; on long horizons, where `V`
+    /// is a product of many probabilities, `ln V` is far better scaled).
+    log_value: f64,
+    /// `d ln V / dz = (dV/dz) / V`.
+    ascent: Vec<f64>,
+    /// `dV/dphi`.
+    phi_gradient: Vec<f64>,
+    residual: f64,
+}
+
+impl Evaluated {
+    fn at(
+        objective: &mut Objective,
+        z: &[f64],
+        adversary: &[f64],
+        c: f64,
+    ) -> Result<Self, OptimiseError> {
+        let point = objective.point(&squash(z, c), adversary)?;
+        let value = point.value.max(f64::MIN_POSITIVE);
+        let ascent = z
+            .iter()
+            .zip(&point.defender)
+            .map(|(&zi, &d)| c * (1.0 - zi.tanh().powi(2)) * d / value)
+            .collect();
+        Ok(Self {
+            value: point.value,
+            log_value: value.ln(),
+            ascent,
+            phi_gradient: point.defender,
+            residual: point.residual,
+        })
+    }
+}
+
+/// A step along the L-BFGS direction (steepest ascent when that is not an
+/// ascent direction) with Armijo backtracking; `None` when no step of the
+/// line search increases `V` enough (a stationary point to working
+/// precision). A trial point whose linear system cannot be solved to the
+/// tolerance (nearly deterministic choices can make `I - Q` nearly
+/// singular) is rejected like one that does not increase `V`.
+fn line_search(
+    objective: &mut Objective,
+    z: &[f64],
+    here: &Evaluated,
+    memory: &mut Memory,
+    adversary: &[f64],
+    c: f64,
+) -> Result<Option<(Vec<f64>, Evaluated, f64)>, OptimiseError> {
+    let mut direction = memory.direction(&here.ascent);
+    let mut slope = dot(&direction, &here.ascent);
+    if slope <= 0.0 {
+        memory.clear();
+        direction.clone_from(&here.ascent);
+        slope = dot(&direction, &here.ascent);
+    }
+    if slope <= 0.0 {
+        return Ok(None);
+    }
+    let longest = direction.iter().fold(0.0f64, |m, d| m.max(d.abs()));
+    let mut step = (MAX_STEP / longest).min(1.0);
+    for _ in 0..HALVINGS {
+        let trial: Vec<f64> = z
+            .iter()
+            .zip(&direction)
+            .map(|(zi, d)| zi + step * d)
+            .collect();
+        match Evaluated::at(objective, &trial, adversary, c) {
+            Ok(next) if next.log_value >= here.log_value + ARMIJO * step * slope => {
+                return Ok(Some((trial, next, step)));
+            }
+            Ok(_) | Err(OptimiseError::Value(ValueError::Solver(_))) => {}
+            Err(error) => return Err(error),
+        }
+        step /= 2.0;
+    }
+    Ok(None)
+}
+
+/// The last `m` pairs `s = z_{k+1} - z_k`, `y = g_k - g_{k+1}` (`g` the
+/// ascent gradient, so `y` is the gradient change of `-V`).
+struct Memory {
+    capacity: usize,
+    pairs: VecDeque<(Vec<f64>, Vec<f64>, f64)>,
+}
+
+impl Memory {
+    fn new(capacity: usize) -> Self {
+        Self {
+            capacity,
+            pairs: VecDeque::with_capacity(capacity),
+        }
+    }
+
+    fn clear(&mut self) {
+        self.pairs.clear();
+    }
+
+    /// Stores the pair when it has positive curvature (`s . y > 0`).
+    fn remember(&mut self, z_next: &[f64], z: &[f64], g_next: &[f64], g: &[f64]) {
+        let s: Vec<f64> = z_next.iter().zip(z).map(|(a, b)| a - b).collect();
+        let y: Vec<f64> = g.iter().zip(g_next).map(|(a, b)| a - b).collect();
+        let curvature = dot(&s, &y);
+        if curvature > 1e-12 * norm(&s) * norm(&y) && curvature > 0.0 {
+            if self.pairs.len() == self.capacity {
+                self.pairs.pop_front();
+            }
+            self.pairs.push_back((s, y, 1.0 / curvature));
+        }
+    }
+
+    /// `H g` by the two-loop recursion, `H` the inverse Hessian estimate of
+    /// `-V` scaled by `s.y / y.y` of the newest pair: an ascent direction of `V`.
+    fn direction(&self, gradient: &[f64]) -> Vec<f64> {
+        let mut q = gradient.to_vec();
+        let mut alphas = Vec::with_capacity(self.pairs.len());
+        for (s, y, rho) in self.pairs.iter().rev() {
+            let alpha = rho * dot(s, &q);
+            for (qi, yi) in q.iter_mut().zip(y) {
+                *qi -= alpha * yi;
+            }
+            alphas.push(alpha);
+        }
+        if let Some((s, y, _)) = self.pairs.back() {
+            let gamma = dot(s, y) / dot(y, y);
+            for qi in &mut q {
+                *qi *= gamma;
+            }
+        }
+        for ((s, y, rho), alpha) in self.pairs.iter().zip(alphas.into_iter().rev()) {
+            let beta = rho * dot(y, &q);
+            for (qi, si) in q.iter_mut().zip(s) {
+                *qi += (alpha - beta) * si;
+            }
+        }
+        q
+    }
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+/// `phi = c tanh(z)`, componentwise.
+fn squash(z: &[f64], c: f64) -> Vec<f64> {
+    z.iter().map(|&zi| c * zi.tanh()).collect()
+}

@@ -1,0 +1,148 @@
+//! Warm starts across controller sizes: a `k`-node FSC embeds into `n >= k`
+//! nodes (nodes `k..n` are never entered), so the best `k`-node defender is
+//! a starting point of the `n`-node optimisation ([`warm_started`]), and
+//! the `n`-node result can be made never worse than the `k`-node one
+//! ([`keep_better`]): results monotone in size by construction.
+
+use super::{Solution, Structure, StructureOutcome, StructureReport};
+use crate::controller::{Choice, Fsc};
+use crate::game::ModelError;
+
+/// The weight of the uniform distribution mixed into an embedded controller
+/// so that it has the full support structure ([`embed`]).
+pub const WARM_START_MIX: f64 = 1e-6;
+
+/// `fsc` embedded into `nodes` nodes on the full support structure (every
+/// `(g', u)` in every block): block `(g, o)` is
+/// `(1 - mix) mu(. | g, o) + mix * uniform` for the old nodes `g < k`, and a
+/// copy of node 0's for the new nodes, so the new nodes are entered with
+/// probability at most `mix` per step and the value moves by `O(mix)`.
+/// The initial distribution is `fsc`'s padded with zeros, or, with
+/// `mix_initial`, mixed with the uniform one over all nodes like the blocks.
+pub fn embed(fsc: &Fsc, nodes: usize, mix: f64, mix_initial: bool) -> Result<Fsc, ModelError> {
+    let k = fsc.num_nodes();
+    if nodes < k {
+        return Err(ModelError::new(
+            "warm start",
+            format!("a {k}-node controller does not embed into {nodes} nodes"),
+        ));
+    }
+    if !(0.0..1.0).contains(&mix) || (mix == 0.0 && nodes > k) {
+        return Err(ModelError::new(
+            "warm start",
+            format!("the uniform weight must be in (0, 1), got {mix}"),
+        ));
+    }
+    let actions = fsc.num_actions();
+    let pairs = (nodes * actions) as f64;
+    let blocks = (0..nodes)
+        .flat_map(|g| (0..fsc.num_observations()).map(move |o| (g, o)))
+        .map(|(g, o)| {
+            let old = fsc.choices(if g < k { g } else { 0 }, o);
+            (0..nodes)
+                .flat_map(|next| (0..actions).map(move |action| (next, action)))
+                .map(|(next, action)| {
+                    let p = old
+                        .iter()
+                        .find(|c| (c.next, c.action) == (next, action))
+                        .map_or(0.0, |c| c.probability);
+                    Choice {
+                        next,
+                        action,
+                        probability: (1.0 - mix) * p + mix / pairs,
+                        logit: None,
+                    }
+                })
+                .collect()
+        })
+        .collect();
+    let mut initial: Vec<f64> = (0..nodes)
+        .map(|g| fsc.initial().get(g).copied().unwrap_or(0.0))
+        .collect();
+    if mix_initial {
+        for p in &mut initial {
+            *p = (1.0 - mix) * *p + mix / nodes as f64;
+        }
+    }
+    Fsc::new(
+        fsc.role(),
+        nodes,
+        fsc.num_observations(),
+        actions,
+        initial,
+        blocks,
+    )
+}
+
+/// `fsc` with `nodes >= k` nodes and the same behaviour: the old nodes keep
+/// their blocks, the new ones copy node 0's, and the initial distribution
+/// is padded with zeros, so the new nodes are never entered.
+pub fn pad(fsc: &Fsc, nodes: usize) -> Result<Fsc, ModelError> {
+    let k = fsc.num_nodes();
+    if nodes < k {
+        return Err(ModelError::new(
+            "warm start",
+            format!("a {k}-node controller does not embed into {nodes} nodes"),
+        ));
+    }
+    let blocks = (0..nodes)
+        .flat_map(|g| (0..fsc.num_observations()).map(move |o| (g, o)))
+        .map(|(g, o)| fsc.choices(if g < k { g } else { 0 }, o).to_vec())
+        .collect();
+    let initial = (0..nodes)
+        .map(|g| fsc.initial().get(g).copied().unwrap_or(0.0))
+        .collect();
+    Fsc::new(
+        fsc.role(),
+        nodes,
+        fsc.num_observations(),
+        fsc.num_actions(),
+        initial,
+        blocks,
+    )
+}
+
+/// `structure` with its defender replaced by `previous` embedded
+/// ([`embed`], uniform weight [`WARM_START_MIX`]) into the structure's
+/// defender size: the optimisation of `n` nodes starts from the best
+/// smaller defender.
+pub fn warm_started(
+    mut structure: Structure,
+    previous: &Fsc,
+    mix_initial: bool,
+) -> Result<Structure, ModelError> {
+    structure.defender = embed(
+        previous,
+        structure.defender.num_nodes(),
+        WARM_START_MIX,
+        mix_initial,
+    )?;
+    Ok(structure)
+}
+
+/// The score structures are compared by: the certified lower bound when
+/// there is one, else the worst-case estimate.
+pub fn score(report: &StructureReport) -> f64 {
+    report.certified_lower.unwrap_or(report.worst_case)
+}
+
+/// Makes the result of a larger defender size never worse than `previous`,
+/// the best outcome of a smaller size: when `previous` scores higher than
+/// `solution`'s best, appends it, its defender padded to `nodes` nodes
+/// ([`pad`]: the same behaviour, so the same value and bounds) and named
+/// `from-<k>-nodes`, and makes it the best. Returns whether it did.
+pub fn keep_better(
+    solution: &mut Solution,
+    previous: &StructureOutcome,
+    nodes: usize,
+) -> Result<bool, ModelError> {
+    if score(&previous.report) <= score(&solution.best().report) {
+        return Ok(false);
+    }
+    let mut kept = previous.clone();
+    kept.report.name = format!("from-{}-nodes", previous.defender.num_nodes());
+    kept.defender = pad(&previous.defender, nodes)?;
+    solution.structures.push(kept);
+    solution.best = solution.structures.len() - 1;
+    Ok(true)
+}
