@@ -9,7 +9,7 @@ use posg_fsc::controller::{Choice, Fsc, Role, Support};
 use posg_fsc::game::Posg;
 use posg_fsc::game::file::from_json_str;
 use posg_fsc::optimise::{
-    Objective, Settings, Softmax, Status, Structure, optimise_structure, solve,
+    Objective, Settings, Softmax, Status, Structure, StructureSource, optimise_structure, solve,
 };
 use posg_fsc::output::CurveCsv;
 use posg_fsc::solver::SolverSettings;
@@ -457,7 +457,7 @@ fn solve_also_optimises_on_pruned_structures_and_picks_the_best() {
         found.best().report.worst_case
     );
     let unpruned = Settings {
-        prune: false,
+        structures: vec![StructureSource::Full],
         ..settings
     };
     assert_eq!(

@@ -28,7 +28,14 @@ fn posg_fsc(args: &[&str], out: &Path) -> Output {
 }
 
 fn solve_args(extra: &[&'static str]) -> Vec<&'static str> {
-    let mut args = vec!["solve", GRID, "--ltl", "!unsafe U goal", "--no-prune"];
+    let mut args = vec![
+        "solve",
+        GRID,
+        "--ltl",
+        "!unsafe U goal",
+        "--structures",
+        "full",
+    ];
     if !extra.contains(&"--max-iterations") {
         args.extend(["--max-iterations", "4"]);
     }

@@ -79,7 +79,7 @@ fn solve_reach_avoid(game: &Posg, dir: &std::path::Path, out: &mut String) -> an
         dra: &dra,
         negated_dra: Some(&negated),
         objective: formula,
-        structures: optimise::candidate_structures(game, &dra, start, &settings)?,
+        candidates: optimise::candidate_structures(game, &dra, Some(&negated), start, &settings)?,
         settings: &settings,
         out: dir,
         progress: false,

@@ -12,7 +12,7 @@ mod export_gmc;
 mod prune;
 mod simulate;
 pub(crate) mod solve;
-mod support;
+pub(crate) mod support;
 mod sweep;
 mod translate;
 

@@ -20,12 +20,14 @@ use posg_fsc::certify::{self, Bracket};
 use posg_fsc::controller::{self, Role};
 use posg_fsc::game::Posg;
 use posg_fsc::optimise::{
-    self, Observer, Settings, Solution, Structure, StructureOutcome, StructureReport, UpdateRule,
+    self, Candidates, Observer, Settings, Solution, SourceNote, Structure, StructureOutcome,
+    StructureReport, StructureSource, UpdateRule,
 };
 use posg_fsc::output::{CurveCsv, CurvePlot, OutputDirectory, Progress, create_dir, write_file};
 use posg_fsc::solver::SolverMethod;
 
 use super::common::{ObjectiveArgs, objective, print_text, read_game};
+use super::support::SynthesisArgs;
 
 /// Arguments of `solve`.
 #[derive(Debug, Args)]
@@ -150,10 +152,20 @@ pub struct SettingsArgs {
     /// the previous iteration) or `auto` (LU up to 50000 unknowns).
     #[arg(long, default_value = "auto", value_parser = |text: &str| text.parse::<SolverMethod>())]
     solver: SolverMethod,
-    /// Optimise on the starting structure only, not also on the structures
-    /// the paper's Algorithm 1 (pruning) keeps.
-    #[arg(long)]
-    no_prune: bool,
+    /// The sources of the structures to optimise on: `full` (the full support,
+    /// or the --defender/--adversary files), `sat` (a support found by SAT that
+    /// wins almost surely, else positively, against every adversary), `paper`
+    /// (the paper's Algorithm 1). Identical structures are optimised once; the
+    /// best certified lower bound wins.
+    #[arg(
+        long,
+        value_enum,
+        value_delimiter = ',',
+        default_value = "full,sat,paper"
+    )]
+    structures: Vec<StructureArg>,
+    #[command(flatten)]
+    synthesis: SynthesisArgs,
     /// Pruning: remove action u under observation o for all nodes, as the
     /// paper's lines 14-16 are printed (default: only the offending entries).
     #[arg(long)]
@@ -162,6 +174,17 @@ pub struct SettingsArgs {
     /// worst-case estimate is then only against the restricted adversary.
     #[arg(long)]
     prune_adversary: bool,
+}
+
+/// `--structures`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum StructureArg {
+    /// The full support (or the controllers given as files).
+    Full,
+    /// Support synthesis by SAT.
+    Sat,
+    /// The paper's Algorithm 1.
+    Paper,
 }
 
 /// `--update`.
@@ -206,7 +229,16 @@ impl SettingsArgs {
             round: !self.no_round,
             solver_tolerance: self.solver_tolerance,
             solver: self.solver,
-            prune: !self.no_prune,
+            structures: self
+                .structures
+                .iter()
+                .map(|s| match s {
+                    StructureArg::Full => StructureSource::Full,
+                    StructureArg::Sat => StructureSource::Sat,
+                    StructureArg::Paper => StructureSource::Paper,
+                })
+                .collect(),
+            synthesis: self.synthesis.structure_settings()?,
             prune_paper_literal: self.prune_paper_literal,
             prune_adversary: self.prune_adversary,
         };
@@ -226,8 +258,8 @@ pub struct SolveJob<'a> {
     pub negated_dra: Option<&'a Dra>,
     /// The objective as the user gave it (formula or automaton file).
     pub objective: &'a str,
-    /// The structures to optimise on.
-    pub structures: Vec<Structure>,
+    /// The structures to optimise on and what their sources said.
+    pub candidates: Candidates,
     /// The optimiser's settings.
     pub settings: &'a Settings,
     /// The directory to write into (a staging directory of an
@@ -261,6 +293,13 @@ struct Summary<'a> {
     certified: Option<Bracket>,
     last_value: f64,
     seconds: f64,
+    /// Seconds of support synthesis (the `sat` source) before optimising.
+    synthesis_seconds: f64,
+    /// Why `structure_used` won: the best certified lower bound, and why
+    /// each other structure or source lost.
+    structure_choice: Vec<String>,
+    /// What each source of structures found, proved or why it gave none.
+    sources: &'a [SourceNote],
     structures: Vec<&'a StructureReport>,
     files: [&'static str; 5],
 }
@@ -289,14 +328,14 @@ pub fn run_job(job: &SolveJob) -> anyhow::Result<(Solution, Option<Bracket>)> {
     let clock = Instant::now();
     let title = format!("{}: {}", job.game.name().unwrap_or("game"), job.objective);
     let iterations = job.settings.max_iterations;
-    let multiple = job.structures.len() > 1;
+    let multiple = job.candidates.structures.len() > 1;
     let out = job.out.to_path_buf();
     let bars = job.progress.then(MultiProgress::new);
     let mut solution = optimise::optimise_structures(
         job.game,
         job.dra,
         job.negated_dra,
-        &job.structures,
+        &job.candidates.structures,
         job.settings,
         |_, structure| {
             let stem = if multiple {
@@ -357,6 +396,15 @@ pub fn run_job(job: &SolveJob) -> anyhow::Result<(Solution, Option<Bracket>)> {
         certified,
         last_value: best.report.last_value,
         seconds: clock.elapsed().as_secs_f64(),
+        synthesis_seconds: job
+            .candidates
+            .notes
+            .iter()
+            .filter(|n| n.source == StructureSource::Sat)
+            .map(|n| n.seconds)
+            .sum(),
+        structure_choice: structure_choice(&solution, &job.candidates.notes),
+        sources: &job.candidates.notes,
         structures: solution.structures.iter().map(|s| &s.report).collect(),
         files: [
             "curve.csv",
@@ -371,6 +419,26 @@ pub fn run_job(job: &SolveJob) -> anyhow::Result<(Solution, Option<Bracket>)> {
         serde_json::to_string_pretty(&summary)? + "\n",
     )?;
     Ok((solution, certified))
+}
+
+/// Why the best structure won, then why each other structure or source
+/// lost (one sentence each).
+pub fn structure_choice(solution: &Solution, notes: &[SourceNote]) -> Vec<String> {
+    let best = solution.best();
+    let measure = match best.report.certified_lower {
+        Some(lower) => format!("the best certified lower bound, {lower:.6}"),
+        None => format!(
+            "the best worst-case estimate, {:.6}",
+            best.report.worst_case
+        ),
+    };
+    std::iter::once(format!("{} won with {measure}", best.report.name))
+        .chain(optimise::why_others_lost(
+            &solution.structures,
+            solution.best,
+            notes,
+        ))
+        .collect()
 }
 
 /// The CSV writer and the plot for `stem`, and a progress bar when asked.
@@ -488,14 +556,24 @@ pub fn run(args: SolveArgs) -> anyhow::Result<()> {
         dra: &dra,
         negated_dra: negated.as_ref(),
         objective: &description,
-        structures: optimise::candidate_structures(&game, &dra, structure, &settings)?,
+        candidates: optimise::candidate_structures(
+            &game,
+            &dra,
+            negated.as_ref(),
+            structure,
+            &settings,
+        )?,
         settings: &settings,
         out: out.path(),
         progress: std::io::stderr().is_terminal(),
         floor: None,
     };
     let (solution, certified) = run_job(&job)?;
+    let choice = structure_choice(&solution, &job.candidates.notes);
     out.commit()?;
+    for line in choice {
+        eprintln!("{line}");
+    }
     let best = solution.best();
     let report = &best.report;
     let bracket = certified.map_or_else(

@@ -101,6 +101,12 @@ pub enum RankEncodingArg {
 }
 
 impl SynthesisArgs {
+    /// The settings for `solve` and `sweep`, whose `sat` source chooses the
+    /// mode itself.
+    pub fn structure_settings(&self) -> anyhow::Result<Settings> {
+        self.settings(Settings::default().mode)
+    }
+
     /// The settings for `mode`, validated.
     pub fn settings(&self, mode: Mode) -> anyhow::Result<Settings> {
         let settings = Settings {

@@ -24,9 +24,10 @@
 //!   each scored exactly on its own support;
 //! * [`optimise_structure`]: parallel seeded starts on one structure, the
 //!   best certified kept, then rounded; [`optimise_structures`] does it on
-//!   several structures in parallel (rayon), the best worst-case estimate
-//!   chosen; [`candidate_structures`] adds the structures pruning keeps
-//!   (method.md section 5) to a starting structure; [`solve`] does both from
+//!   several structures in parallel (rayon), the best certified lower bound
+//!   chosen; [`candidate_structures`] gathers the structures of the sources
+//!   asked for (the starting structure, support synthesis by SAT, the
+//!   paper's pruning; identical structures once); [`solve`] does both from
 //!   the full support structure of given sizes;
 //! * [`embed`], [`pad`], [`warm_started`], [`keep_better`]: warm starts
 //!   across defender sizes, results monotone in size by construction.
@@ -43,6 +44,7 @@ mod optimiser;
 mod rounding;
 mod settings;
 mod softmax;
+mod structures;
 mod warm_start;
 
 pub use ascent::ascend;
@@ -53,6 +55,10 @@ pub use optimiser::{Certifier, Incumbent, Optimiser, PhaseSeconds, RunOutcome};
 pub use rounding::{TRUNCATION_THRESHOLDS, rounded_candidates, truncated};
 pub use settings::{MAX_LOGIT_BOUND, Settings, UpdateRule};
 pub use softmax::{Softmax, clip};
+pub use structures::{
+    Candidates, SourceNote, StructureSource, best_by_certified_lower, candidate_structures,
+    why_others_lost,
+};
 pub use warm_start::{WARM_START_MIX, embed, keep_better, pad, score, warm_started};
 
 use std::time::Instant;
@@ -68,7 +74,8 @@ use crate::automaton::Dra;
 use crate::certify::{self, lower_bound};
 use crate::controller::{Fsc, Role};
 use crate::game::{ModelError, Posg};
-use crate::prune::{PruneError, PruneSettings, prune};
+use crate::prune::PruneError;
+use crate::synthesis::SynthesisError;
 use crate::value::ValueError;
 
 /// Why optimisation could not run.
@@ -92,6 +99,9 @@ pub enum OptimiseError {
     /// A value or gradient could not be computed.
     #[error(transparent)]
     Value(#[from] ValueError),
+    /// Support synthesis failed.
+    #[error(transparent)]
+    Synthesis(#[from] SynthesisError),
     /// A certified bound could not be computed.
     #[error(transparent)]
     Certify(#[from] crate::certify::CertifyError),
@@ -293,7 +303,8 @@ impl Solution {
 /// Optimises on every structure in parallel (rayon), each with its own
 /// [`Objective`] and random stream (`settings.seed`, stream = its index),
 /// each reporting to the observer `observer(index, structure)` makes;
-/// returns every outcome and the best by worst-case estimate. With an
+/// returns every outcome and the best by certified lower bound
+/// ([`best_by_certified_lower`]). With an
 /// automaton `negated` for !phi, every best-response check also certifies
 /// (see [`Certifier`]).
 pub fn optimise_structures<F>(
@@ -324,17 +335,7 @@ where
             )
         })
         .collect::<Result<Vec<_>, _>>()?;
-    let best = (0..outcomes.len())
-        .reduce(|b, i| {
-            if outcomes[i].report.worst_case > outcomes[b].report.worst_case {
-                i
-            } else {
-                b
-            }
-        })
-        .ok_or(OptimiseError::BestResponse(
-            "no structure to optimise".into(),
-        ))?;
+    let best = best_by_certified_lower(&outcomes).ok_or(OptimiseError::NoStructure)?;
     Ok(Solution {
         structures: outcomes,
         best,
@@ -696,45 +697,10 @@ impl Judge<'_> {
     }
 }
 
-/// The structures to optimise on: `start` and, when `settings.prune`, every
-/// structure the paper's Algorithm 1 keeps when started from `start`
-/// ([`crate::prune::prune`] with `settings.prune_paper_literal` and
-/// `settings.prune_adversary`), named `pruned-1`, `pruned-2`, ...
-pub fn candidate_structures(
-    game: &Posg,
-    dra: &Dra,
-    start: Structure,
-    settings: &Settings,
-) -> Result<Vec<Structure>, OptimiseError> {
-    let pruned = if settings.prune {
-        let prune_settings = PruneSettings {
-            paper_literal: settings.prune_paper_literal,
-            prune_adversary: settings.prune_adversary,
-        };
-        prune(
-            game,
-            dra,
-            &start.defender,
-            &start.adversary,
-            &prune_settings,
-        )?
-        .structures
-    } else {
-        Vec::new()
-    };
-    let mut structures = vec![start];
-    structures.extend(pruned.into_iter().enumerate().map(|(k, kept)| Structure {
-        name: format!("pruned-{}", k + 1),
-        defender: kept.defender,
-        adversary: kept.adversary,
-    }));
-    Ok(structures)
-}
-
 /// The library's main job: optimise a defender of `defender_nodes` nodes
-/// against adversaries of `adversary_nodes` nodes on the full support
-/// structure ([`Structure::full`]) and on the structures pruning keeps
-/// ([`candidate_structures`]), and report the best defender found.
+/// against adversaries of `adversary_nodes` nodes on the structures of the
+/// sources in `settings.structures` ([`candidate_structures`], starting
+/// from [`Structure::full`]), and report the best defender found.
 pub fn solve<F>(
     game: &Posg,
     dra: &Dra,
@@ -759,6 +725,13 @@ where
         adversary_nodes,
         settings.optimise_initial,
     );
-    let structures = candidate_structures(game, dra, full, settings)?;
-    optimise_structures(game, dra, negated, &structures, settings, observer)
+    let candidates = candidate_structures(game, dra, negated, full, settings)?;
+    optimise_structures(
+        game,
+        dra,
+        negated,
+        &candidates.structures,
+        settings,
+        observer,
+    )
 }

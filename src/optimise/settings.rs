@@ -3,7 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::OptimiseError;
+use super::{OptimiseError, StructureSource};
 use crate::solver::{SolverMethod, SolverSettings};
 
 /// How a player turns its logit gradient into a step (method.md section 4).
@@ -99,9 +99,13 @@ pub struct Settings {
     pub solver_tolerance: f64,
     /// How the linear systems are solved (LU, BiCGSTAB, or by size).
     pub solver: SolverMethod,
-    /// Also optimise on every structure the paper's Algorithm 1 keeps
-    /// (method.md section 5), in parallel with the starting structure.
-    pub prune: bool,
+    /// The sources of the structures to optimise on (in parallel):
+    /// the starting structure, support synthesis by SAT (method.md section
+    /// 7), the paper's Algorithm 1 (method.md section 5).
+    pub structures: Vec<StructureSource>,
+    /// Support synthesis for the `sat` source; its `mode` is not used (the
+    /// source tries almost-sure winning, then positive winning).
+    pub synthesis: crate::synthesis::Settings,
     /// Algorithm 1's lines 14-16 as printed (remove action `u` under
     /// observation `o` for all nodes) instead of only the offending entries.
     pub prune_paper_literal: bool,
@@ -139,7 +143,8 @@ impl Default for Settings {
             round: true,
             solver_tolerance: crate::solver::DEFAULT_TOLERANCE,
             solver: SolverMethod::Auto,
-            prune: true,
+            structures: StructureSource::ALL.to_vec(),
+            synthesis: crate::synthesis::Settings::default(),
             prune_paper_literal: false,
             prune_adversary: false,
         }
@@ -158,6 +163,13 @@ impl Settings {
 
     /// Checks every field's range; the optimiser cannot fail on settings afterwards.
     pub fn validate(&self) -> Result<(), OptimiseError> {
+        self.synthesis.validate()?;
+        if self.structures.is_empty() {
+            return Err(invalid(
+                "structures",
+                "must name at least one source".into(),
+            ));
+        }
         let positive = [
             ("logit_bound", self.logit_bound),
             ("initial_logit_bound", self.initial_logit_bound),

@@ -185,6 +185,7 @@ pub struct Solver {
     calls: usize,
     seconds: f64,
     deadline: Option<Instant>,
+    created: Instant,
 }
 
 impl Solver {
@@ -196,6 +197,7 @@ impl Solver {
             calls: 0,
             seconds: 0.0,
             deadline,
+            created: Instant::now(),
         };
         solver.load(cnf);
         solver
@@ -225,7 +227,7 @@ impl Solver {
             Some(false) => Ok(Answer::Unsatisfiable),
             None => Err(SynthesisError::TimeBudget {
                 calls: self.calls,
-                seconds: self.seconds,
+                seconds: self.created.elapsed().as_secs_f64(),
             }),
         }
     }

@@ -191,8 +191,8 @@ pub struct Settings {
     /// per clause of this encoding); larger ones are an error before they
     /// are built.
     pub clause_budget: usize,
-    /// Seconds the SAT solver may take in all (0: no limit); running out
-    /// is an error, not an answer.
+    /// Seconds the SAT solver (with the lazy engine's judging) may take in
+    /// all (0: no limit); running out is an error, not an answer.
     pub time_budget: f64,
 }
 
@@ -206,7 +206,7 @@ impl Default for Settings {
             maximise: true,
             confirm_certificate: true,
             clause_budget: 20_000_000,
-            time_budget: 0.0,
+            time_budget: 120.0,
         }
     }
 }
@@ -252,12 +252,15 @@ pub enum SynthesisError {
         /// The budget.
         budget: usize,
     },
-    /// The SAT solver ran out of time: no answer either way.
-    #[error("the SAT solver ran out of time after {calls} calls and {seconds:.1} s: no answer")]
+    /// The time budget ran out: no answer either way.
+    #[error(
+        "support synthesis ran out of its time budget after {calls} SAT calls and {seconds:.1} s: \
+         no answer"
+    )]
     TimeBudget {
-        /// Solver calls made.
+        /// SAT calls made.
         calls: usize,
-        /// Seconds spent in the solver.
+        /// Seconds since the solver was loaded.
         seconds: f64,
     },
     /// The defender does not fit the game, or the sizes are invalid.

@@ -1,0 +1,281 @@
+//! Where the support structures that `solve` optimises on come from, and
+//! the choice among their results.
+//!
+//! Three sources ([`StructureSource`]):
+//!
+//! * `full`: every `(g', u)` in every block ([`Structure::full`]), or the
+//!   controllers the user started from;
+//! * `sat`: a defender support found by SAT (method.md section 7,
+//!   [`crate::synthesis`]): almost-sure winning when one exists (its value is
+//!   then certified to be 1), otherwise positive winning, maximised; the
+//!   adversary keeps the full support;
+//! * `paper`: every structure the paper's Algorithm 1 keeps (method.md
+//!   section 5).
+//!
+//! Identical structures (the same supports and initial supports for both
+//! players) are optimised once. The result with the best certified lower
+//! bound wins ([`best_by_certified_lower`]).
+
+use std::time::Instant;
+
+use serde::{Deserialize, Serialize};
+
+use super::{OptimiseError, Settings, Structure, StructureOutcome};
+use crate::automaton::Dra;
+use crate::controller::{Fsc, Support};
+use crate::game::Posg;
+use crate::prune::{PruneSettings, prune};
+use crate::synthesis::{self, Mode, SynthesisError};
+
+/// A source of support structures.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum StructureSource {
+    /// The starting structure: the full support or the user's controllers.
+    Full,
+    /// Support synthesis by SAT.
+    Sat,
+    /// The paper's Algorithm 1.
+    Paper,
+}
+
+impl StructureSource {
+    /// Every source, in the order their structures are listed.
+    pub const ALL: [Self; 3] = [Self::Full, Self::Sat, Self::Paper];
+
+    /// The name used in settings and messages.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Full => "full",
+            Self::Sat => "sat",
+            Self::Paper => "paper",
+        }
+    }
+}
+
+/// What one source contributed.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SourceNote {
+    /// The source.
+    pub source: StructureSource,
+    /// The names of the structures it contributed (after de-duplication).
+    pub structures: Vec<String>,
+    /// What it found, proved or why it gave nothing.
+    pub note: String,
+    /// Seconds it took.
+    pub seconds: f64,
+}
+
+/// The structures to optimise on and what each source said.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Candidates {
+    /// The structures, without duplicates.
+    pub structures: Vec<Structure>,
+    /// One note per source asked for.
+    pub notes: Vec<SourceNote>,
+}
+
+/// The structures of the sources in `settings.structures`, starting from
+/// `start` (the full structure or the user's controllers, always kept
+/// when it came from files). `negated`, an automaton for !phi, is needed
+/// by the `sat` source (which certifies what it finds).
+pub fn candidate_structures(
+    game: &Posg,
+    dra: &Dra,
+    negated: Option<&Dra>,
+    start: Structure,
+    settings: &Settings,
+) -> Result<Candidates, OptimiseError> {
+    let mut candidates = Candidates {
+        structures: Vec::new(),
+        notes: Vec::new(),
+    };
+    let keep_start = settings.structures.contains(&StructureSource::Full) || start.name != "full";
+    for source in StructureSource::ALL {
+        if !settings.structures.contains(&source)
+            && !(source == StructureSource::Full && keep_start)
+        {
+            continue;
+        }
+        let clock = Instant::now();
+        let (found, note) = match source {
+            StructureSource::Full => (vec![start.clone()], format!("the {} structure", start.name)),
+            StructureSource::Sat => synthesised(game, dra, negated, &start, settings)?,
+            StructureSource::Paper => pruned(game, dra, &start, settings)?,
+        };
+        let mut note = SourceNote {
+            source,
+            structures: Vec::new(),
+            note,
+            seconds: clock.elapsed().as_secs_f64(),
+        };
+        for structure in found {
+            match candidates
+                .structures
+                .iter()
+                .find(|known| same_supports(known, &structure))
+            {
+                Some(known) => {
+                    note.note.push_str(&format!(
+                        "; {} is identical to {}",
+                        structure.name, known.name
+                    ));
+                }
+                None => {
+                    note.structures.push(structure.name.clone());
+                    candidates.structures.push(structure);
+                }
+            }
+        }
+        candidates.notes.push(note);
+    }
+    Ok(candidates)
+}
+
+/// The SAT source: almost-sure winning if possible, else positive.
+fn synthesised(
+    game: &Posg,
+    dra: &Dra,
+    negated: Option<&Dra>,
+    start: &Structure,
+    settings: &Settings,
+) -> Result<(Vec<Structure>, String), OptimiseError> {
+    let Some(negated) = negated else {
+        return Ok((
+            Vec::new(),
+            "skipped: support synthesis certifies with an automaton for !phi, which an objective \
+             given as an automaton lacks"
+                .into(),
+        ));
+    };
+    let nodes = start.defender.num_nodes();
+    let mut reasons = Vec::new();
+    for mode in [Mode::AlmostSure, Mode::Positive] {
+        let mode_settings = synthesis::Settings {
+            mode,
+            ..settings.synthesis.clone()
+        };
+        match synthesis::synthesise(game, dra, negated, nodes, &mode_settings) {
+            Ok(found) => match found.defender.clone() {
+                Some(defender) => {
+                    reasons.push(format!(
+                        "{} (certified lower bound {:.6}, {} support entries, {:.2} s)",
+                        found.reason,
+                        found.certified_lower.unwrap_or(0.0),
+                        found.support_entries(),
+                        found.statistics.map_or(0.0, |s| s.seconds)
+                    ));
+                    let structure = Structure {
+                        name: format!("sat-{}", mode.name()),
+                        defender,
+                        adversary: start.adversary.clone(),
+                    };
+                    return Ok((vec![structure], reasons.join("; ")));
+                }
+                None => reasons.push(found.reason),
+            },
+            Err(SynthesisError::TimeBudget { calls, seconds }) => reasons.push(format!(
+                "{} synthesis gave no answer within its time budget ({calls} SAT calls, {seconds:.1} s)",
+                mode.name()
+            )),
+            Err(other) => return Err(other.into()),
+        }
+    }
+    Ok((Vec::new(), reasons.join("; ")))
+}
+
+/// The paper source: the structures Algorithm 1 keeps from `start`.
+fn pruned(
+    game: &Posg,
+    dra: &Dra,
+    start: &Structure,
+    settings: &Settings,
+) -> Result<(Vec<Structure>, String), OptimiseError> {
+    let prune_settings = PruneSettings {
+        paper_literal: settings.prune_paper_literal,
+        prune_adversary: settings.prune_adversary,
+    };
+    let kept = prune(
+        game,
+        dra,
+        &start.defender,
+        &start.adversary,
+        &prune_settings,
+    )?
+    .structures;
+    let note = match kept.len() {
+        0 => "Algorithm 1 keeps no structure".to_string(),
+        k => format!("Algorithm 1 keeps {k} structures"),
+    };
+    let structures = kept
+        .into_iter()
+        .enumerate()
+        .map(|(k, kept)| Structure {
+            name: format!("pruned-{}", k + 1),
+            defender: kept.defender,
+            adversary: kept.adversary,
+        })
+        .collect();
+    Ok((structures, note))
+}
+
+/// Whether two structures have the same supports and initial supports for
+/// both players (then their optimisation problems are the same).
+fn same_supports(a: &Structure, b: &Structure) -> bool {
+    let same = |x: &Fsc, y: &Fsc| Support::of(x) == Support::of(y);
+    same(&a.defender, &b.defender) && same(&a.adversary, &b.adversary)
+}
+
+/// The index of the outcome with the best certified lower bound (the
+/// worst-case estimate where no bound was computed); the first on ties.
+pub fn best_by_certified_lower(outcomes: &[StructureOutcome]) -> Option<usize> {
+    let score = |o: &StructureOutcome| o.report.certified_lower.unwrap_or(o.report.worst_case);
+    (0..outcomes.len()).reduce(|b, i| {
+        if score(&outcomes[i]) > score(&outcomes[b]) {
+            i
+        } else {
+            b
+        }
+    })
+}
+
+/// Why each structure other than the winner lost, and what the sources
+/// without a structure said: one sentence per line.
+pub fn why_others_lost(
+    outcomes: &[StructureOutcome],
+    best: usize,
+    notes: &[SourceNote],
+) -> Vec<String> {
+    let score = |o: &StructureOutcome| o.report.certified_lower.unwrap_or(o.report.worst_case);
+    let winner = &outcomes[best];
+    let mut lines: Vec<String> = outcomes
+        .iter()
+        .enumerate()
+        .filter(|&(i, _)| i != best)
+        .map(|(_, o)| {
+            let value = score(o);
+            let measure = if o.report.certified_lower.is_some() {
+                "certified lower bound"
+            } else {
+                "worst-case estimate"
+            };
+            if value <= 0.0 {
+                format!("{}: value 0 ({measure} 0)", o.report.name)
+            } else {
+                format!(
+                    "{}: {measure} {value:.6} <= {:.6} of {}",
+                    o.report.name,
+                    score(winner),
+                    winner.report.name
+                )
+            }
+        })
+        .collect();
+    lines.extend(
+        notes
+            .iter()
+            .filter(|n| n.structures.is_empty())
+            .map(|n| format!("{}: no structure ({})", n.source.name(), n.note)),
+    );
+    lines
+}
