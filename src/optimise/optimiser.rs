@@ -43,6 +43,7 @@ use serde::Serialize;
 use super::best_response::best_response;
 use super::objective::Objective;
 use super::observer::{IterationRecord, Observer};
+use super::rounding::truncated;
 use super::softmax::clip;
 use super::{OptimiseError, Settings, Status, UpdateRule};
 use crate::automaton::Dra;
@@ -151,6 +152,10 @@ pub const NEAR_BOUND: f64 = 0.95;
 struct Check {
     worst_case: f64,
     certified_lower: Option<f64>,
+    /// The argmax rounding of the current defender certifies within
+    /// `gap_tolerance` of the upper bound (it is then the incumbent, and
+    /// the final rounding keeps the rounded controller).
+    rounding_closes_gap: bool,
 }
 
 impl<'a> Optimiser<'a> {
@@ -273,6 +278,9 @@ impl<'a> Optimiser<'a> {
                     "no best-response check ran".into(),
                 ))?;
                 history.push(incumbent.score());
+                if status.is_none() && check.rounding_closes_gap {
+                    status = Some(Status::GapClosed);
+                }
                 if status.is_none() {
                     status = self.stop_or_widen(incumbent, upper_bound, &mut history, &mut bound);
                 }
@@ -386,6 +394,7 @@ impl Optimiser<'_> {
             *upper_bound = Some(upper_bound.map_or(upper, |u: f64| u.min(upper)));
             phases.certification += clock.elapsed().as_secs_f64();
         }
+        let rounding_closes_gap = self.rounding_closes_gap(*upper_bound, phases)?;
         let mut current = None;
         for (i, candidate) in [self.defender.clone(), averaged].into_iter().enumerate() {
             let clock = Instant::now();
@@ -423,12 +432,41 @@ impl Optimiser<'_> {
             current.get_or_insert(Check {
                 worst_case: found.value,
                 certified_lower,
+                rounding_closes_gap,
             });
-            if best.as_ref().is_none_or(|b| incumbent.score() > b.score()) {
+            let current_closes = i == 0 && rounding_closes_gap;
+            if current_closes || best.as_ref().is_none_or(|b| incumbent.score() > b.score()) {
                 *best = Some(incumbent);
+            }
+            if current_closes {
+                break;
             }
         }
         current.ok_or(OptimiseError::BestResponse("no candidate checked".into()))
+    }
+}
+
+impl Optimiser<'_> {
+    /// Whether, with rounding on and a certifier, the argmax rounding of the
+    /// current defender certifies within `gap_tolerance` of `upper_bound`: a
+    /// deterministic optimum is then found, though the softmax iterates
+    /// would approach it only slowly.
+    fn rounding_closes_gap(
+        &self,
+        upper_bound: Option<f64>,
+        phases: &mut PhaseSeconds,
+    ) -> Result<bool, OptimiseError> {
+        let (Some(certifier), Some(upper), true) =
+            (&self.certifier, upper_bound, self.settings.round)
+        else {
+            return Ok(false);
+        };
+        let clock = Instant::now();
+        let defender = self.objective.defender().controller(&self.defender)?;
+        let rounded = truncated(&defender, f64::INFINITY)?;
+        let lower = lower_bound(certifier.game, certifier.not_phi, &rounded)?.value;
+        phases.certification += clock.elapsed().as_secs_f64();
+        Ok(upper - lower <= self.settings.gap_tolerance)
     }
 }
 
