@@ -29,6 +29,17 @@
 //!
 //! Both are [`crate::mdp::max_rabin_probability`] on the product, so the
 //! numbers are exact up to the reported residual.
+//!
+//! **Enabled actions** (formats.md section 6). The fixed player's controller
+//! must play only actions enabled under its observations. The free player,
+//! who sees the state, may play in `s` every action that *some* observation
+//! `o` with `O(o | s) > 0` enables ([`Player::action_enabled_in_state`]).
+//! An FSC that observes `o` plays only actions enabled under `o`, so it has
+//! no more options than that, and both bounds stay sound. They are also exact
+//! for the free player's enabled sets when all observations of each state
+//! enable the same actions (Storm's POMDP semantics, and every imported
+//! model); when they differ, the free player of the bound is stronger than any
+//! FSC, which only widens the bracket.
 
 use std::time::Instant;
 
@@ -93,9 +104,11 @@ pub struct StrategyRule {
     pub node: usize,
     /// The chosen action, by name.
     pub action: String,
-    /// The probability that the strategy's player achieves its objective
-    /// from this state (`!phi` for the adversary, `phi` for the defender).
-    pub probability: f64,
+    /// The free player's value in this product state: the largest
+    /// probability with which it achieves its own objective from here
+    /// (`!phi` for the adversary, `phi` for the defender), attained by
+    /// this strategy.
+    pub free_player_value: f64,
 }
 
 /// What an optimised result guarantees (method.md section 6): the defender's
@@ -171,8 +184,8 @@ fn best_response(
             state: game.states()[s].clone(),
             automaton_state: q,
             node,
-            action: free.actions()[result.strategy[m]].clone(),
-            probability: result.values[m],
+            action: free.actions()[product.free_actions[s][result.strategy[m]]].clone(),
+            free_player_value: result.values[m],
         })
         .collect();
     Ok(Bound {
@@ -205,30 +218,27 @@ fn free_player(game: &Posg, fixed: Role) -> &Player {
     fixed_player(game, other(fixed))
 }
 
-/// Checks that `controller` is `role`'s and fits that player of `game`.
+/// Checks that `controller` is `role`'s and fits that player of `game`
+/// (sizes and enabled actions, [`Fsc::check_fits`]).
 fn check_fits(game: &Posg, controller: &Fsc, role: Role) -> Result<(), CertifyError> {
-    let player = fixed_player(game, role);
     let problem = if controller.role() != role {
-        Some(format!("it is a {:?} controller", controller.role()))
-    } else if controller.num_observations() != player.num_observations() {
-        Some(format!(
-            "it has {} observations, the game's player {}",
-            controller.num_observations(),
-            player.num_observations()
-        ))
-    } else if controller.num_actions() != player.num_actions() {
-        Some(format!(
-            "it has {} actions, the game's player {}",
-            controller.num_actions(),
-            player.num_actions()
-        ))
+        Err(format!("it is a {:?} controller", controller.role()))
     } else {
-        None
+        controller.check_fits(fixed_player(game, role))
     };
-    match problem {
-        Some(problem) => Err(CertifyError::Mismatch { role, problem }),
-        None => Ok(()),
-    }
+    problem.map_err(|problem| CertifyError::Mismatch { role, problem })
+}
+
+/// The free player's actions in each state `s`: those some observation of
+/// `s` enables ([`Player::action_enabled_in_state`]), in increasing order.
+fn free_actions(player: &Player, num_states: usize) -> Vec<Vec<usize>> {
+    (0..num_states)
+        .map(|s| {
+            (0..player.num_actions())
+                .filter(|&w| player.action_enabled_in_state(s, w))
+                .collect()
+        })
+        .collect()
 }
 
 /// `A(g', f | s, g) = sum_o O(o | s) mu(g', f | g, o)` of the fixed player,
@@ -268,15 +278,19 @@ struct Product {
     states: Vec<(usize, usize, usize)>,
     /// `p0` as `(MDP state, probability)`.
     initial: Vec<(usize, f64)>,
+    /// The free player's actions per game state: MDP action `a` in
+    /// `(s, q, node)` is the free player's action `free_actions[s][a]`.
+    free_actions: Vec<Vec<usize>>,
 }
 
 impl Product {
     /// Explores the product from `p0` breadth first; the free player's
-    /// action `w` in `(s, q, g)` has the distribution of the module
-    /// documentation (summed over duplicate successors by [`MdpBuilder`]).
+    /// action `w` in `(s, q, g)`, one of those enabled in `s`, has the
+    /// distribution of the module documentation (summed over duplicate
+    /// successors by [`MdpBuilder`]).
     fn build(game: &Posg, dra: &Dra, controller: &Fsc, fixed: Role) -> Result<Self, CertifyError> {
         check_fits(game, controller, fixed)?;
-        let num_free_actions = free_player(game, fixed).num_actions();
+        let free_actions = free_actions(free_player(game, fixed), game.num_states());
         let letters: Vec<Letter> = (0..game.num_states())
             .map(|s| dra.letter_of(game.label_names(s)))
             .collect();
@@ -300,7 +314,7 @@ impl Product {
         let mut terms = Vec::new();
         while builder.num_states() < explorer.states.len() {
             let (s, q, g) = explorer.states[builder.num_states()];
-            for w in 0..num_free_actions {
+            for &w in &free_actions[s] {
                 terms.clear();
                 for &(next, f, a) in &mixture[s * num_nodes + g] {
                     for &(s2, t) in transition(s, f, w) {
@@ -315,6 +329,7 @@ impl Product {
             mdp: builder.build()?,
             states: explorer.states,
             initial,
+            free_actions,
         })
     }
 

@@ -456,7 +456,7 @@ fn an_adversary_that_never_passes_is_seen_by_the_lower_bound() {
         .find(|r| r.state == "s0")
         .unwrap();
     assert_eq!(s0.action, "block");
-    assert_eq!(s0.probability, 1.0);
+    assert_eq!(s0.free_player_value, 1.0);
     let upper = upper_bound(&game, &phi, &adversary).unwrap();
     assert!((upper.value - 1.0).abs() < 1e-12);
     let json = serde_json::to_value(&lower).unwrap();

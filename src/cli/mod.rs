@@ -9,6 +9,7 @@ mod demo;
 mod eval;
 mod example;
 mod export_gmc;
+mod import_drn;
 mod prune;
 mod simulate;
 pub(crate) mod solve;
@@ -34,6 +35,9 @@ enum Command {
     Example(example::ExampleArgs),
     /// Validate a game file and describe it.
     Check(check::CheckArgs),
+    /// Convert a POMDP, MDP or DTMC from Storm's DRN format into a game file
+    /// (docs/formats.md section 6).
+    ImportDrn(import_drn::ImportDrnArgs),
     /// The exact value of a controller pair, as JSON.
     Eval(eval::EvalArgs),
     /// A Monte Carlo estimate of the value with a 95% confidence interval.
@@ -62,6 +66,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Demo(args) => demo::run(args),
         Command::Example(args) => example::run(args),
         Command::Check(args) => check::run(args),
+        Command::ImportDrn(args) => import_drn::run(args),
         Command::Eval(args) => eval::run(args),
         Command::Simulate(args) => simulate::run(args),
         Command::ExportGmc(args) => export_gmc::run(args),

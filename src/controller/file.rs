@@ -51,8 +51,9 @@ pub fn write(path: &Path, fsc: &Fsc, game: &Posg) -> Result<(), ModelError> {
 }
 
 /// The controller a command-line argument names: `uniform:K` is
-/// [`Fsc::uniform`] with `K >= 1` nodes; anything else is a file path read
-/// with [`read`]. For a POMDP the adversary's `uniform:1` is the trivial controller.
+/// [`Fsc::uniform_enabled`] with `K >= 1` nodes (uniform over the enabled
+/// actions); anything else is a file path read with [`read`]. For a POMDP
+/// the adversary's `uniform:1` is the trivial controller.
 pub fn resolve(spec: &str, game: &Posg, role: Role) -> Result<Fsc, ModelError> {
     let Some(size) = spec.strip_prefix("uniform:") else {
         return read(Path::new(spec), game, role);
@@ -67,13 +68,7 @@ pub fn resolve(spec: &str, game: &Posg, role: Role) -> Result<Fsc, ModelError> {
                 format!("`uniform:K` needs a whole number K >= 1, not `{size}`"),
             )
         })?;
-    let p = player(game, role);
-    Ok(Fsc::uniform(
-        role,
-        nodes,
-        p.num_observations(),
-        p.num_actions(),
-    ))
+    Ok(Fsc::uniform_enabled(role, nodes, player(game, role)))
 }
 
 fn player(game: &Posg, role: Role) -> &Player {
@@ -191,15 +186,15 @@ fn blocks(raw: &RawFsc, at: &Located, player: &Player) -> Result<Vec<Vec<Choice>
                 rule.observation
             )));
         }
-        blocks[g * num_obs + o] = Some(choices(rule, raw.nodes, &here.key("choices"), player)?);
+        blocks[g * num_obs + o] = Some(choices(rule, o, raw.nodes, &here.key("choices"), player)?);
     }
-    let uniform = Fsc::uniform(Role::Defender, raw.nodes, 1, player.num_actions()).blocks;
+    let uniform = Fsc::uniform_enabled(Role::Defender, raw.nodes, player).blocks;
     blocks
         .into_iter()
         .enumerate()
         .map(|(b, block)| match (block, raw.default) {
             (Some(block), _) => Ok(block),
-            (None, MissingRule::Uniform) => Ok(uniform[0].clone()),
+            (None, MissingRule::Uniform) => Ok(uniform[b].clone()),
             (None, MissingRule::Error) => Err(at.error(format!(
                 "no rule for node {}, observation `{}` (and \"default\" is \"error\")",
                 b / num_obs,
@@ -231,9 +226,12 @@ fn rule_key(
     Ok((rule.node, o))
 }
 
-/// A rule's choices: checked, renormalised, zero-probability choices dropped.
+/// A rule's choices: checked, renormalised, zero-probability choices
+/// dropped; a positive probability on an action that the rule's observation
+/// does not enable is an error (formats.md section 6).
 fn choices(
     rule: &RawRule,
+    observation: usize,
     nodes: usize,
     at: &Located,
     player: &Player,
@@ -263,6 +261,12 @@ fn choices(
             )));
         }
         check_probability(c.p, &here.key("p"))?;
+        if c.p > 0.0 && !player.action_enabled(observation, action) {
+            return Err(here.key("action").error(format!(
+                "action `{}` is not enabled under observation `{}` (the game's `enabled` map)",
+                c.action, rule.observation
+            )));
+        }
         choices.push(Choice {
             next: c.next,
             action,
