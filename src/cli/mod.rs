@@ -42,7 +42,7 @@ enum Command {
     Eval(eval::EvalArgs),
     /// A Monte Carlo estimate of the value with a 95% confidence interval.
     Simulate(simulate::SimulateArgs),
-    /// Export the Markov chain on (s, g, h) in PRISM's explicit format.
+    /// Export the Markov chain on (s, g, h) for Storm (DRN) and PRISM (explicit format).
     ExportGmc(export_gmc::ExportGmcArgs),
     /// Algorithm 1: prune FSC structures so that a phi-feasible recurrent set exists.
     Prune(prune::PruneArgs),
