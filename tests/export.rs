@@ -48,7 +48,11 @@ fn tra_transitions(tra: &str) -> Vec<(usize, usize, f64)> {
         .map(|line| {
             let mut words = line.split_whitespace();
             let mut next = || words.next().unwrap();
-            (next().parse().unwrap(), next().parse().unwrap(), next().parse().unwrap())
+            (
+                next().parse().unwrap(),
+                next().parse().unwrap(),
+                next().parse().unwrap(),
+            )
         })
         .collect()
 }
@@ -60,14 +64,18 @@ fn the_drn_chain_of_the_paper_grid_has_one_initial_state_and_the_labels() {
     let adv = posg_fsc::controller::file::resolve("uniform:1", &game, Role::Adversary).unwrap();
     let chain = explicit_chain(&game, &def, &adv).unwrap();
     assert!(chain.drn.contains("\n@type: DTMC\n"));
-    let initial = chain.drn.lines().filter(|l| l.split_whitespace().any(|w| w == "init"));
+    let initial = chain
+        .drn
+        .lines()
+        .filter(|l| l.split_whitespace().any(|w| w == "init"));
     assert_eq!(initial.collect::<Vec<_>>(), ["state 0 init"]);
     assert!(chain.drn.contains("\nstate 0 init\n"));
-    assert_eq!(
-        chain.drn.matches("\nstate ").count(),
-        chain.summary.states
-    );
-    let goal_states = chain.drn.lines().filter(|l| l.starts_with("state ") && l.ends_with(" goal")).count();
+    assert_eq!(chain.drn.matches("\nstate ").count(), chain.summary.states);
+    let goal_states = chain
+        .drn
+        .lines()
+        .filter(|l| l.starts_with("state ") && l.ends_with(" goal"))
+        .count();
     assert_eq!(goal_states, 2, "s5 with defender nodes 0 and 1");
     let mut drn = drn_transitions(&chain.drn);
     let mut tra = tra_transitions(&chain.tra);
@@ -94,10 +102,18 @@ fn propositions_of_unreachable_states_are_carried_by_one_unreachable_state() {
     assert_eq!(chain.summary.states, 3, "the fresh initial state, a and b");
     assert!(chain.drn.contains("\nstate 3 unsafe\n"), "{}", chain.drn);
     assert!(chain.drn.contains("\t\t3 : 1e0\n"));
-    assert!(!chain.drn.contains("\t\t3 : 1e0\nstate"), "nothing after the carrier");
+    assert!(
+        !chain.drn.contains("\t\t3 : 1e0\nstate"),
+        "nothing after the carrier"
+    );
     let dtmc = from_drn_str(&chain.drn, "chain.drn", None).unwrap().game;
     assert_eq!(dtmc.propositions(), ["goal", "unsafe"]);
-    let x = value(&dtmc, &translate("X G !unsafe"), &one_of(&dtmc, Role::Defender), &one_of(&dtmc, Role::Adversary));
+    let x = value(
+        &dtmc,
+        &translate("X G !unsafe"),
+        &one_of(&dtmc, Role::Defender),
+        &one_of(&dtmc, Role::Adversary),
+    );
     assert_eq!(x, 1.0);
 }
 

@@ -86,7 +86,7 @@ pub fn read_game(path: &Path) -> anyhow::Result<Posg> {
 
 /// The automaton for the objective, with a description of where it came
 /// from. Warns on stderr about propositions that label no state of the game
-/// (they are false everywhere: formats.md section 3).
+/// (they are false everywhere: docs/formats.md section 3).
 pub fn objective(args: &ObjectiveArgs, game: &Posg) -> anyhow::Result<(Dra, String)> {
     let (dra, description) = match (&args.ltl, &args.automaton) {
         (Some(text), _) => {

@@ -46,7 +46,7 @@ enum Command {
     ExportGmc(export_gmc::ExportGmcArgs),
     /// Algorithm 1: prune FSC structures so that a phi-feasible recurrent set exists.
     Prune(prune::PruneArgs),
-    /// Certified lower and upper bounds (MDP analysis, method.md section 6).
+    /// Certified lower and upper bounds (MDP analysis, docs/method.md section 6).
     Certify(certify::CertifyArgs),
     /// Optimise a defender FSC against a worst-case adversary FSC (max-min by
     /// alternating projected gradient ascent-descent with best-response

@@ -30,7 +30,7 @@ use super::common::{ObjectiveArgs, objective, print_text, read_game};
 /// Arguments of `solve`.
 #[derive(Debug, Args)]
 pub struct SolveArgs {
-    /// The game, a `*.posg.json` file (formats.md section 1).
+    /// The game, a `*.posg.json` file (docs/formats.md section 1).
     game: PathBuf,
     #[command(flatten)]
     objective: ObjectiveArgs,
@@ -210,7 +210,7 @@ struct Summary<'a> {
     worst_case: f64,
     /// The best defender's guaranteed value against every adversary, and
     /// the smallest game upper bound over the best responses found
-    /// (method.md section 6); absent when the objective came as an automaton.
+    /// (docs/method.md section 6); absent when the objective came as an automaton.
     certified: Option<Bracket>,
     last_value: f64,
     seconds: f64,

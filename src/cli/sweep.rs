@@ -17,7 +17,7 @@ use super::solve::{SettingsArgs, SolveJob, load, run_job};
 /// Arguments of `sweep`.
 #[derive(Debug, Args)]
 pub struct SweepArgs {
-    /// The game, a `*.posg.json` file (formats.md section 1).
+    /// The game, a `*.posg.json` file (docs/formats.md section 1).
     game: PathBuf,
     #[command(flatten)]
     objective: ObjectiveArgs,
