@@ -44,7 +44,7 @@
 use std::time::Instant;
 
 use rustc_hash::FxHashMap;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use crate::automaton::{Dra, Letter, RabinPair};
@@ -84,17 +84,23 @@ pub struct Bound {
 }
 
 /// A memoryless deterministic strategy of the free player on the product of
-/// the game, an automaton and the fixed player's controller.
+/// the game, an automaton and the fixed player's controller
+/// ([`crate::strategy`] writes and reads it as a file).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Strategy {
     /// The player who plays it (the adversary for a lower bound).
     pub player: Role,
+    /// The free player's value from the initial distribution: the largest
+    /// probability of its objective (`!phi` for the adversary, `phi` for
+    /// the defender), attained by this strategy.
+    pub value: f64,
     /// One rule per reachable product state.
     pub rules: Vec<StrategyRule>,
 }
 
 /// The action chosen in one product state `(s, q, node)`.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct StrategyRule {
     /// The game state `s`, by name.
     pub state: String,
@@ -192,6 +198,7 @@ fn best_response(
         value: value.clamp(0.0, 1.0),
         strategy: Strategy {
             player: other(fixed),
+            value: value.clamp(0.0, 1.0),
             rules,
         },
         mdp_states: product.states.len(),

@@ -35,7 +35,8 @@
 //! * [`output`]: observers and plots that write the optimiser's results;
 //! * [`mdp`] and [`certify`]: MDP analysis (maximal end components, Rabin
 //!   acceptance, maximum reachability) and the two certified bounds of
-//!   method.md section 6.
+//!   method.md section 6; [`strategy`]: their strategies as files, read
+//!   back and, where the free player observes the state, as controllers.
 #![warn(missing_docs)]
 
 pub mod analysis;
@@ -54,4 +55,5 @@ pub mod prune;
 pub mod sensitivity;
 pub mod simulate;
 pub mod solver;
+pub mod strategy;
 pub mod value;

@@ -13,6 +13,7 @@ mod import_drn;
 mod prune;
 mod simulate;
 pub(crate) mod solve;
+mod strategy;
 mod sweep;
 mod translate;
 
@@ -48,6 +49,9 @@ enum Command {
     Prune(prune::PruneArgs),
     /// Certified lower and upper bounds (MDP analysis, docs/method.md section 6).
     Certify(certify::CertifyArgs),
+    /// Read a strategy file of `certify --attack/--response`, check it against
+    /// the game and, where possible, write it as a controller.
+    Strategy(strategy::StrategyArgs),
     /// Optimise a defender FSC against a worst-case adversary FSC (max-min by
     /// alternating projected gradient ascent-descent with best-response
     /// checks) and write curve.csv, curve.svg, defender.fsc.json,
@@ -72,6 +76,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::ExportGmc(args) => export_gmc::run(args),
         Command::Prune(args) => prune::run(args),
         Command::Certify(args) => certify::run(args),
+        Command::Strategy(args) => strategy::run(args),
         Command::Solve(args) => solve::run(args),
         Command::Sweep(args) => sweep::run(args),
         Command::Translate(args) => translate::run(args),
