@@ -6,6 +6,7 @@ mod certify;
 mod check;
 mod common;
 mod demo;
+mod dot;
 mod eval;
 mod example;
 mod export_gmc;
@@ -55,13 +56,16 @@ enum Command {
     /// Optimise a defender FSC against a worst-case adversary FSC (max-min by
     /// alternating projected gradient ascent-descent with best-response
     /// checks) and write curve.csv, curve.svg, defender.fsc.json,
-    /// adversary.fsc.json and summary.json.
+    /// defender.dot, adversary.fsc.json and summary.json.
     Solve(solve::SolveArgs),
     /// Run `solve` for every pair of controller sizes in parallel and write
     /// sweep.csv and sweep.svg.
     Sweep(sweep::SweepArgs),
     /// Translate an LTL formula into a deterministic Rabin automaton.
     Translate(translate::TranslateArgs),
+    /// Draw a controller as a Graphviz graph (nodes, and edges labelled
+    /// observation / action  probability).
+    Dot(dot::DotArgs),
 }
 
 /// Runs the subcommand the user chose.
@@ -80,5 +84,6 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Solve(args) => solve::run(args),
         Command::Sweep(args) => sweep::run(args),
         Command::Translate(args) => translate::run(args),
+        Command::Dot(args) => dot::run(args),
     }
 }

@@ -3,8 +3,8 @@
 //!
 //! [`SettingsArgs`] is what the user typed for [`Settings`] (shared with
 //! `sweep`); [`SolveJob`] is the built objects; [`run_job`] optimises and
-//! writes `curve.csv`, `curve.svg`, `defender.fsc.json`, `adversary.fsc.json`
-//! and `summary.json` into the output directory.
+//! writes `curve.csv`, `curve.svg`, `defender.fsc.json`, `defender.dot`,
+//! `adversary.fsc.json` and `summary.json` into the output directory.
 
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -215,7 +215,7 @@ struct Summary<'a> {
     last_value: f64,
     seconds: f64,
     structures: Vec<&'a StructureReport>,
-    files: [&'static str; 5],
+    files: [&'static str; 6],
 }
 
 /// Reads the game and builds the objective's automaton (and, for an LTL
@@ -284,6 +284,7 @@ pub fn run_job(job: &SolveJob) -> anyhow::Result<(Solution, Option<Bracket>)> {
         })
         .transpose()?;
     controller::file::write(&out.join("defender.fsc.json"), &best.defender, job.game)?;
+    write_defender_dot(&out.join("defender.dot"), job, &best.defender)?;
     controller::file::write(&out.join("adversary.fsc.json"), &best.adversary, job.game)?;
     let summary = Summary {
         command_line: std::env::args().collect(),
@@ -303,6 +304,7 @@ pub fn run_job(job: &SolveJob) -> anyhow::Result<(Solution, Option<Bracket>)> {
             "curve.csv",
             "curve.svg",
             "defender.fsc.json",
+            "defender.dot",
             "adversary.fsc.json",
             "summary.json",
         ],
@@ -312,6 +314,29 @@ pub fn run_job(job: &SolveJob) -> anyhow::Result<(Solution, Option<Bracket>)> {
         serde_json::to_string_pretty(&summary)? + "\n",
     )?;
     Ok((solution, certified))
+}
+
+/// The Graphviz picture of the best defender (`dot -Tsvg defender.dot`).
+fn write_defender_dot(
+    path: &Path,
+    job: &SolveJob,
+    defender: &controller::Fsc,
+) -> anyhow::Result<()> {
+    let player = job.game.defender();
+    let title = format!(
+        "defender for {}: {} ({} nodes)",
+        job.game.name().unwrap_or("game"),
+        job.objective,
+        defender.num_nodes()
+    );
+    let text = posg_fsc::output::dot::controller_dot(
+        defender,
+        player.observations(),
+        player.actions(),
+        &title,
+        posg_fsc::output::dot::DEFAULT_THRESHOLD,
+    );
+    std::fs::write(path, text).with_context(|| format!("cannot write {}", path.display()))
 }
 
 /// The CSV writer and the plot for `stem`, and a progress bar when asked.
@@ -393,7 +418,7 @@ pub fn run(args: SolveArgs) -> anyhow::Result<()> {
     );
     print_text(&format!(
         "structure {}: worst-case estimate {:.6} (last iterate value {:.6}) after {} iterations, {:.1} s; \
-         GMC {} states{bracket}\nwrote curve.csv, curve.svg, defender.fsc.json, adversary.fsc.json, summary.json to {}\n",
+         GMC {} states{bracket}\nwrote curve.csv, curve.svg, defender.fsc.json, defender.dot, adversary.fsc.json, summary.json to {}\n",
         report.name,
         report.worst_case,
         report.last_value,

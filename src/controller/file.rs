@@ -37,6 +37,64 @@ pub fn from_json_str(
     build(raw, &Located::new(file_name, ""), player(game, role), role)
 }
 
+/// Reads the controller file at `path` for whichever player of `game` its
+/// `player` field names (formats.md section 2).
+pub fn read_either(path: &Path, game: &Posg) -> Result<Fsc, ModelError> {
+    let file_name = path.display().to_string();
+    let text = read_text(path, &file_name)?;
+    let raw: RawFsc = parse(&text, &file_name)?;
+    let role = raw.player;
+    build(raw, &Located::new(&file_name, ""), player(game, role), role)
+}
+
+/// A controller read without its game, with the observation and action
+/// names its file uses.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Standalone {
+    /// The controller, over the observations and actions below.
+    pub fsc: Fsc,
+    /// The observations the rules name, in order of first appearance.
+    pub observations: Vec<String>,
+    /// The actions the choices name, in order of first appearance.
+    pub actions: Vec<String>,
+}
+
+/// Reads the controller file at `path` without its game (for pictures):
+/// the player's observations and actions are taken to be those the file
+/// names. A file with `"default": "uniform"` needs its game (the actions of
+/// the missing rules are not in the file), so it is an error here.
+pub fn read_standalone(path: &Path) -> Result<Standalone, ModelError> {
+    let file_name = path.display().to_string();
+    let text = read_text(path, &file_name)?;
+    let raw: RawFsc = parse(&text, &file_name)?;
+    let at = Located::new(&file_name, "");
+    if raw.default == MissingRule::Uniform {
+        return Err(at.key("default").error(
+            "with \"default\": \"uniform\" the controller can only be read with its game (--game)",
+        ));
+    }
+    let mut observations: Vec<String> = Vec::new();
+    let mut actions: Vec<String> = Vec::new();
+    for rule in &raw.rules {
+        if !observations.contains(&rule.observation) {
+            observations.push(rule.observation.clone());
+        }
+        for c in &rule.choices {
+            if !actions.contains(&c.action) {
+                actions.push(c.action.clone());
+            }
+        }
+    }
+    let player = Player::named(actions.clone(), observations.clone());
+    let role = raw.player;
+    let fsc = build(raw, &at, &player, role)?;
+    Ok(Standalone {
+        fsc,
+        observations,
+        actions,
+    })
+}
+
 /// The controller as pretty-printed JSON naming `game`'s observations and
 /// actions: one rule per (node, observation), `"default": "error"`, the
 /// `logit` of every choice that has one.

@@ -114,6 +114,18 @@ impl Player {
     pub fn restricts_actions(&self) -> bool {
         !self.enabled.is_empty()
     }
+
+    /// A player with these actions and observations, every action enabled,
+    /// in a game without states (to read a controller file on its own).
+    pub(crate) fn named(actions: Vec<String>, observations: Vec<String>) -> Self {
+        Self {
+            actions,
+            observations,
+            full_observation: false,
+            observe: Vec::new(),
+            enabled: Vec::new(),
+        }
+    }
 }
 
 /// A POSG with labelled states and an initial distribution.

@@ -7,8 +7,10 @@
 //! * [`Progress`]: a progress bar on stderr (the caller creates it only when
 //!   stderr is a terminal);
 //! * [`plot_sweep`]: `sweep.svg`, the worst-case value against the defender's
-//!   size, one line per adversary size.
+//!   size, one line per adversary size;
+//! * [`dot::controller_dot`]: a Graphviz picture of a controller.
 
+pub mod dot;
 mod plot;
 
 pub use plot::{CurvePlot, SweepPoint, plot_sweep};
