@@ -22,7 +22,7 @@ pub struct ObjectiveArgs {
         conflicts_with = "automaton"
     )]
     pub ltl: Option<String>,
-    /// A deterministic automaton for phi in HOA v1 (instead of --ltl).
+    /// A deterministic automaton for phi in HOA v1 or v1.1 (instead of --ltl).
     #[arg(long, value_name = "FILE.hoa")]
     pub automaton: Option<PathBuf>,
 }
