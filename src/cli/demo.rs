@@ -82,7 +82,8 @@ fn solve_reach_avoid(game: &Posg, dir: &std::path::Path, out: &mut String) -> an
         structures: optimise::candidate_structures(game, &dra, start, &settings)?,
         settings: &settings,
         out: dir,
-        progress: false,
+        progress: super::progress::ProgressMode::Quiet,
+        seconds_axis: false,
     };
     let (solution, certified) = run_job(&job)?;
     let best = solution.best();

@@ -11,6 +11,7 @@ mod eval;
 mod example;
 mod export_gmc;
 mod import_drn;
+mod progress;
 mod prune;
 mod simulate;
 pub(crate) mod solve;

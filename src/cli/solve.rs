@@ -6,7 +6,6 @@
 //! writes `curve.csv`, `curve.svg`, `defender.fsc.json`, `defender.dot`,
 //! `adversary.fsc.json` and `summary.json` into the output directory.
 
-use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -22,10 +21,11 @@ use posg_fsc::game::Posg;
 use posg_fsc::optimise::{
     self, Observer, Settings, Solution, Structure, StructureReport, UpdateRule,
 };
-use posg_fsc::output::{CurveCsv, CurvePlot, Progress};
+use posg_fsc::output::{CurveCsv, CurvePlot, Title};
 use posg_fsc::solver::SolverMethod;
 
 use super::common::{ObjectiveArgs, objective, print_text, read_game};
+use super::progress::{OutputArgs, ProgressMode, structure_progress};
 
 /// Arguments of `solve`.
 #[derive(Debug, Args)]
@@ -52,6 +52,8 @@ pub struct SolveArgs {
     adversary: Option<PathBuf>,
     #[command(flatten)]
     settings: SettingsArgs,
+    #[command(flatten)]
+    output: OutputArgs,
 }
 
 /// The optimiser's settings as command-line options (defaults: [`Settings::default`]).
@@ -192,8 +194,10 @@ pub struct SolveJob<'a> {
     pub settings: &'a Settings,
     /// The output directory.
     pub out: &'a Path,
-    /// Whether to draw progress bars (stderr is a terminal and nothing else draws).
-    pub progress: bool,
+    /// How to show progress on stderr.
+    pub progress: ProgressMode,
+    /// Whether curve.svg gets a top axis with the seconds elapsed.
+    pub seconds_axis: bool,
 }
 
 /// `summary.json`.
@@ -240,11 +244,10 @@ pub fn run_job(job: &SolveJob) -> anyhow::Result<(Solution, Option<Bracket>)> {
     std::fs::create_dir_all(job.out)
         .with_context(|| format!("cannot create {}", job.out.display()))?;
     let clock = Instant::now();
-    let title = format!("{}: {}", job.game.name().unwrap_or("game"), job.objective);
     let iterations = job.settings.max_iterations;
     let multiple = job.structures.len() > 1;
     let out = job.out.to_path_buf();
-    let bars = job.progress.then(MultiProgress::new);
+    let bars = (job.progress == ProgressMode::Bars).then(MultiProgress::new);
     let solution = optimise::optimise_structures(
         job.game,
         job.dra,
@@ -257,13 +260,14 @@ pub fn run_job(job: &SolveJob) -> anyhow::Result<(Solution, Option<Bracket>)> {
             } else {
                 "curve".to_string()
             };
-            observers(
-                &out,
-                &stem,
-                &title,
-                bars.as_ref()
-                    .map(|bars| (bars, structure.name.as_str(), iterations)),
-            )
+            let mut list = observers(&out, &stem, plot_title(job, structure), job.seconds_axis);
+            list.extend(structure_progress(
+                job.progress,
+                bars.as_ref(),
+                &structure.name,
+                iterations,
+            ));
+            Box::new(list) as Box<dyn Observer + Send>
         },
     )?;
     if multiple {
@@ -339,26 +343,48 @@ fn write_defender_dot(
     std::fs::write(path, text).with_context(|| format!("cannot write {}", path.display()))
 }
 
-/// The CSV writer and the plot for `stem`, and a progress bar when asked.
+/// The title of a structure's `curve.svg`: game and objective, then sizes
+/// and structure.
+fn plot_title(job: &SolveJob, structure: &Structure) -> Title {
+    let nodes = |n: usize| {
+        if n == 1 {
+            "1 node".to_string()
+        } else {
+            format!("{n} nodes")
+        }
+    };
+    let adversary = if job.game.has_adversary() {
+        format!(", adversary {}", nodes(structure.adversary.num_nodes()))
+    } else {
+        String::new()
+    };
+    Title {
+        main: format!("{}: {}", job.game.name().unwrap_or("game"), job.objective),
+        detail: format!(
+            "defender {}{adversary}, structure {}, game of {} states",
+            nodes(structure.defender.num_nodes()),
+            structure.name,
+            job.game.num_states()
+        ),
+    }
+}
+
+/// The CSV writer and the plot for `stem`.
 fn observers(
     out: &Path,
     stem: &str,
-    title: &str,
-    progress: Option<(&MultiProgress, &str, usize)>,
-) -> Box<dyn Observer + Send> {
+    title: Title,
+    seconds_axis: bool,
+) -> Vec<Box<dyn Observer + Send>> {
     let mut list: Vec<Box<dyn Observer + Send>> = Vec::new();
     match CurveCsv::create(&out.join(format!("{stem}.csv"))) {
         Ok(csv) => list.push(Box::new(csv)),
         Err(error) => list.push(Box::new(Failed(Some(error.into())))),
     }
-    list.push(Box::new(CurvePlot::new(
-        &out.join(format!("{stem}.svg")),
-        title,
-    )));
-    if let Some((bars, label, iterations)) = progress {
-        list.push(Box::new(Progress::new(bars, label, iterations)));
-    }
-    Box::new(list)
+    let plot =
+        CurvePlot::new(&out.join(format!("{stem}.svg")), title).with_seconds_axis(seconds_axis);
+    list.push(Box::new(plot));
+    list
 }
 
 /// An observer that could not be created: reports its error at the end.
@@ -398,7 +424,8 @@ pub fn run(args: SolveArgs) -> anyhow::Result<()> {
         structures: optimise::candidate_structures(&game, &dra, structure, &settings)?,
         settings: &settings,
         out: &args.out,
-        progress: std::io::stderr().is_terminal(),
+        progress: ProgressMode::detect(args.output.quiet),
+        seconds_axis: args.output.seconds_axis,
     };
     let (solution, certified) = run_job(&job)?;
     let best = solution.best();

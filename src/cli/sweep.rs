@@ -9,9 +9,10 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use posg_fsc::optimise::{self, Structure};
-use posg_fsc::output::{SweepPoint, plot_sweep};
+use posg_fsc::output::{SweepPoint, Title, plot_sweep};
 
 use super::common::{ObjectiveArgs, print_text};
+use super::progress::{OutputArgs, ProgressMode, SweepProgress};
 use super::solve::{SettingsArgs, SolveJob, load, run_job};
 
 /// Arguments of `sweep`.
@@ -33,6 +34,8 @@ pub struct SweepArgs {
     out: PathBuf,
     #[command(flatten)]
     settings: SettingsArgs,
+    #[command(flatten)]
+    output: OutputArgs,
 }
 
 /// A list of positive sizes.
@@ -87,6 +90,7 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
         .iter()
         .flat_map(|&n| args.adv_nodes.0.iter().map(move |&m| (n, m)))
         .collect();
+    let progress = SweepProgress::new(ProgressMode::detect(args.output.quiet), pairs.len());
     let rows = pairs
         .par_iter()
         .map(|&(n, m)| {
@@ -104,15 +108,13 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
                 )?,
                 settings: &settings,
                 out: &out,
-                progress: false,
+                progress: ProgressMode::Quiet,
+                seconds_axis: args.output.seconds_axis,
             };
             let (solution, certified) = run_job(&job)
                 .with_context(|| format!("defender {n} nodes, adversary {m} nodes"))?;
             let report = &solution.best().report;
-            eprintln!(
-                "defender {n}, adversary {m}: worst-case estimate {:.6}",
-                report.worst_case
-            );
+            progress.finished(n, m, report.worst_case);
             Ok(Row {
                 defender_nodes: n,
                 adversary_nodes: m,
@@ -130,6 +132,7 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
             })
         })
         .collect::<anyhow::Result<Vec<Row>>>()?;
+    progress.finish();
     let mut writer = csv::Writer::from_path(args.out.join("sweep.csv"))?;
     for row in &rows {
         writer.serialize(row)?;
@@ -144,7 +147,14 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
             bracket: r.certified_lower.zip(r.upper_bound),
         })
         .collect();
-    let title = format!("{}: {}", game.name().unwrap_or("game"), description);
+    let title = Title {
+        main: format!("{}: {}", game.name().unwrap_or("game"), description),
+        detail: format!(
+            "best structure per size pair, game of {} states, {} iterations at most",
+            game.num_states(),
+            settings.max_iterations
+        ),
+    };
     plot_sweep(&args.out.join("sweep.svg"), &title, &points).map_err(|e| anyhow::anyhow!(e))?;
     print_text(&format!(
         "wrote sweep.csv and sweep.svg ({} size pairs) to {}\n",
