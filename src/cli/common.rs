@@ -22,7 +22,8 @@ pub struct ObjectiveArgs {
         conflicts_with = "automaton"
     )]
     pub ltl: Option<String>,
-    /// A deterministic automaton for phi in HOA v1 or v1.1 (instead of --ltl).
+    /// A deterministic automaton for phi in HOA v1 or v1.1 (instead of
+    /// --ltl; docs/formats.md section 4).
     #[arg(long, value_name = "FILE.hoa")]
     pub automaton: Option<PathBuf>,
 }
@@ -30,8 +31,9 @@ pub struct ObjectiveArgs {
 /// The two controllers.
 #[derive(Debug, Clone, Args)]
 pub struct ControllerArgs {
-    /// The defender's controller: a *.fsc.json file or `uniform:K` (K nodes,
-    /// uniform over all (next node, action) pairs, starting in node 0).
+    /// The defender's controller: a *.fsc.json file (docs/formats.md section
+    /// 2) or `uniform:K` (K nodes, uniform over all (next node, enabled
+    /// action) pairs, starting in node 0).
     #[arg(long, default_value = "uniform:1")]
     pub defender: String,
     /// The adversary's controller, as for --defender (`uniform:1` for a POMDP).

@@ -45,14 +45,16 @@ enum Command {
     Eval(eval::EvalArgs),
     /// A Monte Carlo estimate of the value with a 95% confidence interval.
     Simulate(simulate::SimulateArgs),
-    /// Export the Markov chain on (s, g, h) for Storm (DRN) and PRISM (explicit format).
+    /// Export the Markov chain on (s, g, h) for Storm (DRN) and PRISM
+    /// (explicit format; docs/formats.md section 8).
     ExportGmc(export_gmc::ExportGmcArgs),
     /// Algorithm 1: prune FSC structures so that a phi-feasible recurrent set exists.
     Prune(prune::PruneArgs),
     /// Certified lower and upper bounds (MDP analysis, docs/method.md section 6).
     Certify(certify::CertifyArgs),
-    /// Read a strategy file of `certify --attack/--response`, check it against
-    /// the game and, where possible, write it as a controller.
+    /// Read a strategy file of `certify --attack/--response` (docs/formats.md
+    /// section 7), check it against the game and, where possible, write it as
+    /// a controller.
     Strategy(strategy::StrategyArgs),
     /// Optimise a defender FSC against a worst-case adversary FSC (max-min by
     /// alternating projected gradient ascent-descent with best-response
@@ -65,7 +67,7 @@ enum Command {
     /// Translate an LTL formula into a deterministic Rabin automaton.
     Translate(translate::TranslateArgs),
     /// Draw a controller as a Graphviz graph (nodes, and edges labelled
-    /// observation / action  probability).
+    /// observation / action  probability; docs/formats.md section 10).
     Dot(dot::DotArgs),
 }
 
