@@ -33,11 +33,22 @@
 //! error). A lower bound above an upper bound beyond their error bounds is
 //! impossible for exact numbers: [`bracket`] and [`check_consistent`]
 //! report it as an error, never as a bracket.
+//!
+//! **Enabled actions** (formats.md section 6). The fixed player's controller
+//! must play only actions enabled under its observations. The free player,
+//! who sees the state, may play in `s` every action that *some* observation
+//! `o` with `O(o | s) > 0` enables ([`Player::action_enabled_in_state`]).
+//! An FSC that observes `o` plays only actions enabled under `o`, so it has
+//! no more options than that, and both bounds stay sound. They are also exact
+//! for the free player's enabled sets when all observations of each state
+//! enable the same actions (Storm's POMDP semantics, and every imported
+//! model); when they differ, the free player of the bound is stronger than any
+//! FSC, which only widens the bracket.
 
 use std::time::Instant;
 
 use rustc_hash::FxHashMap;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use crate::automaton::{Dra, Letter, RabinPair};
@@ -132,17 +143,23 @@ impl Qualitative {
 }
 
 /// A memoryless deterministic strategy of the free player on the product of
-/// the game, an automaton and the fixed player's controller.
+/// the game, an automaton and the fixed player's controller
+/// ([`crate::strategy`] writes and reads it as a file).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Strategy {
     /// The player who plays it (the adversary for a lower bound).
     pub player: Role,
+    /// The free player's value from the initial distribution: the largest
+    /// probability of its objective (`!phi` for the adversary, `phi` for
+    /// the defender), attained by this strategy.
+    pub value: f64,
     /// One rule per reachable product state.
     pub rules: Vec<StrategyRule>,
 }
 
 /// The action chosen in one product state `(s, q, node)`.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct StrategyRule {
     /// The game state `s`, by name.
     pub state: String,
@@ -152,9 +169,11 @@ pub struct StrategyRule {
     pub node: usize,
     /// The chosen action, by name.
     pub action: String,
-    /// The probability that the strategy's player achieves its objective
-    /// from this state (`!phi` for the adversary, `phi` for the defender).
-    pub probability: f64,
+    /// The free player's value in this product state: the largest
+    /// probability with which it achieves its own objective from here
+    /// (`!phi` for the adversary, `phi` for the defender), attained by
+    /// this strategy.
+    pub free_player_value: f64,
 }
 
 /// What an optimised result guarantees (method.md section 6): the defender's
@@ -257,14 +276,15 @@ fn best_response(
             state: game.states()[s].clone(),
             automaton_state: q,
             node,
-            action: free.actions()[result.strategy[m]].clone(),
-            probability: result.values[m],
+            action: free.actions()[analysis.free_actions[s][result.strategy[m]]].clone(),
+            free_player_value: result.values[m],
         })
         .collect();
     Ok(Bound {
         value: value.clamp(0.0, 1.0),
         strategy: Strategy {
             player: other(fixed),
+            value: value.clamp(0.0, 1.0),
             rules,
         },
         mdp_states: analysis.states.len(),
@@ -289,6 +309,9 @@ pub(crate) struct Analysis {
     pub result: Reachability,
     /// The accepting end components, per Rabin pair of the automaton.
     pub accepting: Vec<AcceptingComponent>,
+    /// The free player's actions per game state: MDP action `a` in
+    /// `(s, q, node)` is the free player's action `free_actions[s][a]`.
+    pub free_actions: Vec<Vec<usize>>,
 }
 
 /// The reachable product MDP with `controller` playing for `fixed`, not
@@ -322,6 +345,7 @@ pub(crate) fn analyse(
         initial: product.initial,
         result,
         accepting,
+        free_actions: product.free_actions,
     })
 }
 
@@ -343,30 +367,27 @@ fn free_player(game: &Posg, fixed: Role) -> &Player {
     fixed_player(game, other(fixed))
 }
 
-/// Checks that `controller` is `role`'s and fits that player of `game`.
+/// Checks that `controller` is `role`'s and fits that player of `game`
+/// (sizes and enabled actions, [`Fsc::check_fits`]).
 fn check_fits(game: &Posg, controller: &Fsc, role: Role) -> Result<(), CertifyError> {
-    let player = fixed_player(game, role);
     let problem = if controller.role() != role {
-        Some(format!("it is a {:?} controller", controller.role()))
-    } else if controller.num_observations() != player.num_observations() {
-        Some(format!(
-            "it has {} observations, the game's player {}",
-            controller.num_observations(),
-            player.num_observations()
-        ))
-    } else if controller.num_actions() != player.num_actions() {
-        Some(format!(
-            "it has {} actions, the game's player {}",
-            controller.num_actions(),
-            player.num_actions()
-        ))
+        Err(format!("it is a {:?} controller", controller.role()))
     } else {
-        None
+        controller.check_fits(fixed_player(game, role))
     };
-    match problem {
-        Some(problem) => Err(CertifyError::Mismatch { role, problem }),
-        None => Ok(()),
-    }
+    problem.map_err(|problem| CertifyError::Mismatch { role, problem })
+}
+
+/// The free player's actions in each state `s`: those some observation of
+/// `s` enables ([`Player::action_enabled_in_state`]), in increasing order.
+fn free_actions(player: &Player, num_states: usize) -> Vec<Vec<usize>> {
+    (0..num_states)
+        .map(|s| {
+            (0..player.num_actions())
+                .filter(|&w| player.action_enabled_in_state(s, w))
+                .collect()
+        })
+        .collect()
 }
 
 /// `A(g', f | s, g) = sum_o O(o | s) mu(g', f | g, o)` of the fixed player,
@@ -406,15 +427,19 @@ struct Product {
     states: Vec<(usize, usize, usize)>,
     /// `p0` as `(MDP state, probability)`.
     initial: Vec<(usize, f64)>,
+    /// The free player's actions per game state: MDP action `a` in
+    /// `(s, q, node)` is the free player's action `free_actions[s][a]`.
+    free_actions: Vec<Vec<usize>>,
 }
 
 impl Product {
     /// Explores the product from `p0` breadth first; the free player's
-    /// action `w` in `(s, q, g)` has the distribution of the module
-    /// documentation (summed over duplicate successors by [`MdpBuilder`]).
+    /// action `w` in `(s, q, g)`, one of those enabled in `s`, has the
+    /// distribution of the module documentation (summed over duplicate
+    /// successors by [`MdpBuilder`]).
     fn build(game: &Posg, dra: &Dra, controller: &Fsc, fixed: Role) -> Result<Self, CertifyError> {
         check_fits(game, controller, fixed)?;
-        let num_free_actions = free_player(game, fixed).num_actions();
+        let free_actions = free_actions(free_player(game, fixed), game.num_states());
         let letters: Vec<Letter> = (0..game.num_states())
             .map(|s| dra.letter_of(game.label_names(s)))
             .collect();
@@ -439,7 +464,7 @@ impl Product {
         let mut total_terms = 0u128;
         while builder.num_states() < explorer.states.len() {
             let (s, q, g) = explorer.states[builder.num_states()];
-            for w in 0..num_free_actions {
+            for &w in &free_actions[s] {
                 terms.clear();
                 for &(next, f, a) in &mixture[s * num_nodes + g] {
                     for &(s2, t) in transition(s, f, w) {
@@ -464,6 +489,7 @@ impl Product {
             mdp: builder.build()?,
             states: explorer.states,
             initial,
+            free_actions,
         })
     }
 

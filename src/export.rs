@@ -1,5 +1,6 @@
-//! Export of the labelled Markov chain on `(s, g, h)` in PRISM's explicit
-//! format, so that Storm or PRISM can check a value independently.
+//! Export of the labelled Markov chain on `(s, g, h)` in Storm's DRN format
+//! and PRISM's explicit format, so that Storm or PRISM can check a value
+//! independently.
 //!
 //! The chain is the GMC without the automaton: `P((s',g',h') | (s,g,h)) =
 //! sum_{u,v} A_def(g',u | s,g) A_adv(h',v | s,h) T(s' | s,u,v)` on the states
@@ -10,11 +11,18 @@
 //! `{} L(s_0) L(s_1) ...`: **check `X phi`** on the exported chain to get
 //! the value of `phi`.
 //!
-//! Files: `chain.tra` (`states transitions`, then `source target probability`
+//! Files: `chain.drn` (Storm's explicit DRN: `@type: DTMC`, one block per
+//! state with its labels, `init` on state 0 only, and `(s, g, h)` as a
+//! comment; `storm --explicit-drn chain.drn` and stormpy's
+//! `build_model_from_drn` read it as it is; Storm refuses a formula over a
+//! label no state carries, so when some proposition of the game labels no
+//! reachable state, one last, unreachable state with a self-loop carries
+//! those propositions), and PRISM's explicit files
+//! `chain.tra` (`states transitions`, then `source target probability`
 //! lines), `chain.lab` (label declarations, then `state: labels` lines) and
 //! `chain.sta` (each state's `(s,g,h)`: the game state's index in the game
 //! file's `states` list and the two controller nodes; `-1` for the fresh
-//! initial state).
+//! initial state). All four describe the same chain.
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -34,8 +42,10 @@ pub struct ExportSummary {
     pub transitions: usize,
 }
 
-/// The three files' contents: `(tra, lab, sta)`.
+/// The files' contents.
 pub struct ExplicitChain {
+    /// `chain.drn`.
+    pub drn: String,
     /// `chain.tra`.
     pub tra: String,
     /// `chain.lab`.
@@ -103,6 +113,7 @@ pub fn explicit_chain(
             .expect("writing to a String");
     }
     Ok(ExplicitChain {
+        drn: drn(game, &gmc, &initial, states),
         tra,
         lab,
         sta,
@@ -113,10 +124,73 @@ pub fn explicit_chain(
     })
 }
 
-/// Writes `chain.tra`, `chain.lab` and `chain.sta` into `dir` (created if
-/// needed); an error names the path.
+/// Storm's DRN text of the chain: state 0 is the fresh initial state,
+/// state `m + 1` the GMC state `m`, each labelled by `L(s)`, and, if some
+/// proposition labels no reachable state, an unreachable last state that
+/// carries those propositions (module documentation).
+fn drn(game: &Posg, gmc: &Gmc, initial: &[(usize, f64)], states: usize) -> String {
+    let mut reached = vec![false; game.propositions().len()];
+    for m in 0..gmc.num_states() {
+        for &p in game.label(gmc.state(m).s as usize) {
+            reached[p] = true;
+        }
+    }
+    let unreached: Vec<&str> = game
+        .propositions()
+        .iter()
+        .zip(&reached)
+        .filter(|&(_, &r)| !r)
+        .map(|(name, _)| name.as_str())
+        .collect();
+    let states = states + usize::from(!unreached.is_empty());
+    let mut text = format!(
+        "// Exported by posg-fsc {}: the Markov chain on (s, g, h) under two controllers.\n\
+         // State 0 is a fresh initial state: the value of phi is P=? [ X phi ] there.\n\
+         @type: DTMC\n@value_type: double\n@parameters\n\n@reward_models\n\n\
+         @nr_states\n{states}\n@nr_choices\n{states}\n@model\nstate 0 init\n\taction 0\n",
+        env!("CARGO_PKG_VERSION")
+    );
+    for &(m, p) in initial {
+        writeln!(text, "\t\t{} : {p:e}", m + 1).expect("writing to a String");
+    }
+    for m in 0..gmc.num_states() {
+        let state = gmc.state(m);
+        let s = state.s as usize;
+        write!(text, "state {}", m + 1).expect("writing to a String");
+        for name in game.label_names(s) {
+            write!(text, " {name}").expect("writing to a String");
+        }
+        writeln!(
+            text,
+            "\n//[s={}, g={}, h={}]\n\taction 0",
+            game.states()[s],
+            state.g,
+            state.h
+        )
+        .expect("writing to a String");
+        let (columns, values) = gmc.row(m);
+        for (&c, &p) in columns.iter().zip(values) {
+            writeln!(text, "\t\t{} : {p:e}", c + 1).expect("writing to a String");
+        }
+    }
+    if !unreached.is_empty() {
+        let last = states - 1;
+        writeln!(
+            text,
+            "state {last} {}\n// unreachable: declares the propositions no reachable state carries\n\
+             \taction 0\n\t\t{last} : 1e0",
+            unreached.join(" ")
+        )
+        .expect("writing to a String");
+    }
+    text
+}
+
+/// Writes `chain.drn`, `chain.tra`, `chain.lab` and `chain.sta` into `dir`
+/// (created if needed); an error names the path.
 pub fn write_explicit_chain(chain: &ExplicitChain, dir: &Path) -> Result<(), OutputError> {
     create_dir(dir)?;
+    write_file(&dir.join("chain.drn"), &chain.drn)?;
     write_file(&dir.join("chain.tra"), &chain.tra)?;
     write_file(&dir.join("chain.lab"), &chain.lab)?;
     write_file(&dir.join("chain.sta"), &chain.sta)

@@ -36,7 +36,8 @@
 //! * [`limits`]: the resource budget checked before large allocations;
 //! * [`mdp`] and [`certify`]: MDP analysis (maximal end components, Rabin
 //!   acceptance, maximum reachability) and the two certified bounds of
-//!   method.md section 6;
+//!   method.md section 6; [`strategy`]: their strategies as files, read
+//!   back and, where the free player observes the state, as controllers;
 //! * [`synthesis`]: defender supports that win positively or almost surely
 //!   against the certification adversary, found by SAT (method.md section 7).
 #![warn(missing_docs)]
@@ -58,5 +59,6 @@ pub mod prune;
 pub mod sensitivity;
 pub mod simulate;
 pub mod solver;
+pub mod strategy;
 pub mod synthesis;
 pub mod value;

@@ -756,6 +756,20 @@ fn check_support(
             "uses an action the game's {player} does not have"
         )));
     }
+    for g in 0..support.num_nodes() {
+        for o in 0..support.num_observations() {
+            if let Some(k) = support
+                .block(g, o)
+                .find(|&k| !game_player.action_enabled(o, support.entry(k).1))
+            {
+                return Err(mismatch(format!(
+                    "plays action `{}` in node {g} under observation `{}`, which does not enable it",
+                    game_player.actions()[support.entry(k).1],
+                    game_player.observations()[o]
+                )));
+            }
+        }
+    }
     if support.initial_nodes().next().is_none() {
         return Err(mismatch(
             "has no initial node with positive probability".into(),

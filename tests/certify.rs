@@ -6,7 +6,7 @@
 
 mod common;
 
-use nalgebra::{DMatrix, DVector};
+use common::dense::{self, DMatrix, DVector};
 use posg_fsc::automaton::Dra;
 use posg_fsc::certify::{Bound, CertifyError, lower_bound, upper_bound};
 use posg_fsc::controller::{Fsc, Role};
@@ -103,8 +103,8 @@ fn small_game(seed: u64, full: bool) -> Posg {
 /// (index `(s * |Q| + q) * |G| + node`), straight from formats.md section 3:
 /// `p[w][(m, m')]` for the free player's action `w`.
 struct DenseMdp {
-    p: Vec<DMatrix<f64>>,
-    p0: DVector<f64>,
+    p: Vec<DMatrix>,
+    p0: DVector,
     key: Vec<(usize, usize, usize)>,
 }
 
@@ -117,7 +117,7 @@ fn dense_mdp(game: &Posg, dra: &Dra, fixed: &Fsc) -> DenseMdp {
         Role::Defender => (game.defender(), game.adversary().num_actions()),
         Role::Adversary => (game.adversary(), game.defender().num_actions()),
     };
-    let mut p = vec![DMatrix::zeros(n, n); free_actions];
+    let mut p = vec![DMatrix::zeros(n); free_actions];
     let mut key = vec![(0, 0, 0); n];
     for s in 0..ns {
         for q in 0..nq {
@@ -141,7 +141,7 @@ fn dense_mdp(game: &Posg, dra: &Dra, fixed: &Fsc) -> DenseMdp {
             }
         }
     }
-    let mut p0 = DVector::zeros(n);
+    let mut p0 = dense::zeros(n);
     for &(s, ps) in game.initial() {
         for g in 0..ng {
             p0[index(s, dra.successor(dra.initial(), letter(s)), g)] += ps * fixed.initial()[g];
@@ -151,7 +151,7 @@ fn dense_mdp(game: &Posg, dra: &Dra, fixed: &Fsc) -> DenseMdp {
 }
 
 /// Reflexive-transitive closure of the graph of `p` (entries > 0).
-fn closure(p: &DMatrix<f64>) -> Vec<Vec<bool>> {
+fn closure(p: &DMatrix) -> Vec<Vec<bool>> {
     let n = p.nrows();
     let mut reach: Vec<Vec<bool>> = (0..n)
         .map(|a| (0..n).map(|b| a == b || p[(a, b)] > 0.0).collect())
@@ -170,7 +170,7 @@ fn closure(p: &DMatrix<f64>) -> Vec<Vec<bool>> {
 /// The probability that the Markov chain `p` from `p0` satisfies the DRA's
 /// Rabin condition read on `q_of`: BSCCs by mutual reachability, accepting
 /// BSCCs by the pairs, then a dense solve for reaching them.
-fn chain_value(p: &DMatrix<f64>, p0: &DVector<f64>, q_of: &[usize], dra: &Dra) -> f64 {
+fn chain_value(p: &DMatrix, p0: &[f64], q_of: &[usize], dra: &Dra) -> f64 {
     let n = p.nrows();
     let reach = closure(p);
     let accepting: Vec<bool> = (0..n)
@@ -186,23 +186,23 @@ fn chain_value(p: &DMatrix<f64>, p0: &DVector<f64>, q_of: &[usize], dra: &Dra) -
     let unknown: Vec<usize> = (0..n)
         .filter(|&a| !accepting[a] && (0..n).any(|b| accepting[b] && reach[a][b]))
         .collect();
-    let mut x = DVector::from_iterator(n, accepting.iter().map(|&f| f64::from(f)));
+    let mut x: DVector = accepting.iter().map(|&f| f64::from(f)).collect();
     let k = unknown.len();
     if k > 0 {
-        let mut a = DMatrix::identity(k, k);
-        let mut rhs = DVector::zeros(k);
+        let mut a = DMatrix::identity(k);
+        let mut rhs = dense::zeros(k);
         for (i, &m) in unknown.iter().enumerate() {
             for (j, &m2) in unknown.iter().enumerate() {
                 a[(i, j)] -= p[(m, m2)];
             }
             rhs[i] = (0..n).filter(|&b| accepting[b]).map(|b| p[(m, b)]).sum();
         }
-        let solution = a.lu().solve(&rhs).expect("transient system is nonsingular");
+        let solution = a.solve(&rhs).expect("transient system is nonsingular");
         for (i, &m) in unknown.iter().enumerate() {
             x[m] = solution[i];
         }
     }
-    p0.dot(&x)
+    dense::dot(p0, &x)
 }
 
 impl DenseMdp {
@@ -211,9 +211,7 @@ impl DenseMdp {
         let union = self
             .p
             .iter()
-            .fold(DMatrix::zeros(self.p0.len(), self.p0.len()), |acc, p| {
-                acc + p
-            });
+            .fold(DMatrix::zeros(self.p0.len()), |acc, p| acc + p);
         let reach = closure(&union);
         (0..self.p0.len())
             .filter(|&b| (0..self.p0.len()).any(|a| self.p0[a] > 0.0 && reach[a][b]))
@@ -223,8 +221,8 @@ impl DenseMdp {
     /// `P^sigma(Rabin)` for the memoryless strategy `choice` on `states`.
     fn value(&self, states: &[usize], choice: &[usize], dra: &Dra) -> f64 {
         let k = states.len();
-        let p = DMatrix::from_fn(k, k, |i, j| self.p[choice[i]][(states[i], states[j])]);
-        let p0 = DVector::from_fn(k, |i, _| self.p0[states[i]]);
+        let p = DMatrix::from_fn(k, |i, j| self.p[choice[i]][(states[i], states[j])]);
+        let p0: DVector = states.iter().map(|&m| self.p0[m]).collect();
         let q_of: Vec<usize> = states.iter().map(|&m| self.key[m].1).collect();
         chain_value(&p, &p0, &q_of, dra)
     }
@@ -456,7 +454,7 @@ fn an_adversary_that_never_passes_is_seen_by_the_lower_bound() {
         .find(|r| r.state == "s0")
         .unwrap();
     assert_eq!(s0.action, "block");
-    assert_eq!(s0.probability, 1.0);
+    assert_eq!(s0.free_player_value, 1.0);
     let upper = upper_bound(&game, &phi, &adversary).unwrap();
     assert!((upper.value - 1.0).abs() < 1e-12);
     let json = serde_json::to_value(&lower).unwrap();
@@ -478,4 +476,16 @@ fn a_controller_for_the_wrong_player_is_an_error() {
         upper_bound(&game, &phi, &defender),
         Err(CertifyError::Mismatch { .. })
     ));
+}
+
+#[test]
+fn the_reference_dense_solver_pivots_and_refuses_singular_systems() {
+    // [[0, 1], [2, 1]] x = [1, 4]  =>  x = [1.5, 1].
+    let mut a = DMatrix::zeros(2);
+    a[(0, 1)] = 1.0;
+    a[(1, 0)] = 2.0;
+    a[(1, 1)] = 1.0;
+    let x = a.solve(&[1.0, 4.0]).unwrap();
+    assert_eq!(x, vec![1.5, 1.0]);
+    assert_eq!(DMatrix::zeros(2).solve(&[1.0, 1.0]), None);
 }

@@ -294,7 +294,7 @@ fn malformed_inputs_are_reported_with_their_position() {
         ),
         (
             "HOA: v2".into(),
-            "line 1, column 6: expected version `v1`, found `v2`",
+            "line 1, column 6: expected version `v1` or `v1.1`, found `v2`",
         ),
         (
             "HOA: v1\nAP: 0\nAcceptance: 0 t\n--BODY--\nState: 0 [t] 0\n--END--".into(),
@@ -498,5 +498,63 @@ proptest! {
         let cut = position.min(text.len());
         let damaged = format!("{}{replacement}{}", &text[..cut], &text[(cut + 1).min(text.len())..]);
         let _ = read_hoa_dra(&damaged);
+    }
+}
+
+/// `G F a` as Spot 2.12 writes it with `ltl2tgba -D -G -H1.1 'GF a'`, plus
+/// the other tool-specific items Spot may write.
+const SPOT_V1_1: &str = r#"HOA: v1.1
+name: "G F a"
+States: 1
+Start: 0
+AP: 1 "a"
+acc-name: Buchi
+Acceptance: 1 Inf(0)
+properties: trans-labels explicit-labels trans-acc complete
+properties: deterministic stutter-invariant !weak
+controllable-AP: 0
+spot.highlight.edges: 1 1 2 2
+spot.highlight.states: 0 3
+spot.state-player: 0
+Alias: @a.1 0
+--BODY--
+State: 0
+[@a.1] 0 {0}
+[!0] 0
+--END--
+"#;
+
+#[test]
+fn hoa_v1_1_with_dotted_and_tool_specific_items_is_read() {
+    let aut = parse_hoa(SPOT_V1_1).expect("HOA v1.1 is read");
+    assert!(aut.accepts_lasso(&[], &[0, 1]), "a infinitely often");
+    assert!(!aut.accepts_lasso(&[1], &[0]), "a finitely often");
+    let dra = read_hoa_dra(SPOT_V1_1).expect("and converted");
+    let v1 = read_hoa_dra(&SPOT_V1_1.replace("HOA: v1.1", "HOA: v1")).unwrap();
+    assert_eq!(dra, v1);
+}
+
+#[test]
+fn hoa_items_that_may_change_the_meaning_are_still_errors() {
+    let cases = [
+        (
+            SPOT_V1_1.replace("HOA: v1.1", "HOA: v1.2"),
+            "line 1, column 6: expected version `v1` or `v1.1`, found `v1.2`",
+        ),
+        (
+            SPOT_V1_1.replace("spot.state-player: 0", "Spot.state-player: 0"),
+            "line 13, column 1: unsupported header item `Spot.state-player:`",
+        ),
+        (
+            SPOT_V1_1.replace("Start: 0", "Start: 0 & 0"),
+            "conjunctions of initial states (alternation) are not supported",
+        ),
+    ];
+    for (text, expected) in cases {
+        let error = error_of(&text);
+        assert!(
+            error.contains(expected),
+            "expected `{expected}` in `{error}`"
+        );
     }
 }

@@ -54,7 +54,9 @@ fn distribution(rng: &mut ChaCha8Rng, outcomes: &[String], density: f64) -> Map<
 
 /// A tiny game: 3-7 states labelled from {a, b, c}, 1-3 defender
 /// observations, 2-3 defender actions, 1-2 adversary actions (fully
-/// observing), sparse transitions.
+/// observing), sparse transitions. Every third seed also restricts the
+/// actions (`enabled`): some observations of the defender enable a random
+/// subset, some states let the adversary play only one of its actions.
 fn tiny_game(seed: u64) -> Posg {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let states = names("s", rng.random_range(3..=7));
@@ -90,12 +92,37 @@ fn tiny_game(seed: u64) -> Posg {
         }
     }
     let initial = distribution(&mut rng, &states[..2], 0.3);
-    let game = json!({
+    let mut game = json!({
         "posg": 1, "states": states, "initial": initial, "labels": labels,
         "defender": {"actions": def_actions, "observations": observations, "observe": observe},
         "adversary": {"actions": adv_actions, "observe": "full"},
         "transitions": transitions,
     });
+    if seed % 3 == 0 {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed + 1_000_000);
+        let mut defender = Map::new();
+        for o in &observations {
+            if rng.random_bool(0.6) {
+                let mut actions: Vec<&String> = def_actions
+                    .iter()
+                    .filter(|_| rng.random_bool(0.5))
+                    .collect();
+                if actions.is_empty() {
+                    actions.push(&def_actions[0]);
+                }
+                defender.insert(o.clone(), json!(actions));
+            }
+        }
+        let mut adversary = Map::new();
+        for s in &states {
+            if rng.random_bool(0.4) {
+                let only = &adv_actions[rng.random_range(0..adv_actions.len())];
+                adversary.insert(s.clone(), json!([only]));
+            }
+        }
+        game["defender"]["enabled"] = Value::Object(defender);
+        game["adversary"]["enabled"] = Value::Object(adversary);
+    }
     from_json_str(&game.to_string(), &format!("tiny-{seed}")).unwrap()
 }
 
@@ -132,8 +159,8 @@ fn one_node(game: &Posg, masks: &[usize]) -> Fsc {
     .unwrap()
 }
 
-/// Every 1-node support (a non-empty action set per observation) with the
-/// exact class of its certified lower bound.
+/// Every 1-node support (a non-empty set of enabled actions per
+/// observation) with the exact class of its certified lower bound.
 fn all_one_node_supports(game: &Posg, not_phi: &Dra) -> Vec<(Vec<usize>, Qualitative)> {
     let (no, nu) = (
         game.defender().num_observations(),
@@ -141,8 +168,11 @@ fn all_one_node_supports(game: &Posg, not_phi: &Dra) -> Vec<(Vec<usize>, Qualita
     );
     let per_block = (1usize << nu) - 1;
     let total = per_block.pow(no as u32);
+    let enabled: Vec<usize> = (0..no)
+        .map(|o| game.defender().enabled_actions(o).map(|u| 1 << u).sum())
+        .collect();
     (0..total)
-        .map(|mut code| {
+        .filter_map(|mut code| {
             let masks: Vec<usize> = (0..no)
                 .map(|_| {
                     let mask = code % per_block + 1;
@@ -150,6 +180,13 @@ fn all_one_node_supports(game: &Posg, not_phi: &Dra) -> Vec<(Vec<usize>, Qualita
                     mask
                 })
                 .collect();
+            masks
+                .iter()
+                .zip(&enabled)
+                .all(|(&m, &e)| m & !e == 0)
+                .then_some(masks)
+        })
+        .map(|masks| {
             let class = lower_bound(game, not_phi, &one_node(game, &masks))
                 .unwrap()
                 .qualitative;

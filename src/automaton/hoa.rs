@@ -1,4 +1,5 @@
-//! Reading and writing automata in the Hanoi Omega-Automata format, HOA v1.
+//! Reading and writing automata in the Hanoi Omega-Automata format, HOA v1
+//! and v1.1.
 //!
 //! [`parse_hoa`] reads a deterministic, complete automaton with an arbitrary
 //! Emerson-Lei acceptance condition into an [`EmersonLeiAutomaton`];
@@ -7,13 +8,17 @@
 //!
 //! What the reader accepts:
 //!
-//! * header items `HOA: v1`, `States:`, `Start:` (exactly one, a single
-//!   state), `AP:`, `Alias:`, `Acceptance:` (`t`, `f`, `Fin(m)`, `Fin(!m)`,
-//!   `Inf(m)`, `Inf(!m)`, `&`, `|`, parentheses), and the informative items
+//! * header items `HOA: v1` or `HOA: v1.1` (Spot 2.12 writes v1.1 with
+//!   `-H1.1`), `States:`, `Start:` (exactly one, a single state), `AP:`,
+//!   `Alias:`, `Acceptance:` (`t`, `f`, `Fin(m)`, `Fin(!m)`, `Inf(m)`,
+//!   `Inf(!m)`, `&`, `|`, parentheses), and the informative items
 //!   `acc-name:`, `name:`, `tool:` and `properties:`, which are skipped like
-//!   every other header item whose name starts with a lower-case letter; an
-//!   unknown item starting with an upper-case letter may change the meaning
-//!   of the automaton, so it is an error;
+//!   every other header item whose name starts with a lower-case letter
+//!   (tool-specific ones such as `spot.highlight.edges:` or
+//!   `controllable-AP:` included: names, like aliases, may contain `.` and
+//!   `-`, as in Spot); the format says an item starting with an upper-case
+//!   letter may change the meaning of the automaton, so an unknown one is an
+//!   error, as is any other version;
 //! * a body of `State:` lines (optional label, state number, optional quoted
 //!   name, optional marks `{...}`), each followed by its edges: an optional
 //!   label `[...]` over AP indices, `t`, `f`, `!`, `&`, `|`, parentheses and
@@ -44,7 +49,7 @@ use super::{AutomatonError, Dra, Letter, MAX_PROPOSITIONS};
 /// Why a HOA text could not be read.
 #[derive(Debug, Error, Clone, PartialEq, Eq)]
 pub enum HoaError {
-    /// The text is not a HOA v1 automaton of the kind this crate reads.
+    /// The text is not a HOA v1 or v1.1 automaton of the kind this crate reads.
     #[error("line {line}, column {column}: {message}")]
     Syntax {
         /// The line of the offending token, from 1.
@@ -59,8 +64,8 @@ pub enum HoaError {
     Automaton(#[from] AutomatonError),
 }
 
-/// Reads a deterministic, complete HOA v1 automaton (see the module
-/// documentation for what is supported).
+/// Reads a deterministic, complete HOA v1 or v1.1 automaton (see the
+/// module documentation for what is supported).
 pub fn parse_hoa(text: &str) -> Result<EmersonLeiAutomaton, HoaError> {
     let tokens = tokenize(text)?;
     let mut parser = Parser { tokens, next: 0 };
@@ -70,7 +75,7 @@ pub fn parse_hoa(text: &str) -> Result<EmersonLeiAutomaton, HoaError> {
     build(&header, &states, end)
 }
 
-/// Reads a HOA v1 automaton with [`parse_hoa`] and converts it with
+/// Reads a HOA v1 or v1.1 automaton with [`parse_hoa`] and converts it with
 /// [`to_state_based_rabin`].
 pub fn read_hoa_dra(text: &str) -> Result<Dra, HoaError> {
     Ok(to_state_based_rabin(&parse_hoa(text)?)?)
@@ -472,10 +477,13 @@ impl Lexer {
     }
 }
 
-/// Whether `c` may continue an identifier.
+/// Whether `c` may continue an identifier (a header name, an alias, `v1.1`).
 fn is_identifier_char(c: char) -> bool {
-    c.is_ascii_alphanumeric() || c == '_' || c == '-'
+    c.is_ascii_alphanumeric() || c == '_' || c == '-' || c == '.'
 }
+
+/// The versions of the format the reader accepts.
+const SUPPORTED_VERSIONS: [&str; 2] = ["v1", "v1.1"];
 
 /// The tokens of `text` with their positions, ending with [`Token::Eof`].
 fn tokenize(text: &str) -> Result<Vec<(Token, Pos)>, HoaError> {
@@ -647,8 +655,9 @@ impl Parser {
             return self.expected("`HOA: v1`");
         }
         self.advance();
-        if *self.peek() != Token::Ident("v1".into()) {
-            return self.expected("version `v1`");
+        if !matches!(self.peek(), Token::Ident(version) if SUPPORTED_VERSIONS.contains(&version.as_str()))
+        {
+            return self.expected("version `v1` or `v1.1`");
         }
         self.advance();
         let mut items = HeaderItems::default();

@@ -5,15 +5,18 @@
 //! of the formula against every adversary (of any size, observation and
 //! memory); `upper` (null without `--adversary`) is the best probability any
 //! defender achieves against the given adversary. The strategies behind them
-//! are written to files on request (`--attack`, `--response`).
+//! are written to files on request (`--attack`, `--response`; format in
+//! docs/formats.md section 7, read back by `posg-fsc strategy`).
 
 use std::path::{Path, PathBuf};
 
-use anyhow::Context;
 use clap::Args;
+use posg_fsc::automaton::Dra;
 use posg_fsc::certify::{Bound, check_consistent, lower_bound, upper_bound};
 use posg_fsc::controller::Role;
 use posg_fsc::controller::file::resolve;
+use posg_fsc::game::Posg;
+use posg_fsc::strategy::StrategyFile;
 use serde::Serialize;
 
 use super::common::{self, ObjectiveArgs, Provenance};
@@ -35,11 +38,13 @@ pub struct CertifyArgs {
     /// The adversary's controller for the upper bound: a file or `uniform:K`.
     #[arg(long)]
     adversary: Option<String>,
-    /// Write the adversary's optimal strategy against the defender (JSON) here.
-    #[arg(long)]
+    /// Write the adversary's optimal strategy against the defender here (a
+    /// strategy file, docs/formats.md section 7; `posg-fsc strategy` reads it).
+    #[arg(long, value_name = "FILE.json")]
     attack: Option<PathBuf>,
-    /// Write the defender's optimal strategy against the adversary (JSON) here.
-    #[arg(long)]
+    /// Write the defender's optimal strategy against the adversary here (as
+    /// --attack).
+    #[arg(long, value_name = "FILE.json")]
     response: Option<PathBuf>,
 }
 
@@ -84,13 +89,26 @@ pub fn run(args: CertifyArgs) -> anyhow::Result<()> {
         common::negated_objective(&args.objective, args.negated_automaton.as_deref(), &game)?;
     let defender = resolve(&args.defender, &game, Role::Defender)?;
     let lower = lower_bound(&game, &not_phi_dra, &defender)?;
-    write_strategy(args.attack.as_deref(), &lower)?;
+    let strategy = |path: Option<&Path>, dra: &Dra, bound: &Bound, nodes: usize| {
+        write_strategy(path, &game, dra, bound, nodes, &formula)
+    };
+    strategy(
+        args.attack.as_deref(),
+        &not_phi_dra,
+        &lower,
+        defender.num_nodes(),
+    )?;
     let upper = match &args.adversary {
         Some(spec) => {
             let adversary = resolve(spec, &game, Role::Adversary)?;
             let upper = upper_bound(&game, &phi_dra, &adversary)?;
             check_consistent(&lower, &upper)?;
-            write_strategy(args.response.as_deref(), &upper)?;
+            strategy(
+                args.response.as_deref(),
+                &phi_dra,
+                &upper,
+                adversary.num_nodes(),
+            )?;
             Some(upper)
         }
         None => None,
@@ -104,10 +122,19 @@ pub fn run(args: CertifyArgs) -> anyhow::Result<()> {
     })
 }
 
-fn write_strategy(path: Option<&Path>, bound: &Bound) -> anyhow::Result<()> {
+/// Writes the strategy of `bound`, computed on the product with `dra` and a
+/// controller of `nodes` nodes, when a path was given.
+fn write_strategy(
+    path: Option<&Path>,
+    game: &Posg,
+    dra: &Dra,
+    bound: &Bound,
+    nodes: usize,
+    formula: &str,
+) -> anyhow::Result<()> {
     if let Some(path) = path {
-        let text = serde_json::to_string_pretty(&bound.strategy)?;
-        std::fs::write(path, text).with_context(|| format!("writing {}", path.display()))?;
+        let command = Provenance::current().command;
+        StrategyFile::new(game, dra, bound, nodes, formula, command).write(path)?;
     }
     Ok(())
 }

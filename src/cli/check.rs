@@ -48,8 +48,16 @@ fn describe(game: &Posg) -> String {
         } else {
             ""
         };
+        let restricted = (0..p.num_observations())
+            .filter(|&o| p.enabled_actions(o).count() < p.num_actions())
+            .count();
+        let enabled = if restricted > 0 {
+            format!("  enabled: {restricted} observations enable only some actions\n")
+        } else {
+            String::new()
+        };
         format!(
-            "{name}:\n  actions ({}): {}\n  observations ({}){observe}: {}\n",
+            "{name}:\n  actions ({}): {}\n  observations ({}){observe}: {}\n{enabled}",
             p.num_actions(),
             list(p.actions()),
             p.num_observations(),

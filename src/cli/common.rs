@@ -22,7 +22,8 @@ pub struct ObjectiveArgs {
         conflicts_with = "automaton"
     )]
     pub ltl: Option<String>,
-    /// A deterministic automaton for phi in HOA v1 (instead of --ltl).
+    /// A deterministic automaton for phi in HOA v1 or v1.1 (instead of
+    /// --ltl; docs/formats.md section 4).
     #[arg(long, value_name = "FILE.hoa")]
     pub automaton: Option<PathBuf>,
     /// Accept a formula that can never hold because a proposition labels no
@@ -49,8 +50,9 @@ impl ObjectiveArgs {
 /// The two controllers.
 #[derive(Debug, Clone, Args)]
 pub struct ControllerArgs {
-    /// The defender's controller: a *.fsc.json file or `uniform:K` (K nodes,
-    /// uniform over all (next node, action) pairs, starting in node 0).
+    /// The defender's controller: a *.fsc.json file (docs/formats.md section
+    /// 2) or `uniform:K` (K nodes, uniform over all (next node, enabled
+    /// action) pairs, starting in node 0).
     #[arg(long, default_value = "uniform:1")]
     pub defender: String,
     /// The adversary's controller, as for --defender (`uniform:1` for a POMDP).
@@ -105,7 +107,7 @@ pub fn read_game(path: &Path) -> anyhow::Result<Posg> {
 
 /// The automaton for the objective, with a description of where it came
 /// from. Warns on stderr about propositions that label no state of the game
-/// (they are false everywhere: formats.md section 3), with the closest
+/// (they are false everywhere: docs/formats.md section 3), with the closest
 /// proposition of the game as a hint; when the objective is then
 /// unsatisfiable (every value would be 0) that is an error unless
 /// `--allow-unused-propositions`.

@@ -82,8 +82,9 @@ fn solve_reach_avoid(game: &Posg, dir: &std::path::Path, out: &mut String) -> an
         candidates: optimise::candidate_structures(game, &dra, Some(&negated), start, &settings)?,
         settings: &settings,
         out: dir,
-        progress: false,
+        progress: super::progress::ProgressMode::Quiet,
         floor: None,
+        seconds_axis: false,
     };
     let (solution, certified) = run_job(&job)?;
     let best = solution.best();

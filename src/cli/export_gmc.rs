@@ -1,5 +1,6 @@
-//! `posg-fsc export-gmc`: the labelled Markov chain on (s, g, h) in PRISM's
-//! explicit format, for an independent check with Storm or PRISM.
+//! `posg-fsc export-gmc`: the labelled Markov chain on (s, g, h) in Storm's
+//! DRN format and PRISM's explicit format, for an independent check with
+//! Storm or PRISM.
 
 use std::path::PathBuf;
 
@@ -17,9 +18,10 @@ pub struct ExportGmcArgs {
     pub game: PathBuf,
     #[command(flatten)]
     pub controllers: ControllerArgs,
-    /// Directory for chain.tra, chain.lab and chain.sta (created if needed,
-    /// written atomically). State 0 is a fresh initial state: check `X phi`
-    /// there (see README).
+    /// Directory for chain.drn (Storm), chain.tra, chain.lab and chain.sta
+    /// (PRISM's explicit format), created if needed. State 0 is a fresh
+    /// initial state: check `X phi` there (README, "Checking a value
+    /// independently").
     #[arg(long)]
     pub out: PathBuf,
     /// Replace a non-empty --out whole (without it, a non-empty --out is refused).

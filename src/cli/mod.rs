@@ -6,12 +6,16 @@ mod certify;
 mod check;
 mod common;
 mod demo;
+mod dot;
 mod eval;
 mod example;
 mod export_gmc;
+mod import_drn;
+mod progress;
 mod prune;
 mod simulate;
 pub(crate) mod solve;
+mod strategy;
 pub(crate) mod support;
 mod sweep;
 mod translate;
@@ -35,20 +39,28 @@ enum Command {
     Example(example::ExampleArgs),
     /// Validate a game file and describe it.
     Check(check::CheckArgs),
+    /// Convert a POMDP, MDP or DTMC from Storm's DRN format into a game file
+    /// (docs/formats.md section 6).
+    ImportDrn(import_drn::ImportDrnArgs),
     /// The exact value of a controller pair, as JSON.
     Eval(eval::EvalArgs),
     /// A Monte Carlo estimate of the value with a 95% confidence interval.
     Simulate(simulate::SimulateArgs),
-    /// Export the Markov chain on (s, g, h) in PRISM's explicit format.
+    /// Export the Markov chain on (s, g, h) for Storm (DRN) and PRISM
+    /// (explicit format; docs/formats.md section 8).
     ExportGmc(export_gmc::ExportGmcArgs),
     /// Algorithm 1: prune FSC structures so that a phi-feasible recurrent set exists.
     Prune(prune::PruneArgs),
-    /// Certified lower and upper bounds (MDP analysis, method.md section 6).
+    /// Certified lower and upper bounds (MDP analysis, docs/method.md section 6).
     Certify(certify::CertifyArgs),
+    /// Read a strategy file of `certify --attack/--response` (docs/formats.md
+    /// section 7), check it against the game and, where possible, write it as
+    /// a controller.
+    Strategy(strategy::StrategyArgs),
     /// Optimise a defender FSC against a worst-case adversary FSC (max-min by
     /// alternating projected gradient ascent-descent with best-response
     /// checks) and write curve.csv, curve.svg, defender.fsc.json,
-    /// adversary.fsc.json and summary.json.
+    /// defender.dot, adversary.fsc.json and summary.json.
     Solve(solve::SolveArgs),
     /// A defender support that wins positively or almost surely against every
     /// adversary, found by SAT, or a proof that none of that size exists; writes
@@ -59,6 +71,9 @@ enum Command {
     Sweep(sweep::SweepArgs),
     /// Translate an LTL formula into a deterministic Rabin automaton.
     Translate(translate::TranslateArgs),
+    /// Draw a controller as a Graphviz graph (nodes, and edges labelled
+    /// observation / action  probability; docs/formats.md section 10).
+    Dot(dot::DotArgs),
 }
 
 /// Runs the subcommand the user chose.
@@ -67,14 +82,17 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Demo(args) => demo::run(args),
         Command::Example(args) => example::run(args),
         Command::Check(args) => check::run(args),
+        Command::ImportDrn(args) => import_drn::run(args),
         Command::Eval(args) => eval::run(args),
         Command::Simulate(args) => simulate::run(args),
         Command::ExportGmc(args) => export_gmc::run(args),
         Command::Prune(args) => prune::run(args),
         Command::Certify(args) => certify::run(args),
+        Command::Strategy(args) => strategy::run(args),
         Command::Solve(args) => solve::run(args),
         Command::Support(args) => support::run(args),
         Command::Sweep(args) => sweep::run(args),
         Command::Translate(args) => translate::run(args),
+        Command::Dot(args) => dot::run(args),
     }
 }

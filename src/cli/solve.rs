@@ -3,10 +3,9 @@
 //!
 //! [`SettingsArgs`] is what the user typed for [`Settings`] (shared with
 //! `sweep`); [`SolveJob`] is the built objects; [`run_job`] optimises and
-//! writes `curve.csv`, `curve.svg`, `defender.fsc.json`, `adversary.fsc.json`
-//! and `summary.json` into the output directory.
+//! writes `curve.csv`, `curve.svg`, `defender.fsc.json`, `defender.dot`,
+//! `adversary.fsc.json` and `summary.json` into the output directory.
 
-use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -23,16 +22,17 @@ use posg_fsc::optimise::{
     self, Candidates, Observer, Settings, Solution, SourceNote, Structure, StructureOutcome,
     StructureReport, StructureSource, UpdateRule,
 };
-use posg_fsc::output::{CurveCsv, CurvePlot, OutputDirectory, Progress, create_dir, write_file};
+use posg_fsc::output::{CurveCsv, CurvePlot, OutputDirectory, Title, create_dir, write_file};
 use posg_fsc::solver::SolverMethod;
 
 use super::common::{ObjectiveArgs, objective, print_text, read_game};
+use super::progress::{OutputArgs, ProgressMode, structure_progress};
 use super::support::SynthesisArgs;
 
 /// Arguments of `solve`.
 #[derive(Debug, Args)]
 pub struct SolveArgs {
-    /// The game, a `*.posg.json` file (formats.md section 1).
+    /// The game, a `*.posg.json` file (docs/formats.md section 1).
     game: PathBuf,
     #[command(flatten)]
     objective: ObjectiveArgs,
@@ -58,6 +58,8 @@ pub struct SolveArgs {
     adversary: Option<PathBuf>,
     #[command(flatten)]
     settings: SettingsArgs,
+    #[command(flatten)]
+    output: OutputArgs,
 }
 
 /// The optimiser's settings as command-line options (defaults: [`Settings::default`]).
@@ -265,11 +267,13 @@ pub struct SolveJob<'a> {
     /// The directory to write into (a staging directory of an
     /// [`OutputDirectory`], or a subdirectory of one).
     pub out: &'a Path,
-    /// Whether to draw progress bars (stderr is a terminal and nothing else draws).
-    pub progress: bool,
     /// The best outcome of a smaller defender size (`sweep`): the result
     /// is kept at least as good ([`optimise::keep_better`]).
     pub floor: Option<&'a StructureOutcome>,
+    /// How to show progress on stderr.
+    pub progress: ProgressMode,
+    /// Whether curve.svg gets a top axis with the seconds elapsed.
+    pub seconds_axis: bool,
 }
 
 /// `summary.json`.
@@ -289,7 +293,7 @@ struct Summary<'a> {
     error_bound: f64,
     /// The best defender's guaranteed value against every adversary, and
     /// the smallest game upper bound over the best responses found
-    /// (method.md section 6); absent when the objective came as an automaton.
+    /// (docs/method.md section 6); absent when the objective came as an automaton.
     certified: Option<Bracket>,
     last_value: f64,
     seconds: f64,
@@ -301,7 +305,7 @@ struct Summary<'a> {
     /// What each source of structures found, proved or why it gave none.
     sources: &'a [SourceNote],
     structures: Vec<&'a StructureReport>,
-    files: [&'static str; 5],
+    files: [&'static str; 6],
 }
 
 /// Reads the game and builds the objective's automaton (and, for an LTL
@@ -326,11 +330,10 @@ pub fn load(game: &Path, args: &ObjectiveArgs) -> anyhow::Result<(Posg, Dra, Opt
 pub fn run_job(job: &SolveJob) -> anyhow::Result<(Solution, Option<Bracket>)> {
     create_dir(job.out)?;
     let clock = Instant::now();
-    let title = format!("{}: {}", job.game.name().unwrap_or("game"), job.objective);
     let iterations = job.settings.max_iterations;
     let multiple = job.candidates.structures.len() > 1;
     let out = job.out.to_path_buf();
-    let bars = job.progress.then(MultiProgress::new);
+    let bars = (job.progress == ProgressMode::Bars).then(MultiProgress::new);
     let mut solution = optimise::optimise_structures(
         job.game,
         job.dra,
@@ -343,13 +346,14 @@ pub fn run_job(job: &SolveJob) -> anyhow::Result<(Solution, Option<Bracket>)> {
             } else {
                 "curve".to_string()
             };
-            observers(
-                &out,
-                &stem,
-                &title,
-                bars.as_ref()
-                    .map(|bars| (bars, structure.name.as_str(), iterations)),
-            )
+            let mut list = observers(&out, &stem, plot_title(job, structure), job.seconds_axis);
+            list.extend(structure_progress(
+                job.progress,
+                bars.as_ref(),
+                &structure.name,
+                iterations,
+            ));
+            Box::new(list) as Box<dyn Observer + Send>
         },
     )?;
     if let Some(floor) = job.floor {
@@ -381,6 +385,7 @@ pub fn run_job(job: &SolveJob) -> anyhow::Result<(Solution, Option<Bracket>)> {
             ..bracket
         });
     controller::file::write(&out.join("defender.fsc.json"), &best.defender, job.game)?;
+    write_defender_dot(&out.join("defender.dot"), job, &best.defender)?;
     controller::file::write(&out.join("adversary.fsc.json"), &best.adversary, job.game)?;
     let summary = Summary {
         command_line: std::env::args().collect(),
@@ -410,6 +415,7 @@ pub fn run_job(job: &SolveJob) -> anyhow::Result<(Solution, Option<Bracket>)> {
             "curve.csv",
             "curve.svg",
             "defender.fsc.json",
+            "defender.dot",
             "adversary.fsc.json",
             "summary.json",
         ],
@@ -441,13 +447,62 @@ pub fn structure_choice(solution: &Solution, notes: &[SourceNote]) -> Vec<String
         .collect()
 }
 
-/// The CSV writer and the plot for `stem`, and a progress bar when asked.
+/// The Graphviz picture of the best defender (`dot -Tsvg defender.dot`).
+fn write_defender_dot(
+    path: &Path,
+    job: &SolveJob,
+    defender: &controller::Fsc,
+) -> anyhow::Result<()> {
+    let player = job.game.defender();
+    let title = format!(
+        "defender for {}: {} ({} nodes)",
+        job.game.name().unwrap_or("game"),
+        job.objective,
+        defender.num_nodes()
+    );
+    let text = posg_fsc::output::dot::controller_dot(
+        defender,
+        player.observations(),
+        player.actions(),
+        &title,
+        posg_fsc::output::dot::DEFAULT_THRESHOLD,
+    );
+    Ok(write_file(path, &text)?)
+}
+
+/// The title of a structure's `curve.svg`: game and objective, then sizes
+/// and structure.
+fn plot_title(job: &SolveJob, structure: &Structure) -> Title {
+    let nodes = |n: usize| {
+        if n == 1 {
+            "1 node".to_string()
+        } else {
+            format!("{n} nodes")
+        }
+    };
+    let adversary = if job.game.has_adversary() {
+        format!(", adversary {}", nodes(structure.adversary.num_nodes()))
+    } else {
+        String::new()
+    };
+    Title {
+        main: format!("{}: {}", job.game.name().unwrap_or("game"), job.objective),
+        detail: format!(
+            "defender {}{adversary}, structure {}, game of {} states",
+            nodes(structure.defender.num_nodes()),
+            structure.name,
+            job.game.num_states()
+        ),
+    }
+}
+
+/// The CSV writer and the plot for `stem`.
 fn observers(
     out: &Path,
     stem: &str,
-    title: &str,
-    progress: Option<(&MultiProgress, &str, usize)>,
-) -> Box<dyn Observer + Send> {
+    title: Title,
+    seconds_axis: bool,
+) -> Vec<Box<dyn Observer + Send>> {
     let mut list: Vec<Box<dyn Observer + Send>> = Vec::new();
     let (table, plot) = (
         out.join(format!("{stem}.csv")),
@@ -457,11 +512,9 @@ fn observers(
         Ok(csv) => list.push(Box::new(Named(table, csv))),
         Err(error) => list.push(Box::new(Failed(Some(error.into())))),
     }
-    list.push(Box::new(Named(plot.clone(), CurvePlot::new(&plot, title))));
-    if let Some((bars, label, iterations)) = progress {
-        list.push(Box::new(Progress::new(bars, label, iterations)));
-    }
-    Box::new(list)
+    let curve = CurvePlot::new(&plot, title).with_seconds_axis(seconds_axis);
+    list.push(Box::new(Named(plot, curve)));
+    list
 }
 
 /// An observer writing the file at `.0`, whose failure names that file.
@@ -565,8 +618,9 @@ pub fn run(args: SolveArgs) -> anyhow::Result<()> {
         )?,
         settings: &settings,
         out: out.path(),
-        progress: std::io::stderr().is_terminal(),
+        progress: ProgressMode::detect(args.output.quiet),
         floor: None,
+        seconds_axis: args.output.seconds_axis,
     };
     let (solution, certified) = run_job(&job)?;
     let choice = structure_choice(&solution, &job.candidates.notes);
@@ -592,7 +646,8 @@ pub fn run(args: SolveArgs) -> anyhow::Result<()> {
     print_text(&format!(
         "structure {}: worst-case estimate {:.6} (last iterate value {:.6}) after {} iterations \
          ({}, {}; best of {} starts; {} defender), {:.1} s; \
-         GMC {} states{bracket}\nwrote curve.csv, curve.svg, defender.fsc.json, adversary.fsc.json, summary.json to {}\n",
+         GMC {} states{bracket}\nwrote curve.csv, curve.svg, defender.fsc.json, defender.dot, adversary.fsc.json, \
+         summary.json to {}\n",
         report.name,
         report.worst_case,
         report.last_value,

@@ -12,15 +12,16 @@ use serde::Serialize;
 
 use posg_fsc::limits;
 use posg_fsc::optimise::{self, Structure, StructureOutcome};
-use posg_fsc::output::{OutputDirectory, OutputError, SweepPoint, plot_sweep};
+use posg_fsc::output::{OutputDirectory, OutputError, SweepPoint, Title, plot_sweep};
 
 use super::common::{ObjectiveArgs, print_text};
+use super::progress::{OutputArgs, ProgressMode, SweepProgress};
 use super::solve::{SettingsArgs, SolveJob, check_sizes, load, run_job};
 
 /// Arguments of `sweep`.
 #[derive(Debug, Args)]
 pub struct SweepArgs {
-    /// The game, a `*.posg.json` file (formats.md section 1).
+    /// The game, a `*.posg.json` file (docs/formats.md section 1).
     game: PathBuf,
     #[command(flatten)]
     objective: ObjectiveArgs,
@@ -40,6 +41,8 @@ pub struct SweepArgs {
     force: bool,
     #[command(flatten)]
     settings: SettingsArgs,
+    #[command(flatten)]
+    output: OutputArgs,
 }
 
 /// A list of positive sizes.
@@ -125,6 +128,10 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
     let mut defender_sizes = args.def_nodes.0.clone();
     defender_sizes.sort_unstable();
     defender_sizes.dedup();
+    let progress = SweepProgress::new(
+        ProgressMode::detect(args.output.quiet),
+        defender_sizes.len() * args.adv_nodes.0.len(),
+    );
     let rows: Vec<Row> = args
         .adv_nodes
         .0
@@ -156,17 +163,15 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
                     )?,
                     settings: &settings,
                     out: &out,
-                    progress: false,
+                    progress: ProgressMode::Quiet,
                     floor: previous.as_ref(),
+                    seconds_axis: args.output.seconds_axis,
                 };
                 let (solution, certified) = run_job(&job)
                     .with_context(|| format!("defender {n} nodes, adversary {m} nodes"))?;
                 let best = solution.best();
                 let report = &best.report;
-                eprintln!(
-                    "defender {n}, adversary {m}: worst-case estimate {:.6}",
-                    report.worst_case
-                );
+                progress.finished(n, m, report.worst_case);
                 rows.push(Row {
                     defender_nodes: n,
                     adversary_nodes: m,
@@ -192,6 +197,7 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
         .into_iter()
         .flatten()
         .collect();
+    progress.finish();
     let table = out.join("sweep.csv");
     let file = std::fs::File::create(&table).map_err(|e| OutputError::io("creating", &table, e))?;
     let mut writer = csv::Writer::from_writer(file);
@@ -212,7 +218,14 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
             bracket: r.certified_lower.zip(r.upper_bound),
         })
         .collect();
-    let title = format!("{}: {}", game.name().unwrap_or("game"), description);
+    let title = Title {
+        main: format!("{}: {}", game.name().unwrap_or("game"), description),
+        detail: format!(
+            "best structure per size pair, game of {} states, {} iterations at most",
+            game.num_states(),
+            settings.max_iterations
+        ),
+    };
     let plot = out.join("sweep.svg");
     plot_sweep(&plot, &title, &points)
         .map_err(|e| anyhow::anyhow!("writing {}: {e}", plot.display()))?;

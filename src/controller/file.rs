@@ -37,6 +37,64 @@ pub fn from_json_str(
     build(raw, &Located::new(file_name, ""), player(game, role), role)
 }
 
+/// Reads the controller file at `path` for whichever player of `game` its
+/// `player` field names (formats.md section 2).
+pub fn read_either(path: &Path, game: &Posg) -> Result<Fsc, ModelError> {
+    let file_name = path.display().to_string();
+    let text = read_text(path, &file_name)?;
+    let raw: RawFsc = parse(&text, &file_name)?;
+    let role = raw.player;
+    build(raw, &Located::new(&file_name, ""), player(game, role), role)
+}
+
+/// A controller read without its game, with the observation and action
+/// names its file uses.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Standalone {
+    /// The controller, over the observations and actions below.
+    pub fsc: Fsc,
+    /// The observations the rules name, in order of first appearance.
+    pub observations: Vec<String>,
+    /// The actions the choices name, in order of first appearance.
+    pub actions: Vec<String>,
+}
+
+/// Reads the controller file at `path` without its game (for pictures):
+/// the player's observations and actions are taken to be those the file
+/// names. A file with `"default": "uniform"` needs its game (the actions of
+/// the missing rules are not in the file), so it is an error here.
+pub fn read_standalone(path: &Path) -> Result<Standalone, ModelError> {
+    let file_name = path.display().to_string();
+    let text = read_text(path, &file_name)?;
+    let raw: RawFsc = parse(&text, &file_name)?;
+    let at = Located::new(&file_name, "");
+    if raw.default == MissingRule::Uniform {
+        return Err(at.key("default").error(
+            "with \"default\": \"uniform\" the controller can only be read with its game (--game)",
+        ));
+    }
+    let mut observations: Vec<String> = Vec::new();
+    let mut actions: Vec<String> = Vec::new();
+    for rule in &raw.rules {
+        if !observations.contains(&rule.observation) {
+            observations.push(rule.observation.clone());
+        }
+        for c in &rule.choices {
+            if !actions.contains(&c.action) {
+                actions.push(c.action.clone());
+            }
+        }
+    }
+    let player = Player::named(actions.clone(), observations.clone());
+    let role = raw.player;
+    let fsc = build(raw, &at, &player, role)?;
+    Ok(Standalone {
+        fsc,
+        observations,
+        actions,
+    })
+}
+
 /// The controller as pretty-printed JSON naming `game`'s observations and
 /// actions: one rule per (node, observation), `"default": "error"`, the
 /// `logit` of every choice that has one.
@@ -51,8 +109,9 @@ pub fn write(path: &Path, fsc: &Fsc, game: &Posg) -> Result<(), ModelError> {
 }
 
 /// The controller a command-line argument names: `uniform:K` is
-/// [`Fsc::uniform`] with `K >= 1` nodes; anything else is a file path read
-/// with [`read`]. For a POMDP the adversary's `uniform:1` is the trivial controller.
+/// [`Fsc::uniform_enabled`] with `K >= 1` nodes (uniform over the enabled
+/// actions); anything else is a file path read with [`read`]. For a POMDP
+/// the adversary's `uniform:1` is the trivial controller.
 pub fn resolve(spec: &str, game: &Posg, role: Role) -> Result<Fsc, ModelError> {
     let Some(size) = spec.strip_prefix("uniform:") else {
         return read(Path::new(spec), game, role);
@@ -76,12 +135,7 @@ pub fn resolve(spec: &str, game: &Posg, role: Role) -> Result<Fsc, ModelError> {
              `uniform:1`; drop --adversary",
         ));
     }
-    Ok(Fsc::uniform(
-        role,
-        nodes,
-        p.num_observations(),
-        p.num_actions(),
-    ))
+    Ok(Fsc::uniform_enabled(role, nodes, p))
 }
 
 fn player(game: &Posg, role: Role) -> &Player {
@@ -208,7 +262,7 @@ fn blocks(raw: &RawFsc, at: &Located, player: &Player) -> Result<Vec<Vec<Choice>
                 rule.observation
             )));
         }
-        blocks[g * num_obs + o] = Some(choices(rule, raw.nodes, &here.key("choices"), player)?);
+        blocks[g * num_obs + o] = Some(choices(rule, o, raw.nodes, &here.key("choices"), player)?);
     }
     let missing = blocks.iter().filter(|b| b.is_none()).count();
     if missing > 0 && raw.default == MissingRule::Uniform {
@@ -227,13 +281,12 @@ fn blocks(raw: &RawFsc, at: &Located, player: &Player) -> Result<Vec<Vec<Choice>
             return Err(at.error(message));
         }
     }
-    let uniform = uniform_block(raw.nodes, player.num_actions());
     blocks
         .into_iter()
         .enumerate()
         .map(|(b, block)| match (block, raw.default) {
             (Some(block), _) => Ok(block),
-            (None, MissingRule::Uniform) => Ok(uniform.clone()),
+            (None, MissingRule::Uniform) => Ok(uniform_block(raw.nodes, player, b % num_obs)),
             (None, MissingRule::Error) => Err(at.error(format!(
                 "no rule for node {}, observation `{}` (and \"default\" is \"error\")",
                 b / num_obs,
@@ -243,12 +296,16 @@ fn blocks(raw: &RawFsc, at: &Located, player: &Player) -> Result<Vec<Vec<Choice>
         .collect()
 }
 
-/// The block uniform over every `(next node, action)` pair.
-fn uniform_block(nodes: usize, actions: usize) -> Vec<Choice> {
-    let probability = 1.0 / (nodes * actions) as f64;
+/// The block uniform over the pairs `(next node, action)` with the action
+/// enabled under observation `o`.
+fn uniform_block(nodes: usize, player: &Player, o: usize) -> Vec<Choice> {
+    let actions: Vec<usize> = (0..player.num_actions())
+        .filter(|&u| player.action_enabled(o, u))
+        .collect();
+    let probability = 1.0 / (nodes * actions.len()) as f64;
     (0..nodes)
         .flat_map(|next| {
-            (0..actions).map(move |action| Choice {
+            actions.iter().map(move |&action| Choice {
                 next,
                 action,
                 probability,
@@ -280,9 +337,12 @@ fn rule_key(
     Ok((rule.node, o))
 }
 
-/// A rule's choices: checked, renormalised, zero-probability choices dropped.
+/// A rule's choices: checked, renormalised, zero-probability choices
+/// dropped; a positive probability on an action that the rule's observation
+/// does not enable is an error (formats.md section 6).
 fn choices(
     rule: &RawRule,
+    observation: usize,
     nodes: usize,
     at: &Located,
     player: &Player,
@@ -312,6 +372,12 @@ fn choices(
             )));
         }
         check_probability(c.p, &here.key("p"))?;
+        if c.p > 0.0 && !player.action_enabled(observation, action) {
+            return Err(here.key("action").error(format!(
+                "action `{}` is not enabled under observation `{}` (the game's `enabled` map)",
+                c.action, rule.observation
+            )));
+        }
         choices.push(Choice {
             next: c.next,
             action,

@@ -11,7 +11,7 @@ mod support;
 
 pub use support::{Probabilities, Support};
 
-use crate::game::ModelError;
+use crate::game::{ModelError, Player};
 
 /// Which player a controller belongs to.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
@@ -127,6 +127,60 @@ impl Fsc {
             Some(message) => Err(ModelError::new(input, message)),
             None => Ok(()),
         }
+    }
+
+    /// The controller with `num_nodes` nodes for `player` that starts in
+    /// node 0 and, in every block `(g, o)`, is uniform over the pairs
+    /// `(next node, action)` with the action enabled under `o`
+    /// ([`Player::action_enabled`]); [`Fsc::uniform`] when every action is
+    /// enabled everywhere.
+    pub fn uniform_enabled(role: Role, num_nodes: usize, player: &Player) -> Self {
+        let mut fsc = Self::uniform(
+            role,
+            num_nodes,
+            player.num_observations(),
+            player.num_actions(),
+        );
+        if player.restricts_actions() {
+            for (b, block) in fsc.blocks.iter_mut().enumerate() {
+                let o = b % player.num_observations();
+                block.retain(|c| player.action_enabled(o, c.action));
+                let probability = 1.0 / block.len() as f64;
+                block.iter_mut().for_each(|c| c.probability = probability);
+            }
+        }
+        fsc
+    }
+
+    /// Checks that the controller fits `player`: the same numbers of
+    /// observations and actions, and positive probability only on actions
+    /// enabled under the block's observation (formats.md section 6).
+    pub fn check_fits(&self, player: &Player) -> Result<(), String> {
+        if self.num_observations != player.num_observations() {
+            return Err(format!(
+                "it has {} observations, the game's player {}",
+                self.num_observations,
+                player.num_observations()
+            ));
+        }
+        if self.num_actions != player.num_actions() {
+            return Err(format!(
+                "it has {} actions, the game's player {}",
+                self.num_actions,
+                player.num_actions()
+            ));
+        }
+        for (b, block) in self.blocks.iter().enumerate() {
+            let (g, o) = (b / self.num_observations, b % self.num_observations);
+            if let Some(c) = block.iter().find(|c| !player.action_enabled(o, c.action)) {
+                return Err(format!(
+                    "node {g}, observation `{}` plays action `{}`, which that observation does not enable",
+                    player.observations()[o],
+                    player.actions()[c.action]
+                ));
+            }
+        }
+        Ok(())
     }
 
     fn check(&self) -> Result<(), ModelError> {

@@ -4,8 +4,9 @@
 //! plain serde types that mirror the file (`RawGame` and friends): unknown
 //! fields, duplicate keys and wrong JSON types fail here, with the JSON path
 //! of the offending value. The second pass checks what JSON cannot say (names,
-//! distributions, the coverage of every `(s, u_def, u_adv)` triple by the
-//! `"*"` wildcards) and builds the [`Posg`]. Every error is a [`ModelError`]
+//! distributions, the actions `enabled` per observation, the coverage of every
+//! `(s, u_def, u_adv)` triple whose actions some observation of `s` enables by
+//! the `"*"` wildcards) and builds the [`Posg`]. Every error is a [`ModelError`]
 //! whose path is `FILE: JSON.path`, e.g. `grid.posg.json: transitions[17].next.s9`.
 //!
 //! The helpers shared with the controller files (`parse`, `Located`,
@@ -42,9 +43,10 @@ pub fn from_json_str(text: &str, file_name: &str) -> Result<Posg, ModelError> {
 }
 
 /// The game as pretty-printed JSON that [`from_json_str`] reads back to an
-/// equal [`Posg`]: one transition entry per `(s, u_def, u_adv)` triple (no
-/// wildcards), `"observe": "full"` for fully observing players, no adversary
-/// for a POMDP, the name and labels kept.
+/// equal [`Posg`]: one transition entry per `(s, u_def, u_adv)` triple whose
+/// actions are enabled in `s` (no wildcards), `"observe": "full"` for fully
+/// observing players, `enabled` only for observations that disable some
+/// action, no adversary for a POMDP, the name and labels kept.
 pub fn to_json_string(game: &Posg) -> String {
     let raw = RawGame::from_game(game);
     serde_json::to_string_pretty(&raw).expect("a game always serialises")
@@ -300,6 +302,9 @@ struct RawPlayer {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     observations: Option<Vec<String>>,
     observe: RawObserve,
+    /// Observation -> the actions enabled under it (formats.md section 6).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    enabled: Option<UniqueMap<Vec<String>>>,
 }
 
 /// `observe`: `"full"` or state -> distribution over observations.
@@ -510,11 +515,13 @@ impl<'a> Builder<'a> {
                 Ok::<_, ModelError>(vec![(o, 1.0)])
             })
             .collect::<Result<_, _>>()?;
+        let enabled = enabled(raw, &observations, &index, at)?;
         Ok(Player {
             actions: raw.actions.clone(),
             observations,
             full_observation: true,
             observe,
+            enabled,
         })
     }
 
@@ -553,11 +560,13 @@ impl<'a> Builder<'a> {
                 })
             })
             .collect::<Result<_, _>>()?;
+        let enabled = enabled(raw, &observations, &index, at)?;
         Ok(Player {
             actions: raw.actions.clone(),
             observations,
             full_observation: false,
             observe,
+            enabled,
         })
     }
 
@@ -604,19 +613,22 @@ impl<'a> Builder<'a> {
         for s in 0..game.states.len() {
             for u in 0..nu {
                 for v in 0..nv {
-                    let entry = resolve_triple(&keyed, s, u, v)
-                        .map_err(|m| at.error(m.describe(game, s, u, v)))?;
-                    let total = game.transition_entries.len() as u128 + nexts[entry].len() as u128;
-                    if let Some(message) = limits::exceeded(
-                        "the transitions with their wildcards expanded",
-                        total,
-                        limits::MAX_TRANSITION_ENTRIES,
-                        "entries or more",
-                        "MAX_TRANSITION_ENTRIES",
-                    ) {
-                        return Err(at.error(message));
+                    if triple_required(game, s, u, v) {
+                        let entry = resolve_triple(&keyed, s, u, v)
+                            .map_err(|m| at.error(m.describe(game, s, u, v)))?;
+                        let total =
+                            game.transition_entries.len() as u128 + nexts[entry].len() as u128;
+                        if let Some(message) = limits::exceeded(
+                            "the transitions with their wildcards expanded",
+                            total,
+                            limits::MAX_TRANSITION_ENTRIES,
+                            "entries or more",
+                            "MAX_TRANSITION_ENTRIES",
+                        ) {
+                            return Err(at.error(message));
+                        }
+                        game.transition_entries.extend_from_slice(&nexts[entry]);
                     }
-                    game.transition_entries.extend_from_slice(&nexts[entry]);
                     game.transition_offsets.push(game.transition_entries.len());
                 }
             }
@@ -654,6 +666,58 @@ impl<'a> Builder<'a> {
         };
         Ok((s, u, v))
     }
+}
+
+/// Whether the game must define `T(. | s, u, v)`: some observation of `s`
+/// enables `u` for the defender and some enables `v` for the adversary
+/// (formats.md section 6). Other triples keep no entries.
+fn triple_required(game: &Posg, s: usize, u: usize, v: usize) -> bool {
+    game.defender.action_enabled_in_state(s, u) && game.adversary.action_enabled_in_state(s, v)
+}
+
+/// The `enabled` map of a player as the dense table of [`Player`]: empty
+/// when the map is absent or enables every action everywhere. Every listed
+/// observation needs at least one action; actions are listed at most once.
+fn enabled(
+    raw: &RawPlayer,
+    observations: &[String],
+    index: &FxHashMap<String, usize>,
+    at: &Located,
+) -> Result<Vec<bool>, ModelError> {
+    let Some(map) = &raw.enabled else {
+        return Ok(Vec::new());
+    };
+    let here = at.key("enabled");
+    let num_actions = raw.actions.len();
+    let mut table = vec![true; observations.len() * num_actions];
+    for (observation, actions) in &map.0 {
+        let at_o = here.key(observation);
+        let o = *index
+            .get(observation)
+            .ok_or_else(|| at_o.error(format!("unknown observation `{observation}`")))?;
+        if actions.is_empty() {
+            return Err(at_o.error("an observation needs at least one enabled action"));
+        }
+        let row = &mut table[o * num_actions..(o + 1) * num_actions];
+        row.fill(false);
+        for (i, action) in actions.iter().enumerate() {
+            let u = raw
+                .actions
+                .iter()
+                .position(|a| a == action)
+                .ok_or_else(|| at_o.index(i).error(format!("unknown action `{action}`")))?;
+            if row[u] {
+                return Err(at_o
+                    .index(i)
+                    .error(format!("action `{action}` listed twice")));
+            }
+            row[u] = true;
+        }
+    }
+    if table.iter().all(|&e| e) {
+        table.clear();
+    }
+    Ok(table)
 }
 
 /// A defender or adversary field of a transition: an action index or [`WILDCARD`].
@@ -743,12 +807,13 @@ fn index_names(
 }
 
 /// The adversary of a POMDP: one action `_`, one observation `_`, seen in every state.
-fn pomdp_adversary(num_states: usize) -> Player {
+pub(crate) fn pomdp_adversary(num_states: usize) -> Player {
     Player {
         actions: vec![POMDP_SYMBOL.to_string()],
         observations: vec![POMDP_SYMBOL.to_string()],
         full_observation: false,
         observe: vec![vec![(0, 1.0)]; num_states],
+        enabled: Vec::new(),
     }
 }
 
@@ -789,10 +854,21 @@ impl RawPlayer {
                     .collect(),
             ))
         };
+        let enabled: Vec<(String, Vec<String>)> = (0..player.num_observations())
+            .filter(|&o| player.enabled_actions(o).count() < player.num_actions())
+            .map(|o| {
+                let actions = player
+                    .enabled_actions(o)
+                    .map(|u| player.actions[u].clone())
+                    .collect();
+                (player.observations[o].clone(), actions)
+            })
+            .collect();
         Self {
             actions: player.actions.clone(),
             observations: Some(player.observations.clone()),
             observe,
+            enabled: (!enabled.is_empty()).then_some(UniqueMap(enabled)),
         }
     }
 }
@@ -802,7 +878,7 @@ fn raw_transitions(game: &Posg) -> Vec<RawTransition> {
     let mut out = Vec::with_capacity(game.num_states() * nu * nv);
     for s in 0..game.num_states() {
         for u in 0..nu {
-            for v in 0..nv {
+            for v in (0..nv).filter(|&v| triple_required(game, s, u, v)) {
                 out.push(RawTransition {
                     state: game.states[s].clone(),
                     defender: game.defender.actions[u].clone(),

@@ -286,6 +286,7 @@ impl GridSpec {
             observations,
             full_observation: false,
             observe,
+            enabled: Vec::new(),
         }
     }
 

@@ -2,10 +2,12 @@
 //! the paper's `SG = (S, U_def, U_adv, T, O_def, O_adv, O_def, O_adv, AP, L)`.
 //!
 //! [`Posg`] is the validated in-memory model; [`file`] reads and writes it as
-//! `*.posg.json` (formats.md section 1) and [`grid`] builds the seed paper's
-//! grid family. Every distribution held here has positive entries only (a zero
+//! `*.posg.json` (formats.md section 1), [`drn`] imports Storm's explicit DRN
+//! models (formats.md section 6) and [`grid`] builds the seed paper's grid
+//! family. Every distribution held here has positive entries only (a zero
 //! is "no edge") that sum to one exactly up to rounding.
 
+pub mod drn;
 pub mod file;
 pub mod grid;
 
@@ -39,14 +41,18 @@ impl ModelError {
 /// distinct outcomes and positive probabilities summing to 1.
 pub type Distribution = Vec<(usize, f64)>;
 
-/// One player's side of the game: actions `U_*`, observations `O_*` and the
-/// observation function `O_*(o | s)`.
+/// One player's side of the game: actions `U_*`, observations `O_*`, the
+/// observation function `O_*(o | s)` and the actions enabled under each
+/// observation (formats.md section 6; by default every action).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Player {
     pub(crate) actions: Vec<String>,
     pub(crate) observations: Vec<String>,
     pub(crate) full_observation: bool,
     pub(crate) observe: Vec<Distribution>,
+    /// `enabled[o * |U| + u]`: whether action `u` is enabled under
+    /// observation `o`; empty when every action is enabled everywhere.
+    pub(crate) enabled: Vec<bool>,
 }
 
 impl Player {
@@ -78,6 +84,47 @@ impl Player {
     /// `O_*(. | s)` as `(observation, probability)` pairs with positive probability.
     pub fn observation_distribution(&self, s: StateId) -> &[(usize, f64)] {
         &self.observe[s]
+    }
+
+    /// Whether the player may play `action` after seeing `observation`
+    /// (formats.md section 6): a controller gives positive probability
+    /// `mu(g', u | g, o)` only to actions `u` enabled under `o`.
+    pub fn action_enabled(&self, observation: usize, action: usize) -> bool {
+        self.enabled.is_empty() || self.enabled[observation * self.actions.len() + action]
+    }
+
+    /// The actions enabled under `observation`, in increasing order.
+    pub fn enabled_actions(&self, observation: usize) -> impl Iterator<Item = usize> + '_ {
+        (0..self.actions.len()).filter(move |&u| self.action_enabled(observation, u))
+    }
+
+    /// Whether some observation `o` with `O_*(o | s) > 0` enables `action`:
+    /// the actions the player can play in state `s`, the ones whose
+    /// transitions the game must define, and the ones a fully observing
+    /// player of the certified bounds may use (method.md section 6).
+    pub fn action_enabled_in_state(&self, s: StateId, action: usize) -> bool {
+        self.enabled.is_empty()
+            || self.observe[s]
+                .iter()
+                .any(|&(o, _)| self.action_enabled(o, action))
+    }
+
+    /// Whether some action is disabled under some observation (the game
+    /// file has a non-trivial `enabled` map for this player).
+    pub fn restricts_actions(&self) -> bool {
+        !self.enabled.is_empty()
+    }
+
+    /// A player with these actions and observations, every action enabled,
+    /// in a game without states (to read a controller file on its own).
+    pub(crate) fn named(actions: Vec<String>, observations: Vec<String>) -> Self {
+        Self {
+            actions,
+            observations,
+            full_observation: false,
+            observe: Vec::new(),
+            enabled: Vec::new(),
+        }
     }
 }
 
@@ -169,7 +216,9 @@ impl Posg {
         self.has_adversary
     }
 
-    /// `T(. | s, u, v)` as `(successor, probability)` pairs with positive probability.
+    /// `T(. | s, u, v)` as `(successor, probability)` pairs with positive
+    /// probability. Empty when `u` or `v` is enabled under no observation of
+    /// `s` ([`Player::action_enabled_in_state`]): no controller plays it there.
     pub fn transition(&self, s: StateId, u: usize, v: usize) -> &[(StateId, f64)] {
         let t = (s * self.defender.num_actions() + u) * self.adversary.num_actions() + v;
         &self.transition_entries[self.transition_offsets[t]..self.transition_offsets[t + 1]]

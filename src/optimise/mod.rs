@@ -188,7 +188,8 @@ pub struct Structure {
 }
 
 impl Structure {
-    /// The full support structure: every `(g', u)` in every block, both
+    /// The full support structure: every `(g', u)` with `u` enabled under
+    /// the block's observation in every block, both
     /// players uniform; each starts in node 0, or (when the initial
     /// distribution is optimised) uniformly over its nodes.
     pub fn full(
@@ -202,8 +203,7 @@ impl Structure {
                 Role::Defender => game.defender(),
                 Role::Adversary => game.adversary(),
             };
-            let mut fsc =
-                Fsc::uniform(role, nodes, player.num_observations(), player.num_actions());
+            let mut fsc = Fsc::uniform_enabled(role, nodes, player);
             if optimise_initial {
                 fsc.initial = vec![1.0 / nodes as f64; nodes];
             }

@@ -2,25 +2,23 @@
 //! of finished results:
 //!
 //! * [`CurveCsv`]: `curve.csv`, one row per outer iteration;
-//! * [`CurvePlot`]: `curve.svg`, the value and the worst-case estimate
-//!   against the iteration;
-//! * [`Progress`]: a progress bar on stderr (the caller creates it only when
-//!   stderr is a terminal);
-//! * [`plot_sweep`]: `sweep.svg`, the worst-case value against the defender's
-//!   size, one line per adversary size;
+//! * [`CurvePlot`]: `curve.svg`, the value and the worst-case estimate over
+//!   the certified band, against the iteration;
+//! * [`plot_sweep`]: `sweep.svg`, a heatmap of the certified lower bound
+//!   over defender and adversary sizes;
+//! * [`dot::controller_dot`]: a Graphviz picture of a controller;
 //! * [`OutputDirectory`]: the directory a command writes its results into,
 //!   atomically, under a lock, never mixing old and new results.
 
 mod directory;
+pub mod dot;
 mod plot;
 
 pub use directory::{OutputDirectory, OutputError, create_dir, write_file};
-pub use plot::{CurvePlot, SweepPoint, plot_sweep};
+pub use plot::{CurvePlot, SweepPoint, Title, plot_sweep};
 
 use std::fs::File;
 use std::path::Path;
-
-use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
 
 use crate::optimise::{IterationRecord, Observer, ObserverError};
 
@@ -57,47 +55,5 @@ impl Observer for CurveCsv {
             Some(error) => Err(error.into()),
             None => Ok(self.writer.flush()?),
         }
-    }
-}
-
-/// A progress bar over the outer iterations showing the value and the last
-/// worst-case estimate.
-pub struct Progress {
-    bar: ProgressBar,
-    worst_case: Option<f64>,
-}
-
-impl Progress {
-    /// A bar of `iterations` steps labelled `label`, drawn on stderr below
-    /// the other bars of `bars` (one per structure optimised in parallel).
-    pub fn new(bars: &MultiProgress, label: &str, iterations: usize) -> Self {
-        let bar = bars.add(ProgressBar::new(iterations as u64));
-        let style =
-            ProgressStyle::with_template("{prefix} [{bar:30}] {pos}/{len} {msg} ({elapsed})")
-                .unwrap_or_else(|_| ProgressStyle::default_bar())
-                .progress_chars("=> ");
-        bar.set_style(style);
-        bar.set_prefix(label.to_string());
-        Self {
-            bar,
-            worst_case: None,
-        }
-    }
-}
-
-impl Observer for Progress {
-    fn observe(&mut self, record: &IterationRecord) {
-        self.worst_case = record.worst_case.or(self.worst_case);
-        let worst = self
-            .worst_case
-            .map_or("-".to_string(), |w| format!("{w:.6}"));
-        self.bar.set_position(record.iteration as u64 + 1);
-        self.bar
-            .set_message(format!("value {:.6}, worst case {worst}", record.value));
-    }
-
-    fn finish(&mut self) -> Result<(), ObserverError> {
-        self.bar.finish();
-        Ok(())
     }
 }

@@ -89,7 +89,8 @@ impl<'a> Terms<'a> {
     /// Lines 18-22: pushes onto `out` every allowed adversary entry
     /// `l = (good.h, v | from.h, o')` with `O_adv(o' | from.s) > 0` such that
     /// Equation (BigEqn2) holds for `from -> good` for **every** defender
-    /// action `u in U_def`: some allowed `(good.g, u | from.g, o)` with
+    /// action `u in U_def` that some observation of `from.s` enables
+    /// (formats.md section 6; the others cannot be played there): some allowed `(good.g, u | from.g, o)` with
     /// `O_def(o | from.s) > 0` and `T^phi(good | from, u, v) > 0`.
     pub(crate) fn adversary_entries_toward_good(
         &self,
@@ -100,12 +101,14 @@ impl<'a> Terms<'a> {
         out: &mut Vec<usize>,
     ) {
         let s = from.s as usize;
-        let actions = self.game.defender().num_actions();
+        let defender_player = self.game.defender();
         for &(o, _) in self.game.adversary().observation_distribution(s) {
             for l in adversary.alive_in(from.h as usize, o) {
                 let (next, v) = adversary.support().entry(l);
                 if next == good.h as usize
-                    && (0..actions).all(|u| self.defender_completes(from, good, u, v, defender))
+                    && (0..defender_player.num_actions())
+                        .filter(|&u| defender_player.action_enabled_in_state(s, u))
+                        .all(|u| self.defender_completes(from, good, u, v, defender))
                 {
                     out.push(l);
                 }

@@ -228,13 +228,14 @@ impl<'p> Certificate<'p> {
         vars: &mut SupportVariables,
     ) -> Result<(), SynthesisError> {
         let (graph, nodes) = (context.graph, context.nodes);
-        let nv = context.game.adversary().num_actions();
+        let adversary = context.game.adversary();
+        let nv = adversary.num_actions();
         let mut edges: Vec<(usize, Lit)> = Vec::new();
         for cell in 0..graph.num_cells() {
             let (s, q) = graph.cells[cell];
             for g in 0..nodes {
                 let m = cell * nodes + g;
-                for v in 0..nv {
+                for v in (0..nv).filter(|&v| adversary.action_enabled_in_state(s, v)) {
                     edges.clear();
                     for step in graph.steps(cell, v) {
                         for next in 0..nodes {

@@ -117,7 +117,7 @@ use crate::certify::{CertifyError, Qualitative, lower_bound};
 use crate::controller::{Choice, Fsc, Role};
 use crate::game::{ModelError, Posg};
 
-use cnf::{Answer, Cnf, Lit, Solver};
+use cnf::{Answer, Cnf, FALSE, Lit, Solver};
 use encoding::{Claim, Context};
 use graph::{CellGraph, Moves};
 use search::Oracle;
@@ -587,16 +587,18 @@ fn usable_pairs<'a>(graph: &CellGraph, pairs: &'a [RabinPair]) -> Vec<&'a RabinP
 /// entries at once, then each absent entry with the kept ones assumed. If
 /// `kept + {c}` cannot win, no superset of `kept` with `c` can either
 /// (assumptions only restrict), so the result is inclusion-maximal.
+/// Entries fixed to [`FALSE`] (actions not enabled) are never candidates.
 fn maximise(
     mut kept: Vec<bool>,
     mut find: impl FnMut(&[Lit]) -> Result<Option<Vec<bool>>, SynthesisError>,
     support: &[Lit],
 ) -> Result<Vec<bool>, SynthesisError> {
-    if let Some(all) = find(support)? {
+    let free: Vec<Lit> = support.iter().copied().filter(|&x| x != FALSE).collect();
+    if let Some(all) = find(&free)? {
         return Ok(all);
     }
     for candidate in 0..support.len() {
-        if kept[candidate] {
+        if kept[candidate] || support[candidate] == FALSE {
             continue;
         }
         let assumptions: Vec<Lit> = support

@@ -203,7 +203,8 @@ struct LemmaBuilder<'o, 'a, 'c> {
 }
 
 impl LemmaBuilder<'_, '_, '_> {
-    /// Every edge a support may have from product state `m` under `v`.
+    /// Every edge a support may have from product state `m` under the
+    /// free player's MDP action `v` (the game action `free_actions[s][v]`).
     fn potential_edges(&self, m: usize, v: usize) -> Vec<PotentialEdge> {
         let (s, q, g) = self.analysis.states[m];
         let present: Vec<usize> = self
@@ -215,7 +216,8 @@ impl LemmaBuilder<'_, '_, '_> {
             .collect();
         let dra = self.oracle.dra_not_phi;
         let mut edges = Vec::new();
-        for &(next_state, transition) in self.oracle.moves.successors(s, v) {
+        let action = self.analysis.free_actions[s][v];
+        for &(next_state, transition) in self.oracle.moves.successors(s, action) {
             let q_next = dra.successor(q, self.oracle.letters[next_state]);
             for next in 0..self.oracle.nodes {
                 let target = self.index.get(&(next_state, q_next, next)).copied();

@@ -6,7 +6,10 @@
 //! with `T(s' | s, u, v) > 0` have `x[g, o, g', u]`; the edge literal is
 //! that disjunction (Tseitin). It does not depend on `q`, so it is keyed by
 //! the transition `(s, v, s')` ([`Moves`]) and the nodes `g -> g'`, and
-//! built the first time it is asked for.
+//! built the first time it is asked for. `x[g, o, g', u]` is the constant
+//! false when `o` does not enable `u` (`enabled` actions, docs/formats.md
+//! section 6); the certification adversary plays in `s` the actions some
+//! observation of `s` enables.
 
 use super::SynthesisError;
 use super::cnf::{Cnf, FALSE, Lit, TRUE};
@@ -35,7 +38,16 @@ impl SupportVariables {
     ) -> Result<Self, SynthesisError> {
         let player = game.defender();
         let (no, nu) = (player.num_observations(), player.num_actions());
-        let support = cnf.fresh_many(nodes * no * nodes * nu);
+        let support: Vec<Lit> = (0..nodes * no * nodes * nu)
+            .map(|i| {
+                let (o, u) = ((i / (nodes * nu)) % no, i % nu);
+                if player.action_enabled(o, u) {
+                    cnf.fresh()
+                } else {
+                    FALSE
+                }
+            })
+            .collect();
         for block in support.chunks(nodes * nu) {
             cnf.clause(block.iter().copied())?;
         }

@@ -1,10 +1,10 @@
 //! Test support: hand-built automata and an independent reference
 //! computation of the value (dense product over all (s, q, g, h), reachability
-//! by transitive closure, BSCCs by mutual reachability, a dense LU solve with
-//! nalgebra). It shares no code with the crate's product, graph or solver.
+//! by transitive closure, BSCCs by mutual reachability, a dense LU solve of
+//! [`dense`]). It shares no code with the crate's product, graph or solver.
 #![allow(dead_code)]
 
-use nalgebra::{DMatrix, DVector};
+use dense::{DMatrix, DVector};
 use posg_fsc::automaton::{Dra, RabinPair};
 use posg_fsc::controller::Fsc;
 use posg_fsc::game::Posg;
@@ -91,8 +91,8 @@ pub fn recurrent_goal_safe() -> Dra {
 /// A dense description of the GMC over all (s, q, g, h), built directly from
 /// formats.md section 3.
 pub struct DenseProduct {
-    pub p: DMatrix<f64>,
-    pub p0: DVector<f64>,
+    pub p: DMatrix,
+    pub p0: DVector,
     pub q_of: Vec<usize>,
 }
 
@@ -109,7 +109,7 @@ pub fn dense_product(game: &Posg, dra: &Dra, def: &Fsc, adv: &Fsc) -> DenseProdu
     );
     let n = ns * nq * ng * nh;
     let idx = |s: usize, q: usize, g: usize, h: usize| ((s * nq + q) * ng + g) * nh + h;
-    let mut p = DMatrix::zeros(n, n);
+    let mut p = DMatrix::zeros(n);
     let mut q_of = vec![0; n];
     for s in 0..ns {
         for q in 0..nq {
@@ -134,7 +134,7 @@ pub fn dense_product(game: &Posg, dra: &Dra, def: &Fsc, adv: &Fsc) -> DenseProdu
             }
         }
     }
-    let mut p0 = DVector::zeros(n);
+    let mut p0 = dense::zeros(n);
     for &(s, ps) in game.initial() {
         let q = dra.successor(dra.initial(), letter(game, dra, s));
         for g in 0..ng {
@@ -190,11 +190,11 @@ pub fn reference_value(game: &Posg, dra: &Dra, def: &Fsc, adv: &Fsc) -> f64 {
     let unknown: Vec<usize> = (0..n)
         .filter(|&a| !feasible[a] && (0..n).any(|b| feasible[b] && reach[a][b]))
         .collect();
-    let mut x = DVector::from_iterator(n, feasible.iter().map(|&f| f64::from(f)));
+    let mut x: DVector = feasible.iter().map(|&f| f64::from(f)).collect();
     if !unknown.is_empty() {
         let k = unknown.len();
-        let mut a = DMatrix::identity(k, k);
-        let mut rhs = DVector::zeros(k);
+        let mut a = DMatrix::identity(k);
+        let mut rhs = dense::zeros(k);
         for (i, &m) in unknown.iter().enumerate() {
             for (j, &m2) in unknown.iter().enumerate() {
                 a[(i, j)] -= product.p[(m, m2)];
@@ -204,12 +204,13 @@ pub fn reference_value(game: &Posg, dra: &Dra, def: &Fsc, adv: &Fsc) -> f64 {
                 .map(|b| product.p[(m, b)])
                 .sum();
         }
-        let solution = a.lu().solve(&rhs).expect("transient system is nonsingular");
+        let solution = a.solve(&rhs).expect("transient system is nonsingular");
         for (i, &m) in unknown.iter().enumerate() {
             x[m] = solution[i];
         }
     }
-    product.p0.dot(&x)
+    dense::dot(&product.p0, &x)
 }
 
+pub mod dense;
 pub mod random;

@@ -86,6 +86,79 @@ pub fn game_json(seed: u64) -> String {
     game.to_string()
 }
 
+/// [`game_json`] with a random `enabled` map on every player that has
+/// several actions (each observation enables a random non-empty subset,
+/// some observations are left out) and without the transition entries the
+/// game no longer needs: those of `(s, u, v)` where no observation of `s`
+/// enables `u`, or none enables `v` (formats.md section 6).
+pub fn game_json_with_enabled(seed: u64) -> String {
+    let mut game: Value = serde_json::from_str(&game_json(seed)).unwrap();
+    let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0xe1ab1ed);
+    let states: Vec<String> = serde_json::from_value(game["states"].clone()).unwrap();
+    let mut possible: Vec<Vec<Vec<String>>> = Vec::new();
+    for role in ["defender", "adversary"] {
+        let Some(player) = game.get_mut(role) else {
+            possible.push(vec![vec!["*".to_string()]; states.len()]);
+            continue;
+        };
+        let actions: Vec<String> = serde_json::from_value(player["actions"].clone()).unwrap();
+        let observations: Vec<String> = match player.get("observations") {
+            Some(o) => serde_json::from_value(o.clone()).unwrap(),
+            None => states.clone(),
+        };
+        let mut enabled = Map::new();
+        for o in &observations {
+            if actions.len() > 1 && rng.random_bool(0.7) {
+                let mut subset: Vec<&String> =
+                    actions.iter().filter(|_| rng.random_bool(0.5)).collect();
+                if subset.is_empty() {
+                    subset.push(actions.choose(&mut rng).unwrap());
+                }
+                enabled.insert(o.clone(), json!(subset));
+            }
+        }
+        let enables = |o: &str, u: &String| {
+            enabled
+                .get(o)
+                .is_none_or(|list| list.as_array().unwrap().iter().any(|a| a == u))
+        };
+        let per_state = states
+            .iter()
+            .map(|s| {
+                let seen: Vec<String> = match &player["observe"] {
+                    Value::String(_) => vec![s.clone()],
+                    observe => observe[s.as_str()]
+                        .as_object()
+                        .unwrap()
+                        .iter()
+                        .filter(|(_, p)| p.as_f64().unwrap() > 0.0)
+                        .map(|(o, _)| o.clone())
+                        .collect(),
+                };
+                actions
+                    .iter()
+                    .filter(|u| seen.iter().any(|o| enables(o, u)))
+                    .cloned()
+                    .collect()
+            })
+            .collect();
+        possible.push(per_state);
+        player["enabled"] = Value::Object(enabled);
+    }
+    let transitions: Vec<Value> = serde_json::from_value(game["transitions"].clone()).unwrap();
+    let kept: Vec<Value> = transitions
+        .into_iter()
+        .filter(|t| {
+            let s = states.iter().position(|s| t["state"] == *s).unwrap();
+            let v = t["adversary"].as_str().unwrap();
+            possible[0][s].iter().any(|u| t["defender"] == *u)
+                && (v == "*" || possible[1][s].iter().any(|a| a == v))
+        })
+        .collect();
+    game["transitions"] = json!(kept);
+    game.to_string()
+}
+
 /// A random complete DRA over (goal, unsafe, a) with 1-4 states and 1-2 pairs.
 pub fn dra(seed: u64) -> Dra {
     let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5eed);
@@ -110,8 +183,8 @@ pub fn controller(seed: u64, game: &Posg, role: Role) -> Fsc {
     controller_with_nodes(seed, game, role, nodes)
 }
 
-/// A random controller with `nodes` nodes, random non-empty supports and
-/// random probabilities on them.
+/// A random controller with `nodes` nodes, random non-empty supports on
+/// the enabled actions and random probabilities on them.
 pub fn controller_with_nodes(seed: u64, game: &Posg, role: Role, nodes: usize) -> Fsc {
     let mut rng =
         ChaCha8Rng::seed_from_u64(seed ^ if role == Role::Defender { 0xdef } else { 0xad7 });
@@ -122,13 +195,16 @@ pub fn controller_with_nodes(seed: u64, game: &Posg, role: Role, nodes: usize) -
     };
     let (no, na) = (player.num_observations(), player.num_actions());
     let blocks = (0..nodes * no)
-        .map(|_| {
+        .map(|b| {
+            let enabled: Vec<usize> = player.enabled_actions(b % no).collect();
             let mut pairs: Vec<(usize, usize)> = (0..nodes)
                 .flat_map(|g| (0..na).map(move |u| (g, u)))
                 .filter(|_| rng.random_bool(0.6))
+                .filter(|&(_, u)| player.action_enabled(b % no, u))
                 .collect();
             if pairs.is_empty() {
-                pairs.push((rng.random_range(0..nodes), rng.random_range(0..na)));
+                let g = rng.random_range(0..nodes);
+                pairs.push((g, enabled[rng.random_range(0..enabled.len())]));
             }
             let weights: Vec<f64> = pairs.iter().map(|_| rng.random_range(0.05..1.0)).collect();
             let total: f64 = weights.iter().sum();

@@ -1,0 +1,692 @@
+//! Reading Storm's explicit DRN format into a game (formats.md section 6).
+//!
+//! A DRN file (`storm --prism M.prism --buildfull --exportbuild M.drn`, or
+//! stormpy's `export_to_drn`) is a header (`@type`, `@value_type`,
+//! `@parameters`, `@reward_models`, `@nr_states`, `@nr_choices`) and, after
+//! `@model`, one block per state:
+//!
+//! ```text
+//! state 3 {1} [0.5] goal init      // id, {observation} (POMDP), [rewards], labels
+//!     action north [1]             // a choice: its label (or __NOLABEL__), [rewards]
+//!         4 : 0.9                  // target : probability
+//!         3 : 0.1
+//! ```
+//!
+//! [`from_drn_str`] turns a `POMDP`, `MDP` or `DTMC` into a [`Posg`] without an
+//! adversary (a POMDP game): state `k` is named `s{k}`; a POMDP's observation
+//! `k` becomes the defender's observation `o{k}` (observed with probability
+//! 1), an MDP or DTMC is fully observed; each choice label is an action, and
+//! the `enabled` actions of each observation (or, fully observed, of each
+//! state) are the labels of its choices (formats.md section 6), so no
+//! transition has to be invented for actions a state does not offer. The
+//! states labelled `init` are the initial distribution (uniform if several);
+//! the other labels, except `deadlock`, are propositions. Rewards are dropped
+//! with a warning. Everything the game format cannot say is an error naming
+//! the line: continuous time, parameters and placeholders, intervals, two
+//! choices of one state with the same label, a state whose choices differ
+//! from those of another state with its observation, a label that is not a
+//! proposition name, probabilities that do not sum to 1 within 1e-6.
+
+use std::path::Path;
+
+use rustc_hash::FxHashMap;
+
+use super::file::{is_valid_name, is_valid_proposition, read_text};
+use super::{Distribution, ModelError, Player, Posg};
+
+/// A game imported from DRN and what was dropped on the way.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DrnImport {
+    /// The game: no adversary, the defender as the POMDP's agent.
+    pub game: Posg,
+    /// What the game does not keep (rewards), one sentence each.
+    pub warnings: Vec<String>,
+}
+
+/// Reads the DRN file at `path` ([`from_drn_str`]); the game is named after
+/// the file's stem.
+pub fn read(path: &Path) -> Result<DrnImport, ModelError> {
+    let file_name = path.display().to_string();
+    let text = read_text(path, &file_name)?;
+    let name = path
+        .file_stem()
+        .map(|stem| stem.to_string_lossy().into_owned());
+    from_drn_str(&text, &file_name, name)
+}
+
+/// Parses a DRN model (module documentation) into a POMDP game named
+/// `name`; `file_name` prefixes every error, which names the line.
+pub fn from_drn_str(
+    text: &str,
+    file_name: &str,
+    name: Option<String>,
+) -> Result<DrnImport, ModelError> {
+    let mut lines = Lines::new(text, file_name);
+    let header = Header::parse(&mut lines)?;
+    let model = Model::parse(&mut lines, &header)?;
+    let mut warnings = Vec::new();
+    if header.reward_models || model.rewards {
+        warnings.push(format!(
+            "{file_name}: rewards are ignored (the game format has none)"
+        ));
+    }
+    let game = model.into_game(&header, name, &lines)?;
+    Ok(DrnImport { game, warnings })
+}
+
+/// The model types the importer reads.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum ModelType {
+    Dtmc,
+    Mdp,
+    Pomdp,
+}
+
+/// Numbered, comment-free lines of the file, for error messages.
+struct Lines<'a> {
+    file_name: &'a str,
+    lines: std::iter::Peekable<std::iter::Enumerate<std::str::Lines<'a>>>,
+}
+
+impl<'a> Lines<'a> {
+    fn new(text: &'a str, file_name: &'a str) -> Self {
+        Self {
+            file_name,
+            lines: text.lines().enumerate().peekable(),
+        }
+    }
+
+    /// The next line that is neither empty nor a `//` comment, trimmed, with
+    /// its 1-based number.
+    fn next_content(&mut self) -> Option<(usize, &'a str)> {
+        for (i, line) in self.lines.by_ref() {
+            let line = line.trim();
+            if !line.is_empty() && !line.starts_with("//") {
+                return Some((i + 1, line));
+            }
+        }
+        None
+    }
+
+    /// The next raw line (a header's value, possibly empty), trimmed.
+    fn next_raw(&mut self) -> Option<(usize, &'a str)> {
+        self.lines.next().map(|(i, line)| (i + 1, line.trim()))
+    }
+
+    fn error(&self, line: usize, message: impl Into<String>) -> ModelError {
+        ModelError::new(format!("{}: line {line}", self.file_name), message)
+    }
+}
+
+/// The header: everything before `@model`.
+#[derive(Debug)]
+struct Header {
+    model_type: ModelType,
+    states: usize,
+    choices: Option<usize>,
+    reward_models: bool,
+}
+
+impl Header {
+    fn parse(lines: &mut Lines) -> Result<Self, ModelError> {
+        let mut model_type = None;
+        let mut states = None;
+        let mut choices = None;
+        let mut reward_models = false;
+        while let Some((n, line)) = lines.next_content() {
+            match line {
+                "@model" => {
+                    let model_type = model_type
+                        .ok_or_else(|| lines.error(n, "`@type` must come before `@model`"))?;
+                    let states = states
+                        .ok_or_else(|| lines.error(n, "`@nr_states` must come before `@model`"))?;
+                    return Ok(Self {
+                        model_type,
+                        states,
+                        choices,
+                        reward_models,
+                    });
+                }
+                "@parameters" => {
+                    let (m, value) = value_line(lines, n, line)?;
+                    if !value.is_empty() {
+                        return Err(lines.error(
+                            m,
+                            format!("parametric models cannot be imported (parameters `{value}`)"),
+                        ));
+                    }
+                }
+                "@placeholders" => {
+                    return Err(lines.error(n, "placeholders (`$name` values) cannot be imported"));
+                }
+                "@reward_models" => {
+                    let (_, value) = value_line(lines, n, line)?;
+                    reward_models |= !value.is_empty();
+                }
+                "@nr_states" => states = Some(count_line(lines, n, line)?),
+                "@nr_choices" => choices = Some(count_line(lines, n, line)?),
+                _ => {
+                    if let Some(kind) = line.strip_prefix("@type:") {
+                        model_type = Some(parse_type(kind.trim(), n, lines)?);
+                    } else if let Some(kind) = line.strip_prefix("@value_type:") {
+                        let kind = kind.trim();
+                        if kind != "double" && kind != "rational" {
+                            return Err(lines.error(
+                                n,
+                                format!(
+                                    "value type `{kind}` cannot be imported (only double and rational)"
+                                ),
+                            ));
+                        }
+                    } else {
+                        return Err(lines.error(n, format!("unexpected header line `{line}`")));
+                    }
+                }
+            }
+        }
+        Err(ModelError::new(
+            lines.file_name,
+            "the file ends before `@model`",
+        ))
+    }
+}
+
+/// The line after a header keyword `key` at line `n`.
+fn value_line<'a>(
+    lines: &mut Lines<'a>,
+    n: usize,
+    key: &str,
+) -> Result<(usize, &'a str), ModelError> {
+    lines
+        .next_raw()
+        .ok_or_else(|| lines.error(n, format!("`{key}` needs a value on the next line")))
+}
+
+/// A whole number on the line after `key`.
+fn count_line(lines: &mut Lines, n: usize, key: &str) -> Result<usize, ModelError> {
+    let (m, value) = value_line(lines, n, key)?;
+    value
+        .parse()
+        .map_err(|_| lines.error(m, format!("`{key}` needs a whole number, not `{value}`")))
+}
+
+fn parse_type(kind: &str, n: usize, lines: &Lines) -> Result<ModelType, ModelError> {
+    match kind {
+        "DTMC" => Ok(ModelType::Dtmc),
+        "MDP" => Ok(ModelType::Mdp),
+        "POMDP" => Ok(ModelType::Pomdp),
+        _ => Err(lines.error(
+            n,
+            format!("model type `{kind}` cannot be imported (only DTMC, MDP and POMDP)"),
+        )),
+    }
+}
+
+/// One choice of a state: its label, the line it starts on, its successors.
+#[derive(Debug)]
+struct Choice {
+    label: String,
+    line: usize,
+    successors: Vec<(usize, f64)>,
+}
+
+/// One state: its DRN observation, labels, line and choices.
+#[derive(Debug)]
+struct State {
+    line: usize,
+    observation: Option<u64>,
+    labels: Vec<String>,
+    choices: Vec<Choice>,
+}
+
+/// The states of the `@model` section, as written.
+#[derive(Debug)]
+struct Model {
+    states: Vec<State>,
+    rewards: bool,
+}
+
+impl Model {
+    fn parse(lines: &mut Lines, header: &Header) -> Result<Self, ModelError> {
+        let mut model = Self {
+            states: Vec::with_capacity(header.states),
+            rewards: false,
+        };
+        while let Some((n, line)) = lines.next_content() {
+            if let Some(rest) = line.strip_prefix("state ") {
+                let state = model.state_line(rest, n, lines, header)?;
+                model.states.push(state);
+            } else if let Some(rest) = line.strip_prefix("action ") {
+                model.action_line(rest, n, lines)?;
+            } else {
+                model.transition_line(line, n, lines, header)?;
+            }
+        }
+        if model.states.len() != header.states {
+            return Err(ModelError::new(
+                lines.file_name,
+                format!(
+                    "@nr_states declares {} states, the model has {}",
+                    header.states,
+                    model.states.len()
+                ),
+            ));
+        }
+        let choices: usize = model.states.iter().map(|s| s.choices.len()).sum();
+        if let Some(declared) = header.choices.filter(|&c| c != choices) {
+            return Err(ModelError::new(
+                lines.file_name,
+                format!("@nr_choices declares {declared} choices, the model has {choices}"),
+            ));
+        }
+        Ok(model)
+    }
+
+    /// `state ID [{OBSERVATION}] [[REWARDS]] LABELS...`.
+    fn state_line(
+        &mut self,
+        rest: &str,
+        n: usize,
+        lines: &Lines,
+        header: &Header,
+    ) -> Result<State, ModelError> {
+        let (id, mut rest) = split_word(rest);
+        let expected = self.states.len();
+        if id.parse::<usize>().ok() != Some(expected) {
+            return Err(lines.error(
+                n,
+                format!("expected state {expected} (states are numbered in order), found `{id}`"),
+            ));
+        }
+        if expected >= header.states {
+            return Err(lines.error(
+                n,
+                format!("more states than @nr_states ({})", header.states),
+            ));
+        }
+        let mut observation = None;
+        if header.model_type == ModelType::Pomdp {
+            let (inside, after) = bracketed(rest, '{', '}')
+                .ok_or_else(|| lines.error(n, "a POMDP state needs its observation `{k}`"))?;
+            observation = Some(inside.trim().parse().map_err(|_| {
+                lines.error(n, format!("observation `{inside}` is not a whole number"))
+            })?);
+            rest = after;
+        }
+        if let Some((_, after)) = bracketed(rest, '[', ']') {
+            self.rewards = true;
+            rest = after;
+        }
+        let labels = parse_labels(rest).map_err(|m| lines.error(n, m))?;
+        Ok(State {
+            line: n,
+            observation,
+            labels,
+            choices: Vec::new(),
+        })
+    }
+
+    /// `action LABEL [[REWARDS]]`.
+    fn action_line(&mut self, rest: &str, n: usize, lines: &Lines) -> Result<(), ModelError> {
+        let (label, after) = split_word(rest);
+        if bracketed(after, '[', ']').is_some() {
+            self.rewards = true;
+        } else if !after.is_empty() {
+            return Err(lines.error(n, format!("unexpected `{after}` after the action label")));
+        }
+        if !is_valid_name(label) {
+            return Err(lines.error(
+                n,
+                format!("action label `{label}` is not a valid action name ([A-Za-z0-9_.:-]+)"),
+            ));
+        }
+        let state = self
+            .states
+            .last_mut()
+            .ok_or_else(|| lines.error(n, "an action before the first state"))?;
+        if let Some(first) = state.choices.iter().find(|c| c.label == label) {
+            return Err(lines.error(
+                n,
+                format!(
+                    "a second choice labelled `{label}` in this state (the first is at line {}); \
+                     give the commands distinct action labels",
+                    first.line
+                ),
+            ));
+        }
+        state.choices.push(Choice {
+            label: label.to_string(),
+            line: n,
+            successors: Vec::new(),
+        });
+        Ok(())
+    }
+
+    /// `TARGET : PROBABILITY`.
+    fn transition_line(
+        &mut self,
+        line: &str,
+        n: usize,
+        lines: &Lines,
+        header: &Header,
+    ) -> Result<(), ModelError> {
+        let (target, value) = line.split_once(':').ok_or_else(|| {
+            lines.error(
+                n,
+                format!("expected `target : probability`, found `{line}`"),
+            )
+        })?;
+        let target: usize = target.trim().parse().map_err(|_| {
+            lines.error(
+                n,
+                format!("target `{}` is not a state number", target.trim()),
+            )
+        })?;
+        if target >= header.states {
+            return Err(lines.error(
+                n,
+                format!(
+                    "target {target} is not a state (@nr_states is {})",
+                    header.states
+                ),
+            ));
+        }
+        let p = parse_probability(value.trim()).map_err(|m| lines.error(n, m))?;
+        let choice = self
+            .states
+            .last_mut()
+            .and_then(|s| s.choices.last_mut())
+            .ok_or_else(|| {
+                lines.error(
+                    n,
+                    "a transition before the first `action` line of its state",
+                )
+            })?;
+        if choice.successors.iter().any(|&(t, _)| t == target) {
+            return Err(lines.error(n, format!("target {target} appears twice in this choice")));
+        }
+        choice.successors.push((target, p));
+        Ok(())
+    }
+
+    /// The game (module documentation).
+    fn into_game(
+        self,
+        header: &Header,
+        name: Option<String>,
+        lines: &Lines,
+    ) -> Result<Posg, ModelError> {
+        let error = |line: usize, message: String| lines.error(line, message);
+        let states: Vec<String> = (0..self.states.len()).map(|k| format!("s{k}")).collect();
+        let mut actions: Vec<String> = Vec::new();
+        let mut action_index: FxHashMap<&str, usize> = FxHashMap::default();
+        for choice in self.states.iter().flat_map(|s| &s.choices) {
+            action_index.entry(&choice.label).or_insert_with(|| {
+                actions.push(choice.label.clone());
+                actions.len() - 1
+            });
+        }
+        for state in &self.states {
+            if state.choices.is_empty() {
+                return Err(error(state.line, "a state without choices".into()));
+            }
+        }
+        let (observations, observe, observation_of) = self.observations(header.model_type, &states);
+        let enabled = self.enabled(
+            &observation_of,
+            observations.len(),
+            &action_index,
+            &actions,
+            lines,
+        )?;
+        let (propositions, labels, initial) = self.labels(lines)?;
+        let nu = actions.len();
+        let mut transition_offsets = Vec::with_capacity(self.states.len() * nu + 1);
+        transition_offsets.push(0);
+        let mut transition_entries = Vec::new();
+        for state in &self.states {
+            let mut rows: Vec<Option<&Choice>> = vec![None; nu];
+            for choice in &state.choices {
+                rows[action_index[choice.label.as_str()]] = Some(choice);
+            }
+            for row in rows {
+                if let Some(choice) = row {
+                    let distribution =
+                        normalised(&choice.successors).map_err(|m| error(choice.line, m))?;
+                    transition_entries.extend(distribution);
+                }
+                transition_offsets.push(transition_entries.len());
+            }
+        }
+        let defender = Player {
+            actions,
+            observations,
+            full_observation: header.model_type != ModelType::Pomdp,
+            observe,
+            enabled,
+        };
+        Ok(Posg {
+            name,
+            initial,
+            propositions,
+            labels,
+            adversary: super::file::pomdp_adversary(states.len()),
+            states,
+            defender,
+            has_adversary: false,
+            transition_offsets,
+            transition_entries,
+        })
+    }
+
+    /// The defender's observation names, `O(. | s)` and each state's
+    /// observation index: `o{k}` for a POMDP's observation `k` (in
+    /// increasing order of `k`), the state names when fully observed.
+    fn observations(
+        &self,
+        model_type: ModelType,
+        states: &[String],
+    ) -> (Vec<String>, Vec<Distribution>, Vec<usize>) {
+        let (names, observation_of) = if model_type == ModelType::Pomdp {
+            let mut ids: Vec<u64> = self.states.iter().filter_map(|s| s.observation).collect();
+            ids.sort_unstable();
+            ids.dedup();
+            let of: Vec<usize> = self
+                .states
+                .iter()
+                .map(|s| {
+                    let k = s.observation.expect("a POMDP state has an observation");
+                    ids.binary_search(&k).expect("every observation is listed")
+                })
+                .collect();
+            (ids.iter().map(|k| format!("o{k}")).collect(), of)
+        } else {
+            (states.to_vec(), (0..states.len()).collect())
+        };
+        let observe = observation_of.iter().map(|&o| vec![(o, 1.0)]).collect();
+        (names, observe, observation_of)
+    }
+
+    /// The dense `enabled` table of [`Player`]: each observation enables the
+    /// labels of its states' choices, which must be the same for all its
+    /// states (Storm's POMDP semantics). Empty when everything is enabled.
+    fn enabled(
+        &self,
+        observation_of: &[usize],
+        num_observations: usize,
+        action_index: &FxHashMap<&str, usize>,
+        actions: &[String],
+        lines: &Lines,
+    ) -> Result<Vec<bool>, ModelError> {
+        let nu = actions.len();
+        let mut table = vec![false; num_observations * nu];
+        let mut first_state: Vec<Option<usize>> = vec![None; num_observations];
+        for (k, state) in self.states.iter().enumerate() {
+            let o = observation_of[k];
+            let mut row = vec![false; nu];
+            for choice in &state.choices {
+                row[action_index[choice.label.as_str()]] = true;
+            }
+            match first_state[o] {
+                None => {
+                    table[o * nu..(o + 1) * nu].copy_from_slice(&row);
+                    first_state[o] = Some(k);
+                }
+                Some(first) if table[o * nu..(o + 1) * nu] != row[..] => {
+                    let names = |row: &[bool]| {
+                        let listed: Vec<&str> = (0..nu)
+                            .filter(|&u| row[u])
+                            .map(|u| actions[u].as_str())
+                            .collect();
+                        listed.join(", ")
+                    };
+                    return Err(lines.error(
+                        state.line,
+                        format!(
+                            "state {k} offers {{{}}}, but state {first} (line {}) with the same \
+                             observation offers {{{}}}: a POMDP's states with one observation \
+                             must offer the same actions",
+                            names(&row),
+                            self.states[first].line,
+                            names(&table[o * nu..(o + 1) * nu])
+                        ),
+                    ));
+                }
+                Some(_) => {}
+            }
+        }
+        if table.iter().all(|&e| e) {
+            table.clear();
+        }
+        Ok(table)
+    }
+
+    /// The sorted propositions, each state's label and the initial
+    /// distribution (uniform over the states labelled `init`).
+    #[allow(clippy::type_complexity)]
+    fn labels(
+        &self,
+        lines: &Lines,
+    ) -> Result<(Vec<String>, Vec<Vec<usize>>, Distribution), ModelError> {
+        let mut propositions: Vec<String> = Vec::new();
+        let mut initial_states = Vec::new();
+        for (k, state) in self.states.iter().enumerate() {
+            for label in &state.labels {
+                match label.as_str() {
+                    "init" => initial_states.push(k),
+                    "deadlock" => {}
+                    _ if !is_valid_proposition(label) => {
+                        return Err(lines.error(
+                            state.line,
+                            format!(
+                                "label `{label}` is not a valid proposition name ([a-z_][a-z0-9_]*)"
+                            ),
+                        ));
+                    }
+                    _ => propositions.push(label.clone()),
+                }
+            }
+        }
+        propositions.sort();
+        propositions.dedup();
+        let labels = self
+            .states
+            .iter()
+            .map(|state| {
+                let mut ids: Vec<usize> = state
+                    .labels
+                    .iter()
+                    .filter_map(|l| propositions.binary_search(l).ok())
+                    .collect();
+                ids.sort_unstable();
+                ids.dedup();
+                ids
+            })
+            .collect();
+        if initial_states.is_empty() {
+            return Err(ModelError::new(
+                lines.file_name,
+                "no state is labelled `init`",
+            ));
+        }
+        let p = 1.0 / initial_states.len() as f64;
+        let initial = initial_states.into_iter().map(|s| (s, p)).collect();
+        Ok((propositions, labels, initial))
+    }
+}
+
+/// The first whitespace-separated word and the trimmed rest.
+fn split_word(text: &str) -> (&str, &str) {
+    let text = text.trim_start();
+    match text.find(char::is_whitespace) {
+        Some(i) => (&text[..i], text[i..].trim_start()),
+        None => (text, ""),
+    }
+}
+
+/// `OPEN inside CLOSE rest` at the start of `text`: `(inside, rest)`.
+fn bracketed(text: &str, open: char, close: char) -> Option<(&str, &str)> {
+    let inner = text.trim_start().strip_prefix(open)?;
+    let end = inner.find(close)?;
+    Some((&inner[..end], inner[end + close.len_utf8()..].trim_start()))
+}
+
+/// State labels: words, or names in double quotes.
+fn parse_labels(text: &str) -> Result<Vec<String>, String> {
+    let mut labels = Vec::new();
+    let mut rest = text.trim_start();
+    while !rest.is_empty() {
+        if let Some(quoted) = rest.strip_prefix('"') {
+            let end = quoted
+                .find('"')
+                .ok_or_else(|| format!("unterminated quoted label in `{text}`"))?;
+            labels.push(quoted[..end].to_string());
+            rest = quoted[end + 1..].trim_start();
+        } else {
+            let (word, after) = split_word(rest);
+            labels.push(word.to_string());
+            rest = after;
+        }
+    }
+    Ok(labels)
+}
+
+/// A probability written as a decimal (`0.25`, `1e-3`) or a rational (`1/4`).
+fn parse_probability(text: &str) -> Result<f64, String> {
+    let value = match text.split_once('/') {
+        Some((numerator, denominator)) => {
+            let numerator: f64 = numerator.trim().parse().map_err(|_| bad_number(text))?;
+            let denominator: f64 = denominator.trim().parse().map_err(|_| bad_number(text))?;
+            numerator / denominator
+        }
+        None => text.parse().map_err(|_| bad_number(text))?,
+    };
+    if value.is_finite() && (0.0..=1.0).contains(&value) {
+        Ok(value)
+    } else {
+        Err(format!("probability {text} is not in [0, 1]"))
+    }
+}
+
+fn bad_number(text: &str) -> String {
+    format!("`{text}` is not a probability (a decimal or p/q)")
+}
+
+/// A choice's successors as a game distribution: sums to 1 within 1e-6
+/// (then renormalised), zero entries dropped, sorted by successor.
+fn normalised(successors: &[(usize, f64)]) -> Result<Distribution, String> {
+    let total: f64 = successors.iter().map(|&(_, p)| p).sum();
+    if (total - 1.0).abs() > 1e-6 {
+        return Err(format!(
+            "the probabilities of this choice sum to {total}, not 1 (tolerance 1e-6)"
+        ));
+    }
+    let renormalise = (total - 1.0).abs() > successors.len() as f64 * f64::EPSILON;
+    let mut distribution: Distribution = successors
+        .iter()
+        .filter(|&&(_, p)| p > 0.0)
+        .map(|&(t, p)| (t, if renormalise { p / total } else { p }))
+        .collect();
+    distribution.sort_unstable_by_key(|&(t, _)| t);
+    Ok(distribution)
+}
