@@ -55,6 +55,7 @@ use crate::automaton::{Dra, Letter, RabinPair};
 use crate::controller::{Fsc, Role};
 use crate::game::{Player, Posg};
 use crate::mdp::{AcceptingComponent, Mdp, MdpBuilder, MdpError, Reachability, max_rabin_analysis};
+use crate::solver::SolverError;
 
 /// Why a bound could not be computed.
 #[derive(Debug, Error, Clone, PartialEq)]
@@ -90,6 +91,20 @@ pub enum CertifyError {
         /// The upper bound's error bound.
         upper_error: f64,
     },
+}
+
+impl CertifyError {
+    /// Whether a policy evaluation could not be solved to the tolerance
+    /// because the product mixes too slowly (method.md section 8): the
+    /// bound is unknown, not wrong, and the trivial bound stays sound.
+    pub fn is_slow_mixing(&self) -> bool {
+        matches!(
+            self,
+            Self::Mdp(MdpError::Solver(
+                SolverError::Unbounded { .. } | SolverError::Inaccurate { .. }
+            ))
+        )
+    }
 }
 
 /// A certified bound on `P(trace |= phi)` and the strategy that attains it.
@@ -189,6 +204,10 @@ pub struct Bracket {
 
 /// The bracket for `defender` and the adversaries tried against it;
 /// `dra_phi` and `dra_not_phi` are deterministic automata for phi and !phi.
+/// An adversary whose product mixes too slowly to be solved to the
+/// tolerance contributes nothing (its trivial bound 1); the defender's lower
+/// bound has no such fallback: it is the number reported, so its trouble is
+/// an error.
 pub fn bracket<'a>(
     game: &Posg,
     dra_phi: &Dra,
@@ -199,14 +218,49 @@ pub fn bracket<'a>(
     let lower = lower_bound(game, dra_not_phi, defender)?;
     let mut upper = 1.0f64;
     for adversary in adversaries {
-        let bound = upper_bound(game, dra_phi, adversary)?;
-        check_consistent(&lower, &bound)?;
-        upper = upper.min(bound.value);
+        match upper_bound(game, dra_phi, adversary) {
+            Ok(bound) => {
+                check_consistent(&lower, &bound)?;
+                upper = upper.min(bound.value);
+            }
+            Err(error) if error.is_slow_mixing() => {}
+            Err(error) => return Err(error),
+        }
     }
     Ok(Bracket {
         certified_lower: lower.value,
         upper_bound: upper,
     })
+}
+
+/// [`lower_bound`]'s value, or the trivial bound 0 when the product mixes
+/// so slowly that its systems cannot be solved to the tolerance
+/// ([`CertifyError::is_slow_mixing`]). Sound either way; for choosing among
+/// candidates, where one candidate's trouble must not stop the search.
+pub fn lower_value_or_trivial(
+    game: &Posg,
+    dra_not_phi: &Dra,
+    defender: &Fsc,
+) -> Result<f64, CertifyError> {
+    match lower_bound(game, dra_not_phi, defender) {
+        Ok(bound) => Ok(bound.value),
+        Err(error) if error.is_slow_mixing() => Ok(0.0),
+        Err(error) => Err(error),
+    }
+}
+
+/// [`upper_bound`]'s value, or the trivial bound 1 when the product mixes
+/// too slowly (as [`lower_value_or_trivial`]).
+pub fn upper_value_or_trivial(
+    game: &Posg,
+    dra_phi: &Dra,
+    adversary: &Fsc,
+) -> Result<f64, CertifyError> {
+    match upper_bound(game, dra_phi, adversary) {
+        Ok(bound) => Ok(bound.value),
+        Err(error) if error.is_slow_mixing() => Ok(1.0),
+        Err(error) => Err(error),
+    }
 }
 
 /// Checks `lower <= upper` up to their error bounds: for any defender and

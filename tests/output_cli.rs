@@ -63,7 +63,8 @@ fn solve_writes_a_titled_curve_with_the_certified_band_and_a_controller_picture(
         &out,
         "--max-iterations",
         "30",
-        "--no-prune",
+        "--structures",
+        "full",
         "--seconds-axis",
     ]);
     let svg = read(dir.join("out/curve.svg"));
@@ -119,6 +120,7 @@ fn quiet_solve_and_sweep_report_no_progress() {
         "--quiet",
     ]);
     assert!(!String::from_utf8_lossy(&solve.stderr).contains("iteration"));
+    let out = dir.join("sweep").display().to_string();
     let sweep = posg_fsc(&[
         "sweep",
         &game,

@@ -82,7 +82,7 @@ fn existing_files_are_kept_without_force_and_replaced_whole_with_it() {
     let names: Vec<String> = snapshot(&out).into_iter().map(|(n, _)| n).collect();
     assert_eq!(
         names,
-        ["chain.lab", "chain.sta", "chain.tra"],
+        ["chain.drn", "chain.lab", "chain.sta", "chain.tra"],
         "never a mixture"
     );
     let leftovers = std::fs::read_dir(&base).unwrap().count();

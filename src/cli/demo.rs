@@ -2,22 +2,26 @@
 //!
 //! 1. `solve` for `!unsafe U goal` (2-node defender, 1-node adversary):
 //!    worst-case estimate, certified bracket, output files.
-//! 2. `GF goal & G !unsafe`, the paper's formula: zero under full supports,
-//!    no structure from Algorithm 1, and a hand-made 2-node controller whose
-//!    guarantee against every adversary `certify` proves.
+//! 2. `GF goal & G !unsafe`, the paper's formula: zero under full supports
+//!    and no structure from Algorithm 1; support synthesis by SAT proves
+//!    that no 2-node support wins almost surely and finds one that wins
+//!    with positive probability; `solve` with its defaults tunes it and
+//!    certifies the result (beside a hand-made controller's guarantee).
 
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
 use clap::Args;
 use posg_fsc::automaton::Dra;
-use posg_fsc::certify::{lower_bound, upper_bound};
+use posg_fsc::certify::lower_bound;
 use posg_fsc::controller::{Choice, Fsc, Role};
 use posg_fsc::game::Posg;
 use posg_fsc::game::grid::GridSpec;
 use posg_fsc::optimise::{self, Settings, Structure};
+use posg_fsc::output::OutputDirectory;
 use posg_fsc::prune::{PruneSettings, prune};
 use posg_fsc::solver::SolverSettings;
+use posg_fsc::synthesis::{self, Mode, synthesise};
 use posg_fsc::value::evaluate_controllers;
 
 use super::solve::{SolveJob, run_job};
@@ -25,7 +29,8 @@ use super::solve::{SolveJob, run_job};
 /// Arguments of `demo`.
 #[derive(Debug, Args)]
 pub struct DemoArgs {
-    /// Where to write the solve's files.
+    /// Where to write the solves' files (`reach-avoid/` and `paper/`; an
+    /// earlier demo's directory is replaced).
     #[arg(long, default_value = "posg-fsc-demo")]
     out: PathBuf,
 }
@@ -64,12 +69,25 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
         out,
         "(defender) or 0.6 (adversary), otherwise a random neighbour's name.\n"
     )?;
-    solve_reach_avoid(&game, &args.out, &mut out)?;
-    recurrence(&game, &mut out)?;
+    let directory = OutputDirectory::create(&args.out, true)?;
+    let place = |name: &str| Place {
+        staging: directory.join(name),
+        shown: args.out.join(name),
+    };
+    solve_reach_avoid(&game, &place("reach-avoid"), &mut out)?;
+    recurrence(&game, &place("paper"), &mut out)?;
+    directory.commit()?;
     super::common::print_text(&out)
 }
 
-fn solve_reach_avoid(game: &Posg, dir: &std::path::Path, out: &mut String) -> anyhow::Result<()> {
+/// Where a solve writes (inside the demo's staging directory) and where its
+/// files will be once the demo has finished.
+struct Place {
+    staging: PathBuf,
+    shown: PathBuf,
+}
+
+fn solve_reach_avoid(game: &Posg, place: &Place, out: &mut String) -> anyhow::Result<()> {
     let formula = "!unsafe U goal";
     let (dra, negated) = translate(formula)?;
     let settings = Settings::default();
@@ -81,7 +99,7 @@ fn solve_reach_avoid(game: &Posg, dir: &std::path::Path, out: &mut String) -> an
         objective: formula,
         candidates: optimise::candidate_structures(game, &dra, Some(&negated), start, &settings)?,
         settings: &settings,
-        out: dir,
+        out: &place.staging,
         progress: super::progress::ProgressMode::Quiet,
         floor: None,
         seconds_axis: false,
@@ -138,7 +156,7 @@ fn solve_reach_avoid(game: &Posg, dir: &std::path::Path, out: &mut String) -> an
     writeln!(
         out,
         "   Files in {}/: curve.csv and curve.svg (convergence), defender.fsc.json and",
-        dir.display()
+        place.shown.display()
     )?;
     writeln!(
         out,
@@ -147,21 +165,17 @@ fn solve_reach_avoid(game: &Posg, dir: &std::path::Path, out: &mut String) -> an
     Ok(())
 }
 
-fn recurrence(game: &Posg, out: &mut String) -> anyhow::Result<()> {
+fn recurrence(game: &Posg, place: &Place, out: &mut String) -> anyhow::Result<()> {
     let formula = "GF goal & G !unsafe";
     let (dra, negated) = translate(formula)?;
-    let uniform = |role: Role, nodes: usize| {
-        let player = if role == Role::Defender {
-            game.defender()
-        } else {
-            game.adversary()
-        };
-        Fsc::uniform(role, nodes, player.num_observations(), player.num_actions())
-    };
-    let (defender, adversary) = (uniform(Role::Defender, 2), uniform(Role::Adversary, 1));
+    let defender = Fsc::uniform_enabled(Role::Defender, 2, game.defender());
+    let adversary = Fsc::uniform_enabled(Role::Adversary, 1, game.adversary());
     let full = value(game, &dra, &defender, &adversary)?;
     let report = prune(game, &dra, &defender, &adversary, &PruneSettings::default())?;
-    writeln!(out, "2. The paper's formula '{formula}'.")?;
+    writeln!(
+        out,
+        "2. The paper's formula '{formula}', defender 2 nodes, adversary 1 node."
+    )?;
     writeln!(
         out,
         "   With every action possible in every node its value is exactly {full}: the"
@@ -172,46 +186,167 @@ fn recurrence(game: &Posg, out: &mut String) -> anyhow::Result<()> {
     )?;
     writeln!(
         out,
-        "   are zero. Algorithm 1 (`posg-fsc prune`) keeps {} structures here: near s4",
+        "   are zero. Algorithm 1 (`posg-fsc prune`) keeps {} structures: near s4 the",
         report.structures.len()
     )?;
     writeln!(
         out,
-        "   only wall moves are safe and the noisy observations mix cells that need"
+        "   noisy observations mix cells that need different safe moves."
     )?;
-    writeln!(
-        out,
-        "   different wall moves, so pruning stops before any Good state is recurrent."
-    )?;
+    synthesis_story(game, &dra, &negated, out)?;
+    tuned_story(game, &dra, &negated, formula, place, out)?;
     let park = park_on_goal(game)?;
-    let parked = value(game, &dra, &park, &adversary)?;
     let lower = lower_bound(game, &negated, &park)?.value;
-    let upper = upper_bound(game, &dra, &adversary)?.value;
     writeln!(
         out,
-        "   A hand-made 2-node defender (go R, R, D to s5, then switch node and push"
+        "   For comparison, a hand-made 2-node defender (go R, R, D to s5, then switch"
     )?;
     writeln!(
         out,
-        "   into the wall forever) has value {parked:.4} against the uniform adversary and is"
+        "   node and push into the wall forever) is certified at {lower:.4}.\n"
     )?;
     writeln!(
         out,
-        "   certified to get at least {lower:.4} against every adversary; against the uniform"
-    )?;
-    writeln!(
-        out,
-        "   adversary no defender gets more than {upper:.4}. Positive values exist; finding"
-    )?;
-    writeln!(
-        out,
-        "   the support that reaches them is what pruning is for.\n"
-    )?;
-    writeln!(
-        out,
-        "Next: `posg-fsc solve --help`, `posg-fsc certify --help`, `posg-fsc example grid --help`."
+        "Next: `posg-fsc solve --help`, `posg-fsc support --help`, `posg-fsc example grid --help`."
     )?;
     Ok(())
+}
+
+/// Support synthesis (method.md section 7) for 2 defender nodes, both modes.
+fn synthesis_story(game: &Posg, dra: &Dra, negated: &Dra, out: &mut String) -> anyhow::Result<()> {
+    let run = |mode| {
+        let settings = synthesis::Settings {
+            mode,
+            ..synthesis::Settings::default()
+        };
+        synthesise(game, dra, negated, 2, &settings)
+    };
+    let almost_sure = run(Mode::AlmostSure)?;
+    let positive = run(Mode::Positive)?;
+    writeln!(
+        out,
+        "   Support synthesis by SAT (`posg-fsc support`) decides which supports win:"
+    )?;
+    let effort = |s: &synthesis::Synthesis| {
+        s.statistics.as_ref().map_or_else(String::new, |stats| {
+            format!(
+                "{} SAT calls, {} lemmas, {:.2} s",
+                stats.calls, stats.lemmas, stats.seconds
+            )
+        })
+    };
+    match &almost_sure.defender {
+        None => writeln!(
+            out,
+            "   - no 2-node support wins almost surely against every adversary (proved:\n     {});",
+            effort(&almost_sure)
+        )?,
+        Some(_) => writeln!(
+            out,
+            "   - a 2-node support wins almost surely ({});",
+            effort(&almost_sure)
+        )?,
+    }
+    match (&positive.defender, positive.certified_lower) {
+        (Some(_), Some(lower)) => writeln!(
+            out,
+            "   - a 2-node support of {} (node, observation, next node, action) entries wins\n     \
+             with positive probability: uniform on it, certified at {lower:.4} ({}).",
+            positive.support_entries(),
+            effort(&positive)
+        )?,
+        _ => writeln!(out, "   - {} ({}).", positive.reason, effort(&positive))?,
+    }
+    Ok(())
+}
+
+/// `solve` with its defaults on the paper's formula: the SAT support is one
+/// of the structures it optimises on.
+fn tuned_story(
+    game: &Posg,
+    dra: &Dra,
+    negated: &Dra,
+    formula: &str,
+    place: &Place,
+    out: &mut String,
+) -> anyhow::Result<()> {
+    let settings = Settings::default();
+    let start = Structure::full(game, 2, 1, settings.optimise_initial);
+    let job = SolveJob {
+        game,
+        dra,
+        negated_dra: Some(negated),
+        objective: formula,
+        candidates: optimise::candidate_structures(game, dra, Some(negated), start, &settings)?,
+        settings: &settings,
+        out: &place.staging,
+        progress: super::progress::ProgressMode::Quiet,
+        floor: None,
+        seconds_axis: false,
+    };
+    let (solution, certified) = run_job(&job)?;
+    let best = solution.best();
+    writeln!(
+        out,
+        "   `solve` with its defaults optimises on every structure found (full, SAT,"
+    )?;
+    writeln!(
+        out,
+        "   Algorithm 1) and keeps the best certified one: here `{}`, tuned in {:.1} s.",
+        best.report.name, best.report.seconds
+    )?;
+    if let Some(bracket) = certified {
+        writeln!(
+            out,
+            "   Certified: at least {:.4} against EVERY adversary; no defender gets more",
+            bracket.certified_lower
+        )?;
+        writeln!(
+            out,
+            "   than {:.4} against the adversary found. Its rules (observation: action -> node):",
+            bracket.upper_bound
+        )?;
+    }
+    for line in rules(game, &best.defender) {
+        writeln!(out, "     {line}")?;
+    }
+    writeln!(
+        out,
+        "   Files in {}/ (defender.dot is a picture: `dot -Tsvg`).",
+        place.shown.display()
+    )?;
+    Ok(())
+}
+
+/// One line per node: each observation's most likely choice, `obs: action
+/// -> next` (with its probability when below 0.99).
+fn rules(game: &Posg, fsc: &Fsc) -> Vec<String> {
+    let player = game.defender();
+    (0..fsc.num_nodes())
+        .map(|g| {
+            let choices: Vec<String> = (0..fsc.num_observations())
+                .map(|o| {
+                    let best = fsc
+                        .choices(g, o)
+                        .iter()
+                        .max_by(|a, b| a.probability.total_cmp(&b.probability));
+                    let best = best.expect("every block of a controller has a choice");
+                    let probability = if best.probability < 0.99 {
+                        format!(" ({:.2})", best.probability)
+                    } else {
+                        String::new()
+                    };
+                    format!(
+                        "{}: {} -> {}{probability}",
+                        player.observations()[o],
+                        player.actions()[best.action],
+                        best.next
+                    )
+                })
+                .collect();
+            format!("node {g}: {}", choices.join(", "))
+        })
+        .collect()
 }
 
 fn value(game: &Posg, dra: &Dra, defender: &Fsc, adversary: &Fsc) -> anyhow::Result<f64> {

@@ -57,7 +57,7 @@ pub struct SupportArgs {
 pub struct SynthesisArgs {
     /// `lazy`: SAT over supports, each judged by exact certification, losses
     /// learnt as lemmas; `certificate`: supports and their certificates in one
-    /// formula (docs/method.md, support synthesis).
+    /// formula (docs/method.md section 7).
     #[arg(long, value_enum, default_value = "lazy")]
     engine: EngineArg,
     /// Bound on the certificate's levels and ranks (default: the number of

@@ -8,6 +8,12 @@
 //! `LBFGS::new(MoreThuenteLineSearch::new(), m)`. The lowest value found over
 //! all starts is the defender's worst-case estimate: an upper bound on the
 //! true minimum over adversaries of this size and support.
+//!
+//! Near the box's faces the adversary's chain can mix so slowly that its
+//! linear system cannot be solved to the tolerance (method.md section 8).
+//! A start that runs into such a point is dropped (its estimate would not
+//! be trustworthy), never reported as a number; if every start is dropped
+//! the check fails with the solver's error.
 
 use std::cell::RefCell;
 
@@ -19,6 +25,7 @@ use rand_chacha::ChaCha8Rng;
 
 use super::objective::Objective;
 use super::{OptimiseError, Settings};
+use crate::value::ValueError;
 
 /// The outcome of one best-response check.
 #[derive(Debug, Clone, PartialEq)]
@@ -52,17 +59,33 @@ pub fn best_response(
         .iter()
         .map(|&phi| (phi / bound).clamp(-START_CLAMP, START_CLAMP).atanh())
         .collect();
-    let mut best = minimise_from(objective, defender, at_current, settings)?;
+    let mut best: Option<BestResponse> = None;
+    let mut dropped = None;
+    let mut keep = |found: Result<BestResponse, OptimiseError>| match found {
+        Ok(found) => {
+            if best.as_ref().is_none_or(|b| found.value < b.value) {
+                best = Some(found);
+            }
+            Ok(())
+        }
+        Err(error @ OptimiseError::Value(ValueError::Solver(_))) => {
+            dropped = Some(error);
+            Ok(())
+        }
+        Err(error) => Err(error),
+    };
+    keep(minimise_from(objective, defender, at_current, settings))?;
     for _ in 0..settings.restarts {
         let start = (0..current.len())
             .map(|_| rng.random_range(-START_RANGE..=START_RANGE))
             .collect();
-        let found = minimise_from(objective, defender, start, settings)?;
-        if found.value < best.value {
-            best = found;
-        }
+        keep(minimise_from(objective, defender, start, settings))?;
     }
-    Ok(best)
+    match (best, dropped) {
+        (Some(best), _) => Ok(best),
+        (None, Some(error)) => Err(error),
+        (None, None) => unreachable!("at least the start at the current adversary ran"),
+    }
 }
 
 fn minimise_from(

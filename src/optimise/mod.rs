@@ -71,7 +71,7 @@ use serde::Serialize;
 use thiserror::Error;
 
 use crate::automaton::Dra;
-use crate::certify::{self, lower_bound};
+use crate::certify::{lower_value_or_trivial, upper_value_or_trivial};
 use crate::controller::{Fsc, Role};
 use crate::game::{ModelError, Posg};
 use crate::prune::PruneError;
@@ -594,7 +594,7 @@ fn finalise(
             let (score, found) = match (method, certifier) {
                 (Method::Ascent, _) => (judge.value(&candidate)?, None),
                 (Method::MaxMin, Some(c)) => {
-                    (lower_bound(game, c.not_phi, &candidate)?.value, None)
+                    (lower_value_or_trivial(game, c.not_phi, &candidate)?, None)
                 }
                 (Method::MaxMin, None) => {
                     let found = judge.best_response(&candidate, &mut run.rng)?;
@@ -635,8 +635,8 @@ fn finalise(
     phases.rounding += clock.elapsed().as_secs_f64();
     if let (Method::Ascent, Some(c)) = (method, certifier) {
         let clock = Instant::now();
-        chosen.certified_lower = Some(lower_bound(game, c.not_phi, &chosen.defender)?.value);
-        chosen.upper_bound = Some(certify::upper_bound(game, c.phi, &chosen.adversary)?.value);
+        chosen.certified_lower = Some(lower_value_or_trivial(game, c.not_phi, &chosen.defender)?);
+        chosen.upper_bound = Some(upper_value_or_trivial(game, c.phi, &chosen.adversary)?);
         phases.certification += clock.elapsed().as_secs_f64();
     }
     Ok(chosen)

@@ -47,7 +47,7 @@ use super::rounding::truncated;
 use super::softmax::clip;
 use super::{OptimiseError, Settings, Status, UpdateRule};
 use crate::automaton::Dra;
-use crate::certify::{lower_bound, upper_bound as upper_bound_of};
+use crate::certify::{lower_value_or_trivial, upper_value_or_trivial};
 use crate::game::Posg;
 
 /// The optimiser's state on one structure.
@@ -390,7 +390,7 @@ impl Optimiser<'_> {
                 .adversary()
                 .logits_of(&mu, self.settings.logit_bound);
             let adversary = self.objective.adversary().controller(&logits)?;
-            let upper = upper_bound_of(certifier.game, certifier.phi, &adversary)?.value;
+            let upper = upper_value_or_trivial(certifier.game, certifier.phi, &adversary)?;
             *upper_bound = Some(upper_bound.map_or(upper, |u: f64| u.min(upper)));
             phases.certification += clock.elapsed().as_secs_f64();
         }
@@ -410,11 +410,12 @@ impl Optimiser<'_> {
             let certified_lower = match &self.certifier {
                 Some(certifier) => {
                     let defender = self.objective.defender().controller(&candidate)?;
-                    let lower = lower_bound(certifier.game, certifier.not_phi, &defender)?.value;
+                    let lower =
+                        lower_value_or_trivial(certifier.game, certifier.not_phi, &defender)?;
                     if i == 0 {
                         let adversary = self.objective.adversary().controller(&found.adversary)?;
                         let upper =
-                            upper_bound_of(certifier.game, certifier.phi, &adversary)?.value;
+                            upper_value_or_trivial(certifier.game, certifier.phi, &adversary)?;
                         *upper_bound = Some(upper_bound.map_or(upper, |u: f64| u.min(upper)));
                     }
                     Some(lower)
@@ -464,7 +465,7 @@ impl Optimiser<'_> {
         let clock = Instant::now();
         let defender = self.objective.defender().controller(&self.defender)?;
         let rounded = truncated(&defender, f64::INFINITY)?;
-        let lower = lower_bound(certifier.game, certifier.not_phi, &rounded)?.value;
+        let lower = lower_value_or_trivial(certifier.game, certifier.not_phi, &rounded)?;
         phases.certification += clock.elapsed().as_secs_f64();
         Ok(upper - lower <= self.settings.gap_tolerance)
     }

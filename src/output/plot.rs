@@ -491,6 +491,7 @@ mod tests {
             worst_case: None,
             certified_lower: None,
             upper_bound: None,
+            logit_bound: 4.0,
         }
     }
 
