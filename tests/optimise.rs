@@ -76,7 +76,10 @@ fn assert_close(adjoint: &[f64], fd: &[f64], who: &str) -> Result<(), TestCaseEr
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(48))]
+    #![proptest_config(ProptestConfig {
+        rng_seed: proptest::test_runner::RngSeed::Fixed(1),
+        ..ProptestConfig::with_cases(48)
+    })]
 
     /// dV/dphi by adjoint + softmax chain rule against central differences,
     /// both players, with and without initial-distribution logits.
