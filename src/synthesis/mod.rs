@@ -444,6 +444,7 @@ pub fn synthesise(
             settings.mode.phrase()
         );
     } else {
+        synthesis.confirmation = Confirmation::Skipped;
         let strength = if synthesis.exact {
             "proved"
         } else if pairs.len() > 1 {
