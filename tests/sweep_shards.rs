@@ -119,8 +119,17 @@ fn sharded_and_merged_equals_the_unsharded_sweep() {
     let game = grid(&dir);
     let (whole, sharded) = (dir.join("whole"), dir.join("sharded"));
     sweep_ok(&game, &whole, &[]);
-    for shard in ["2/2", "1/2"] {
-        sweep_ok(&game, &sharded, &["--shard", shard]);
+    // Both shards start at once into a directory that does not exist yet.
+    let shards: Vec<_> = ["2/2", "1/2"]
+        .into_iter()
+        .map(|shard| {
+            let (game, out) = (game.clone(), sharded.clone());
+            std::thread::spawn(move || sweep(&game, &out, &["--shard", shard]))
+        })
+        .collect();
+    for shard in shards {
+        let output = shard.join().unwrap();
+        assert!(output.status.success(), "{output:?}");
     }
     let merged = merge(&sharded);
     assert!(merged.status.success(), "{merged:?}");
@@ -129,7 +138,10 @@ fn sharded_and_merged_equals_the_unsharded_sweep() {
     let record = std::fs::read_to_string(sharded.join("shards/shard-1-of-2.json")).unwrap();
     let record: serde_json::Value = serde_json::from_str(&record).unwrap();
     assert_eq!(record["written_by"], "shard 1/2");
-    assert_eq!(record["plan"]["adversary_sizes"], serde_json::json!([2, 1, 3]));
+    assert_eq!(
+        record["plan"]["adversary_sizes"],
+        serde_json::json!([2, 1, 3])
+    );
     assert_eq!(record["plan"]["settings"]["max_iterations"], 4);
     assert!(record["command_line"].as_array().unwrap().len() > 3);
 }
@@ -179,8 +191,9 @@ fn shards_of_different_settings_are_refused() {
     let game = grid(&dir);
     let sharded = dir.join("sharded");
     sweep_ok(&game, &sharded, &["--shard", "1/2"]);
-    let error = String::from_utf8(sweep(&game, &sharded, &["--shard", "2/2", "--seed", "7"]).stderr)
-        .unwrap();
+    let error =
+        String::from_utf8(sweep(&game, &sharded, &["--shard", "2/2", "--seed", "7"]).stderr)
+            .unwrap();
     assert!(
         error.contains("shard-1-of-2.json (shard 1/2) was written with different settings"),
         "{error}"
@@ -205,17 +218,29 @@ fn shards_of_different_settings_are_refused() {
 fn bad_shards_and_directories_are_refused() {
     let dir = scratch("refused");
     let game = grid(&dir);
-    let error = String::from_utf8(sweep(&game, &dir.join("a"), &["--shard", "4/4"]).stderr).unwrap();
+    let error =
+        String::from_utf8(sweep(&game, &dir.join("a"), &["--shard", "4/4"]).stderr).unwrap();
     assert!(error.contains("the sweep has 3 chains"), "{error}");
-    let error = String::from_utf8(sweep(&game, &dir.join("a"), &["--shard", "3/2"]).stderr).unwrap();
+    let error =
+        String::from_utf8(sweep(&game, &dir.join("a"), &["--shard", "3/2"]).stderr).unwrap();
     assert!(error.contains("1 <= K <= N"), "{error}");
     let whole = dir.join("whole");
     sweep_ok(&game, &whole, &[]);
     let error = String::from_utf8(sweep(&game, &whole, &["--shard", "1/3"]).stderr).unwrap();
     assert!(error.contains("holds no shard records"), "{error}");
     let error = fail(&["sweep-merge", &whole.display().to_string()]);
-    assert!(error.contains("not the --out of a `sweep --shard K/N` run"), "{error}");
-    let error = fail(&["sweep", &game, "--out", "x", "--slurm-option", "--partition=a"]);
+    assert!(
+        error.contains("not the --out of a `sweep --shard K/N` run"),
+        "{error}"
+    );
+    let error = fail(&[
+        "sweep",
+        &game,
+        "--out",
+        "x",
+        "--slurm-option",
+        "--partition=a",
+    ]);
     assert!(error.contains("--slurm"), "{error}");
 }
 
@@ -262,17 +287,29 @@ fn the_slurm_scripts_run_the_same_sweep() {
         exec.ends_with("--shard \"$SLURM_ARRAY_TASK_ID/3\""),
         "{exec}"
     );
-    assert!(!exec.contains("--slurm") && !exec.contains("short"), "{exec}");
+    assert!(
+        !exec.contains("--slurm") && !exec.contains("short"),
+        "{exec}"
+    );
     let first_command = lines.iter().position(|l| !l.starts_with('#')).unwrap();
     assert!(
-        lines[first_command..].iter().all(|l| !l.starts_with("#SBATCH")),
+        lines[first_command..]
+            .iter()
+            .all(|l| !l.starts_with("#SBATCH")),
         "sbatch reads options only before the first command"
     );
-    assert!(sharded.join("slurm-logs").is_dir(), "Slurm does not create it");
+    assert!(
+        sharded.join("slurm-logs").is_dir(),
+        "Slurm does not create it"
+    );
     let merge_script = std::fs::read_to_string(sharded.join("sweep-merge.sbatch")).unwrap();
     assert!(merge_script.contains("#SBATCH --partition=short"));
     assert!(!merge_script.contains("--array"));
-    assert!(merge_script.trim_end().ends_with(&format!("sweep-merge '{}'", sharded.display())));
+    assert!(
+        merge_script
+            .trim_end()
+            .ends_with(&format!("sweep-merge '{}'", sharded.display()))
+    );
     // The array tasks and the merge as Slurm would run them.
     for task in ["3", "1", "2"] {
         let status = Command::new("sh")

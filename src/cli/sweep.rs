@@ -38,7 +38,8 @@ pub struct SweepArgs {
     adv_nodes: Sizes,
     /// Directory for `sweep.csv`, `sweep.svg` and one `solve` directory
     /// `def<N>-adv<M>/` per size pair (written atomically: the results
-    /// appear there whole when the run ends).
+    /// appear there whole when the run ends; with --shard, each pair
+    /// appears whole when it is done; docs/formats.md section 9).
     #[arg(long)]
     out: PathBuf,
     /// Replace a non-empty --out whole (without it, a non-empty --out is
@@ -238,7 +239,12 @@ fn run_whole(
         ProgressMode::detect(args.output.quiet),
         inputs.defender_sizes.len() * adversary_sizes.len(),
     );
-    let rows = run_chains(inputs, adversary_sizes, PairPlace::Inside(out.path()), &progress)?;
+    let rows = run_chains(
+        inputs,
+        adversary_sizes,
+        PairPlace::Inside(out.path()),
+        &progress,
+    )?;
     progress.finish();
     shard::write_sweep(out.path(), &rows, title)?;
     out.commit()?;
@@ -314,8 +320,8 @@ fn run_chain(
             floor: previous.as_ref(),
             seconds_axis: inputs.seconds_axis,
         };
-        let (solution, certified) = run_job(&job)
-            .with_context(|| format!("defender {n} nodes, adversary {m} nodes"))?;
+        let (solution, certified) =
+            run_job(&job).with_context(|| format!("defender {n} nodes, adversary {m} nodes"))?;
         let best = solution.best();
         let report = &best.report;
         progress.finished(n, m, report.worst_case);
@@ -371,7 +377,11 @@ fn run_shard(
         command_line: std::env::args().collect(),
         plan: plan.clone(),
     };
-    shard::begin(&args.out, &shard::shard_record_path(&args.out, shard), &record)?;
+    shard::begin(
+        &args.out,
+        &shard::shard_record_path(&args.out, shard),
+        &record,
+    )?;
     let chains = plan.chains_of(shard);
     let (done, todo): (Vec<usize>, Vec<usize>) = chains
         .iter()

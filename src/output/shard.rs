@@ -194,7 +194,10 @@ impl SweepPlan {
             ("game_name", self.game_name == other.game_name),
             ("objective", self.objective == other.objective),
             ("settings", self.settings == other.settings),
-            ("defender_sizes", self.defender_sizes == other.defender_sizes),
+            (
+                "defender_sizes",
+                self.defender_sizes == other.defender_sizes,
+            ),
             (
                 "adversary_sizes",
                 self.adversary_sizes == other.adversary_sizes,
@@ -266,7 +269,7 @@ pub enum ShardError {
     /// A non-empty directory that is not a sharded sweep's.
     #[error(
         "refusing to write shards into {path}: it is not empty and holds no shard records \
-         (results of an unsharded run?); choose another --out"
+         ({path}/shards/; results of an unsharded run?); choose another --out"
     )]
     NotSharded {
         /// The directory.
@@ -347,8 +350,7 @@ pub fn read_records(dir: &Path) -> Result<Vec<(PathBuf, ShardRecord)>, ShardErro
     if !records.is_dir() {
         return Ok(Vec::new());
     }
-    let entries =
-        fs::read_dir(&records).map_err(|e| OutputError::io("reading", &records, e))?;
+    let entries = fs::read_dir(&records).map_err(|e| OutputError::io("reading", &records, e))?;
     let mut paths = Vec::new();
     for entry in entries {
         let path = entry
@@ -394,26 +396,27 @@ pub fn check_records(dir: &Path, plan: &SweepPlan) -> Result<(), ShardError> {
 }
 
 /// Prepares `dir` for a shard or for `--slurm`: creates it, refuses a
-/// non-empty directory without records and records that disagree with
-/// `record`'s plan, then writes `record` to `path` atomically.
+/// non-empty directory without a `shards/` subdirectory (shards starting
+/// at once into a fresh `dir` all pass: the first creates it) and records
+/// that disagree with `record`'s plan, then writes `record` to `path`
+/// atomically.
 pub fn begin(dir: &Path, path: &Path, record: &ShardRecord) -> Result<(), ShardError> {
     create_dir(dir)?;
-    let records = read_records(dir)?;
     let empty = fs::read_dir(dir)
         .map_err(|e| OutputError::io("reading", dir, e))?
         .next()
         .is_none();
-    if records.is_empty() && !empty {
+    if !empty && !dir.join(RECORDS_DIRECTORY).is_dir() {
         return Err(ShardError::NotSharded {
             path: dir.to_path_buf(),
         });
     }
+    create_dir(&dir.join(RECORDS_DIRECTORY))?;
     check_records(dir, &record.plan)?;
     let text = serde_json::to_string_pretty(record).map_err(|e| ShardError::Malformed {
         path: path.to_path_buf(),
         problem: e.to_string(),
     })? + "\n";
-    create_dir(&dir.join(RECORDS_DIRECTORY))?;
     write_atomically(path, text.as_bytes())?;
     Ok(())
 }
@@ -571,8 +574,7 @@ fn checked_row(pair: &Path, n: usize, m: usize, plan: &SweepPlan) -> Result<Swee
         });
     }
     let summary = pair.join("summary.json");
-    let text =
-        fs::read_to_string(&summary).map_err(|e| OutputError::io("reading", &summary, e))?;
+    let text = fs::read_to_string(&summary).map_err(|e| OutputError::io("reading", &summary, e))?;
     let value: serde_json::Value =
         serde_json::from_str(&text).map_err(|e| ShardError::Malformed {
             path: summary.clone(),
@@ -617,10 +619,7 @@ mod tests {
 
     #[test]
     fn shards_parse_from_k_slash_n_and_refuse_k_outside_one_to_n() {
-        assert_eq!(
-            "2/3".parse::<Shard>(),
-            Ok(Shard { index: 2, count: 3 })
-        );
+        assert_eq!("2/3".parse::<Shard>(), Ok(Shard { index: 2, count: 3 }));
         for bad in ["0/3", "4/3", "1/0", "3", "a/2", "1/-2"] {
             assert!(bad.parse::<Shard>().is_err(), "{bad}");
         }
@@ -635,7 +634,13 @@ mod tests {
         assert_eq!(plan.chains_of(Shard { index: 1, count: 3 }), vec![5, 2]);
         for &m in &plan.adversary_sizes {
             let shard = plan.shard_of(m).unwrap();
-            assert!(plan.chains_of(Shard { index: shard, count: 3 }).contains(&m));
+            assert!(
+                plan.chains_of(Shard {
+                    index: shard,
+                    count: 3
+                })
+                .contains(&m)
+            );
         }
         all.sort_unstable();
         assert_eq!(all, vec![1, 2, 3, 4, 5]);

@@ -52,10 +52,7 @@ pub fn check_option(option: &str) -> Result<(), String> {
 fn header(sweep: &SlurmSweep, name: &str, log: &str) -> String {
     let mut text = String::from("#!/bin/sh\n");
     text += &format!("#SBATCH --job-name={name}\n");
-    text += &format!(
-        "#SBATCH --chdir={}\n",
-        sweep.working_directory.display()
-    );
+    text += &format!("#SBATCH --chdir={}\n", sweep.working_directory.display());
     text += &format!(
         "#SBATCH --output={}\n",
         sweep.out.join(LOG_DIRECTORY).join(log).display()
@@ -92,7 +89,11 @@ pub fn array_script(sweep: &SlurmSweep) -> String {
     let mut text = header(sweep, "posg-fsc-sweep", "shard-%a-of-%A.out");
     text += &format!("#SBATCH --array=1-{}\n", sweep.shards);
     text += &footer(sweep, "one shard of a posg-fsc sweep per array task");
-    let arguments: Vec<String> = sweep.sweep_arguments.iter().map(|a| shell_quote(a)).collect();
+    let arguments: Vec<String> = sweep
+        .sweep_arguments
+        .iter()
+        .map(|a| shell_quote(a))
+        .collect();
     text += &format!(
         "exec {} {} --shard \"$SLURM_ARRAY_TASK_ID/{}\"\n",
         shell_quote(&sweep.program.display().to_string()),
