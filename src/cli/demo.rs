@@ -155,13 +155,14 @@ fn solve_reach_avoid(game: &Posg, place: &Place, out: &mut String) -> anyhow::Re
     }
     writeln!(
         out,
-        "   Files in {}/: curve.csv and curve.svg (convergence), defender.fsc.json and",
+        "   Files in {}/: curve.csv and curve.svg (convergence),",
         place.shown.display()
     )?;
     writeln!(
         out,
-        "   adversary.fsc.json (the controllers, with logits), summary.json (settings).\n"
+        "   defender.fsc.json and adversary.fsc.json (the controllers, with logits),"
     )?;
+    writeln!(out, "   summary.json (settings).\n")?;
     Ok(())
 }
 
@@ -207,7 +208,7 @@ fn recurrence(game: &Posg, place: &Place, out: &mut String) -> anyhow::Result<()
     )?;
     writeln!(
         out,
-        "Next: `posg-fsc solve --help`, `posg-fsc support --help`, `posg-fsc example grid --help`."
+        "Next: `posg-fsc solve --help`, `posg-fsc support --help`,\n`posg-fsc example grid --help`."
     )?;
     Ok(())
 }
@@ -230,8 +231,10 @@ fn synthesis_story(game: &Posg, dra: &Dra, negated: &Dra, out: &mut String) -> a
     let effort = |s: &synthesis::Synthesis| {
         s.statistics.as_ref().map_or_else(String::new, |stats| {
             format!(
-                "{} SAT calls, {} lemmas, {:.2} s",
-                stats.calls, stats.lemmas, stats.seconds
+                "{} SAT calls, {} lemmas, {:.1} ms",
+                stats.calls,
+                stats.lemmas,
+                stats.seconds * 1e3
             )
         })
     };
@@ -251,7 +254,7 @@ fn synthesis_story(game: &Posg, dra: &Dra, negated: &Dra, out: &mut String) -> a
         (Some(_), Some(lower)) => writeln!(
             out,
             "   - a 2-node support of {} (node, observation, next node, action) entries wins\n     \
-             with positive probability: uniform on it, certified at {lower:.4} ({}).",
+             with positive probability: uniform on it, certified at {lower:.4}\n     ({}).",
             positive.support_entries(),
             effort(&positive)
         )?,
@@ -292,7 +295,7 @@ fn tuned_story(
     )?;
     writeln!(
         out,
-        "   Algorithm 1) and keeps the best certified one: here `{}`, tuned in {:.1} s.",
+        "   Algorithm 1) and keeps the best certified one: here `{}`,\n   tuned in {:.1} s.",
         best.report.name, best.report.seconds
     )?;
     if let Some(bracket) = certified {
@@ -303,7 +306,7 @@ fn tuned_story(
         )?;
         writeln!(
             out,
-            "   than {:.4} against the adversary found. Its rules (observation: action -> node):",
+            "   than {:.4} against the adversary found. Its rules, as\n   observation:action->next node:",
             bracket.upper_bound
         )?;
     }
@@ -318,8 +321,8 @@ fn tuned_story(
     Ok(())
 }
 
-/// One line per node: each observation's most likely choice, `obs: action
-/// -> next` (with its probability when below 0.99).
+/// One line per node: each observation's most likely choice,
+/// `obs:action->next` (with its probability when below 0.99).
 fn rules(game: &Posg, fsc: &Fsc) -> Vec<String> {
     let player = game.defender();
     (0..fsc.num_nodes())
@@ -337,14 +340,14 @@ fn rules(game: &Posg, fsc: &Fsc) -> Vec<String> {
                         String::new()
                     };
                     format!(
-                        "{}: {} -> {}{probability}",
+                        "{}:{}->{}{probability}",
                         player.observations()[o],
                         player.actions()[best.action],
                         best.next
                     )
                 })
                 .collect();
-            format!("node {g}: {}", choices.join(", "))
+            format!("node {g}: {}", choices.join("  "))
         })
         .collect()
 }
