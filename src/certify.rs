@@ -397,17 +397,7 @@ pub(crate) fn analyse_qualitative(
     controller: &Fsc,
     fixed: Role,
 ) -> Result<Analysis<QualitativeReachability>, CertifyError> {
-    let product = Product::build(game, dra, controller, fixed)?;
-    let pairs = product.lift(dra.pairs());
-    let (result, accepting) = max_rabin_qualitative(&product.mdp, &pairs)?;
-    Ok(Analysis {
-        states: product.states,
-        mdp: product.mdp,
-        initial: product.initial,
-        result,
-        accepting,
-        free_actions: product.free_actions,
-    })
+    analyse_with(game, dra, controller, fixed, max_rabin_qualitative)
 }
 
 /// Builds the product with `controller` playing for `fixed` and analyses it.
@@ -417,9 +407,21 @@ pub(crate) fn analyse(
     controller: &Fsc,
     fixed: Role,
 ) -> Result<Analysis, CertifyError> {
+    analyse_with(game, dra, controller, fixed, max_rabin_analysis)
+}
+
+/// The product with `controller` playing for `fixed`, analysed by `solve`
+/// for the automaton's pairs lifted to it.
+fn analyse_with<R>(
+    game: &Posg,
+    dra: &Dra,
+    controller: &Fsc,
+    fixed: Role,
+    solve: impl FnOnce(&Mdp, &[RabinPair]) -> Result<(R, Vec<AcceptingComponent>), MdpError>,
+) -> Result<Analysis<R>, CertifyError> {
     let product = Product::build(game, dra, controller, fixed)?;
     let pairs = product.lift(dra.pairs());
-    let (result, accepting) = max_rabin_analysis(&product.mdp, &pairs)?;
+    let (result, accepting) = solve(&product.mdp, &pairs)?;
     Ok(Analysis {
         states: product.states,
         mdp: product.mdp,

@@ -13,11 +13,11 @@ use std::path::PathBuf;
 
 use clap::Args;
 use posg_fsc::automaton::Dra;
-use posg_fsc::certify::lower_bound;
+use posg_fsc::certify::{Bracket, lower_bound};
 use posg_fsc::controller::{Choice, Fsc, Role};
 use posg_fsc::game::Posg;
 use posg_fsc::game::grid::GridSpec;
-use posg_fsc::optimise::{self, Settings, Structure};
+use posg_fsc::optimise::{self, Settings, Solution, Structure};
 use posg_fsc::output::OutputDirectory;
 use posg_fsc::prune::{PruneSettings, prune};
 use posg_fsc::solver::SolverSettings;
@@ -80,6 +80,32 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
     super::common::print_text(&out)
 }
 
+/// `solve` with its defaults, 2 defender nodes against 1 adversary node,
+/// quietly, into `place`.
+fn solve_with_defaults(
+    game: &Posg,
+    dra: &Dra,
+    negated: &Dra,
+    formula: &str,
+    place: &Place,
+) -> anyhow::Result<(Solution, Option<Bracket>)> {
+    let settings = Settings::default();
+    let start = Structure::full(game, 2, 1, settings.optimise_initial);
+    let job = SolveJob {
+        game,
+        dra,
+        negated_dra: Some(negated),
+        objective: formula,
+        candidates: optimise::candidate_structures(game, dra, Some(negated), start, &settings)?,
+        settings: &settings,
+        out: &place.staging,
+        progress: super::progress::ProgressMode::Quiet,
+        floor: None,
+        seconds_axis: false,
+    };
+    run_job(&job)
+}
+
 /// Where a solve writes (inside the demo's staging directory) and where its
 /// files will be once the demo has finished.
 struct Place {
@@ -90,21 +116,7 @@ struct Place {
 fn solve_reach_avoid(game: &Posg, place: &Place, out: &mut String) -> anyhow::Result<()> {
     let formula = "!unsafe U goal";
     let (dra, negated) = translate(formula)?;
-    let settings = Settings::default();
-    let start = Structure::full(game, 2, 1, settings.optimise_initial);
-    let job = SolveJob {
-        game,
-        dra: &dra,
-        negated_dra: Some(&negated),
-        objective: formula,
-        candidates: optimise::candidate_structures(game, &dra, Some(&negated), start, &settings)?,
-        settings: &settings,
-        out: &place.staging,
-        progress: super::progress::ProgressMode::Quiet,
-        floor: None,
-        seconds_axis: false,
-    };
-    let (solution, certified) = run_job(&job)?;
+    let (solution, certified) = solve_with_defaults(game, &dra, &negated, formula, place)?;
     let best = solution.best();
     let defender = Fsc::uniform(
         Role::Defender,
@@ -273,21 +285,7 @@ fn tuned_story(
     place: &Place,
     out: &mut String,
 ) -> anyhow::Result<()> {
-    let settings = Settings::default();
-    let start = Structure::full(game, 2, 1, settings.optimise_initial);
-    let job = SolveJob {
-        game,
-        dra,
-        negated_dra: Some(negated),
-        objective: formula,
-        candidates: optimise::candidate_structures(game, dra, Some(negated), start, &settings)?,
-        settings: &settings,
-        out: &place.staging,
-        progress: super::progress::ProgressMode::Quiet,
-        floor: None,
-        seconds_axis: false,
-    };
-    let (solution, certified) = run_job(&job)?;
+    let (solution, certified) = solve_with_defaults(game, dra, negated, formula, place)?;
     let best = solution.best();
     writeln!(
         out,

@@ -130,13 +130,15 @@ impl OptimiseError {
     }
 }
 
+/// The items kept by [`keep_solved`] as `(index, item)`, and the dropped
+/// ones as `(index, error)`.
+type Kept<T> = (Vec<(usize, T)>, Vec<(usize, String)>);
+
 /// Keeps the results of `results` that succeeded; numerical trouble
 /// ([`OptimiseError::is_numerical`]) drops an item and is described in the
 /// second list as `(index, error)`; any other error, or every item failing,
 /// is returned.
-fn keep_solved<T>(
-    results: Vec<Result<T, OptimiseError>>,
-) -> Result<(Vec<(usize, T)>, Vec<(usize, String)>), OptimiseError> {
+fn keep_solved<T>(results: Vec<Result<T, OptimiseError>>) -> Result<Kept<T>, OptimiseError> {
     let (mut kept, mut dropped, mut first) = (Vec::new(), Vec::new(), None);
     for (index, result) in results.into_iter().enumerate() {
         match result {

@@ -92,9 +92,9 @@ pub fn candidate_structures(
     };
     let keep_start = settings.structures.contains(&StructureSource::Full) || start.name != "full";
     for source in StructureSource::ALL {
-        if !settings.structures.contains(&source)
-            && !(source == StructureSource::Full && keep_start)
-        {
+        let wanted = settings.structures.contains(&source)
+            || (source == StructureSource::Full && keep_start);
+        if !wanted {
             continue;
         }
         let clock = Instant::now();

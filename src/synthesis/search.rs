@@ -239,10 +239,8 @@ impl LemmaBuilder<'_, '_, '_> {
             self.cnf,
             self.oracle.game,
             self.oracle.moves,
-            edge.s,
-            edge.transition,
-            edge.nodes.0,
-            edge.nodes.1,
+            (edge.s, edge.transition),
+            edge.nodes,
         )
     }
 
