@@ -12,13 +12,12 @@
 //! The helpers shared with the controller files (`parse`, `Located`,
 //! `distribution`) live here too.
 
-use std::collections::HashSet;
 use std::fmt;
 use std::marker::PhantomData;
 use std::path::Path;
 
 use crate::limits;
-use rustc_hash::FxHashMap;
+use rustc_hash::{FxHashMap, FxHashSet};
 use serde::de::{self, DeserializeSeed, Deserializer, MapAccess, Visitor};
 use serde::ser::{SerializeMap, Serializer};
 use serde::{Deserialize, Serialize};
@@ -75,7 +74,22 @@ pub(crate) fn write_text(path: &Path, text: &str) -> Result<(), ModelError> {
 
 /// Parses `text` into `T`, turning syntax, type, unknown-field and
 /// duplicate-key errors into a [`ModelError`] at `FILE: JSON.path`.
+///
+/// The text is parsed once without tracking JSON paths (parser speed); only
+/// when that fails is it parsed again with [`serde_path_to_error`], whose
+/// error names the path. Both parses accept exactly the same texts.
 pub(crate) fn parse<T: for<'de> Deserialize<'de>>(
+    text: &str,
+    file_name: &str,
+) -> Result<T, ModelError> {
+    match serde_json::from_str(text) {
+        Ok(value) => Ok(value),
+        Err(_) => parse_tracking_paths(text, file_name),
+    }
+}
+
+/// [`parse`] with the JSON path of every value tracked, for its error message.
+fn parse_tracking_paths<T: for<'de> Deserialize<'de>>(
     text: &str,
     file_name: &str,
 ) -> Result<T, ModelError> {
@@ -137,9 +151,14 @@ impl<'a> Located<'a> {
     }
 }
 
+/// Whether `p` is a probability: finite and in [0, 1].
+fn is_probability(p: f64) -> bool {
+    p.is_finite() && (0.0..=1.0).contains(&p)
+}
+
 /// Checks one probability of a distribution (finite, in [0, 1]).
 pub(crate) fn check_probability(p: f64, at: &Located) -> Result<(), ModelError> {
-    if p.is_finite() && (0.0..=1.0).contains(&p) {
+    if is_probability(p) {
         Ok(())
     } else {
         Err(at.error(format!("probability {p} is not in [0, 1]")))
@@ -177,9 +196,11 @@ pub(crate) fn distribution(
     let mut outcomes = Vec::with_capacity(map.0.len());
     let mut weights = Vec::with_capacity(map.0.len());
     for &(ref name, p) in &map.0 {
-        let here = at.key(name);
-        let outcome = index(name).ok_or_else(|| here.error(format!("unknown {kind} `{name}`")))?;
-        check_probability(p, &here)?;
+        let outcome =
+            index(name).ok_or_else(|| at.key(name).error(format!("unknown {kind} `{name}`")))?;
+        if !is_probability(p) {
+            check_probability(p, &at.key(name))?;
+        }
         outcomes.push(outcome);
         weights.push(p);
     }
@@ -242,15 +263,37 @@ impl<'de, V: Deserialize<'de>> Visitor<'de> for UniqueMapVisitor<V> {
 
     fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<Self::Value, A::Error> {
         let mut entries = Vec::new();
-        let mut seen = HashSet::new();
+        let mut seen = None;
         while let Some(key) = map.next_key::<String>()? {
-            if !seen.insert(key.clone()) {
+            if is_repeated(&entries, &mut seen, &key) {
                 map.next_value_seed(Duplicate)?;
             }
             entries.push((key, map.next_value()?));
         }
         Ok(UniqueMap(entries))
     }
+}
+
+/// Objects with at most this many members are checked for a repeated key by
+/// comparing with each earlier one (no allocation); larger ones by a set.
+const SMALL_OBJECT: usize = 16;
+
+/// Whether `key` is already among the keys of `entries`; `seen` holds those
+/// keys as a set once the object outgrows [`SMALL_OBJECT`].
+fn is_repeated<V>(
+    entries: &[(String, V)],
+    seen: &mut Option<FxHashSet<String>>,
+    key: &str,
+) -> bool {
+    if let Some(set) = seen {
+        return !set.insert(key.to_string());
+    }
+    let repeated = entries.iter().any(|(k, _)| k == key);
+    if entries.len() >= SMALL_OBJECT {
+        let keys = entries.iter().map(|(k, _)| k.clone());
+        *seen = Some(keys.chain(std::iter::once(key.to_string())).collect());
+    }
+    repeated
 }
 
 /// The value of a repeated key: always an error, raised from inside the value
@@ -583,14 +626,12 @@ impl<'a> Builder<'a> {
         let mut keyed: FxHashMap<(usize, u32, u32), Vec<usize>> = FxHashMap::default();
         let mut nexts = Vec::with_capacity(raw.len());
         for (i, t) in raw.iter().enumerate() {
-            let key = self.transition_key(t, &at.index(i), game)?;
+            let here = at.index(i);
+            let key = self.transition_key(t, &here, game)?;
             keyed.entry(key).or_default().push(i);
-            nexts.push(distribution(
-                &t.next,
-                &at.index(i).key("next"),
-                "state",
-                |n| self.state(n),
-            )?);
+            nexts.push(distribution(&t.next, &here.key("next"), "state", |n| {
+                self.state(n)
+            })?);
         }
         let (nu, nv) = (game.defender.num_actions(), game.adversary.num_actions());
         let triples = [game.states.len(), nu, nv]
