@@ -171,45 +171,49 @@ pub(crate) fn check_probability(p: f64, at: &Located) -> Result<(), ModelError> 
 /// and reading a model gives back the same numbers.
 pub(crate) fn normalise(weights: &mut [f64], at: &Located) -> Result<(), ModelError> {
     let total: f64 = weights.iter().sum();
+    if let Some(total) = normalisation(total, weights.len(), at)? {
+        weights.iter_mut().for_each(|w| *w /= total);
+    }
+    Ok(())
+}
+
+/// The check of [`normalise`] on the sum `total` of `len` weights: an error
+/// when it is not 1 within 1e-6, `Some(total)` when the weights must be
+/// divided by it, `None` when they sum to 1 up to rounding (kept bit for bit).
+fn normalisation(total: f64, len: usize, at: &Located) -> Result<Option<f64>, ModelError> {
     if (total - 1.0).abs() > 1e-6 {
         let shown = (total * 1e9).round() / 1e9 + 0.0;
         return Err(at.error(format!(
             "probabilities sum to {shown}, not 1 (tolerance 1e-6)"
         )));
     }
-    if (total - 1.0).abs() > weights.len() as f64 * f64::EPSILON {
-        weights.iter_mut().for_each(|w| *w /= total);
-    }
-    Ok(())
+    Ok(((total - 1.0).abs() > len as f64 * f64::EPSILON).then_some(total))
 }
 
 /// The distribution written as the object at `at` over outcomes found by
 /// `index` (`kind` names them in errors, e.g. "state"): checked, renormalised,
 /// zero entries dropped, sorted by outcome (so the order of keys in the file
-/// does not matter).
+/// does not matter). Positions in `at` are built only for an error message.
 pub(crate) fn distribution(
     map: &UniqueMap<f64>,
     at: &Located,
     kind: &str,
     index: impl Fn(&str) -> Option<usize>,
 ) -> Result<Distribution, ModelError> {
-    let mut outcomes = Vec::with_capacity(map.0.len());
-    let mut weights = Vec::with_capacity(map.0.len());
+    let mut d: Distribution = Vec::with_capacity(map.0.len());
     for &(ref name, p) in &map.0 {
         let outcome =
             index(name).ok_or_else(|| at.key(name).error(format!("unknown {kind} `{name}`")))?;
         if !is_probability(p) {
             check_probability(p, &at.key(name))?;
         }
-        outcomes.push(outcome);
-        weights.push(p);
+        d.push((outcome, p));
     }
-    normalise(&mut weights, at)?;
-    let mut d: Distribution = outcomes
-        .into_iter()
-        .zip(weights)
-        .filter(|&(_, p)| p > 0.0)
-        .collect();
+    let total: f64 = d.iter().map(|&(_, p)| p).sum();
+    if let Some(total) = normalisation(total, d.len(), at)? {
+        d.iter_mut().for_each(|(_, p)| *p /= total);
+    }
+    d.retain(|&(_, p)| p > 0.0);
     d.sort_unstable_by_key(|&(o, _)| o);
     Ok(d)
 }
