@@ -54,7 +54,10 @@ use thiserror::Error;
 use crate::automaton::{Dra, Letter, RabinPair};
 use crate::controller::{Fsc, Role};
 use crate::game::{Player, Posg};
-use crate::mdp::{AcceptingComponent, Mdp, MdpBuilder, MdpError, Reachability, max_rabin_analysis};
+use crate::mdp::{
+    AcceptingComponent, Mdp, MdpBuilder, MdpError, QualitativeReachability, Reachability,
+    max_rabin_analysis, max_rabin_qualitative,
+};
 use crate::solver::SolverError;
 
 /// Why a bound could not be computed.
@@ -351,8 +354,10 @@ fn best_response(
 
 /// The product MDP of a game, an automaton and one player's controller,
 /// analysed for the free player's maximum probability of the automaton's
-/// language (what [`lower_bound`] and [`upper_bound`] are computed from).
-pub(crate) struct Analysis {
+/// language (what [`lower_bound`] and [`upper_bound`] are computed from),
+/// or only qualitatively (`R` = [`QualitativeReachability`]: what support
+/// synthesis needs).
+pub(crate) struct Analysis<R = Reachability> {
     /// `(s, q, node)` of each MDP state.
     pub states: Vec<(usize, usize, usize)>,
     /// The MDP: state `m`'s action `w` is the free player's action `w`.
@@ -360,7 +365,7 @@ pub(crate) struct Analysis {
     /// `p0` as `(MDP state, probability)`.
     pub initial: Vec<(usize, f64)>,
     /// Maximum reachability of the accepting end components.
-    pub result: Reachability,
+    pub result: R,
     /// The accepting end components, per Rabin pair of the automaton.
     pub accepting: Vec<AcceptingComponent>,
     /// The free player's actions per game state: MDP action `a` in
@@ -383,6 +388,18 @@ pub(crate) fn product_mdp(
     Ok((product.states, product.mdp, product.initial))
 }
 
+/// Builds the product with `controller` playing for `fixed` and decides,
+/// by graph search alone, where the free player wins with positive
+/// probability and where almost surely.
+pub(crate) fn analyse_qualitative(
+    game: &Posg,
+    dra: &Dra,
+    controller: &Fsc,
+    fixed: Role,
+) -> Result<Analysis<QualitativeReachability>, CertifyError> {
+    analyse_with(game, dra, controller, fixed, max_rabin_qualitative)
+}
+
 /// Builds the product with `controller` playing for `fixed` and analyses it.
 pub(crate) fn analyse(
     game: &Posg,
@@ -390,9 +407,21 @@ pub(crate) fn analyse(
     controller: &Fsc,
     fixed: Role,
 ) -> Result<Analysis, CertifyError> {
+    analyse_with(game, dra, controller, fixed, max_rabin_analysis)
+}
+
+/// The product with `controller` playing for `fixed`, analysed by `solve`
+/// for the automaton's pairs lifted to it.
+fn analyse_with<R>(
+    game: &Posg,
+    dra: &Dra,
+    controller: &Fsc,
+    fixed: Role,
+    solve: impl FnOnce(&Mdp, &[RabinPair]) -> Result<(R, Vec<AcceptingComponent>), MdpError>,
+) -> Result<Analysis<R>, CertifyError> {
     let product = Product::build(game, dra, controller, fixed)?;
     let pairs = product.lift(dra.pairs());
-    let (result, accepting) = max_rabin_analysis(&product.mdp, &pairs)?;
+    let (result, accepting) = solve(&product.mdp, &pairs)?;
     Ok(Analysis {
         states: product.states,
         mdp: product.mdp,

@@ -13,11 +13,11 @@ use std::path::PathBuf;
 
 use clap::Args;
 use posg_fsc::automaton::Dra;
-use posg_fsc::certify::lower_bound;
+use posg_fsc::certify::{Bracket, lower_bound};
 use posg_fsc::controller::{Choice, Fsc, Role};
 use posg_fsc::game::Posg;
 use posg_fsc::game::grid::GridSpec;
-use posg_fsc::optimise::{self, Settings, Structure};
+use posg_fsc::optimise::{self, Settings, Solution, Structure};
 use posg_fsc::output::OutputDirectory;
 use posg_fsc::prune::{PruneSettings, prune};
 use posg_fsc::solver::SolverSettings;
@@ -80,6 +80,32 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
     super::common::print_text(&out)
 }
 
+/// `solve` with its defaults, 2 defender nodes against 1 adversary node,
+/// quietly, into `place`.
+fn solve_with_defaults(
+    game: &Posg,
+    dra: &Dra,
+    negated: &Dra,
+    formula: &str,
+    place: &Place,
+) -> anyhow::Result<(Solution, Option<Bracket>)> {
+    let settings = Settings::default();
+    let start = Structure::full(game, 2, 1, settings.optimise_initial);
+    let job = SolveJob {
+        game,
+        dra,
+        negated_dra: Some(negated),
+        objective: formula,
+        candidates: optimise::candidate_structures(game, dra, Some(negated), start, &settings)?,
+        settings: &settings,
+        out: &place.staging,
+        progress: super::progress::ProgressMode::Quiet,
+        floor: None,
+        seconds_axis: false,
+    };
+    run_job(&job)
+}
+
 /// Where a solve writes (inside the demo's staging directory) and where its
 /// files will be once the demo has finished.
 struct Place {
@@ -90,21 +116,7 @@ struct Place {
 fn solve_reach_avoid(game: &Posg, place: &Place, out: &mut String) -> anyhow::Result<()> {
     let formula = "!unsafe U goal";
     let (dra, negated) = translate(formula)?;
-    let settings = Settings::default();
-    let start = Structure::full(game, 2, 1, settings.optimise_initial);
-    let job = SolveJob {
-        game,
-        dra: &dra,
-        negated_dra: Some(&negated),
-        objective: formula,
-        candidates: optimise::candidate_structures(game, &dra, Some(&negated), start, &settings)?,
-        settings: &settings,
-        out: &place.staging,
-        progress: super::progress::ProgressMode::Quiet,
-        floor: None,
-        seconds_axis: false,
-    };
-    let (solution, certified) = run_job(&job)?;
+    let (solution, certified) = solve_with_defaults(game, &dra, &negated, formula, place)?;
     let best = solution.best();
     let defender = Fsc::uniform(
         Role::Defender,
@@ -155,13 +167,14 @@ fn solve_reach_avoid(game: &Posg, place: &Place, out: &mut String) -> anyhow::Re
     }
     writeln!(
         out,
-        "   Files in {}/: curve.csv and curve.svg (convergence), defender.fsc.json and",
+        "   Files in {}/: curve.csv and curve.svg (convergence),",
         place.shown.display()
     )?;
     writeln!(
         out,
-        "   adversary.fsc.json (the controllers, with logits), summary.json (settings).\n"
+        "   defender.fsc.json and adversary.fsc.json (the controllers, with logits),"
     )?;
+    writeln!(out, "   summary.json (settings).\n")?;
     Ok(())
 }
 
@@ -207,7 +220,7 @@ fn recurrence(game: &Posg, place: &Place, out: &mut String) -> anyhow::Result<()
     )?;
     writeln!(
         out,
-        "Next: `posg-fsc solve --help`, `posg-fsc support --help`, `posg-fsc example grid --help`."
+        "Next: `posg-fsc solve --help`, `posg-fsc support --help`,\n`posg-fsc example grid --help`."
     )?;
     Ok(())
 }
@@ -230,8 +243,10 @@ fn synthesis_story(game: &Posg, dra: &Dra, negated: &Dra, out: &mut String) -> a
     let effort = |s: &synthesis::Synthesis| {
         s.statistics.as_ref().map_or_else(String::new, |stats| {
             format!(
-                "{} SAT calls, {} lemmas, {:.2} s",
-                stats.calls, stats.lemmas, stats.seconds
+                "{} SAT calls, {} lemmas, {:.1} ms",
+                stats.calls,
+                stats.lemmas,
+                stats.seconds * 1e3
             )
         })
     };
@@ -251,7 +266,7 @@ fn synthesis_story(game: &Posg, dra: &Dra, negated: &Dra, out: &mut String) -> a
         (Some(_), Some(lower)) => writeln!(
             out,
             "   - a 2-node support of {} (node, observation, next node, action) entries wins\n     \
-             with positive probability: uniform on it, certified at {lower:.4} ({}).",
+             with positive probability: uniform on it, certified at {lower:.4}\n     ({}).",
             positive.support_entries(),
             effort(&positive)
         )?,
@@ -270,21 +285,7 @@ fn tuned_story(
     place: &Place,
     out: &mut String,
 ) -> anyhow::Result<()> {
-    let settings = Settings::default();
-    let start = Structure::full(game, 2, 1, settings.optimise_initial);
-    let job = SolveJob {
-        game,
-        dra,
-        negated_dra: Some(negated),
-        objective: formula,
-        candidates: optimise::candidate_structures(game, dra, Some(negated), start, &settings)?,
-        settings: &settings,
-        out: &place.staging,
-        progress: super::progress::ProgressMode::Quiet,
-        floor: None,
-        seconds_axis: false,
-    };
-    let (solution, certified) = run_job(&job)?;
+    let (solution, certified) = solve_with_defaults(game, dra, negated, formula, place)?;
     let best = solution.best();
     writeln!(
         out,
@@ -292,7 +293,7 @@ fn tuned_story(
     )?;
     writeln!(
         out,
-        "   Algorithm 1) and keeps the best certified one: here `{}`, tuned in {:.1} s.",
+        "   Algorithm 1) and keeps the best certified one: here `{}`,\n   tuned in {:.1} s.",
         best.report.name, best.report.seconds
     )?;
     if let Some(bracket) = certified {
@@ -303,7 +304,7 @@ fn tuned_story(
         )?;
         writeln!(
             out,
-            "   than {:.4} against the adversary found. Its rules (observation: action -> node):",
+            "   than {:.4} against the adversary found. Its rules, as\n   observation:action->next node:",
             bracket.upper_bound
         )?;
     }
@@ -318,8 +319,8 @@ fn tuned_story(
     Ok(())
 }
 
-/// One line per node: each observation's most likely choice, `obs: action
-/// -> next` (with its probability when below 0.99).
+/// One line per node: each observation's most likely choice,
+/// `obs:action->next` (with its probability when below 0.99).
 fn rules(game: &Posg, fsc: &Fsc) -> Vec<String> {
     let player = game.defender();
     (0..fsc.num_nodes())
@@ -337,14 +338,14 @@ fn rules(game: &Posg, fsc: &Fsc) -> Vec<String> {
                         String::new()
                     };
                     format!(
-                        "{}: {} -> {}{probability}",
+                        "{}:{}->{}{probability}",
                         player.observations()[o],
                         player.actions()[best.action],
                         best.next
                     )
                 })
                 .collect();
-            format!("node {g}: {}", choices.join(", "))
+            format!("node {g}: {}", choices.join("  "))
         })
         .collect()
 }

@@ -69,6 +69,9 @@ enum Command {
     /// Run `solve` for every pair of controller sizes in parallel and write
     /// sweep.csv and sweep.svg.
     Sweep(sweep::SweepArgs),
+    /// Join the shards of `sweep --shard K/N` into sweep.csv and sweep.svg
+    /// (naming any size pair that is missing).
+    SweepMerge(sweep::SweepMergeArgs),
     /// Translate an LTL formula into a deterministic Rabin automaton.
     Translate(translate::TranslateArgs),
     /// Draw a controller as a Graphviz graph (nodes, and edges labelled
@@ -92,6 +95,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Solve(args) => solve::run(args),
         Command::Support(args) => support::run(args),
         Command::Sweep(args) => sweep::run(args),
+        Command::SweepMerge(args) => sweep::run_merge(args),
         Command::Translate(args) => translate::run(args),
         Command::Dot(args) => dot::run(args),
     }

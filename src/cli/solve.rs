@@ -295,6 +295,10 @@ struct Summary<'a> {
     /// the smallest game upper bound over the best responses found
     /// (docs/method.md section 6); absent when the objective came as an automaton.
     certified: Option<Bracket>,
+    /// Why `certified` is absent although the objective came as a formula:
+    /// the best defender's product mixes too slowly for its bound to be
+    /// solved to the tolerance (method.md section 8).
+    certification_error: Option<String>,
     last_value: f64,
     seconds: f64,
     /// Seconds of support synthesis (the `sat` source) before optimising.
@@ -369,21 +373,29 @@ pub fn run_job(job: &SolveJob) -> anyhow::Result<(Solution, Option<Bracket>)> {
         }
     }
     let best = solution.best();
-    let certified = job
+    let bracket = job
         .negated_dra
         .map(|negated| {
             let adversaries = solution.structures.iter().map(|s| &s.adversary);
             certify::bracket(job.game, job.dra, negated, &best.defender, adversaries)
         })
-        .transpose()?
-        .map(|bracket| Bracket {
-            upper_bound: solution
-                .structures
-                .iter()
-                .filter_map(|s| s.report.upper_bound)
-                .fold(bracket.upper_bound, f64::min),
-            ..bracket
-        });
+        .transpose();
+    let (bracket, certification_error) = match bracket {
+        Ok(bracket) => (bracket, None),
+        Err(error) if error.is_slow_mixing() => {
+            eprintln!("warning: the best defender has no certificate: {error}");
+            (None, Some(error.to_string()))
+        }
+        Err(error) => return Err(error.into()),
+    };
+    let certified = bracket.map(|bracket| Bracket {
+        upper_bound: solution
+            .structures
+            .iter()
+            .filter_map(|s| s.report.upper_bound)
+            .fold(bracket.upper_bound, f64::min),
+        ..bracket
+    });
     controller::file::write(&out.join("defender.fsc.json"), &best.defender, job.game)?;
     write_defender_dot(&out.join("defender.dot"), job, &best.defender)?;
     controller::file::write(&out.join("adversary.fsc.json"), &best.adversary, job.game)?;
@@ -399,6 +411,7 @@ pub fn run_job(job: &SolveJob) -> anyhow::Result<(Solution, Option<Bracket>)> {
         worst_case: best.report.worst_case,
         error_bound: best.report.error_bound,
         certified,
+        certification_error,
         last_value: best.report.last_value,
         seconds: clock.elapsed().as_secs_f64(),
         synthesis_seconds: job
@@ -443,6 +456,7 @@ pub fn structure_choice(solution: &Solution, notes: &[SourceNote]) -> Vec<String
             &solution.structures,
             solution.best,
             notes,
+            &solution.failed,
         ))
         .collect()
 }
@@ -624,6 +638,7 @@ pub fn run(args: SolveArgs) -> anyhow::Result<()> {
     };
     let (solution, certified) = run_job(&job)?;
     let choice = structure_choice(&solution, &job.candidates.notes);
+    let certifiable = job.negated_dra.is_some();
     out.commit()?;
     for line in choice {
         eprintln!("{line}");
@@ -632,9 +647,15 @@ pub fn run(args: SolveArgs) -> anyhow::Result<()> {
     let report = &best.report;
     let bracket = certified.map_or_else(
         || {
-            "; no certified bracket (the objective came as an automaton: run `posg-fsc certify \
-         --automaton A --negated-automaton N --defender defender.fsc.json`)"
-                .to_string()
+            if certifiable {
+                "; no certified bracket: the best defender's product mixes too slowly to be \
+                 solved to the tolerance (summary.json: certification_error)"
+                    .to_string()
+            } else {
+                "; no certified bracket (the objective came as an automaton: run `posg-fsc \
+                 certify --automaton A --negated-automaton N --defender defender.fsc.json`)"
+                    .to_string()
+            }
         },
         |b| {
             format!(

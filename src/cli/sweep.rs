@@ -1,18 +1,23 @@
 //! `posg-fsc sweep`: `solve` for every pair of controller sizes (the
 //! adversary sizes in parallel, the defender sizes in increasing order, each
 //! warm-started from the next smaller one), with a table and a plot of the
-//! worst-case estimates.
+//! worst-case estimates; with `--shard K/N` one slice of it, with
+//! `--slurm` the Slurm scripts that run every slice; `sweep-merge` joins
+//! the slices (docs/formats.md section 9).
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 use clap::Args;
 use rayon::prelude::*;
-use serde::Serialize;
 
+use posg_fsc::automaton::Dra;
+use posg_fsc::game::Posg;
 use posg_fsc::limits;
-use posg_fsc::optimise::{self, Structure, StructureOutcome};
-use posg_fsc::output::{OutputDirectory, OutputError, SweepPoint, Title, plot_sweep};
+use posg_fsc::optimise::{self, Settings, Structure, StructureOutcome};
+use posg_fsc::output::shard::{self, Shard, ShardRecord, SweepPlan, SweepRow};
+use posg_fsc::output::slurm::{self, SlurmSweep};
+use posg_fsc::output::{OutputDirectory, Title, create_dir, write_file};
 
 use super::common::{ObjectiveArgs, print_text};
 use super::progress::{OutputArgs, ProgressMode, SweepProgress};
@@ -33,12 +38,32 @@ pub struct SweepArgs {
     adv_nodes: Sizes,
     /// Directory for `sweep.csv`, `sweep.svg` and one `solve` directory
     /// `def<N>-adv<M>/` per size pair (written atomically: the results
-    /// appear there whole when the run ends).
+    /// appear there whole when the run ends; with --shard, each pair
+    /// appears whole when it is done; docs/formats.md section 9).
     #[arg(long)]
     out: PathBuf,
-    /// Replace a non-empty --out whole (without it, a non-empty --out is refused).
-    #[arg(long)]
+    /// Replace a non-empty --out whole (without it, a non-empty --out is
+    /// refused); with --shard, recompute the shard's complete chains too.
+    #[arg(long, conflicts_with = "slurm")]
     force: bool,
+    /// Run only shard K of N (`K/N`, 1 <= K <= N): the adversary sizes at
+    /// positions K, K+N, K+2N, ... of --adv-nodes, each with all its
+    /// defender sizes; every size pair goes into --out atomically, and
+    /// `posg-fsc sweep-merge DIR` writes sweep.csv and sweep.svg once all
+    /// shards are done. A rerun completes what a failed run left out.
+    #[arg(long, conflicts_with = "slurm")]
+    shard: Option<Shard>,
+    /// Run nothing: write --out/sweep.sbatch, a Slurm array job whose task K
+    /// runs --shard K/N, and --out/sweep-merge.sbatch, and print how to
+    /// submit them.
+    #[arg(long)]
+    slurm: bool,
+    /// With --slurm: an extra `#SBATCH` line (e.g. --slurm-option=--partition=short); repeatable.
+    #[arg(long, requires = "slurm", allow_hyphen_values = true)]
+    slurm_option: Vec<String>,
+    /// With --slurm: N, the number of shards (array tasks); default one per adversary size.
+    #[arg(long, requires = "slurm")]
+    shards: Option<usize>,
     #[command(flatten)]
     settings: SettingsArgs,
     #[command(flatten)]
@@ -80,32 +105,41 @@ fn parse_sizes(text: &str) -> Result<Sizes, String> {
     Ok(Sizes(sizes))
 }
 
-/// One row of `sweep.csv`: the best structure's numbers for one size pair.
-#[derive(Debug, Serialize)]
-struct Row {
-    defender_nodes: usize,
-    adversary_nodes: usize,
-    structure: String,
-    gmc_states: usize,
-    gmc_transitions: usize,
-    defender_parameters: usize,
-    adversary_parameters: usize,
-    last_value: f64,
-    worst_case: f64,
-    error_bound: f64,
-    certified_lower: Option<f64>,
-    upper_bound: Option<f64>,
-    iterations: usize,
-    seconds: f64,
-    /// Whether the run started from the best defender of the next smaller size.
-    warm_started: bool,
+/// Arguments of `sweep-merge`.
+#[derive(Debug, Args)]
+pub struct SweepMergeArgs {
+    /// The --out of the `sweep --shard K/N` runs.
+    dir: PathBuf,
+}
+
+/// The loaded inputs every chain of a sweep shares.
+struct Inputs<'a> {
+    game: &'a Posg,
+    dra: &'a Dra,
+    negated: Option<&'a Dra>,
+    description: &'a str,
+    settings: &'a Settings,
+    defender_sizes: &'a [usize],
+    seconds_axis: bool,
+}
+
+/// Where a chain writes its pairs.
+#[derive(Clone, Copy)]
+enum PairPlace<'a> {
+    /// Into the staging directory of the whole (unsharded) sweep.
+    Inside(&'a Path),
+    /// Each pair into its own atomic directory under a sharded sweep's
+    /// directory, with its row in [`shard::ROW_FILE`].
+    Own(&'a Path),
 }
 
 /// Runs `sweep`: the adversary sizes in parallel; for each, the defender
 /// sizes in increasing order, each warm-started from the best defender of
 /// the next smaller size and kept at least as good as it
 /// ([`optimise::warm_started`], [`optimise::keep_better`]), so the results
-/// are monotone in the defender's size by construction.
+/// are monotone in the defender's size by construction. With `--shard K/N`
+/// only the chains (adversary sizes) of shard K; with `--slurm` nothing
+/// runs: the Slurm scripts are written ([`posg_fsc::output::shard`]).
 pub fn run(args: SweepArgs) -> anyhow::Result<()> {
     let settings = args.settings.settings()?;
     let (game, dra, negated, description) = load(&args.game, &args.objective)?;
@@ -124,100 +158,19 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
             check_sizes(&game, n, m)?;
         }
     }
-    let out = OutputDirectory::create(&args.out, args.force)?;
     let mut defender_sizes = args.def_nodes.0.clone();
     defender_sizes.sort_unstable();
     defender_sizes.dedup();
-    let progress = SweepProgress::new(
-        ProgressMode::detect(args.output.quiet),
-        defender_sizes.len() * args.adv_nodes.0.len(),
-    );
-    let rows: Vec<Row> = args
-        .adv_nodes
-        .0
-        .par_iter()
-        .map(|&m| {
-            let mut rows = Vec::new();
-            let mut previous: Option<StructureOutcome> = None;
-            for &n in &defender_sizes {
-                let out = out.join(format!("def{n}-adv{m}"));
-                let mut start = Structure::full(&game, n, m, settings.optimise_initial);
-                if let Some(smaller) = &previous {
-                    start = optimise::warm_started(
-                        start,
-                        &smaller.defender,
-                        settings.optimise_initial,
-                    )?;
-                }
-                let job = SolveJob {
-                    game: &game,
-                    dra: &dra,
-                    negated_dra: negated.as_ref(),
-                    objective: &description,
-                    candidates: optimise::candidate_structures(
-                        &game,
-                        &dra,
-                        negated.as_ref(),
-                        start,
-                        &settings,
-                    )?,
-                    settings: &settings,
-                    out: &out,
-                    progress: ProgressMode::Quiet,
-                    floor: previous.as_ref(),
-                    seconds_axis: args.output.seconds_axis,
-                };
-                let (solution, certified) = run_job(&job)
-                    .with_context(|| format!("defender {n} nodes, adversary {m} nodes"))?;
-                let best = solution.best();
-                let report = &best.report;
-                progress.finished(n, m, report.worst_case);
-                rows.push(Row {
-                    defender_nodes: n,
-                    adversary_nodes: m,
-                    structure: report.name.clone(),
-                    gmc_states: report.gmc.states,
-                    gmc_transitions: report.gmc.transitions,
-                    defender_parameters: report.defender_parameters,
-                    adversary_parameters: report.adversary_parameters,
-                    last_value: report.last_value,
-                    worst_case: report.worst_case,
-                    error_bound: report.error_bound,
-                    certified_lower: certified.map(|b| b.certified_lower),
-                    upper_bound: certified.map(|b| b.upper_bound),
-                    iterations: report.iterations,
-                    seconds: report.seconds,
-                    warm_started: previous.is_some(),
-                });
-                previous = Some(best.clone());
-            }
-            Ok(rows)
-        })
-        .collect::<anyhow::Result<Vec<Vec<Row>>>>()?
-        .into_iter()
-        .flatten()
-        .collect();
-    progress.finish();
-    let table = out.join("sweep.csv");
-    let file = std::fs::File::create(&table).map_err(|e| OutputError::io("creating", &table, e))?;
-    let mut writer = csv::Writer::from_writer(file);
-    for row in &rows {
-        writer
-            .serialize(row)
-            .with_context(|| format!("writing {}", table.display()))?;
-    }
-    writer
-        .flush()
-        .map_err(|e| OutputError::io("writing", &table, e))?;
-    let points: Vec<SweepPoint> = rows
-        .iter()
-        .map(|r| SweepPoint {
-            defender_nodes: r.defender_nodes,
-            adversary_nodes: r.adversary_nodes,
-            worst_case: r.worst_case,
-            bracket: r.certified_lower.zip(r.upper_bound),
-        })
-        .collect();
+    let inputs = Inputs {
+        game: &game,
+        dra: &dra,
+        negated: negated.as_ref(),
+        description: &description,
+        settings: &settings,
+        defender_sizes: &defender_sizes,
+        seconds_axis: args.output.seconds_axis,
+    };
+    let adversary_sizes = distinct_in_order(&args.adv_nodes.0);
     let title = Title {
         main: format!("{}: {}", game.name().unwrap_or("game"), description),
         detail: format!(
@@ -226,17 +179,300 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
             settings.max_iterations
         ),
     };
-    let plot = out.join("sweep.svg");
-    plot_sweep(&plot, &title, &points)
-        .map_err(|e| anyhow::anyhow!("writing {}: {e}", plot.display()))?;
+    let shards = match (args.shard, args.slurm) {
+        (Some(shard), _) => Some(shard.count),
+        (None, true) => Some(args.shards.unwrap_or(adversary_sizes.len())),
+        (None, false) => None,
+    };
+    let Some(shards) = shards else {
+        return run_whole(&args, &inputs, &adversary_sizes, &title);
+    };
+    if shards == 0 || shards > adversary_sizes.len() {
+        anyhow::bail!(
+            "{shards} shards: the sweep has {} chains (one per adversary size: a chain runs the \
+             defender sizes in increasing order, each warm-started from the previous), so N \
+             must be between 1 and {}",
+            adversary_sizes.len(),
+            adversary_sizes.len()
+        );
+    }
+    let game_bytes =
+        std::fs::read(&args.game).with_context(|| format!("reading {}", args.game.display()))?;
+    let plan = SweepPlan {
+        crate_version: env!("CARGO_PKG_VERSION").into(),
+        game_fingerprint: shard::fingerprint(&game_bytes),
+        game_name: game.name().map(str::to_string),
+        objective: description.clone(),
+        settings: serde_json::to_value(&settings)?,
+        defender_sizes: defender_sizes.clone(),
+        adversary_sizes,
+        shards,
+        title_main: title.main,
+        title_detail: title.detail,
+    };
+    match args.shard {
+        Some(shard) => run_shard(&args, &inputs, &plan, shard),
+        None => write_slurm(&args, &plan),
+    }
+}
+
+/// The sizes without repetitions, in their first order.
+fn distinct_in_order(sizes: &[usize]) -> Vec<usize> {
+    let mut seen = Vec::new();
+    for &m in sizes {
+        if !seen.contains(&m) {
+            seen.push(m);
+        }
+    }
+    seen
+}
+
+/// The unsharded sweep: every chain, into one atomic directory.
+fn run_whole(
+    args: &SweepArgs,
+    inputs: &Inputs,
+    adversary_sizes: &[usize],
+    title: &Title,
+) -> anyhow::Result<()> {
+    let out = OutputDirectory::create(&args.out, args.force)?;
+    let progress = SweepProgress::new(
+        ProgressMode::detect(args.output.quiet),
+        inputs.defender_sizes.len() * adversary_sizes.len(),
+    );
+    let rows = run_chains(
+        inputs,
+        adversary_sizes,
+        PairPlace::Inside(out.path()),
+        &progress,
+    )?;
+    progress.finish();
+    shard::write_sweep(out.path(), &rows, title)?;
     out.commit()?;
     print_text(&format!(
-        "wrote sweep.csv and sweep.svg ({} size pairs) to {}\n\
-         each defender size was warm-started from the best defender of the next smaller size \
-         and kept at least as good as it (a k-node controller embeds into k+1 nodes), so the \
-         results are monotone in the defender's size by construction (by certified lower bound \
-         with an LTL formula, else by worst-case estimate)\n",
+        "wrote sweep.csv and sweep.svg ({} size pairs) to {}\n{MONOTONE}\n",
         rows.len(),
         args.out.display()
+    ))
+}
+
+/// What every sweep prints about the warm starts.
+const MONOTONE: &str = "each defender size was warm-started from the best defender of the next \
+     smaller size and kept at least as good as it (a k-node controller embeds into k+1 nodes), \
+     so the results are monotone in the defender's size by construction (by certified lower \
+     bound with an LTL formula, else by worst-case estimate)";
+
+/// The chains of `adversary_sizes` in parallel; their rows in order.
+fn run_chains(
+    inputs: &Inputs,
+    adversary_sizes: &[usize],
+    place: PairPlace,
+    progress: &SweepProgress,
+) -> anyhow::Result<Vec<SweepRow>> {
+    Ok(adversary_sizes
+        .par_iter()
+        .map(|&m| run_chain(inputs, m, place, progress))
+        .collect::<anyhow::Result<Vec<Vec<SweepRow>>>>()?
+        .into_iter()
+        .flatten()
+        .collect())
+}
+
+/// One chain: adversary size `m`, the defender sizes in increasing order,
+/// each warm-started from the best defender of the previous size.
+fn run_chain(
+    inputs: &Inputs,
+    m: usize,
+    place: PairPlace,
+    progress: &SweepProgress,
+) -> anyhow::Result<Vec<SweepRow>> {
+    let settings = inputs.settings;
+    let mut rows = Vec::new();
+    let mut previous: Option<StructureOutcome> = None;
+    for &n in inputs.defender_sizes {
+        let name = shard::pair_directory_name(n, m);
+        let (own, out) = match place {
+            PairPlace::Inside(root) => (None, root.join(&name)),
+            PairPlace::Own(dir) => {
+                let own = OutputDirectory::create(&dir.join(&name), true)?;
+                let path = own.path().to_path_buf();
+                (Some(own), path)
+            }
+        };
+        let mut start = Structure::full(inputs.game, n, m, settings.optimise_initial);
+        if let Some(smaller) = &previous {
+            start = optimise::warm_started(start, &smaller.defender, settings.optimise_initial)?;
+        }
+        let job = SolveJob {
+            game: inputs.game,
+            dra: inputs.dra,
+            negated_dra: inputs.negated,
+            objective: inputs.description,
+            candidates: optimise::candidate_structures(
+                inputs.game,
+                inputs.dra,
+                inputs.negated,
+                start,
+                settings,
+            )?,
+            settings,
+            out: &out,
+            progress: ProgressMode::Quiet,
+            floor: previous.as_ref(),
+            seconds_axis: inputs.seconds_axis,
+        };
+        let (solution, certified) =
+            run_job(&job).with_context(|| format!("defender {n} nodes, adversary {m} nodes"))?;
+        let best = solution.best();
+        let report = &best.report;
+        progress.finished(n, m, report.worst_case);
+        let row = SweepRow {
+            defender_nodes: n,
+            adversary_nodes: m,
+            structure: report.name.clone(),
+            gmc_states: report.gmc.states,
+            gmc_transitions: report.gmc.transitions,
+            defender_parameters: report.defender_parameters,
+            adversary_parameters: report.adversary_parameters,
+            last_value: report.last_value,
+            worst_case: report.worst_case,
+            error_bound: report.error_bound,
+            certified_lower: certified.map(|b| b.certified_lower),
+            upper_bound: certified.map(|b| b.upper_bound),
+            iterations: report.iterations,
+            seconds: report.seconds,
+            warm_started: previous.is_some(),
+        };
+        if let Some(own) = own {
+            let table = shard::sweep_table(std::slice::from_ref(&row))
+                .with_context(|| format!("writing {}", out.join(shard::ROW_FILE).display()))?;
+            write_file(&out.join(shard::ROW_FILE), table)?;
+            own.commit()?;
+        }
+        rows.push(row);
+        previous = Some(best.clone());
+    }
+    Ok(rows)
+}
+
+/// Whether every pair of the chain `m` is in `dir` (renamed into place whole).
+fn chain_complete(dir: &Path, plan: &SweepPlan, m: usize) -> bool {
+    plan.defender_sizes.iter().all(|&n| {
+        dir.join(shard::pair_directory_name(n, m))
+            .join(shard::ROW_FILE)
+            .is_file()
+    })
+}
+
+/// `--shard K/N`: records the shard, then runs its chains that are not
+/// complete yet (all of them with --force), each pair into its own atomic
+/// directory.
+fn run_shard(
+    args: &SweepArgs,
+    inputs: &Inputs,
+    plan: &SweepPlan,
+    shard: Shard,
+) -> anyhow::Result<()> {
+    let record = ShardRecord {
+        written_by: format!("shard {shard}"),
+        command_line: std::env::args().collect(),
+        plan: plan.clone(),
+    };
+    shard::begin(
+        &args.out,
+        &shard::shard_record_path(&args.out, shard),
+        &record,
+    )?;
+    let chains = plan.chains_of(shard);
+    let (done, todo): (Vec<usize>, Vec<usize>) = chains
+        .iter()
+        .partition(|&&m| !args.force && chain_complete(&args.out, plan, m));
+    let progress = SweepProgress::new(
+        ProgressMode::detect(args.output.quiet),
+        inputs.defender_sizes.len() * todo.len(),
+    );
+    let rows = run_chains(inputs, &todo, PairPlace::Own(&args.out), &progress)?;
+    progress.finish();
+    let kept = if done.is_empty() {
+        String::new()
+    } else {
+        format!(
+            "; adversary sizes {done:?} were complete already and kept (--force recomputes them)"
+        )
+    };
+    print_text(&format!(
+        "shard {shard}: wrote {} size pairs (adversary sizes {todo:?}) to {}{kept}\n\
+         when all {} shards are done: posg-fsc sweep-merge {}\n{MONOTONE}\n",
+        rows.len(),
+        args.out.display(),
+        shard.count,
+        args.out.display()
+    ))
+}
+
+/// The arguments of this run without the options of `--slurm` itself.
+fn arguments_for_shards() -> Vec<String> {
+    let mut kept = Vec::new();
+    let mut arguments = std::env::args().skip(1);
+    while let Some(argument) = arguments.next() {
+        match argument.as_str() {
+            "--slurm" => {}
+            "--slurm-option" | "--shards" => {
+                arguments.next();
+            }
+            a if a.starts_with("--slurm-option=") || a.starts_with("--shards=") => {}
+            _ => kept.push(argument),
+        }
+    }
+    kept
+}
+
+/// `--slurm`: records the plan and writes `sweep.sbatch` and
+/// `sweep-merge.sbatch`; prints how to submit them.
+fn write_slurm(args: &SweepArgs, plan: &SweepPlan) -> anyhow::Result<()> {
+    for option in &args.slurm_option {
+        slurm::check_option(option).map_err(anyhow::Error::msg)?;
+    }
+    let command_line: Vec<String> = std::env::args().collect();
+    let record = ShardRecord {
+        written_by: "--slurm".into(),
+        command_line: command_line.clone(),
+        plan: plan.clone(),
+    };
+    shard::begin(&args.out, &shard::slurm_record_path(&args.out), &record)?;
+    create_dir(&args.out.join(slurm::LOG_DIRECTORY))?;
+    let working_directory = std::env::current_dir().context("the current directory")?;
+    let out = std::path::absolute(&args.out)
+        .with_context(|| format!("the absolute path of {}", args.out.display()))?;
+    let program = std::env::current_exe().context("the path of posg-fsc itself")?;
+    let sweep_arguments = arguments_for_shards();
+    let job = SlurmSweep {
+        program: &program,
+        working_directory: &working_directory,
+        sweep_arguments: &sweep_arguments,
+        out: &out,
+        shards: plan.shards,
+        options: &args.slurm_option,
+        command_line: &command_line,
+    };
+    let (array, merge) = (out.join("sweep.sbatch"), out.join("sweep-merge.sbatch"));
+    shard::write_atomically(&array, slurm::array_script(&job).as_bytes())?;
+    shard::write_atomically(&merge, slurm::merge_script(&job).as_bytes())?;
+    print_text(&format!(
+        "wrote {} (an array job of {} shards) and {}; submit both with\n{}",
+        array.display(),
+        plan.shards,
+        merge.display(),
+        slurm::submit_commands(&array, &merge)
+    ))
+}
+
+/// Runs `sweep-merge`.
+pub fn run_merge(args: SweepMergeArgs) -> anyhow::Result<()> {
+    let merged = shard::merge(&args.dir)?;
+    print_text(&format!(
+        "wrote sweep.csv and sweep.svg ({} size pairs from {} shards) to {}\n",
+        merged.rows.len(),
+        merged.plan.shards,
+        args.dir.display()
     ))
 }

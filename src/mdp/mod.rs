@@ -26,8 +26,11 @@ pub mod reachability;
 pub use end_components::{EndComponent, maximal_end_components};
 pub use rabin::{
     AcceptingComponent, accepting_end_components, max_rabin_analysis, max_rabin_probability,
+    max_rabin_qualitative,
 };
-pub use reachability::{Reachability, max_reachability};
+pub use reachability::{
+    QualitativeReachability, Reachability, max_reachability, qualitative_reachability,
+};
 
 use thiserror::Error;
 

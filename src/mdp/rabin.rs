@@ -27,6 +27,7 @@
 
 use crate::automaton::RabinPair;
 
+use super::reachability::{QualitativeReachability, qualitative_reachability};
 use super::{EndComponent, Mdp, MdpError, Reachability, max_reachability, maximal_end_components};
 
 /// A maximal end component that is accepting for one Rabin pair.
@@ -79,16 +80,47 @@ pub fn max_rabin_analysis(
     pairs: &[RabinPair],
 ) -> Result<(Reachability, Vec<AcceptingComponent>), MdpError> {
     let accepting = accepting_end_components(mdp, pairs)?;
+    let mut result = max_reachability(mdp, &accepting_union(mdp, &accepting))?;
+    stay_in_accepting(mdp, pairs, &accepting, &mut result.strategy);
+    Ok((result, accepting))
+}
+
+/// The qualitative part of [`max_rabin_analysis`] (graph search only, no
+/// linear solve): from which states the Rabin condition can be met with
+/// positive probability and from which almost surely, with a strategy that
+/// wins almost surely from the latter.
+pub fn max_rabin_qualitative(
+    mdp: &Mdp,
+    pairs: &[RabinPair],
+) -> Result<(QualitativeReachability, Vec<AcceptingComponent>), MdpError> {
+    let accepting = accepting_end_components(mdp, pairs)?;
+    let mut result = qualitative_reachability(mdp, &accepting_union(mdp, &accepting))?;
+    stay_in_accepting(mdp, pairs, &accepting, &mut result.strategy);
+    Ok((result, accepting))
+}
+
+/// Whether each state lies in an accepting end component.
+fn accepting_union(mdp: &Mdp, accepting: &[AcceptingComponent]) -> Vec<bool> {
     let mut target = vec![false; mdp.num_states()];
-    for c in &accepting {
+    for c in accepting {
         for &s in &c.component.states {
             target[s] = true;
         }
     }
-    let mut result = max_reachability(mdp, &target)?;
+    target
+}
+
+/// Inside the accepting end components, `strategy` stays in the component
+/// and visits its pair's `inf` states ([`stay_and_visit`]).
+fn stay_in_accepting(
+    mdp: &Mdp,
+    pairs: &[RabinPair],
+    accepting: &[AcceptingComponent],
+    strategy: &mut [usize],
+) {
     let mut decided = vec![false; mdp.num_states()];
     let mut position = vec![usize::MAX; mdp.num_states()];
-    for c in &accepting {
+    for c in accepting {
         let inf = &pairs[c.pair].inf;
         stay_and_visit(
             mdp,
@@ -96,10 +128,9 @@ pub fn max_rabin_analysis(
             inf,
             &mut position,
             &mut decided,
-            &mut result.strategy,
+            strategy,
         );
     }
-    Ok((result, accepting))
 }
 
 /// Writes the in-component attractor towards `inf` of `component` into

@@ -94,20 +94,12 @@ pub struct Reachability {
 /// optimal memoryless deterministic strategy (see the module documentation).
 pub fn max_reachability(mdp: &Mdp, target: &[bool]) -> Result<Reachability, MdpError> {
     let n = mdp.num_states();
-    if target.len() != n {
-        return Err(MdpError::Malformed(format!(
-            "target set of size {} for {n} states",
-            target.len()
-        )));
-    }
-    let predecessors = mdp.predecessors();
-    let positive = backward_reachable(&predecessors, target);
-    let (almost_sure, sure_strategy) = almost_surely(mdp, &predecessors, target, &positive);
+    let QualitativeReachability {
+        possible: positive,
+        almost_sure,
+        mut strategy,
+    } = qualitative_reachability(mdp, target)?;
     let maybe: Vec<usize> = (0..n).filter(|&s| positive[s] && !almost_sure[s]).collect();
-    let mut strategy = attractor(n, &predecessors, &almost_sure);
-    for s in (0..n).filter(|&s| almost_sure[s]) {
-        strategy[s] = sure_strategy[s];
-    }
     let mut previous: Vec<f64> = almost_sure.iter().map(|&t| f64::from(t)).collect();
     for iterations in 1..=MAX_ITERATIONS {
         let (values, report) = evaluate(mdp, &almost_sure, &maybe, &strategy, &previous)?;
@@ -127,6 +119,48 @@ pub fn max_reachability(mdp: &Mdp, target: &[bool]) -> Result<Reachability, MdpE
         previous = values;
     }
     Err(MdpError::NotConverged(MAX_ITERATIONS))
+}
+
+/// The qualitative step alone (module documentation, steps 1 and 2): which
+/// states reach the target with positive probability and which almost
+/// surely, by graph search only, with a strategy that stays in the
+/// almost-sure region and reaches the target from there with probability
+/// 1 (elsewhere: the proper start of step 2). Needs no linear solve, so it
+/// answers even where the quantitative systems are too ill-conditioned.
+#[derive(Debug, Clone, PartialEq)]
+pub struct QualitativeReachability {
+    /// Whether some strategy reaches the target with positive probability.
+    pub possible: Vec<bool>,
+    /// Whether some strategy reaches the target with probability 1.
+    pub almost_sure: Vec<bool>,
+    /// The strategy described above.
+    pub strategy: Vec<usize>,
+}
+
+/// [`QualitativeReachability`] of `target`.
+pub fn qualitative_reachability(
+    mdp: &Mdp,
+    target: &[bool],
+) -> Result<QualitativeReachability, MdpError> {
+    let n = mdp.num_states();
+    if target.len() != n {
+        return Err(MdpError::Malformed(format!(
+            "target set of size {} for {n} states",
+            target.len()
+        )));
+    }
+    let predecessors = mdp.predecessors();
+    let possible = backward_reachable(&predecessors, target);
+    let (almost_sure, sure_strategy) = almost_surely(mdp, &predecessors, target, &possible);
+    let mut strategy = attractor(n, &predecessors, &almost_sure);
+    for s in (0..n).filter(|&s| almost_sure[s]) {
+        strategy[s] = sure_strategy[s];
+    }
+    Ok(QualitativeReachability {
+        possible,
+        almost_sure,
+        strategy,
+    })
 }
 
 /// `S_1`, the states from which some strategy reaches `target` almost

@@ -116,6 +116,46 @@ pub enum OptimiseError {
     BestResponse(String),
 }
 
+impl OptimiseError {
+    /// Whether the error is numerical trouble of one candidate (a linear
+    /// system that could not be solved to the tolerance, method.md section
+    /// 8): a start or structure that runs into it is dropped, with the
+    /// reason reported, while the others go on.
+    pub fn is_numerical(&self) -> bool {
+        match self {
+            Self::Value(ValueError::Solver(_)) => true,
+            Self::Certify(error) => error.is_slow_mixing(),
+            _ => false,
+        }
+    }
+}
+
+/// The items kept by [`keep_solved`] as `(index, item)`, and the dropped
+/// ones as `(index, error)`.
+type Kept<T> = (Vec<(usize, T)>, Vec<(usize, String)>);
+
+/// Keeps the results of `results` that succeeded; numerical trouble
+/// ([`OptimiseError::is_numerical`]) drops an item and is described in the
+/// second list as `(index, error)`; any other error, or every item failing,
+/// is returned.
+fn keep_solved<T>(results: Vec<Result<T, OptimiseError>>) -> Result<Kept<T>, OptimiseError> {
+    let (mut kept, mut dropped, mut first) = (Vec::new(), Vec::new(), None);
+    for (index, result) in results.into_iter().enumerate() {
+        match result {
+            Ok(value) => kept.push((index, value)),
+            Err(error) if error.is_numerical() => {
+                dropped.push((index, error.to_string()));
+                first.get_or_insert(error);
+            }
+            Err(error) => return Err(error),
+        }
+    }
+    match first {
+        Some(error) if kept.is_empty() => Err(error),
+        _ => Ok((kept, dropped)),
+    }
+}
+
 /// Why a run stopped.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "kebab-case")]
@@ -264,6 +304,9 @@ pub struct StructureReport {
     pub starts: Vec<StartReport>,
     /// The start whose defender was kept.
     pub best_start: usize,
+    /// The starts dropped because a linear system could not be solved to
+    /// the tolerance, with the error.
+    pub failed_starts: Vec<String>,
     /// The kept start's logit bound `c` at the end.
     pub logit_bound: f64,
     /// The largest residual of any linear solve of the kept start.
@@ -287,10 +330,12 @@ pub struct StructureOutcome {
 /// The outcomes on all structures and the one with the best worst-case estimate.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Solution {
-    /// One outcome per structure, in the order given.
+    /// One outcome per structure that could be optimised, in the order given.
     pub structures: Vec<StructureOutcome>,
     /// The index of the best structure (the first of equal estimates).
     pub best: usize,
+    /// The structures dropped for numerical trouble, as `(name, error)`.
+    pub failed: Vec<(String, String)>,
 }
 
 impl Solution {
@@ -304,7 +349,9 @@ impl Solution {
 /// [`Objective`] and random stream (`settings.seed`, stream = its index),
 /// each reporting to the observer `observer(index, structure)` makes;
 /// returns every outcome and the best by certified lower bound
-/// ([`best_by_certified_lower`]). With an
+/// ([`best_by_certified_lower`]). A structure whose linear systems cannot
+/// be solved to the tolerance is dropped and named in
+/// [`Solution::failed`] (an error only if every structure fails). With an
 /// automaton `negated` for !phi, every best-response check also certifies
 /// (see [`Certifier`]).
 pub fn optimise_structures<F>(
@@ -334,11 +381,20 @@ where
                 watcher.as_mut(),
             )
         })
-        .collect::<Result<Vec<_>, _>>()?;
+        .collect::<Vec<_>>();
+    if outcomes.is_empty() {
+        return Err(OptimiseError::NoStructure);
+    }
+    let (kept, dropped) = keep_solved(outcomes)?;
+    let outcomes: Vec<StructureOutcome> = kept.into_iter().map(|(_, o)| o).collect();
     let best = best_by_certified_lower(&outcomes).ok_or(OptimiseError::NoStructure)?;
     Ok(Solution {
         structures: outcomes,
         best,
+        failed: dropped
+            .into_iter()
+            .map(|(index, error)| (structures[index].name.clone(), error))
+            .collect(),
     })
 }
 
@@ -351,7 +407,9 @@ where
 /// worst-case estimate; the first of equals) is kept and its iteration
 /// records are replayed to `observer`; then its rounded candidates
 /// ([`rounded_candidates`]) are scored alike and the best of the unrounded
-/// defender and its roundings is returned.
+/// defender and its roundings is returned. A start that runs into a linear
+/// system it cannot solve to the tolerance is dropped
+/// ([`StructureReport::failed_starts`]).
 pub fn optimise_structure(
     game: &Posg,
     dra: &Dra,
@@ -373,7 +431,7 @@ pub fn optimise_structure(
         phi: dra,
         not_phi,
     });
-    let mut runs = (0..settings.starts)
+    let runs = (0..settings.starts)
         .into_par_iter()
         .map(|start| {
             let start_stream = stream + ((start as u64) << 32);
@@ -387,11 +445,13 @@ pub fn optimise_structure(
                 method,
             )
         })
-        .collect::<Result<Vec<_>, _>>()?;
+        .collect::<Vec<_>>();
+    let (runs, failed_starts) = keep_solved(runs)?;
+    let (indices, mut runs): (Vec<usize>, Vec<StartRun>) = runs.into_iter().unzip();
     let starts: Vec<StartReport> = runs
         .iter()
-        .enumerate()
-        .map(|(start, run)| StartReport {
+        .zip(&indices)
+        .map(|(run, &start)| StartReport {
             start,
             stream: stream + ((start as u64) << 32),
             worst_case: run.outcome.best.worst_case,
@@ -460,7 +520,11 @@ pub fn optimise_structure(
             rounding: chosen.name,
             candidates: chosen.candidates,
             starts,
-            best_start,
+            best_start: indices[best_start],
+            failed_starts: failed_starts
+                .into_iter()
+                .map(|(start, error)| format!("start {start}: {error}"))
+                .collect(),
             logit_bound: outcome.logit_bound,
             max_residual: outcome.max_residual,
             phases,
@@ -591,15 +655,19 @@ fn finalise(
             settings,
         };
         for (name, candidate) in rounded_candidates(&chosen.defender)? {
-            let (score, found) = match (method, certifier) {
-                (Method::Ascent, _) => (judge.value(&candidate)?, None),
-                (Method::MaxMin, Some(c)) => {
-                    (lower_value_or_trivial(game, c.not_phi, &candidate)?, None)
-                }
-                (Method::MaxMin, None) => {
-                    let found = judge.best_response(&candidate, &mut run.rng)?;
-                    (found.0, Some(found))
-                }
+            let scored = match (method, certifier) {
+                (Method::Ascent, _) => judge.value(&candidate).map(|v| (v, None)),
+                (Method::MaxMin, Some(c)) => lower_value_or_trivial(game, c.not_phi, &candidate)
+                    .map(|v| (v, None))
+                    .map_err(OptimiseError::from),
+                (Method::MaxMin, None) => judge
+                    .best_response(&candidate, &mut run.rng)
+                    .map(|found| (found.0, Some(found))),
+            };
+            let (score, found) = match scored {
+                Ok(scored) => scored,
+                Err(OptimiseError::Value(ValueError::Solver(_))) => continue,
+                Err(error) => return Err(error),
             };
             chosen.candidates.push(CandidateReport {
                 name: name.clone(),
@@ -635,7 +703,12 @@ fn finalise(
     phases.rounding += clock.elapsed().as_secs_f64();
     if let (Method::Ascent, Some(c)) = (method, certifier) {
         let clock = Instant::now();
-        chosen.certified_lower = Some(lower_value_or_trivial(game, c.not_phi, &chosen.defender)?);
+        chosen.certified_lower =
+            match crate::certify::lower_bound(game, c.not_phi, &chosen.defender) {
+                Ok(bound) => Some(bound.value),
+                Err(error) if error.is_slow_mixing() => None,
+                Err(error) => return Err(error.into()),
+            };
         chosen.upper_bound = Some(upper_value_or_trivial(game, c.phi, &chosen.adversary)?);
         phases.certification += clock.elapsed().as_secs_f64();
     }

@@ -92,9 +92,9 @@ pub fn candidate_structures(
     };
     let keep_start = settings.structures.contains(&StructureSource::Full) || start.name != "full";
     for source in StructureSource::ALL {
-        if !settings.structures.contains(&source)
-            && !(source == StructureSource::Full && keep_start)
-        {
+        let wanted = settings.structures.contains(&source)
+            || (source == StructureSource::Full && keep_start);
+        if !wanted {
             continue;
         }
         let clock = Instant::now();
@@ -240,11 +240,13 @@ pub fn best_by_certified_lower(outcomes: &[StructureOutcome]) -> Option<usize> {
 }
 
 /// Why each structure other than the winner lost, and what the sources
-/// without a structure said: one sentence per line.
+/// without a structure said, and which structures were dropped for
+/// numerical trouble: one sentence per line.
 pub fn why_others_lost(
     outcomes: &[StructureOutcome],
     best: usize,
     notes: &[SourceNote],
+    failed: &[(String, String)],
 ) -> Vec<String> {
     let score = |o: &StructureOutcome| o.report.certified_lower.unwrap_or(o.report.worst_case);
     let winner = &outcomes[best];
@@ -276,6 +278,11 @@ pub fn why_others_lost(
             .iter()
             .filter(|n| n.structures.is_empty())
             .map(|n| format!("{}: no structure ({})", n.source.name(), n.note)),
+    );
+    lines.extend(
+        failed
+            .iter()
+            .map(|(name, error)| format!("{name}: dropped, numerical trouble ({error})")),
     );
     lines
 }

@@ -8,11 +8,16 @@
 //!   over defender and adversary sizes;
 //! * [`dot::controller_dot`]: a Graphviz picture of a controller;
 //! * [`OutputDirectory`]: the directory a command writes its results into,
-//!   atomically, under a lock, never mixing old and new results.
+//!   atomically, under a lock, never mixing old and new results;
+//! * [`shard`]: a sweep split into shards (`sweep --shard K/N`), one
+//!   directory per size pair, and their merge into `sweep.csv`/`sweep.svg`;
+//! * [`slurm`]: the Slurm array job and merge job of a sharded sweep.
 
 mod directory;
 pub mod dot;
 mod plot;
+pub mod shard;
+pub mod slurm;
 
 pub use directory::{OutputDirectory, OutputError, create_dir, write_file};
 pub use plot::{CurvePlot, SweepPoint, Title, plot_sweep};

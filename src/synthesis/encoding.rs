@@ -243,10 +243,8 @@ impl<'p> Certificate<'p> {
                                 cnf,
                                 context.game,
                                 context.moves,
-                                s,
-                                step.transition,
-                                g,
-                                next,
+                                (s, step.transition),
+                                (g, next),
                             )?;
                             if e != FALSE {
                                 edges.push((step.cell * nodes + next, e));

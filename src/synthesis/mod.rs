@@ -90,10 +90,6 @@
 //! and kept when the formula stays satisfiable. The result is
 //! inclusion-maximal: no single entry can be added. Gradient play then has
 //! the most room, and never needs an entry the support excludes.
-//!
-//! [`synthesise_certified`] re-checks every support it returns with the
-//! exact certification of method.md section 6 ([`crate::certify`]), an
-//! independent route to the same fact; a disagreement is an error.
 
 mod cnf;
 mod confirm;
@@ -448,6 +444,7 @@ pub fn synthesise(
             settings.mode.phrase()
         );
     } else {
+        synthesis.confirmation = Confirmation::Skipped;
         let strength = if synthesis.exact {
             "proved"
         } else if pairs.len() > 1 {

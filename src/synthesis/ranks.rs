@@ -167,13 +167,13 @@ fn order_less(cnf: &mut Cnf, a: &[Lit], b: &[Lit], strict: bool) -> Result<Lit, 
     let t = cnf.fresh();
     if strict {
         cnf.clause([-t, b[0]])?;
-        for k in 0..width {
+        for (k, &ak) in a.iter().enumerate() {
             let next = b.get(k + 1).copied().unwrap_or(FALSE);
-            cnf.clause([-t, -a[k], next])?;
+            cnf.clause([-t, -ak, next])?;
         }
     } else {
-        for k in 0..width {
-            cnf.clause([-t, -a[k], b[k]])?;
+        for (&ak, &bk) in a.iter().zip(b) {
+            cnf.clause([-t, -ak, bk])?;
         }
     }
     Ok(t)

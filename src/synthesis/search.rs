@@ -38,10 +38,11 @@ use super::graph::{CellGraph, Moves};
 use super::variables::SupportVariables;
 use super::{Mode, SynthesisError, defender_on};
 use crate::automaton::{Dra, Letter};
-use crate::certify::{Analysis, analyse};
+use crate::certify::{Analysis, analyse_qualitative};
 use crate::controller::Role;
 use crate::game::Posg;
 use crate::graph::{Digraph, bottom_components, strongly_connected_components};
+use crate::mdp::QualitativeReachability;
 
 /// The exact judge of supports and the source of lemmas.
 pub struct Oracle<'a> {
@@ -130,7 +131,7 @@ impl<'a> Oracle<'a> {
     ) -> Result<Option<Vec<Lit>>, SynthesisError> {
         self.judged += 1;
         let defender = defender_on(self.game, self.nodes, vars, support)?;
-        let analysis = analyse(self.game, self.dra_not_phi, &defender, Role::Defender)?;
+        let analysis = analyse_qualitative(self.game, self.dra_not_phi, &defender, Role::Defender)?;
         let result = &analysis.result;
         let wins = match self.mode {
             Mode::Positive => analysis
@@ -195,7 +196,7 @@ struct PotentialEdge {
 /// Collects a lemma's literals from the analysis of a losing support.
 struct LemmaBuilder<'o, 'a, 'c> {
     oracle: &'o Oracle<'a>,
-    analysis: &'o Analysis,
+    analysis: &'o Analysis<QualitativeReachability>,
     index: FxHashMap<(usize, usize, usize), usize>,
     cnf: &'c mut Cnf,
     vars: &'c mut SupportVariables,
@@ -238,10 +239,8 @@ impl LemmaBuilder<'_, '_, '_> {
             self.cnf,
             self.oracle.game,
             self.oracle.moves,
-            edge.s,
-            edge.transition,
-            edge.nodes.0,
-            edge.nodes.1,
+            (edge.s, edge.transition),
+            edge.nodes,
         )
     }
 

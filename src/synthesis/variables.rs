@@ -83,16 +83,14 @@ impl SupportVariables {
     }
 
     /// The edge literal for game state `s`, transition `t` (from `s`) and
-    /// nodes `g -> next`.
+    /// nodes `(g, next)`.
     pub fn edge(
         &mut self,
         cnf: &mut Cnf,
         game: &Posg,
         moves: &Moves,
-        s: usize,
-        t: usize,
-        g: usize,
-        next: usize,
+        (s, t): (usize, usize),
+        (g, next): (usize, usize),
     ) -> Result<Lit, SynthesisError> {
         let key = (t * self.nodes + g) * self.nodes + next;
         if self.edges[key] == 0 {
