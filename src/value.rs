@@ -311,6 +311,11 @@ impl Evaluator {
         self.system.solver.method()
     }
 
+    /// Why [`Self::solver_method`] is in use ([`LinearSolver::reason`]).
+    pub fn solver_reason(&self) -> &str {
+        self.system.solver.reason()
+    }
+
     /// The pattern of `I - Q` on `T` and its numbers as of the last evaluation.
     pub fn system(&self) -> (&SparsePattern, &[f64]) {
         (self.system.solver.pattern(), &self.system.matrix_values)

@@ -58,5 +58,10 @@ fn eval_with_gradient_reports_the_norms_of_the_adjoint_gradient() {
     assert!(gradient["adjoint_residual"].as_f64().unwrap() < 1e-12);
     assert!(report["phase_seconds"]["value_and_gradient"].is_number());
     assert!(report["phase_seconds"]["factorise_and_solve"].is_null());
+    assert_eq!(report["solver"], "lu");
+    assert_eq!(
+        report["solver_reason"], "auto: lu, 1 unknowns, at most the LU limit 50000",
+        "{report}"
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }

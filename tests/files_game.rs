@@ -226,6 +226,35 @@ mod malformed {
     }
 
     #[test]
+    fn duplicate_key_in_a_large_object() {
+        // Objects beyond 16 members are checked by a set, smaller ones by
+        // comparison: a repeat is found at every position in both regimes.
+        for members in [3, 16, 17, 40] {
+            for repeat_of in [0, members / 2, members - 1] {
+                let mut v = base();
+                let states: Vec<String> = (0..members).map(|i| format!("c{i}")).collect();
+                v["states"] = json!(states);
+                let entries: Vec<String> = states
+                    .iter()
+                    .map(|s| format!(r#""{s}":0"#))
+                    .chain([format!(r#""c{repeat_of}":1"#)])
+                    .collect();
+                let text = v.to_string().replacen(
+                    r#""initial":{"a":1.0}"#,
+                    &format!(r#""initial":{{{}}}"#, entries.join(",")),
+                    1,
+                );
+                assert!(text.contains(r#""c0":0"#));
+                assert_error(
+                    &error_of_text(&text),
+                    &format!("initial.c{repeat_of}"),
+                    "duplicate key",
+                );
+            }
+        }
+    }
+
+    #[test]
     fn duplicate_key_in_struct() {
         let text = base()
             .to_string()

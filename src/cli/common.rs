@@ -65,7 +65,8 @@ pub struct ControllerArgs {
 pub struct SolverArgs {
     /// `lu` (sparse LU, direct), `krylov` (BiCGSTAB with an ILU(0)
     /// preconditioner, iterative, warm-started) or `auto` (LU up to
-    /// --lu-limit unknowns, krylov above).
+    /// --lu-limit unknowns; above, a short BiCGSTAB trial predicts whether
+    /// krylov costs less than LU; eval reports why as `solver_reason`).
     #[arg(long, default_value = "auto", value_parser = solver_method)]
     pub solver: SolverMethod,
     /// With --solver auto: the most unknowns |T| solved by LU.

@@ -52,6 +52,9 @@ struct Report {
     feasible_bsccs: usize,
     transient_states: usize,
     solver: &'static str,
+    /// Why `solver` was used: the setting, `auto`'s size limits, or its
+    /// prediction from a short BiCGSTAB trial.
+    solver_reason: String,
     residual: f64,
     /// A bound on `|value - exact value|` (method.md section 8).
     error_bound: f64,
@@ -178,6 +181,7 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
         feasible_bsccs: recurrence.feasible().count(),
         transient_states: recurrence.transient.len(),
         solver: evaluator.solver_method().name(),
+        solver_reason: evaluator.solver_reason().to_string(),
         residual: evaluation.residual,
         error_bound: evaluation.error_bound,
         solver_iterations: evaluation.iterations,

@@ -12,13 +12,12 @@
 //! The helpers shared with the controller files (`parse`, `Located`,
 //! `distribution`) live here too.
 
-use std::collections::HashSet;
 use std::fmt;
 use std::marker::PhantomData;
 use std::path::Path;
 
 use crate::limits;
-use rustc_hash::FxHashMap;
+use rustc_hash::{FxHashMap, FxHashSet};
 use serde::de::{self, DeserializeSeed, Deserializer, MapAccess, Visitor};
 use serde::ser::{SerializeMap, Serializer};
 use serde::{Deserialize, Serialize};
@@ -75,7 +74,22 @@ pub(crate) fn write_text(path: &Path, text: &str) -> Result<(), ModelError> {
 
 /// Parses `text` into `T`, turning syntax, type, unknown-field and
 /// duplicate-key errors into a [`ModelError`] at `FILE: JSON.path`.
+///
+/// The text is parsed once without tracking JSON paths (parser speed); only
+/// when that fails is it parsed again with [`serde_path_to_error`], whose
+/// error names the path. Both parses accept exactly the same texts.
 pub(crate) fn parse<T: for<'de> Deserialize<'de>>(
+    text: &str,
+    file_name: &str,
+) -> Result<T, ModelError> {
+    match serde_json::from_str(text) {
+        Ok(value) => Ok(value),
+        Err(_) => parse_tracking_paths(text, file_name),
+    }
+}
+
+/// [`parse`] with the JSON path of every value tracked, for its error message.
+fn parse_tracking_paths<T: for<'de> Deserialize<'de>>(
     text: &str,
     file_name: &str,
 ) -> Result<T, ModelError> {
@@ -137,9 +151,14 @@ impl<'a> Located<'a> {
     }
 }
 
+/// Whether `p` is a probability: finite and in [0, 1].
+fn is_probability(p: f64) -> bool {
+    p.is_finite() && (0.0..=1.0).contains(&p)
+}
+
 /// Checks one probability of a distribution (finite, in [0, 1]).
 pub(crate) fn check_probability(p: f64, at: &Located) -> Result<(), ModelError> {
-    if p.is_finite() && (0.0..=1.0).contains(&p) {
+    if is_probability(p) {
         Ok(())
     } else {
         Err(at.error(format!("probability {p} is not in [0, 1]")))
@@ -152,43 +171,49 @@ pub(crate) fn check_probability(p: f64, at: &Located) -> Result<(), ModelError> 
 /// and reading a model gives back the same numbers.
 pub(crate) fn normalise(weights: &mut [f64], at: &Located) -> Result<(), ModelError> {
     let total: f64 = weights.iter().sum();
+    if let Some(total) = normalisation(total, weights.len(), at)? {
+        weights.iter_mut().for_each(|w| *w /= total);
+    }
+    Ok(())
+}
+
+/// The check of [`normalise`] on the sum `total` of `len` weights: an error
+/// when it is not 1 within 1e-6, `Some(total)` when the weights must be
+/// divided by it, `None` when they sum to 1 up to rounding (kept bit for bit).
+fn normalisation(total: f64, len: usize, at: &Located) -> Result<Option<f64>, ModelError> {
     if (total - 1.0).abs() > 1e-6 {
         let shown = (total * 1e9).round() / 1e9 + 0.0;
         return Err(at.error(format!(
             "probabilities sum to {shown}, not 1 (tolerance 1e-6)"
         )));
     }
-    if (total - 1.0).abs() > weights.len() as f64 * f64::EPSILON {
-        weights.iter_mut().for_each(|w| *w /= total);
-    }
-    Ok(())
+    Ok(((total - 1.0).abs() > len as f64 * f64::EPSILON).then_some(total))
 }
 
 /// The distribution written as the object at `at` over outcomes found by
 /// `index` (`kind` names them in errors, e.g. "state"): checked, renormalised,
 /// zero entries dropped, sorted by outcome (so the order of keys in the file
-/// does not matter).
+/// does not matter). Positions in `at` are built only for an error message.
 pub(crate) fn distribution(
     map: &UniqueMap<f64>,
     at: &Located,
     kind: &str,
     index: impl Fn(&str) -> Option<usize>,
 ) -> Result<Distribution, ModelError> {
-    let mut outcomes = Vec::with_capacity(map.0.len());
-    let mut weights = Vec::with_capacity(map.0.len());
+    let mut d: Distribution = Vec::with_capacity(map.0.len());
     for &(ref name, p) in &map.0 {
-        let here = at.key(name);
-        let outcome = index(name).ok_or_else(|| here.error(format!("unknown {kind} `{name}`")))?;
-        check_probability(p, &here)?;
-        outcomes.push(outcome);
-        weights.push(p);
+        let outcome =
+            index(name).ok_or_else(|| at.key(name).error(format!("unknown {kind} `{name}`")))?;
+        if !is_probability(p) {
+            check_probability(p, &at.key(name))?;
+        }
+        d.push((outcome, p));
     }
-    normalise(&mut weights, at)?;
-    let mut d: Distribution = outcomes
-        .into_iter()
-        .zip(weights)
-        .filter(|&(_, p)| p > 0.0)
-        .collect();
+    let total: f64 = d.iter().map(|&(_, p)| p).sum();
+    if let Some(total) = normalisation(total, d.len(), at)? {
+        d.iter_mut().for_each(|(_, p)| *p /= total);
+    }
+    d.retain(|&(_, p)| p > 0.0);
     d.sort_unstable_by_key(|&(o, _)| o);
     Ok(d)
 }
@@ -242,15 +267,37 @@ impl<'de, V: Deserialize<'de>> Visitor<'de> for UniqueMapVisitor<V> {
 
     fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<Self::Value, A::Error> {
         let mut entries = Vec::new();
-        let mut seen = HashSet::new();
+        let mut seen = None;
         while let Some(key) = map.next_key::<String>()? {
-            if !seen.insert(key.clone()) {
+            if is_repeated(&entries, &mut seen, &key) {
                 map.next_value_seed(Duplicate)?;
             }
             entries.push((key, map.next_value()?));
         }
         Ok(UniqueMap(entries))
     }
+}
+
+/// Objects with at most this many members are checked for a repeated key by
+/// comparing with each earlier one (no allocation); larger ones by a set.
+const SMALL_OBJECT: usize = 16;
+
+/// Whether `key` is already among the keys of `entries`; `seen` holds those
+/// keys as a set once the object outgrows [`SMALL_OBJECT`].
+fn is_repeated<V>(
+    entries: &[(String, V)],
+    seen: &mut Option<FxHashSet<String>>,
+    key: &str,
+) -> bool {
+    if let Some(set) = seen {
+        return !set.insert(key.to_string());
+    }
+    let repeated = entries.iter().any(|(k, _)| k == key);
+    if entries.len() >= SMALL_OBJECT {
+        let keys = entries.iter().map(|(k, _)| k.clone());
+        *seen = Some(keys.chain(std::iter::once(key.to_string())).collect());
+    }
+    repeated
 }
 
 /// The value of a repeated key: always an error, raised from inside the value
@@ -583,14 +630,12 @@ impl<'a> Builder<'a> {
         let mut keyed: FxHashMap<(usize, u32, u32), Vec<usize>> = FxHashMap::default();
         let mut nexts = Vec::with_capacity(raw.len());
         for (i, t) in raw.iter().enumerate() {
-            let key = self.transition_key(t, &at.index(i), game)?;
+            let here = at.index(i);
+            let key = self.transition_key(t, &here, game)?;
             keyed.entry(key).or_default().push(i);
-            nexts.push(distribution(
-                &t.next,
-                &at.index(i).key("next"),
-                "state",
-                |n| self.state(n),
-            )?);
+            nexts.push(distribution(&t.next, &here.key("next"), "state", |n| {
+                self.state(n)
+            })?);
         }
         let (nu, nv) = (game.defender.num_actions(), game.adversary.num_actions());
         let triples = [game.states.len(), nu, nv]

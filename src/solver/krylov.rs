@@ -46,6 +46,38 @@ pub const ACCURACY_MARGIN: f64 = 1e-4;
 /// space causes.
 pub const ROUND_ITERATIONS: usize = 200;
 
+/// The outcome of [`KrylovSolver::probe`]: true residuals
+/// `max_i |(A x - b)_i|` before and after some iterations.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct KrylovProbe {
+    /// Iterations performed.
+    pub iterations: usize,
+    /// The residual of the start.
+    pub start_residual: f64,
+    /// The residual of the returned `x` (at most `start_residual`).
+    pub residual: f64,
+}
+
+impl KrylovProbe {
+    /// The iterations a solve from the probe's start would need to bring the
+    /// residual to `target` if it kept falling at the probe's mean rate per
+    /// iteration (`k log(target / r_0) / log(r_k / r_0)`); 0 when the start
+    /// already meets it, infinite when the residual did not fall.
+    pub fn predicted_iterations(&self, target: f64) -> f64 {
+        if self.start_residual <= target {
+            return 0.0;
+        }
+        if self.residual <= target {
+            return self.iterations as f64;
+        }
+        let fallen = (self.residual / self.start_residual).ln();
+        if fallen.is_nan() || fallen >= 0.0 {
+            return f64::INFINITY;
+        }
+        self.iterations.max(1) as f64 * (target / self.start_residual).ln() / fallen
+    }
+}
+
 /// Preconditioned BiCGSTAB for `A x = b` and `A^T y = c` with a fixed pattern.
 pub struct KrylovSolver {
     system: System,
@@ -160,6 +192,20 @@ impl KrylovSolver {
             .solve(&mut self.transposed, c, y, Direction::Transposed, tolerance)
     }
 
+    /// A short trial of BiCGSTAB on `A x = b`: from `x` (or the
+    /// preconditioner's guess, as in [`Self::solve`]), at most `iterations`
+    /// iterations; `x` becomes the better of its start and the trial's
+    /// iterate. The rate at which the true residual falls estimates how
+    /// fast the chain mixes, hence the cost of a whole solve.
+    pub fn probe(
+        &mut self,
+        b: &[f64],
+        x: &mut [f64],
+        iterations: usize,
+    ) -> Result<KrylovProbe, SolverError> {
+        self.system.probe(&mut self.forward, b, x, iterations)
+    }
+
     /// [`Self::solve`] and [`Self::solve_transpose`] at once, on two threads.
     pub fn solve_both(&mut self, b: &[f64], x: &mut [f64], c: &[f64], y: &mut [f64]) -> SolvePair {
         let system = &self.system;
@@ -270,6 +316,46 @@ impl System {
             residual,
             iterations,
             error_bound: None,
+        })
+    }
+
+    fn probe(
+        &self,
+        workspace: &mut Workspace,
+        rhs: &[f64],
+        solution: &mut [f64],
+        iterations: usize,
+    ) -> Result<KrylovProbe, SolverError> {
+        if !self.factorised {
+            return Err(SolverError::Malformed(
+                "solve called before a successful factorisation".into(),
+            ));
+        }
+        check_solve_inputs(self.pattern.n, rhs, solution)?;
+        if solution.iter().all(|&v| v == 0.0) || solution.iter().any(|v| !v.is_finite()) {
+            self.preconditioned_start(rhs, solution, Direction::Forward);
+        }
+        let start_residual = self.true_residual(workspace, rhs, solution, Direction::Forward);
+        workspace.best.copy_from_slice(solution);
+        let done = self
+            .run_bicgstab(
+                workspace,
+                rhs,
+                solution,
+                Direction::Forward,
+                0.0,
+                iterations,
+            )
+            .unwrap_or(iterations);
+        let mut residual = self.true_residual(workspace, rhs, solution, Direction::Forward);
+        if !(residual.is_finite() && residual <= start_residual) {
+            solution.copy_from_slice(&workspace.best);
+            residual = start_residual;
+        }
+        Ok(KrylovProbe {
+            iterations: done,
+            start_residual,
+            residual,
         })
     }
 

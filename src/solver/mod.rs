@@ -36,7 +36,7 @@ mod lu;
 use bound::ExpectedTime;
 pub use denormals::FlushDenormals;
 pub use ilu::Ilu0;
-pub use krylov::KrylovSolver;
+pub use krylov::{KrylovProbe, KrylovSolver};
 pub use lu::LuSolver;
 
 use thiserror::Error;
@@ -49,12 +49,17 @@ pub const DEFAULT_TOLERANCE: f64 = 1e-9;
 pub const DEFAULT_LU_LIMIT: usize = 50_000;
 
 /// With [`SolverMethod::Auto`], a BiCGSTAB solve that needs more iterations
-/// than this is abandoned for LU, which then stays in use, if the system has
-/// at most [`SolverSettings::lu_switch_limit`] unknowns. Measured on grid games: LU
+/// than [`lu_cost_in_iterations`], which is at most this, is abandoned for
+/// LU, which then stays in use, if the system has at most
+/// [`SolverSettings::lu_switch_limit`] unknowns. Measured on grid games: LU
 /// and BiCGSTAB took the same time at about 150 iterations both at 6e4
 /// unknowns (0.7 s against 0.8 s for 148 iterations) and at 3.3e5 (10 s
 /// against 12 s for 400 iterations).
 pub const SLOW_KRYLOV_ITERATIONS: usize = 150;
+
+/// With [`SolverMethod::Auto`], the BiCGSTAB iterations of the trial that
+/// predicts the cost of a whole solve (see [`LinearSolver`]).
+pub const PROBE_ITERATIONS: usize = 20;
 
 /// The default [`SolverSettings::lu_switch_limit`]: LU of a 3.3e5-unknown
 /// grid system took 4 GiB.
@@ -218,8 +223,9 @@ impl SolverSettings {
 pub struct SolveReport {
     /// `max_i |(A x - b)_i|` (or `|(A^T y - c)_i|`) of the returned solution.
     pub residual: f64,
-    /// BiCGSTAB iterations (0 for LU), refinements included (not those of
-    /// the solve for the expected time of the error bound).
+    /// BiCGSTAB iterations (0 for LU), refinements and `auto`'s trial
+    /// included (not those of the solve for the expected time of the error
+    /// bound).
     pub iterations: usize,
     /// For [`LinearSolver::solve`]: a bound on `max_i |x_i - (A^{-1} b)_i|`,
     /// `max(t) ||r||_inf` plus the rounding in computing `r` (method.md
@@ -354,6 +360,39 @@ fn join_directions(
     )
 }
 
+/// The cost of a one-shot sparse LU (symbolic analysis, numeric
+/// factorisation, one solve) of a grid-like system with `nnz` entries, in
+/// BiCGSTAB + ILU(0) iterations on the same system, whose cost is linear in
+/// `nnz`: measured on the grid family with 2-node controllers (release
+/// build, one thread; `experiments/solver-choice`), about 75 iterations at
+/// 7.3e5 entries (37k unknowns) and 150 at 2.9e6 (147k unknowns), where LU
+/// grew as `nnz^1.6`; interpolated as `75 sqrt(nnz / 7.3e5)` and capped at
+/// [`SLOW_KRYLOV_ITERATIONS`], the break-even measured at 3.3e5 unknowns.
+pub fn lu_cost_in_iterations(nnz: usize) -> f64 {
+    (75.0 * (nnz as f64 / 7.3e5).sqrt()).min(SLOW_KRYLOV_ITERATIONS as f64)
+}
+
+/// Why `settings` give the method [`SolverSettings::method_for`] chooses
+/// for `n` unknowns, before any solve.
+fn initial_reason(settings: &SolverSettings, n: usize) -> String {
+    match settings.method {
+        SolverMethod::Auto if n <= settings.lu_limit => format!(
+            "auto: lu, {n} unknowns, at most the LU limit {}",
+            settings.lu_limit
+        ),
+        SolverMethod::Auto if n > settings.lu_switch_limit => format!(
+            "auto: krylov, {n} unknowns, more than the {} up to which LU is tried \
+             (LU's memory)",
+            settings.lu_switch_limit
+        ),
+        SolverMethod::Auto => format!(
+            "auto: krylov, {n} unknowns, more than the LU limit {}; a trial decides",
+            settings.lu_limit
+        ),
+        chosen => format!("{} as set", chosen.name()),
+    }
+}
+
 /// The checks every method makes before a solve: sizes and finite inputs.
 fn check_solve_inputs(n: usize, rhs: &[f64], x: &[f64]) -> Result<(), SolverError> {
     if rhs.len() != n || x.len() != n {
@@ -398,11 +437,18 @@ fn accept(residual: f64, x: &[f64], tolerance: f64) -> Result<f64, SolverError> 
 /// chooses for its size. With [`SolverMethod::Auto`], a BiCGSTAB solve that
 /// does not converge is repeated by LU, which then stays in use: `auto`
 /// never fails where LU would succeed. On systems of at most
-/// [`SolverSettings::lu_switch_limit`] unknowns it gives BiCGSTAB only
-/// [`SLOW_KRYLOV_ITERATIONS`] iterations before turning to LU: slowly mixing
-/// chains are solved faster by LU.
+/// [`SolverSettings::lu_switch_limit`] unknowns it first predicts the cost
+/// of BiCGSTAB from a short trial and takes LU at once when that is cheaper
+/// (`choose_by_trial`), and it gives BiCGSTAB only as many iterations per
+/// solve as an LU costs ([`lu_cost_in_iterations`]) before turning to LU:
+/// slowly mixing chains are solved faster by LU, and a wrong prediction
+/// costs at most one LU's worth of iterations (the ski-rental bound: at
+/// most about twice the better method per solve). [`Self::reason`] says why
+/// the method in use was chosen.
 pub struct LinearSolver {
     backend: Backend,
+    reason: String,
+    probe_pending: bool,
     fall_back_to_lu: bool,
     krylov_budget: usize,
     tolerance: f64,
@@ -441,13 +487,20 @@ impl LinearSolver {
         let auto = settings.method == SolverMethod::Auto;
         let krylov_settings = if auto && pattern.n <= settings.lu_switch_limit {
             SolverSettings {
-                max_iterations: settings.max_iterations.min(SLOW_KRYLOV_ITERATIONS),
+                max_iterations: settings
+                    .max_iterations
+                    .min(lu_cost_in_iterations(pattern.nnz()).ceil() as usize)
+                    .max(1),
                 ..*settings
             }
         } else {
             *settings
         };
-        let backend = match settings.method_for(pattern.n) {
+        let method = settings.method_for(pattern.n);
+        let reason = initial_reason(settings, pattern.n);
+        let probe_pending =
+            auto && method == SolverMethod::Krylov && pattern.n <= settings.lu_switch_limit;
+        let backend = match method {
             SolverMethod::Krylov => {
                 Backend::Krylov(Box::new(KrylovSolver::new(pattern, &krylov_settings)?))
             }
@@ -455,6 +508,8 @@ impl LinearSolver {
         };
         Ok(Self {
             backend,
+            reason,
+            probe_pending,
             fall_back_to_lu: auto,
             krylov_budget: krylov_settings.max_iterations,
             tolerance: settings.tolerance,
@@ -477,6 +532,12 @@ impl LinearSolver {
             Backend::Lu(_) => SolverMethod::Lu,
             Backend::Krylov(_) => SolverMethod::Krylov,
         }
+    }
+
+    /// Why [`Self::method`] is in use, in words (for reports): the setting,
+    /// the size limits, or `auto`'s prediction from a short BiCGSTAB trial.
+    pub fn reason(&self) -> &str {
+        &self.reason
     }
 
     /// The pattern of `A`.
@@ -502,7 +563,9 @@ impl LinearSolver {
     /// is the starting point of an iterative solve (ignored by LU); on
     /// return it is the solution.
     pub fn solve(&mut self, b: &[f64], x: &mut [f64]) -> Result<SolveReport, SolverError> {
-        let report = self.solve_in(Direction::Forward, b, x, None)?;
+        let probe_iterations = self.choose_by_trial(b, x, 1)?;
+        let mut report = self.solve_in(Direction::Forward, b, x, None)?;
+        report.iterations += probe_iterations;
         self.bound_error(b, x, report)
     }
 
@@ -676,9 +739,71 @@ impl LinearSolver {
     /// (the two solves share the factorisation and nothing else); the
     /// forward solve's error is then bounded as by [`Self::solve`].
     pub fn solve_both(&mut self, b: &[f64], x: &mut [f64], c: &[f64], y: &mut [f64]) -> SolvePair {
+        let probe_iterations = match self.choose_by_trial(b, x, 2) {
+            Ok(iterations) => iterations,
+            Err(error) => return (Err(error.clone()), Err(error)),
+        };
         let (forward, transposed) = self.solve_both_unbounded(b, x, c, y);
-        let forward = forward.and_then(|report| self.bound_error(b, x, report));
+        let forward = forward.and_then(|mut report| {
+            report.iterations += probe_iterations;
+            self.bound_error(b, x, report)
+        });
         (forward, transposed)
+    }
+
+    /// With `auto` on a BiCGSTAB system of at most
+    /// [`SolverSettings::lu_switch_limit`] unknowns, before the first solve:
+    /// a trial of [`PROBE_ITERATIONS`] BiCGSTAB iterations on `A x = b`, in
+    /// two restarted halves, predicts the iterations of a whole solve from
+    /// the rate at which the residual falls in the second half (the first
+    /// removes the quickly damped error, whose fast fall would make the
+    /// prediction optimistic); when the predicted iterations of all `solves` (one
+    /// for the value, two with the adjoint) cost more than an LU
+    /// ([`lu_cost_in_iterations`]), LU replaces BiCGSTAB at once, otherwise
+    /// BiCGSTAB goes on from the trial's iterate. Returns the trial's
+    /// iterations.
+    fn choose_by_trial(
+        &mut self,
+        b: &[f64],
+        x: &mut [f64],
+        solves: usize,
+    ) -> Result<usize, SolverError> {
+        if !std::mem::take(&mut self.probe_pending) {
+            return Ok(0);
+        }
+        let Backend::Krylov(krylov) = &mut self.backend else {
+            return Ok(0);
+        };
+        let half = (PROBE_ITERATIONS / 2).min(self.krylov_budget / 2).max(1);
+        let first = krylov.probe(b, x, half)?;
+        let probe = krylov.probe(b, x, half)?;
+        let target = krylov::ACCURACY_MARGIN * self.tolerance;
+        let predicted = probe.predicted_iterations(target);
+        let (n, nnz) = (krylov.pattern().n, krylov.pattern().nnz());
+        let lu_cost = lu_cost_in_iterations(nnz);
+        let trial = format!(
+            "{n} unknowns, {nnz} nonzeros: a trial of {} BiCGSTAB iterations reduced the \
+             residual from {:.1e} to {:.1e} and the next {} to {:.1e}, predicting {} iterations \
+             per solve to {target:.0e} ({solves} solve(s)) against an LU costing about \
+             {lu_cost:.0} iterations",
+            first.iterations,
+            first.start_residual,
+            first.residual,
+            probe.iterations,
+            probe.residual,
+            if predicted.is_finite() {
+                format!("{predicted:.0}")
+            } else {
+                "unbounded".into()
+            }
+        );
+        if predicted * solves as f64 > lu_cost {
+            self.reason = format!("auto: lu, {trial}");
+            self.fall_back()?;
+        } else {
+            self.reason = format!("auto: krylov, {trial}");
+        }
+        Ok(first.iterations + probe.iterations)
     }
 
     fn solve_both_unbounded(
@@ -716,6 +841,13 @@ impl LinearSolver {
     fn fall_back(&mut self) -> Result<(), SolverError> {
         self.fall_back_to_lu = false;
         if let Backend::Krylov(krylov) = &self.backend {
+            if !self.reason.starts_with("auto: lu") {
+                self.reason = format!(
+                    "auto: lu, BiCGSTAB did not converge within its budget of {} iterations \
+                     (before: {})",
+                    self.krylov_budget, self.reason
+                );
+            }
             let (pattern, values) = (krylov.pattern().clone(), krylov.values().to_vec());
             // BiCGSTAB's memory is freed before the numeric LU needs its own.
             self.backend = Backend::Lu(Box::new(LuSolver::new(pattern, self.tolerance)?));
@@ -981,11 +1113,88 @@ mod tests {
             let report = solver.solve(&b, &mut x).unwrap();
             assert!(report.residual <= DEFAULT_TOLERANCE);
             if switched {
-                assert_eq!((solver.method(), report.iterations), (SolverMethod::Lu, 0));
+                assert_eq!(
+                    (solver.method(), report.iterations),
+                    (SolverMethod::Lu, PROBE_ITERATIONS)
+                );
+                assert!(
+                    solver.reason().starts_with("auto: lu") && solver.reason().contains("trial"),
+                    "{}",
+                    solver.reason()
+                );
             } else {
                 assert_eq!(solver.method(), SolverMethod::Krylov);
                 assert!(report.iterations > SLOW_KRYLOV_ITERATIONS, "{report:?}");
             }
+        }
+    }
+
+    #[test]
+    fn the_trial_predicts_from_the_mean_rate_per_iteration() {
+        let probe = KrylovProbe {
+            iterations: 10,
+            start_residual: 1e-2,
+            residual: 1e-4,
+        };
+        // Two decades per 10 iterations: 1e-2 -> 1e-12 is ten decades.
+        assert!((probe.predicted_iterations(1e-12) - 50.0).abs() < 1e-9);
+        assert_eq!(probe.predicted_iterations(1e-3), 10.0);
+        assert_eq!(probe.predicted_iterations(1e-1), 0.0);
+        let stalled = KrylovProbe {
+            residual: 1e-2,
+            ..probe
+        };
+        assert_eq!(stalled.predicted_iterations(1e-12), f64::INFINITY);
+    }
+
+    #[test]
+    fn the_lu_cost_grows_with_the_entries_up_to_the_measured_break_even() {
+        assert!((lu_cost_in_iterations(730_000) - 75.0).abs() < 1e-9);
+        assert!(lu_cost_in_iterations(100_000) < lu_cost_in_iterations(730_000));
+        assert_eq!(
+            lu_cost_in_iterations(50_000_000),
+            SLOW_KRYLOV_ITERATIONS as f64
+        );
+    }
+
+    #[test]
+    fn auto_keeps_krylov_on_a_fast_mixing_chain_and_says_why() {
+        let (pattern, values) = random_chain(2000, 5, 0.3, 7);
+        let b = vec![0.5; 2000];
+        let settings = SolverSettings {
+            lu_limit: 0,
+            ..SolverSettings::default()
+        };
+        let mut solver = LinearSolver::new(pattern.clone(), &settings).unwrap();
+        assert!(
+            solver.reason().contains("a trial decides"),
+            "{}",
+            solver.reason()
+        );
+        solver.factorize(&values).unwrap();
+        let mut x = vec![0.0; 2000];
+        let report = solver.solve(&b, &mut x).unwrap();
+        assert_eq!(solver.method(), SolverMethod::Krylov);
+        assert!(
+            solver.reason().starts_with("auto: krylov"),
+            "{}",
+            solver.reason()
+        );
+        assert!(report.error_bound.unwrap() <= DEFAULT_TOLERANCE);
+        let mut lu = LinearSolver::new(
+            pattern,
+            &SolverSettings {
+                method: SolverMethod::Lu,
+                ..settings
+            },
+        )
+        .unwrap();
+        assert_eq!(lu.reason(), "lu as set");
+        lu.factorize(&values).unwrap();
+        let mut exact = vec![0.0; 2000];
+        lu.solve(&b, &mut exact).unwrap();
+        for (a, e) in x.iter().zip(&exact) {
+            assert!((a - e).abs() <= 1e-9);
         }
     }
 
