@@ -7,7 +7,8 @@ own objective `GF goal & G !unsafe`?
 
 For each grid (the paper's 3x2 grid, and n x n grids with the goal in the
 far corner, `unsafe` next to the start and n*n/10 random unsafe cells, seed
-1) and each defender size, it runs `posg-fsc support` in both modes
+1) and each defender size, and for the 8x8 grid POMDP of the optimiser's
+benchmarks (walls, hazards, `F goal` and `!hazard U goal`, 3 nodes), it runs `posg-fsc support` in both modes
 (almost-sure, positive) with the default (lazy) engine, and on the smallest
 cases also with the certificate engine (without maximisation, which takes
 it minutes), and records what support.json
@@ -29,7 +30,10 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
 BINARY = os.path.join(ROOT, "target", "release", "posg-fsc")
 FORMULA = "GF goal & G !unsafe"
+sys.path.insert(0, os.path.join(ROOT, "experiments", "benchmarks"))
+import games as benchmark_games  # noqa: E402
 OUT = os.path.join(ROOT, "results", "support-synthesis.csv")
+BUDGET = 60  # seconds per question; a run that needs more is recorded as "time budget"
 
 
 def grid(directory, n):
@@ -45,18 +49,28 @@ def grid(directory, n):
     return path
 
 
-def support(game, nodes, mode, engine, directory):
+def support(game, nodes, mode, engine, directory, formula=FORMULA):
     """Runs `posg-fsc support` and returns (command, support.json)."""
     out = os.path.join(directory, "out")
-    command = [BINARY, "support", game, "--ltl", FORMULA, "--def-nodes", str(nodes),
+    command = [BINARY, "support", game, "--ltl", formula, "--def-nodes", str(nodes),
                "--engine", engine, "--out", out, "--force"]
     if mode == "almost-sure":
         command.append("--almost-sure")
     if engine == "certificate":
         command.append("--no-maximise")
-    subprocess.run(command, check=True, stderr=subprocess.DEVNULL)
+    command += ["--synthesis-time-budget", str(BUDGET)]
+    done = subprocess.run(command, capture_output=True, text=True)
+    if done.returncode != 0:
+        if "time budget" in done.stderr:
+            return command, None
+        sys.exit(done.stderr)
     with open(os.path.join(out, "support.json")) as f:
         return command, json.load(f)
+
+
+def shown(command, directory):
+    """The command without the binary's path, with scratch paths as bare names."""
+    return " ".join(os.path.basename(c) if c.startswith(directory) else c for c in command[1:])
 
 
 def main():
@@ -66,12 +80,25 @@ def main():
     rows = []
     with tempfile.TemporaryDirectory() as directory:
         games = {n: grid(directory, n) for n in sorted({c[0] for c in cases})}
-        for n, nodes, engine in cases:
+        games["pomdp8"] = os.path.join(directory, "pomdp8.posg.json")
+        benchmark_games.write(benchmark_games.grid_pomdp(8), games["pomdp8"])
+        runs = [(games[n], "3x2 (paper)" if n == 0 else f"{n}x{n}", nodes, engine, FORMULA)
+                for n, nodes, engine in cases]
+        runs += [(games["pomdp8"], "8x8 POMDP", 3, "lazy", formula)
+                 for formula in ("F goal", "!hazard U goal")]
+        for game, label, nodes, engine, formula in runs:
             for mode in ("almost-sure", "positive"):
-                command, result = support(games[n], nodes, mode, engine, directory)
+                command, result = support(game, nodes, mode, engine, directory, formula)
+                if result is None:
+                    rows.append({"grid": label, "formula": formula, "defender_nodes": nodes,
+                                 "mode": mode, "engine": engine, "found": "time budget",
+                                 "seconds": BUDGET, "command": shown(command, directory)})
+                    print(label, nodes, mode, engine, "time budget", file=sys.stderr)
+                    continue
                 sat = result["sat"]
                 rows.append({
-                    "grid": "3x2 (paper)" if n == 0 else f"{n}x{n}",
+                    "grid": label,
+                    "formula": formula,
                     "defender_nodes": nodes,
                     "mode": mode,
                     "engine": engine,
@@ -89,14 +116,13 @@ def main():
                     "lemmas": sat["lemmas"],
                     "sat_seconds": round(sat["solve_seconds"], 4),
                     "seconds": round(sat["seconds"], 4),
-                    "command": " ".join(os.path.basename(c) if c.endswith(".json") else c
-                                        for c in command[1:]),
+                    "command": shown(command, directory),
                     "version": result["version"],
                 })
                 print(rows[-1]["grid"], nodes, mode, engine, result["found"],
                       rows[-1]["seconds"], file=sys.stderr)
     with open(OUT, "w", newline="") as f:
-        writer = csv.DictWriter(f, fieldnames=list(rows[0]))
+        writer = csv.DictWriter(f, fieldnames=list(rows[0]), restval="")
         writer.writeheader()
         writer.writerows(rows)
     print(f"wrote {OUT}", file=sys.stderr)

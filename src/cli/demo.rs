@@ -263,13 +263,22 @@ fn synthesis_story(game: &Posg, dra: &Dra, negated: &Dra, out: &mut String) -> a
         )?,
     }
     match (&positive.defender, positive.certified_lower) {
-        (Some(_), Some(lower)) => writeln!(
-            out,
-            "   - a 2-node support of {} (node, observation, next node, action) entries wins\n     \
-             with positive probability: uniform on it, certified at {lower:.4}\n     ({}).",
-            positive.support_entries(),
-            effort(&positive)
-        )?,
+        (Some(support), Some(lower)) => {
+            writeln!(
+                out,
+                "   - a 2-node support of {} (node, observation, next node, action) entries wins\n     \
+                 with positive probability: uniform on it, certified at {lower:.4}\n     ({}).",
+                positive.support_entries(),
+                effort(&positive)
+            )?;
+            writeln!(
+                out,
+                "     It starts in node 0 and allows every choice except:"
+            )?;
+            for line in restrictions(game, support) {
+                writeln!(out, "       {line}")?;
+            }
+        }
         _ => writeln!(out, "   - {} ({}).", positive.reason, effort(&positive))?,
     }
     Ok(())
@@ -317,6 +326,55 @@ fn tuned_story(
         place.shown.display()
     )?;
     Ok(())
+}
+
+/// The blocks `(g, o)` of a support that do not allow every `(next node,
+/// enabled action)`, blocks with the same choices merged: `node g at o1,
+/// o2: A or B, to node(s) ...`.
+fn restrictions(game: &Posg, support: &Fsc) -> Vec<String> {
+    let player = game.defender();
+    let mut groups: Vec<(usize, Vec<(usize, usize)>, Vec<&str>)> = Vec::new();
+    for g in 0..support.num_nodes() {
+        for (o, observation) in player.observations().iter().enumerate() {
+            let enabled = player.enabled_actions(o).count();
+            let mut choices: Vec<(usize, usize)> = support
+                .choices(g, o)
+                .iter()
+                .map(|c| (c.next, c.action))
+                .collect();
+            if choices.len() == support.num_nodes() * enabled {
+                continue;
+            }
+            choices.sort_unstable();
+            match groups.iter_mut().find(|(h, c, _)| *h == g && *c == choices) {
+                Some(group) => group.2.push(observation),
+                None => groups.push((g, choices, vec![observation])),
+            }
+        }
+    }
+    groups
+        .into_iter()
+        .map(|(g, choices, observations)| {
+            let mut actions: Vec<usize> = choices.iter().map(|&(_, u)| u).collect();
+            actions.sort_unstable();
+            actions.dedup();
+            let mut nexts: Vec<usize> = choices.iter().map(|&(n, _)| n).collect();
+            nexts.dedup();
+            let names = |items: &[usize], name: &dyn Fn(usize) -> String| {
+                items
+                    .iter()
+                    .map(|&i| name(i))
+                    .collect::<Vec<_>>()
+                    .join(" or ")
+            };
+            format!(
+                "node {g} at {}: only {}, to node {}",
+                observations.join(", "),
+                names(&actions, &|u| player.actions()[u].clone()),
+                names(&nexts, &|n| n.to_string())
+            )
+        })
+        .collect()
 }
 
 /// One line per node: each observation's most likely choice,

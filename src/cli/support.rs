@@ -77,7 +77,9 @@ pub struct SynthesisArgs {
     /// Refuse SAT instances with more clauses than this.
     #[arg(long, default_value_t = Settings::default().clause_budget)]
     clause_budget: usize,
-    /// Seconds the SAT solver may take (0: no limit); running out is an error.
+    /// Seconds the SAT solver may take (0: no limit); running out is an
+    /// error for `support`; `solve` and `sweep` give the almost-sure attempt
+    /// a tenth of it, note a timeout and go on with the positive one.
     #[arg(long, default_value_t = Settings::default().time_budget)]
     synthesis_time_budget: f64,
 }

@@ -56,8 +56,8 @@ pub use rounding::{TRUNCATION_THRESHOLDS, rounded_candidates, truncated};
 pub use settings::{MAX_LOGIT_BOUND, Settings, UpdateRule};
 pub use softmax::{Softmax, clip};
 pub use structures::{
-    Candidates, SourceNote, StructureSource, best_by_certified_lower, candidate_structures,
-    why_others_lost,
+    ALMOST_SURE_BUDGET_SHARE, Candidates, SourceNote, StructureSource, best_by_certified_lower,
+    candidate_structures, why_others_lost,
 };
 pub use warm_start::{WARM_START_MIX, embed, keep_better, pad, score, warm_started};
 
