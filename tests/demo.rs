@@ -39,7 +39,10 @@ fn the_demo_finds_and_certifies_a_support_for_the_papers_formula() {
     );
     let positive = number_after(&text, "with positive probability", "certified at");
     assert!(positive > 0.0, "{text}");
-    assert!(text.contains("allows every choice except:\n       node "), "{text}");
+    assert!(
+        text.contains("allows every choice except:\n       node "),
+        "{text}"
+    );
     let tuned = number_after(&text, "2. The paper's formula", "Certified: at least");
     let upper = number_after(
         &text,

@@ -328,12 +328,20 @@ fn tuned_story(
     Ok(())
 }
 
+/// The choices `(next node, action)` a support keeps in node `node` under
+/// each of `observations`.
+struct Restriction<'a> {
+    node: usize,
+    choices: Vec<(usize, usize)>,
+    observations: Vec<&'a str>,
+}
+
 /// The blocks `(g, o)` of a support that do not allow every `(next node,
 /// enabled action)`, blocks with the same choices merged: `node g at o1,
 /// o2: A or B, to node(s) ...`.
 fn restrictions(game: &Posg, support: &Fsc) -> Vec<String> {
     let player = game.defender();
-    let mut groups: Vec<(usize, Vec<(usize, usize)>, Vec<&str>)> = Vec::new();
+    let mut groups: Vec<Restriction> = Vec::new();
     for g in 0..support.num_nodes() {
         for (o, observation) in player.observations().iter().enumerate() {
             let enabled = player.enabled_actions(o).count();
@@ -346,34 +354,47 @@ fn restrictions(game: &Posg, support: &Fsc) -> Vec<String> {
                 continue;
             }
             choices.sort_unstable();
-            match groups.iter_mut().find(|(h, c, _)| *h == g && *c == choices) {
-                Some(group) => group.2.push(observation),
-                None => groups.push((g, choices, vec![observation])),
+            match groups
+                .iter_mut()
+                .find(|r| r.node == g && r.choices == choices)
+            {
+                Some(group) => group.observations.push(observation),
+                None => groups.push(Restriction {
+                    node: g,
+                    choices,
+                    observations: vec![observation],
+                }),
             }
         }
     }
     groups
         .into_iter()
-        .map(|(g, choices, observations)| {
-            let mut actions: Vec<usize> = choices.iter().map(|&(_, u)| u).collect();
-            actions.sort_unstable();
-            actions.dedup();
-            let mut nexts: Vec<usize> = choices.iter().map(|&(n, _)| n).collect();
-            nexts.dedup();
-            let names = |items: &[usize], name: &dyn Fn(usize) -> String| {
-                items
-                    .iter()
-                    .map(|&i| name(i))
-                    .collect::<Vec<_>>()
-                    .join(" or ")
-            };
-            format!(
-                "node {g} at {}: only {}, to node {}",
-                observations.join(", "),
-                names(&actions, &|u| player.actions()[u].clone()),
-                names(&nexts, &|n| n.to_string())
-            )
-        })
+        .map(
+            |Restriction {
+                 node: g,
+                 choices,
+                 observations,
+             }| {
+                let mut actions: Vec<usize> = choices.iter().map(|&(_, u)| u).collect();
+                actions.sort_unstable();
+                actions.dedup();
+                let mut nexts: Vec<usize> = choices.iter().map(|&(n, _)| n).collect();
+                nexts.dedup();
+                let names = |items: &[usize], name: &dyn Fn(usize) -> String| {
+                    items
+                        .iter()
+                        .map(|&i| name(i))
+                        .collect::<Vec<_>>()
+                        .join(" or ")
+                };
+                format!(
+                    "node {g} at {}: only {}, to node {}",
+                    observations.join(", "),
+                    names(&actions, &|u| player.actions()[u].clone()),
+                    names(&nexts, &|n| n.to_string())
+                )
+            },
+        )
         .collect()
 }
 
