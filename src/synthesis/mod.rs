@@ -347,20 +347,14 @@ pub fn synthesise(
     settings.validate()?;
     check_nodes(defender_nodes)?;
     let clock = Instant::now();
-    let moves = Moves::of(game);
-    let graph = CellGraph::build(game, dra, &moves);
-    let pairs = usable_pairs(&graph, dra.pairs());
-    let context = Context {
-        game,
-        moves: &moves,
-        graph: &graph,
-        nodes: defender_nodes,
-    };
-    let product_states = graph.num_cells() * defender_nodes;
-    let rank_bound = settings
-        .rank_bound
-        .unwrap_or(product_states)
-        .clamp(1, product_states.max(1));
+    let problem = Problem::new(game, dra, defender_nodes, settings);
+    let (moves, pairs, product_states, rank_bound) = (
+        &problem.moves,
+        problem.pairs(dra),
+        problem.product_states,
+        problem.rank_bound,
+    );
+    let context = problem.context(game);
     let certificate_complete = pairs.len() <= 1 && rank_bound >= product_states;
     let mut synthesis = Synthesis {
         mode: settings.mode,
@@ -387,8 +381,8 @@ pub fn synthesise(
     let deadline =
         (settings.time_budget > 0.0).then(|| clock + Duration::from_secs_f64(settings.time_budget));
     let mut cnf = Cnf::new(settings.clause_budget);
-    let mut vars = SupportVariables::new(&mut cnf, game, &moves, defender_nodes)?;
-    let mut oracle = Oracle::new(game, dra_not_phi, &moves, defender_nodes, settings.mode);
+    let mut vars = SupportVariables::new(&mut cnf, game, moves, defender_nodes)?;
+    let mut oracle = Oracle::new(game, dra_not_phi, moves, defender_nodes, settings.mode);
     if settings.engine == Engine::Certificate {
         let certificates = encoding::certificates(
             &context,
@@ -510,22 +504,11 @@ pub fn write_dimacs(
 ) -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
     settings.validate()?;
     check_nodes(defender_nodes)?;
-    let moves = Moves::of(game);
-    let graph = CellGraph::build(game, dra, &moves);
-    let pairs = usable_pairs(&graph, dra.pairs());
-    let context = Context {
-        game,
-        moves: &moves,
-        graph: &graph,
-        nodes: defender_nodes,
-    };
-    let product_states = graph.num_cells() * defender_nodes;
-    let rank_bound = settings
-        .rank_bound
-        .unwrap_or(product_states)
-        .clamp(1, product_states.max(1));
+    let problem = Problem::new(game, dra, defender_nodes, settings);
+    let (moves, pairs, rank_bound) = (&problem.moves, problem.pairs(dra), problem.rank_bound);
+    let context = problem.context(game);
     let mut cnf = Cnf::new(settings.clause_budget);
-    let mut vars = SupportVariables::new(&mut cnf, game, &moves, defender_nodes)?;
+    let mut vars = SupportVariables::new(&mut cnf, game, moves, defender_nodes)?;
     let certificates = encoding::certificates(
         &context,
         &mut cnf,
@@ -563,6 +546,52 @@ fn check_nodes(defender_nodes: usize) -> Result<(), ModelError> {
 }
 
 /// The pairs `(L_i, K_i)` with a cycle through a `K_i` cell that avoids
+/// What both the search and the DIMACS export build first: the game's
+/// transitions, the cell graph, and the rank bound.
+struct Problem {
+    moves: Moves,
+    graph: CellGraph,
+    nodes: usize,
+    /// Product states `(s, q, g)` of the certificate formula.
+    product_states: usize,
+    /// The bound on levels and ranks (the number of product states unless
+    /// the settings lower it).
+    rank_bound: usize,
+}
+
+impl Problem {
+    fn new(game: &Posg, dra: &Dra, nodes: usize, settings: &Settings) -> Self {
+        let moves = Moves::of(game);
+        let graph = CellGraph::build(game, dra, &moves);
+        let product_states = graph.num_cells() * nodes;
+        let rank_bound = settings
+            .rank_bound
+            .unwrap_or(product_states)
+            .clamp(1, product_states.max(1));
+        Self {
+            moves,
+            graph,
+            nodes,
+            product_states,
+            rank_bound,
+        }
+    }
+
+    /// The Rabin pairs of `dra` that can hold ([`usable_pairs`]).
+    fn pairs<'d>(&self, dra: &'d Dra) -> Vec<&'d RabinPair> {
+        usable_pairs(&self.graph, dra.pairs())
+    }
+
+    fn context<'a>(&'a self, game: &'a Posg) -> Context<'a> {
+        Context {
+            game,
+            moves: &self.moves,
+            graph: &self.graph,
+            nodes: self.nodes,
+        }
+    }
+}
+
 /// `L_i` in the cell graph (every cell is reachable): the others can never
 /// be satisfied.
 fn usable_pairs<'a>(graph: &CellGraph, pairs: &'a [RabinPair]) -> Vec<&'a RabinPair> {
