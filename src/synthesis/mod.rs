@@ -384,17 +384,7 @@ pub fn synthesise(
     let mut vars = SupportVariables::new(&mut cnf, game, moves, defender_nodes)?;
     let mut oracle = Oracle::new(game, dra_not_phi, moves, defender_nodes, settings.mode);
     if settings.engine == Engine::Certificate {
-        let certificates = encoding::certificates(
-            &context,
-            &mut cnf,
-            &mut vars,
-            &pairs,
-            settings.mode.claim(),
-            settings.rank_encoding,
-            rank_bound,
-            None,
-        )?;
-        encoding::claim_initial(&context, &mut cnf, &certificates, settings.mode.claim())?;
+        certificate_formula(&context, &mut cnf, &mut vars, &pairs, settings, rank_bound)?;
     }
     let mut solver = Solver::new(&cnf, deadline);
     let mut find = |cnf: &mut Cnf,
@@ -509,17 +499,7 @@ pub fn write_dimacs(
     let context = problem.context(game);
     let mut cnf = Cnf::new(settings.clause_budget);
     let mut vars = SupportVariables::new(&mut cnf, game, moves, defender_nodes)?;
-    let certificates = encoding::certificates(
-        &context,
-        &mut cnf,
-        &mut vars,
-        &pairs,
-        settings.mode.claim(),
-        settings.rank_encoding,
-        rank_bound,
-        None,
-    )?;
-    encoding::claim_initial(&context, &mut cnf, &certificates, settings.mode.claim())?;
+    certificate_formula(&context, &mut cnf, &mut vars, &pairs, settings, rank_bound)?;
     let variables: Vec<String> = vars.support.iter().map(ToString::to_string).collect();
     let comments = vec![
         format!(
@@ -546,6 +526,29 @@ fn check_nodes(defender_nodes: usize) -> Result<(), ModelError> {
 }
 
 /// The pairs `(L_i, K_i)` with a cycle through a `K_i` cell that avoids
+/// Adds the certificate formula to `cnf`: one certificate per pair and the
+/// claim on the initial states for `settings.mode` (module documentation).
+fn certificate_formula(
+    context: &Context,
+    cnf: &mut Cnf,
+    vars: &mut SupportVariables,
+    pairs: &[&RabinPair],
+    settings: &Settings,
+    rank_bound: usize,
+) -> Result<(), SynthesisError> {
+    let certificates = encoding::certificates(
+        context,
+        cnf,
+        vars,
+        pairs,
+        settings.mode.claim(),
+        settings.rank_encoding,
+        rank_bound,
+        None,
+    )?;
+    encoding::claim_initial(context, cnf, &certificates, settings.mode.claim())
+}
+
 /// What both the search and the DIMACS export build first: the game's
 /// transitions, the cell graph, and the rank bound.
 struct Problem {
