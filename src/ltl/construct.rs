@@ -778,20 +778,24 @@ pub(crate) fn wait_then(context: &mut Context, l: &Formula, then: &Tgr) -> Tgr {
     }
 }
 
-/// The union of two automata over the same letters: their product, whose
-/// marks are those of `first` followed by those of `second` (shifted past
-/// `first`'s), accepting a run iff some disjunct of either automaton holds on
-/// its component. It accepts exactly the words one of them accepts.
-pub(crate) fn union(first: &Tgr, second: &Tgr) -> Result<Tgr, TranslateError> {
-    let letters = first.letters;
-    let shift = first.num_marks;
-    let num_marks = shift + second.num_marks;
+/// The number of marks of the product of `first` and `second` (theirs
+/// added up), or an error when a [`MarkSet`] cannot hold them.
+fn marks_of_product(first: &Tgr, second: &Tgr) -> Result<u32, TranslateError> {
+    let num_marks = first.num_marks + second.num_marks;
     if num_marks > MarkSet::BITS {
         return Err(TranslateError::TooManyMarks {
             count: num_marks as usize,
             limit: MarkSet::BITS as usize,
         });
     }
+    Ok(num_marks)
+}
+
+/// The edges of the synchronous product of `first` and `second` from their
+/// initial states: each edge carries `first`'s marks followed by `second`'s,
+/// shifted past `first`'s.
+fn product_edges(first: &Tgr, second: &Tgr) -> Result<Vec<Edge>, TranslateError> {
+    let (letters, shift) = (first.letters, first.num_marks);
     let shifted = |marks: MarkSet| marks.checked_shl(shift).unwrap_or(0);
     let (_, edges) = explore(
         (first.initial as u32, second.initial as u32),
@@ -802,6 +806,21 @@ pub(crate) fn union(first: &Tgr, second: &Tgr) -> Result<Tgr, TranslateError> {
             ((e.target, f.target), e.marks | shifted(f.marks))
         },
     )?;
+    Ok(edges)
+}
+
+/// The union of two automata over the same letters: their product, whose
+/// marks are those of `first` followed by those of `second` (shifted past
+/// `first`'s), accepting a run iff some disjunct of either automaton holds on
+/// its component. It accepts exactly the words one of them accepts.
+pub(crate) fn union(first: &Tgr, second: &Tgr) -> Result<Tgr, TranslateError> {
+    let (letters, shift, num_marks) = (
+        first.letters,
+        first.num_marks,
+        marks_of_product(first, second)?,
+    );
+    let edges = product_edges(first, second)?;
+    let shifted = |marks: MarkSet| marks.checked_shl(shift).unwrap_or(0);
     let disjuncts = first
         .disjuncts
         .iter()
@@ -857,29 +876,17 @@ pub(crate) const MAX_PRODUCT_DISJUNCTS: usize = 4096;
 /// Rabin condition again; for conjunctions of `GF`, `FG` and `G (a -> F b)`
 /// terms the states multiply, the marks add up and no guess is enumerated).
 pub(crate) fn intersection(first: &Tgr, second: &Tgr) -> Result<Tgr, TranslateError> {
-    let letters = first.letters;
-    let shift = first.num_marks;
-    let num_marks = shift + second.num_marks;
-    if num_marks > MarkSet::BITS {
-        return Err(TranslateError::TooManyMarks {
-            count: num_marks as usize,
-            limit: MarkSet::BITS as usize,
-        });
-    }
+    let (letters, shift, num_marks) = (
+        first.letters,
+        first.num_marks,
+        marks_of_product(first, second)?,
+    );
     let count = first.disjuncts.len() * second.disjuncts.len();
     if count > MAX_PRODUCT_DISJUNCTS {
         return Err(TranslateError::TooLarge { limit: MAX_STATES });
     }
+    let edges = product_edges(first, second)?;
     let shifted = |marks: MarkSet| marks.checked_shl(shift).unwrap_or(0);
-    let (_, edges) = explore(
-        (first.initial as u32, second.initial as u32),
-        letters,
-        |&(p, q), a| {
-            let e = first.edges[p as usize * letters + a as usize];
-            let f = second.edges[q as usize * letters + a as usize];
-            ((e.target, f.target), e.marks | shifted(f.marks))
-        },
-    )?;
     let mut disjuncts = Vec::with_capacity(count);
     for d in &first.disjuncts {
         for e in &second.disjuncts {
