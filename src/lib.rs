@@ -32,6 +32,8 @@
 //!   per parameter (a reference for comparison);
 //! * [`optimise`]: softmax parameters, alternating projected gradient
 //!   ascent-descent and best-response checks (method.md sections 3-4);
+//! * [`pipeline`]: the main job end to end (structures, optimisation, the
+//!   best structure, its certified bracket) and its `solve` directory;
 //! * [`output`]: observers and plots that write the optimiser's results;
 //! * [`limits`]: the resource budget checked before large allocations;
 //! * [`mdp`] and [`certify`]: MDP analysis (maximal end components, Rabin
@@ -54,6 +56,7 @@ pub mod ltl;
 pub mod mdp;
 pub mod optimise;
 pub mod output;
+pub mod pipeline;
 pub mod product;
 pub mod prune;
 pub mod sensitivity;
