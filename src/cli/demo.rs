@@ -21,8 +21,8 @@ use posg_fsc::optimise::Settings;
 use posg_fsc::output::OutputDirectory;
 use posg_fsc::pipeline::{Automata, Job, Outcome, Sizes};
 use posg_fsc::prune::{PruneSettings, prune};
-use posg_fsc::solver::SolverSettings;
 use posg_fsc::synthesis::{self, Mode, synthesise};
+use posg_fsc::value::SolverSettings;
 use posg_fsc::value::evaluate_controllers;
 
 use super::progress::ProgressMode;

@@ -134,7 +134,7 @@ pub struct Settings {
     #[arg(skip = Settings::default().solver)]
     pub solver: SolverMethod,
     /// With `solver` auto: the most unknowns solved by LU. Recorded in
-    /// `summary.json` only when it is not [`DEFAULT_LU_LIMIT`].
+    /// `summary.json` only when it is not [`crate::value::DEFAULT_LU_LIMIT`].
     #[arg(skip = Settings::default().lu_limit)]
     #[serde(skip_serializing_if = "is_default_lu_limit")]
     pub lu_limit: usize,
