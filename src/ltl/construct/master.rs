@@ -3,7 +3,8 @@
 //!
 //! Contract: [`master`] returns an automaton with transition-based
 //! generalised Rabin acceptance (one disjunct per remaining guess `(X, Y)`)
-//! accepting exactly the words of `phi`. It runs in five steps: enumerate
+//! accepting exactly the words of `phi`. It runs in five steps: find the
+//! candidates `mu(phi)` and `nu(phi)` ([`fixpoint_candidates`]), enumerate
 //! the guesses and the monitors they need ([`enumerate_guesses`]), keep the
 //! strongest guesses ([`strongest_guesses`]), number the marks of the
 //! monitors they use ([`MarkLayout`]), and explore the product of the
