@@ -49,6 +49,7 @@ pub mod controller;
 pub mod export;
 pub mod game;
 pub mod graph;
+mod interner;
 pub mod limits;
 pub mod ltl;
 pub mod mdp;

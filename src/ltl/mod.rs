@@ -81,6 +81,7 @@ use crate::automaton::{
     AutomatonError, Dra, EmersonLeiAutomaton, Letter, MAX_PROPOSITIONS, RabinPair,
     minimise::minimise_with_free_start, to_state_based_rabin,
 };
+use crate::interner::{Interner, TooManyKeys};
 use construct::budget;
 
 /// Why a formula could not be translated.
@@ -573,9 +574,13 @@ fn degeneralise(
     let marks = &disjunct.inf;
     let letters = tgr.letters;
     type Key = (u32, u32, bool, bool);
-    let mut index: rustc_hash::FxHashMap<Key, u32> = rustc_hash::FxHashMap::default();
-    let mut states: Vec<Key> = vec![(tgr.initial as u32, 0, false, false)];
-    index.insert(states[0], 0);
+    let too_large = |TooManyKeys| TranslateError::TooLarge {
+        limit: construct::MAX_STATES,
+    };
+    let mut states: Interner<Key> = Interner::default();
+    states
+        .intern((tgr.initial as u32, 0, false, false))
+        .map_err(too_large)?;
     let mut successors = Vec::new();
     let mut next = 0;
     while next < states.len() {
@@ -586,7 +591,7 @@ fn degeneralise(
                 limit: construct::MAX_STATES,
             });
         }
-        let (q, awaited, _, _) = states[next];
+        let (q, awaited, _, _) = states.keys()[next];
         for letter in 0..letters {
             let edge = tgr.edges[q as usize * letters + letter];
             let mut i = awaited as usize;
@@ -600,15 +605,11 @@ fn degeneralise(
                 completed,
                 edge.marks & disjunct.fin != 0,
             );
-            let fresh = states.len() as u32;
-            let target = *index.entry(key).or_insert_with(|| {
-                states.push(key);
-                fresh
-            });
-            successors.push(target);
+            successors.push(states.intern(key).map_err(too_large)?);
         }
         next += 1;
     }
+    let states = states.into_keys();
     let pair = RabinPair {
         fin: states.iter().map(|s| s.3).collect(),
         inf: states.iter().map(|s| s.2).collect(),
