@@ -17,21 +17,25 @@
 //! over the GMC for the gradient of all parameters of both players. The
 //! vectors `b`, `x`, `p0` and `y` live in the evaluator: an evaluation
 //! allocates nothing, and an iterative solver starts from the previous
-//! evaluation's `x` and `y` (warm start). The gradient pass ([`gradient`])
+//! evaluation's `x` and `y` (warm start). The gradient pass ([`GradientPass`])
 //! and its buffers belong to the evaluator too.
 
 mod gradient;
 
 use thiserror::Error;
 
-use crate::analysis::{Recurrence, StateClass};
 use crate::automaton::Dra;
 use crate::controller::{Fsc, Probabilities, Support};
 use crate::game::Posg;
-use crate::product::{Gmc, ProductError};
-use crate::solver::{
-    FlushDenormals, LinearSolver, SolveReport, SolverError, SolverMethod, SolverSettings,
-    SparsePattern,
+use crate::solver::{FlushDenormals, LinearSolver, SparsePattern};
+
+pub use crate::analysis::{Bscc, Recurrence, StateClass};
+pub use crate::product::{Gmc, GmcState, ProductError};
+pub use crate::sensitivity::{ForwardGradient, ForwardSensitivities};
+pub use crate::simulate::{Estimate, STEP_LIMIT, SimulationError, SimulationSettings, simulate};
+pub use crate::solver::{
+    DEFAULT_LU_LIMIT, DEFAULT_TOLERANCE, LuSolver, SolveReport, SolverError, SolverMethod,
+    SolverSettings,
 };
 pub use gradient::{GradientPass, PARALLEL_GRADIENT_ROWS};
 pub(crate) use gradient::{RowWorkspace, row_derivatives};
