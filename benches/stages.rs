@@ -15,7 +15,7 @@
 //!   with the solver [`SolverMethod::Auto`] picks for the size;
 //! * `value+gradient`: [`Evaluator::evaluate_with_gradient`] (two solves and
 //!   the adjoint pass);
-//! * `gradient pass`: [`Gmc::add_adjoint_gradient`] alone;
+//! * `gradient pass`: [`GradientPass::add_adjoint_gradient`] alone;
 //! * `optimiser iteration`: one alternating projected step of both players
 //!   with the public [`Objective`] (value and logit gradients) and
 //!   [`clip`]: an adversary descent step, then a defender ascent step, two
@@ -55,10 +55,10 @@ use posg_fsc::game::Posg;
 use posg_fsc::game::file::{from_json_str, to_json_string};
 use posg_fsc::game::grid::GridSpec;
 use posg_fsc::optimise::{Objective, Softmax, clip};
-use posg_fsc::value::Evaluator;
 use posg_fsc::value::Gmc;
 use posg_fsc::value::Recurrence;
 use posg_fsc::value::{DEFAULT_TOLERANCE, LuSolver, SolverSettings};
+use posg_fsc::value::{Evaluator, GradientPass};
 
 /// (grid side, defender nodes, adversary nodes): about 1.2e3, 1.2e4,
 /// 2.8e4, 1.1e5, 2.0e5 and 1.0e6 GMC states.
@@ -291,10 +291,11 @@ fn stages(c: &mut Criterion) {
             .map(|m| f64::from(recurrence.transient_index[m] != u32::MAX))
             .collect();
         let (mut gd, mut ga) = (vec![0.0; pd.entries.len()], vec![0.0; pa.entries.len()]);
-        gmc.add_adjoint_gradient(&x, &y, &mut gd, &mut ga);
+        let mut pass = GradientPass::new();
+        pass.add_adjoint_gradient(&gmc, &x, &y, &mut gd, &mut ga);
         assert!(finite(&gd) && finite(&ga));
         timed("gradient pass", &mut || {
-            gmc.add_adjoint_gradient(&x, &y, &mut gd, &mut ga)
+            pass.add_adjoint_gradient(&gmc, &x, &y, &mut gd, &mut ga)
         });
         drop((gmc, evaluator));
 

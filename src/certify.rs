@@ -12,7 +12,7 @@
 //!
 //!   ```text
 //!   P((s', q', g') | (s, q, g), v) = sum_u A_def(g', u | s, g) T(s' | s, u, v),  q' = delta(q, L(s')),
-//!   A_def(g', u | s, g) = sum_o O_def(o | s) mu_def(g', u | g, o),
+//!   A_def(g', u | s, g) = sum_o O_def(o | s) mu_def(g', u | g, o)   (controller::Mixture),
 //!   p0(s, delta(q_0, L(s)), g) = init(s) init_def(g).
 //!   ```
 //!
@@ -48,13 +48,13 @@
 
 use std::time::Instant;
 
-use rustc_hash::FxHashMap;
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
-use crate::automaton::{Dra, Letter, RabinPair};
-use crate::controller::{Fsc, Role};
+use crate::automaton::{Dra, RabinPair};
+use crate::controller::{Fsc, Mixture, Role};
 use crate::game::{Player, Posg};
+use crate::interner::{Interner, TooManyKeys};
 use crate::mdp::{
     AcceptingComponent, Mdp, MdpBuilder, QualitativeReachability, Reachability, max_rabin_analysis,
     max_rabin_qualitative,
@@ -331,7 +331,7 @@ fn best_response(
     } else {
         Qualitative::Between
     };
-    let free = free_player(game, fixed);
+    let free = fixed.other().player(game);
     let rules = analysis
         .states
         .iter()
@@ -347,7 +347,7 @@ fn best_response(
     Ok(Bound {
         value: value.clamp(0.0, 1.0),
         strategy: Strategy {
-            player: other(fixed),
+            player: fixed.other(),
             value: value.clamp(0.0, 1.0),
             rules,
         },
@@ -439,31 +439,13 @@ fn analyse_with<R>(
     })
 }
 
-fn other(role: Role) -> Role {
-    match role {
-        Role::Defender => Role::Adversary,
-        Role::Adversary => Role::Defender,
-    }
-}
-
-fn fixed_player(game: &Posg, fixed: Role) -> &Player {
-    match fixed {
-        Role::Defender => game.defender(),
-        Role::Adversary => game.adversary(),
-    }
-}
-
-fn free_player(game: &Posg, fixed: Role) -> &Player {
-    fixed_player(game, other(fixed))
-}
-
 /// Checks that `controller` is `role`'s and fits that player of `game`
 /// (sizes and enabled actions, [`Fsc::check_fits`]).
 fn check_fits(game: &Posg, controller: &Fsc, role: Role) -> Result<(), CertifyError> {
     let problem = if controller.role() != role {
         Err(format!("it is a {:?} controller", controller.role()))
     } else {
-        controller.check_fits(fixed_player(game, role))
+        controller.check_fits(role.player(game))
     };
     problem.map_err(|problem| CertifyError::Mismatch { role, problem })
 }
@@ -478,36 +460,6 @@ fn free_actions(player: &Player, num_states: usize) -> Vec<Vec<usize>> {
                 .collect()
         })
         .collect()
-}
-
-/// `A(g', f | s, g) = sum_o O(o | s) mu(g', f | g, o)` of the fixed player,
-/// as `(g', f, probability)` lists per `s * |G| + g`, distinct `(g', f)`.
-fn mixture(player: &Player, controller: &Fsc, num_states: usize) -> Vec<Vec<(usize, usize, f64)>> {
-    let mut mixture = Vec::with_capacity(num_states * controller.num_nodes());
-    for s in 0..num_states {
-        for g in 0..controller.num_nodes() {
-            let mut terms: Vec<(usize, usize, f64)> = player
-                .observation_distribution(s)
-                .iter()
-                .flat_map(|&(o, weight)| {
-                    controller
-                        .choices(g, o)
-                        .iter()
-                        .map(move |c| (c.next, c.action, weight * c.probability))
-                })
-                .collect();
-            terms.sort_by_key(|&(next, action, _)| (next, action));
-            let mut merged: Vec<(usize, usize, f64)> = Vec::with_capacity(terms.len());
-            for (next, action, p) in terms {
-                match merged.last_mut() {
-                    Some(last) if (last.0, last.1) == (next, action) => last.2 += p,
-                    _ => merged.push((next, action, p)),
-                }
-            }
-            mixture.push(merged);
-        }
-    }
-    mixture
 }
 
 /// The reachable product MDP of a game, an automaton and one player's controller.
@@ -529,36 +481,36 @@ impl Product {
     /// successors by [`MdpBuilder`]).
     fn build(game: &Posg, dra: &Dra, controller: &Fsc, fixed: Role) -> Result<Self, CertifyError> {
         check_fits(game, controller, fixed)?;
-        let free_actions = free_actions(free_player(game, fixed), game.num_states());
-        let letters: Vec<Letter> = (0..game.num_states())
-            .map(|s| dra.letter_of(game.label_names(s)))
-            .collect();
-        let mixture = mixture(fixed_player(game, fixed), controller, game.num_states());
-        let num_nodes = controller.num_nodes();
+        let free_actions = free_actions(fixed.other().player(game), game.num_states());
+        let letters = dra.state_letters(game);
+        let mixture = Mixture::of(fixed.player(game), controller, game.num_states());
         let transition = |s: usize, f: usize, w: usize| match fixed {
             Role::Defender => game.transition(s, f, w),
             Role::Adversary => game.transition(s, w, f),
         };
-        let mut explorer = Explorer::default();
+        let mut explorer: Interner<(usize, usize, usize)> = Interner::default();
         let mut initial = Vec::new();
         for &(s, p) in game.initial() {
             let q = dra.successor(dra.initial(), letters[s]);
             for (g, &p_node) in controller.initial().iter().enumerate() {
                 if p_node > 0.0 {
-                    initial.push((explorer.id((s, q, g)), p * p_node));
+                    initial.push((state_id(&mut explorer, (s, q, g))?, p * p_node));
                 }
             }
         }
         let mut builder = MdpBuilder::new();
         let mut terms = Vec::new();
+        let mut action = Vec::new();
         let mut total_terms = 0u128;
-        while builder.num_states() < explorer.states.len() {
-            let (s, q, g) = explorer.states[builder.num_states()];
+        while builder.num_states() < explorer.len() {
+            let (s, q, g) = explorer.keys()[builder.num_states()];
             for &w in &free_actions[s] {
                 terms.clear();
-                for &(next, f, a) in &mixture[s * num_nodes + g] {
-                    for &(s2, t) in transition(s, f, w) {
-                        terms.push(((s2, dra.successor(q, letters[s2]), next), a * t));
+                for j in mixture.at(s, g) {
+                    let (next, f) = mixture.entry(j);
+                    let a = mixture.values()[j];
+                    for &(s2, t) in transition(s, f as usize, w) {
+                        terms.push(((s2, dra.successor(q, letters[s2]), next as usize), a * t));
                     }
                 }
                 total_terms += terms.len() as u128;
@@ -571,13 +523,17 @@ impl Product {
                 ) {
                     return Err(CertifyError::Budget(message));
                 }
-                builder.add_action(terms.iter().map(|&(key, p)| (explorer.id(key), p)));
+                action.clear();
+                for &(key, p) in &terms {
+                    action.push((state_id(&mut explorer, key)?, p));
+                }
+                builder.add_action(action.iter().copied());
             }
             builder.end_state();
         }
         Ok(Self {
             mdp: builder.build()?,
-            states: explorer.states,
+            states: explorer.into_keys(),
             initial,
             free_actions,
         })
@@ -595,18 +551,13 @@ impl Product {
     }
 }
 
-/// Numbers product states `(s, q, node)` in order of discovery.
-#[derive(Default)]
-struct Explorer {
-    index: FxHashMap<(usize, usize, usize), usize>,
-    states: Vec<(usize, usize, usize)>,
-}
-
-impl Explorer {
-    fn id(&mut self, key: (usize, usize, usize)) -> usize {
-        *self.index.entry(key).or_insert_with(|| {
-            self.states.push(key);
-            self.states.len() - 1
-        })
-    }
+/// The index of product state `(s, q, node)`, numbered in order of discovery.
+fn state_id(
+    explorer: &mut Interner<(usize, usize, usize)>,
+    key: (usize, usize, usize),
+) -> Result<usize, CertifyError> {
+    let id = explorer.intern(key).map_err(|TooManyKeys| {
+        CertifyError::Budget("the certification product MDP exceeds 2^32 - 1 states".into())
+    })?;
+    Ok(id as usize)
 }

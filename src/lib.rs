@@ -77,6 +77,7 @@ pub mod certify;
 pub mod controller;
 pub mod game;
 mod graph;
+mod interner;
 pub mod limits;
 pub mod ltl;
 mod mdp;

@@ -20,25 +20,14 @@
 //! is linear in the number of terms of the sum.
 
 use rayon::prelude::*;
-use rustc_hash::FxHashMap;
 use thiserror::Error;
 
 use crate::automaton::{Dra, Letter};
-use crate::controller::{Probabilities, Support};
+use crate::controller::{Mixture, Probabilities, Support};
 use crate::game::{Player, Posg};
 use crate::graph::CsrGraph;
+use crate::interner::{Interner, TooManyKeys};
 use crate::solver::FlushDenormals;
-
-/// The fewest rows with nonzero adjoint weight for which
-/// [`Gmc::add_adjoint_gradient`] runs in parallel.
-pub const PARALLEL_GRADIENT_ROWS: usize = 4096;
-
-/// The number of row chunks of the parallel gradient pass: fixed, so that
-/// the sum does not depend on the number of threads.
-pub const GRADIENT_CHUNKS: usize = 4;
-
-/// Gradient entries per task when the chunks' buffers are added up.
-const REDUCTION_BLOCK: usize = 1 << 14;
 
 /// A state `(s, q, g, h)` of the GMC: game state, automaton state, defender
 /// node, adversary node.
@@ -71,85 +60,6 @@ pub enum ProductError {
     /// The chain exceeds the resource budget ([`crate::limits`]).
     #[error("the global Markov chain: {0}")]
     Budget(String),
-}
-
-/// One player's action mixture `A(g', u | s, g) = sum_o O(o | s) mu(g', u | g, o)`
-/// on a fixed support: for each `(s, g)` the distinct supported `(g', u)`,
-/// each with the terms `(support entry k, O(o | s))` that sum to it.
-#[derive(Debug, Clone)]
-struct Mixture {
-    num_nodes: usize,
-    offsets: Vec<usize>,
-    entries: Vec<(u32, u32)>,
-    term_offsets: Vec<usize>,
-    terms: Vec<(u32, f64)>,
-    values: Vec<f64>,
-}
-
-/// A mixture entry `(g', u)`.
-type MixtureKey = (u32, u32);
-/// A term `(support entry k, O(o | s))` of a mixture entry.
-type MixtureTerm = (u32, f64);
-
-impl Mixture {
-    fn build(player: &Player, support: &Support, num_states: usize) -> Self {
-        let num_nodes = support.num_nodes();
-        let mut offsets = vec![0];
-        let mut entries = Vec::new();
-        let mut term_offsets = vec![0];
-        let mut terms = Vec::new();
-        let mut pending: Vec<(MixtureKey, Vec<MixtureTerm>)> = Vec::new();
-        for s in 0..num_states {
-            for g in 0..num_nodes {
-                pending.clear();
-                for &(o, weight) in player.observation_distribution(s) {
-                    for k in support.block(g, o) {
-                        let (next, action) = support.entry(k);
-                        let key = (next as u32, action as u32);
-                        let term = (k as u32, weight);
-                        match pending.iter_mut().find(|(e, _)| *e == key) {
-                            Some((_, list)) => list.push(term),
-                            None => pending.push((key, vec![term])),
-                        }
-                    }
-                }
-                pending.sort_by_key(|(key, _)| *key);
-                for (key, list) in &pending {
-                    entries.push(*key);
-                    terms.extend_from_slice(list);
-                    term_offsets.push(terms.len());
-                }
-                offsets.push(entries.len());
-            }
-        }
-        let values = vec![0.0; entries.len()];
-        Self {
-            num_nodes,
-            offsets,
-            entries,
-            term_offsets,
-            terms,
-            values,
-        }
-    }
-
-    fn refill(&mut self, mu: &[f64]) {
-        for (j, value) in self.values.iter_mut().enumerate() {
-            *value = self.terms[self.term_offsets[j]..self.term_offsets[j + 1]]
-                .iter()
-                .map(|&(k, weight)| weight * mu[k as usize])
-                .sum();
-        }
-    }
-
-    fn at(&self, s: usize, g: usize) -> std::ops::Range<usize> {
-        let i = s * self.num_nodes + g;
-        self.offsets[i]..self.offsets[i + 1]
-    }
-
-    fn terms_of(&self, j: usize) -> &[(u32, f64)] {
-        &self.terms[self.term_offsets[j]..self.term_offsets[j + 1]]
-    }
 }
 
 /// Game-level tables: for each state `s`, its possible successors over all
@@ -200,9 +110,7 @@ impl GameTables {
             }
             successor_offsets.push(successors.len());
         }
-        let letters = (0..game.num_states())
-            .map(|s| dra.letter_of(game.label_names(s)))
-            .collect();
+        let letters = dra.state_letters(game);
         Self {
             num_defender_actions: nu,
             num_adversary_actions: nv,
@@ -224,35 +132,6 @@ impl GameTables {
     }
 }
 
-/// Scratch vectors of [`Gmc::row_derivatives`] (one per thread): the
-/// values `x` of a row's successors by cell, and the derivatives of the
-/// row with respect to each of its mixture entries.
-#[derive(Debug, Clone, Default)]
-pub struct RowWorkspace {
-    x_cell: Vec<f64>,
-    d_def: Vec<f64>,
-    d_adv: Vec<f64>,
-}
-
-/// One chunk of rows of the parallel gradient pass: its partial gradients
-/// and its row scratch.
-#[derive(Debug, Clone)]
-struct GradientChunk {
-    defender: Vec<f64>,
-    adversary: Vec<f64>,
-    rows: RowWorkspace,
-}
-
-/// The buffers of [`Gmc::add_adjoint_gradient`], kept between calls: the
-/// rows with nonzero adjoint weight, the row scratch of the sequential
-/// pass and one [`GradientChunk`] per chunk of the parallel pass.
-#[derive(Debug, Clone, Default)]
-struct GradientWorkspace {
-    rows: Vec<u32>,
-    sequential: RowWorkspace,
-    chunks: Vec<GradientChunk>,
-}
-
 /// The reachable global Markov chain in compressed sparse row form.
 ///
 /// Row `m` holds `P(. | m)`; within a row the columns are sorted. Each
@@ -263,8 +142,7 @@ pub struct Gmc {
     tables: GameTables,
     defender: Mixture,
     adversary: Mixture,
-    states: Vec<GmcState>,
-    index: FxHashMap<GmcState, u32>,
+    states: Interner<GmcState>,
     row_offsets: Vec<usize>,
     columns: Vec<u32>,
     cells: Vec<u32>,
@@ -273,7 +151,6 @@ pub struct Gmc {
     initial_probabilities: Vec<f64>,
     game_initial: Vec<f64>,
     max_cells: usize,
-    gradient_workspace: GradientWorkspace,
 }
 
 /// Rows refilled by one parallel task of [`Gmc::refill`].
@@ -320,8 +197,7 @@ impl Gmc {
             tables,
             defender: defender_mixture,
             adversary: adversary_mixture,
-            states: Vec::new(),
-            index: FxHashMap::default(),
+            states: Interner::default(),
             row_offsets: vec![0],
             columns: Vec::new(),
             cells: Vec::new(),
@@ -330,7 +206,6 @@ impl Gmc {
             initial_probabilities: Vec::new(),
             game_initial,
             max_cells,
-            gradient_workspace: GradientWorkspace::default(),
         };
         for &(s, _) in game.initial() {
             let q = dra.successor(dra.initial(), gmc.tables.letters[s]) as u32;
@@ -354,13 +229,9 @@ impl Gmc {
     }
 
     fn intern(&mut self, state: GmcState) -> Result<u32, ProductError> {
-        if let Some(&m) = self.index.get(&state) {
-            return Ok(m);
-        }
-        let m = u32::try_from(self.states.len()).map_err(|_| ProductError::TooLarge)?;
-        self.states.push(state);
-        self.index.insert(state, m);
-        Ok(m)
+        self.states
+            .intern(state)
+            .map_err(|TooManyKeys| ProductError::TooLarge)
     }
 
     fn explore(&mut self, dra: &Dra) -> Result<(), ProductError> {
@@ -369,7 +240,7 @@ impl Gmc {
         let mut row: Vec<(u32, u32)> = Vec::new();
         let mut m = 0;
         while m < self.states.len() {
-            let state = self.states[m];
+            let state = self.states.keys()[m];
             row_cells.clear();
             self.for_each_term(state, |cell, _, _, _| {
                 if !cell_seen[cell] {
@@ -403,7 +274,7 @@ impl Gmc {
 
     /// The GMC state of `cell = (local s', g', h')` in the row of `state`.
     fn cell_state(&self, state: GmcState, cell: usize, dra: &Dra) -> GmcState {
-        let (num_g, num_h) = (self.defender.num_nodes, self.adversary.num_nodes);
+        let (num_g, num_h) = (self.defender.num_nodes(), self.adversary.num_nodes());
         let h = cell % num_h;
         let g = (cell / num_h) % num_g;
         let local = cell / (num_h * num_g);
@@ -421,13 +292,17 @@ impl Gmc {
     /// defining row `state`: defender mixture entry `j = (g', u)`, adversary
     /// mixture entry `l = (h', v)`, successor `s'` (in `cell`).
     #[inline]
-    fn for_each_term(&self, state: GmcState, mut visit: impl FnMut(usize, usize, usize, f64)) {
-        let (s, num_h) = (state.s as usize, self.adversary.num_nodes);
-        let num_g = self.defender.num_nodes;
+    pub(crate) fn for_each_term(
+        &self,
+        state: GmcState,
+        mut visit: impl FnMut(usize, usize, usize, f64),
+    ) {
+        let (s, num_h) = (state.s as usize, self.adversary.num_nodes());
+        let num_g = self.defender.num_nodes();
         for j in self.defender.at(s, state.g as usize) {
-            let (g_next, u) = self.defender.entries[j];
+            let (g_next, u) = self.defender.entry(j);
             for l in self.adversary.at(s, state.h as usize) {
-                let (h_next, v) = self.adversary.entries[l];
+                let (h_next, v) = self.adversary.entry(l);
                 for &(local, p) in self.tables.transition(s, u as usize, v as usize) {
                     let cell = (local as usize * num_g + g_next as usize) * num_h + h_next as usize;
                     visit(cell, j, l, p);
@@ -456,7 +331,7 @@ impl Gmc {
             .for_each(|(rows, chunk)| self.refill_rows(rows, chunk));
         self.values = values;
         for (i, &m) in self.initial_states.iter().enumerate() {
-            let state = self.states[m as usize];
+            let state = self.states.keys()[m as usize];
             self.initial_probabilities[i] = self.game_initial[state.s as usize]
                 * defender.initial[state.g as usize]
                 * adversary.initial[state.h as usize];
@@ -469,9 +344,10 @@ impl Gmc {
         let _flush = FlushDenormals::on_this_thread();
         let mut scratch = vec![0.0; self.max_cells];
         let base = self.row_offsets[rows.start];
-        let (defender_mixture, adversary_mixture) = (&self.defender.values, &self.adversary.values);
+        let (defender_mixture, adversary_mixture) =
+            (self.defender.values(), self.adversary.values());
         for m in rows {
-            self.for_each_term(self.states[m], |cell, j, l, p| {
+            self.for_each_term(self.states.keys()[m], |cell, j, l, p| {
                 scratch[cell] += defender_mixture[j] * adversary_mixture[l] * p;
             });
             for k in self.row_range(m) {
@@ -494,12 +370,12 @@ impl Gmc {
 
     /// State `m` as `(s, q, g, h)`.
     pub fn state(&self, m: usize) -> GmcState {
-        self.states[m]
+        self.states.keys()[m]
     }
 
     /// The index of a reachable state.
     pub fn index_of(&self, state: GmcState) -> Option<usize> {
-        self.index.get(&state).map(|&m| m as usize)
+        self.states.get(&state).map(|m| m as usize)
     }
 
     /// Row `m`: successor indices (sorted) and their probabilities.
@@ -536,205 +412,31 @@ impl Gmc {
             .map(|(&m, &p)| (m as usize, p))
     }
 
-    /// A scratch space for [`Gmc::row_derivatives`], sized for this chain.
-    pub fn row_workspace(&self) -> RowWorkspace {
-        RowWorkspace {
-            x_cell: vec![0.0; self.max_cells],
-            d_def: Vec::new(),
-            d_adv: Vec::new(),
-        }
+    /// The largest number of cells `(local s', g', h')` of a row: the
+    /// length of a dense scratch vector indexed by cell.
+    pub(crate) fn max_cells(&self) -> usize {
+        self.max_cells
     }
 
-    /// The partial derivatives of row `m`'s expectation of `x` with respect
-    /// to the controller probabilities (method.md section 2):
-    ///
-    /// ```text
-    /// r_k(m) = sum_m' dP(m' | m)/d mu_k x(m').
-    /// ```
-    ///
-    /// For a defender support entry `k = (g', u | g, o)` with `m = (s, q, g, h)`,
-    ///
-    /// ```text
-    /// r_k(m) = O_def(o|s) sum_{h',v} A_adv(h',v | s,h) sum_{s'} T(s'|s,u,v) x(s', q', g', h'),
-    /// ```
-    ///
-    /// and symmetrically for the adversary. Calls `defender(k, r_k(m))` and
-    /// `adversary(k, r_k(m))` once for every support entry `k` whose
-    /// probability appears in row `m` (every other `r_k(m)` is zero), using
-    /// the numbers of the last [`Gmc::refill`]. `x` is indexed by GMC state.
-    pub fn row_derivatives(
-        &self,
-        m: usize,
-        x: &[f64],
-        work: &mut RowWorkspace,
-        mut defender: impl FnMut(usize, f64),
-        mut adversary: impl FnMut(usize, f64),
-    ) {
-        let state = self.states[m];
-        for k in self.row_range(m) {
-            work.x_cell[self.cells[k] as usize] = x[self.columns[k] as usize];
-        }
-        let def_range = self.defender.at(state.s as usize, state.g as usize);
-        let adv_range = self.adversary.at(state.s as usize, state.h as usize);
-        work.d_def.clear();
-        work.d_def.resize(def_range.len(), 0.0);
-        work.d_adv.clear();
-        work.d_adv.resize(adv_range.len(), 0.0);
-        let (def_start, adv_start) = (def_range.start, adv_range.start);
-        let (defender_mixture, adversary_mixture) = (&self.defender.values, &self.adversary.values);
-        let (x_cell, d_def, d_adv) = (&work.x_cell, &mut work.d_def, &mut work.d_adv);
-        self.for_each_term(state, |cell, j, l, p| {
-            let w = p * x_cell[cell];
-            d_def[j - def_start] += adversary_mixture[l] * w;
-            d_adv[l - adv_start] += defender_mixture[j] * w;
-        });
-        for (offset, j) in def_range.enumerate() {
-            for &(k, weight) in self.defender.terms_of(j) {
-                defender(k as usize, weight * d_def[offset]);
-            }
-        }
-        for (offset, l) in adv_range.enumerate() {
-            for &(k, weight) in self.adversary.terms_of(l) {
-                adversary(k as usize, weight * d_adv[offset]);
-            }
-        }
+    /// The cell `(local s', g', h')` of each stored entry of row `m`,
+    /// aligned with [`Gmc::row`].
+    pub(crate) fn row_cells(&self, m: usize) -> &[u32] {
+        &self.cells[self.row_range(m)]
     }
 
-    /// The adjoint gradient pass of method.md section 2. With `x` the value
-    /// vector on all states and `y` the adjoint weights (zero outside `T`),
-    /// adds to `gradient_defender[k]` and `gradient_adversary[k]`
-    ///
-    /// ```text
-    /// grad_k = sum_m y(m) r_k(m),   r_k(m) = sum_m' dP(m' | m)/d mu_k x(m')
-    /// ```
-    ///
-    /// ([`Gmc::row_derivatives`]): the partial derivatives of
-    /// `sum_m y(m) sum_m' P(m' | m) x(m')` with respect to `mu_def` and `mu_adv`.
-    ///
-    /// Above [`PARALLEL_GRADIENT_ROWS`] rows with `y(m) != 0`, the rows are
-    /// split into [`GRADIENT_CHUNKS`] contiguous chunks handled in parallel
-    /// (rayon), each summing into its own buffers, which are then added in
-    /// chunk order. The chunks do not depend on the number of threads, so
-    /// the result is bitwise reproducible; it differs from a sequential sum
-    /// only by the order of summation. The buffers are kept in the GMC and
-    /// reused: after the first call the pass allocates nothing.
-    pub fn add_adjoint_gradient(
-        &mut self,
-        x: &[f64],
-        y: &[f64],
-        gradient_defender: &mut [f64],
-        gradient_adversary: &mut [f64],
-    ) {
-        let mut workspace = std::mem::take(&mut self.gradient_workspace);
-        workspace.rows.clear();
-        workspace
-            .rows
-            .extend((0..y.len()).filter(|&m| y[m] != 0.0).map(|m| m as u32));
-        if workspace.rows.len() < PARALLEL_GRADIENT_ROWS {
-            let work = &mut workspace.sequential;
-            work.x_cell.resize(self.max_cells, 0.0);
-            for &m in &workspace.rows {
-                let y_m = y[m as usize];
-                self.row_derivatives(
-                    m as usize,
-                    x,
-                    work,
-                    |k, r| gradient_defender[k] += y_m * r,
-                    |k, r| gradient_adversary[k] += y_m * r,
-                );
-            }
-        } else {
-            self.parallel_adjoint_gradient(
-                &mut workspace,
-                x,
-                y,
-                gradient_defender,
-                gradient_adversary,
-            );
-        }
-        self.gradient_workspace = workspace;
+    /// The defender's and the adversary's mixtures `A(g', u | s, g)` as of
+    /// the last [`Gmc::refill`].
+    pub(crate) fn mixtures(&self) -> (&Mixture, &Mixture) {
+        (&self.defender, &self.adversary)
     }
 
-    fn parallel_adjoint_gradient(
-        &self,
-        workspace: &mut GradientWorkspace,
-        x: &[f64],
-        y: &[f64],
-        gradient_defender: &mut [f64],
-        gradient_adversary: &mut [f64],
-    ) {
-        let (num_def, num_adv) = (gradient_defender.len(), gradient_adversary.len());
-        workspace
-            .chunks
-            .resize_with(GRADIENT_CHUNKS, || GradientChunk {
-                defender: Vec::new(),
-                adversary: Vec::new(),
-                rows: RowWorkspace::default(),
-            });
-        let rows = &workspace.rows;
-        let per_chunk = rows.len().div_ceil(GRADIENT_CHUNKS);
-        workspace
-            .chunks
-            .par_iter_mut()
-            .enumerate()
-            .for_each(|(c, chunk)| {
-                let _flush = FlushDenormals::on_this_thread();
-                chunk.defender.clear();
-                chunk.defender.resize(num_def, 0.0);
-                chunk.adversary.clear();
-                chunk.adversary.resize(num_adv, 0.0);
-                chunk.rows.x_cell.resize(self.max_cells, 0.0);
-                let mine =
-                    &rows[(c * per_chunk).min(rows.len())..((c + 1) * per_chunk).min(rows.len())];
-                let (defender, adversary) = (&mut chunk.defender, &mut chunk.adversary);
-                for &m in mine {
-                    let y_m = y[m as usize];
-                    self.row_derivatives(
-                        m as usize,
-                        x,
-                        &mut chunk.rows,
-                        |k, r| defender[k] += y_m * r,
-                        |k, r| adversary[k] += y_m * r,
-                    );
-                }
-            });
-        let chunks = &workspace.chunks;
-        let reduce = |gradient: &mut [f64], part: fn(&GradientChunk) -> &[f64]| {
-            gradient
-                .par_chunks_mut(REDUCTION_BLOCK)
-                .enumerate()
-                .for_each(|(b, block)| {
-                    let start = b * REDUCTION_BLOCK;
-                    for (i, g) in block.iter_mut().enumerate() {
-                        *g += chunks
-                            .iter()
-                            .map(|chunk| part(chunk)[start + i])
-                            .sum::<f64>();
-                    }
-                });
-        };
-        reduce(gradient_defender, |chunk| &chunk.defender);
-        reduce(gradient_adversary, |chunk| &chunk.adversary);
-    }
-
-    /// Adds to `initial_defender[g]` and `initial_adversary[h]` the partial
-    /// derivatives of `V = sum_m p0(m) x(m)` with respect to the initial node
-    /// probabilities: `dV/d init_def(g) = sum_{s,h} init(s) init_adv(h) x(s, q0(s), g, h)`.
-    pub fn add_initial_gradient(
-        &self,
-        x: &[f64],
-        defender: &Probabilities,
-        adversary: &Probabilities,
-        initial_defender: &mut [f64],
-        initial_adversary: &mut [f64],
-    ) {
-        for &m in &self.initial_states {
-            let state = self.states[m as usize];
-            let (s, g, h) = (state.s as usize, state.g as usize, state.h as usize);
-            let base = self.game_initial[s] * x[m as usize];
-            initial_defender[g] += base * adversary.initial[h];
-            initial_adversary[h] += base * defender.initial[g];
-        }
+    /// The initial states `(s, q0(s), g, h)` and `init(s)` of each, in the
+    /// order of [`Gmc::initial`].
+    pub(crate) fn initial_states(&self) -> impl Iterator<Item = (usize, f64)> + '_ {
+        self.initial_states.iter().map(|&m| {
+            let s = self.states.keys()[m as usize].s as usize;
+            (m as usize, self.game_initial[s])
+        })
     }
 }
 

@@ -10,7 +10,7 @@
 //! dV/d mu_k = sum_{m in T} p0(m) dx_k(m),
 //! ```
 //!
-//! with `r_k` from [`crate::product::Gmc::row_derivatives`] (`x` is 1 on
+//! with `r_k` from the adjoint gradient pass of [`crate::value`] (`x` is 1 on
 //! `B`, 0 on `Z`, and does not depend on `mu` there). This is the method
 //! of gradient-based parameter synthesis in probabilistic model checkers
 //! (one solve per parameter); the adjoint method computes the same numbers
@@ -19,12 +19,12 @@
 //! it once (sparse LU) and then solves once per parameter.
 //!
 //! The derivatives with respect to the initial node distributions need no
-//! solve in either method ([`crate::product::Gmc::add_initial_gradient`]);
+//! solve in either method ([`crate::value::Evaluator::evaluate_with_gradient`]);
 //! they are not repeated here.
 
 use crate::controller::Probabilities;
 use crate::solver::{FlushDenormals, LuSolver, SolveReport, SolverError};
-use crate::value::Evaluator;
+use crate::value::{Evaluator, RowWorkspace, row_derivatives};
 
 /// The right-hand sides `r_k` on `T` for every support entry of both
 /// players, and the sparse LU of `I - Q`, ready for one solve per parameter.
@@ -75,10 +75,11 @@ impl ForwardSensitivities {
         let num_defender = defender.entries.len();
         let num_parameters = num_defender + adversary.entries.len();
         let (mut from_defender, mut from_adversary) = (Vec::new(), Vec::new());
-        let mut work = gmc.row_workspace();
+        let mut work = RowWorkspace::for_chain(gmc);
         for (i, &m) in recurrence.transient.iter().enumerate() {
             let i = i as u32;
-            gmc.row_derivatives(
+            row_derivatives(
+                gmc,
                 m,
                 x,
                 &mut work,

@@ -101,9 +101,7 @@ pub fn simulate(
             bscc_of[m] = Some(bscc.is_feasible());
         }
     }
-    let letters: Vec<_> = (0..game.num_states())
-        .map(|s| dra.letter_of(game.label_names(s)))
-        .collect();
+    let letters = dra.state_letters(game);
     let mut rng = ChaCha8Rng::seed_from_u64(settings.seed);
     let mut successes = 0;
     for run in 0..settings.runs {

@@ -17,7 +17,10 @@
 //! over the GMC for the gradient of all parameters of both players. The
 //! vectors `b`, `x`, `p0` and `y` live in the evaluator: an evaluation
 //! allocates nothing, and an iterative solver starts from the previous
-//! evaluation's `x` and `y` (warm start).
+//! evaluation's `x` and `y` (warm start). The gradient pass ([`GradientPass`])
+//! and its buffers belong to the evaluator too.
+
+mod gradient;
 
 use thiserror::Error;
 
@@ -27,13 +30,15 @@ use crate::game::Posg;
 use crate::solver::{FlushDenormals, LinearSolver, SparsePattern};
 
 pub use crate::analysis::{Bscc, Recurrence, StateClass};
-pub use crate::product::{Gmc, GmcState, PARALLEL_GRADIENT_ROWS, ProductError};
+pub use crate::product::{Gmc, GmcState, ProductError};
 pub use crate::sensitivity::{ForwardGradient, ForwardSensitivities};
 pub use crate::simulate::{Estimate, STEP_LIMIT, SimulationError, SimulationSettings, simulate};
 pub use crate::solver::{
     DEFAULT_LU_LIMIT, DEFAULT_TOLERANCE, LuSolver, SolveReport, SolverError, SolverMethod,
     SolverSettings,
 };
+pub use gradient::{GradientPass, PARALLEL_GRADIENT_ROWS};
+pub(crate) use gradient::{RowWorkspace, row_derivatives};
 
 /// Why a value could not be computed.
 #[derive(Debug, Error, Clone, PartialEq)]
@@ -269,6 +274,7 @@ pub struct Evaluator {
     system: TransientSystem,
     values: Vec<f64>,
     adjoint: Vec<f64>,
+    gradient_pass: GradientPass,
 }
 
 impl Evaluator {
@@ -296,6 +302,7 @@ impl Evaluator {
             system,
             values,
             adjoint,
+            gradient_pass: GradientPass::new(),
         })
     }
 
@@ -407,13 +414,15 @@ impl Evaluator {
             adjoint_residual: report.residual,
             adjoint_iterations: report.iterations,
         };
-        self.gmc.add_adjoint_gradient(
+        self.gradient_pass.add_adjoint_gradient(
+            &self.gmc,
             &self.values,
             &self.adjoint,
             &mut gradient.defender,
             &mut gradient.adversary,
         );
-        self.gmc.add_initial_gradient(
+        gradient::add_initial_gradient(
+            &self.gmc,
             &self.values,
             defender,
             adversary,

@@ -3,7 +3,7 @@
 //! `Inf(m)`), as in HOA v1, and their conversion to state-based Rabin
 //! automata ([`to_state_based_rabin`]).
 
-use rustc_hash::FxHashMap;
+use crate::interner::{Interner, TooManyKeys};
 
 use super::{AutomatonError, Dra, Letter, MAX_PROPOSITIONS, RabinPair};
 
@@ -278,14 +278,20 @@ pub fn to_state_based_rabin(aut: &EmersonLeiAutomaton) -> Result<Dra, AutomatonE
         counters: vec![0; counted.len()],
         completed: vec![false; counted.len()],
     };
-    let mut states = vec![initial.clone()];
-    let mut index = FxHashMap::default();
-    index.insert(initial, 0u32);
+    let mut states = Interner::default();
+    let too_large = |count: usize| {
+        AutomatonError::Malformed(format!(
+            "the state-based Rabin automaton would exceed {count} states"
+        ))
+    };
+    states
+        .intern(initial)
+        .map_err(|TooManyKeys| too_large(u32::MAX as usize))?;
     let mut successors = Vec::new();
     let mut next = 0;
     while next < states.len() {
         for letter in 0..letters {
-            let state = &states[next];
+            let state = &states.keys()[next];
             let q = state.q as usize;
             let seen = satisfied(q, letter);
             let (counters, completed) = counted
@@ -311,25 +317,20 @@ pub fn to_state_based_rabin(aut: &EmersonLeiAutomaton) -> Result<Dra, AutomatonE
                 counters,
                 completed,
             };
-            let id = match index.get(&key) {
-                Some(&id) => id,
-                None => {
-                    if (states.len() + 1) * letters > MAX_TABLE_ENTRIES {
-                        return Err(AutomatonError::Malformed(format!(
-                            "the state-based Rabin automaton would exceed {} states",
-                            MAX_TABLE_ENTRIES / letters
-                        )));
-                    }
-                    let id = states.len() as u32;
-                    states.push(key.clone());
-                    index.insert(key, id);
-                    id
+            let id = match states.get(&key) {
+                Some(id) => id,
+                None if (states.len() + 1) * letters > MAX_TABLE_ENTRIES => {
+                    return Err(too_large(MAX_TABLE_ENTRIES / letters));
                 }
+                None => states
+                    .intern(key)
+                    .map_err(|TooManyKeys| too_large(u32::MAX as usize))?,
             };
             successors.push(id);
         }
         next += 1;
     }
+    let states = states.into_keys();
     let rabin_pairs = pairs
         .iter()
         .enumerate()

@@ -34,6 +34,8 @@ pub use minimise::{minimise, minimise_with_free_start};
 
 use thiserror::Error;
 
+use crate::game::Posg;
+
 /// A letter of the alphabet `2^AP`: bit `i` is set iff proposition `i` holds.
 pub type Letter = u32;
 
@@ -158,6 +160,15 @@ impl Dra {
             .into_iter()
             .filter_map(|name| self.propositions.iter().position(|p| p == name))
             .fold(0, |letter, bit| letter | (1 << bit))
+    }
+
+    /// The state letters `L(s)` of a game: for each game state `s`, the
+    /// letter in which exactly the propositions labelling `s` hold
+    /// ([`Dra::letter_of`] of [`Posg::label_names`]), indexed by `s`.
+    pub fn state_letters(&self, game: &Posg) -> Vec<Letter> {
+        (0..game.num_states())
+            .map(|s| self.letter_of(game.label_names(s)))
+            .collect()
     }
 
     /// Whether the automaton accepts some infinite word whose letters all

@@ -158,7 +158,7 @@ impl StrategyFile {
         check_value(self.free_player_value, &at.key("free_player_value"))?;
         self.automaton.check(&at.key("automaton"))?;
         self.automaton.letters_of(game, &at.key("automaton"))?;
-        let player = free_player(game, self.player);
+        let player = self.player.player(game);
         let mut seen: FxHashMap<(usize, usize, usize), usize> = FxHashMap::default();
         for (i, rule) in self.rules.iter().enumerate() {
             let here = at.key("rules").index(i);
@@ -206,7 +206,7 @@ impl StrategyFile {
                 at.key("action").error(format!(
                     "unknown action `{}` of the {}",
                     rule.action,
-                    role_name(self.player)
+                    self.player.name()
                 ))
             })?;
         if !player.action_enabled_in_state(s, u) {
@@ -226,7 +226,7 @@ impl StrategyFile {
     ///
     /// [`read`]: StrategyFile::read
     pub fn to_fsc(&self, game: &Posg) -> Result<Fsc, String> {
-        let player = free_player(game, self.player);
+        let player = self.player.player(game);
         let observed_state = observed_states(game, player, self.player)?;
         let at = Located::new("strategy", "");
         let letters = self
@@ -378,14 +378,14 @@ fn observed_states(game: &Posg, player: &Player, role: Role) -> Result<Vec<Optio
         let &[(o, _)] = player.observation_distribution(s) else {
             return Err(format!(
                 "the {} does not observe the state exactly: state `{}` has several observations",
-                role_name(role),
+                role.name(),
                 game.states()[s]
             ));
         };
         if let Some(other) = state_of[o].replace(s) {
             return Err(format!(
                 "the {} does not observe the state exactly: states `{}` and `{}` share observation `{}`",
-                role_name(role),
+                role.name(),
                 game.states()[other],
                 game.states()[s],
                 player.observations()[o]
@@ -402,20 +402,6 @@ fn first_enabled(player: &Player, o: usize) -> usize {
         .enabled_actions(o)
         .next()
         .expect("every observation enables some action")
-}
-
-fn free_player(game: &Posg, role: Role) -> &Player {
-    match role {
-        Role::Defender => game.defender(),
-        Role::Adversary => game.adversary(),
-    }
-}
-
-fn role_name(role: Role) -> &'static str {
-    match role {
-        Role::Defender => "defender",
-        Role::Adversary => "adversary",
-    }
 }
 
 fn check_value(value: f64, at: &Located) -> Result<(), ModelError> {

@@ -4,7 +4,6 @@
 use std::path::PathBuf;
 
 use clap::Args;
-use posg_fsc::controller::Role;
 use posg_fsc::controller::file::{read_either, read_standalone};
 use posg_fsc::output::dot::{DEFAULT_THRESHOLD, controller_dot};
 
@@ -42,10 +41,7 @@ pub fn run(args: DotArgs) -> anyhow::Result<()> {
         Some(game_path) => {
             let game = common::read_game(game_path)?;
             let fsc = read_either(&args.controller, &game)?;
-            let player = match fsc.role() {
-                Role::Defender => game.defender(),
-                Role::Adversary => game.adversary(),
-            };
+            let player = fsc.role().player(&game);
             let title = format!("{name}: {} nodes", fsc.num_nodes());
             controller_dot(
                 &fsc,

@@ -195,10 +195,7 @@ fn stops_json(game: &Posg, report: &PruneReport) -> Vec<Value> {
 }
 
 fn stop_json(game: &Posg, a: &Attempt, s: &LastOptionStop) -> Value {
-    let player = match s.player {
-        Role::Defender => game.defender(),
-        Role::Adversary => game.adversary(),
-    };
+    let player = s.player.player(game);
     json!({
         "scc": a.scc, "pair": a.pair,
         "bad_state": describe(game, s.bad_state),

@@ -34,7 +34,7 @@ pub fn from_json_str(
     role: Role,
 ) -> Result<Fsc, ModelError> {
     let raw: RawFsc = parse(text, file_name)?;
-    build(raw, &Located::new(file_name, ""), player(game, role), role)
+    build(raw, &Located::new(file_name, ""), role.player(game), role)
 }
 
 /// Reads the controller file at `path` for whichever player of `game` its
@@ -44,7 +44,7 @@ pub fn read_either(path: &Path, game: &Posg) -> Result<Fsc, ModelError> {
     let text = read_text(path, &file_name)?;
     let raw: RawFsc = parse(&text, &file_name)?;
     let role = raw.player;
-    build(raw, &Located::new(&file_name, ""), player(game, role), role)
+    build(raw, &Located::new(&file_name, ""), role.player(game), role)
 }
 
 /// A controller read without its game, with the observation and action
@@ -99,7 +99,7 @@ pub fn read_standalone(path: &Path) -> Result<Standalone, ModelError> {
 /// actions: one rule per (node, observation), `"default": "error"`, the
 /// `logit` of every choice that has one.
 pub fn to_json_string(fsc: &Fsc, game: &Posg) -> String {
-    let raw = RawFsc::from_fsc(fsc, player(game, fsc.role));
+    let raw = RawFsc::from_fsc(fsc, fsc.role.player(game));
     serde_json::to_string_pretty(&raw).expect("a controller always serialises")
 }
 
@@ -126,7 +126,7 @@ pub fn resolve(spec: &str, game: &Posg, role: Role) -> Result<Fsc, ModelError> {
                 format!("`uniform:K` needs a whole number K >= 1, not `{size}`"),
             )
         })?;
-    let p = player(game, role);
+    let p = role.player(game);
     Fsc::check_uniform_size(spec, nodes, p.num_observations(), p.num_actions())?;
     if role == Role::Adversary && !game.has_adversary() && nodes != 1 {
         return Err(ModelError::new(
@@ -136,13 +136,6 @@ pub fn resolve(spec: &str, game: &Posg, role: Role) -> Result<Fsc, ModelError> {
         ));
     }
     Ok(Fsc::uniform_enabled(role, nodes, p))
-}
-
-fn player(game: &Posg, role: Role) -> &Player {
-    match role {
-        Role::Defender => game.defender(),
-        Role::Adversary => game.adversary(),
-    }
 }
 
 /// The top-level object of a `*.fsc.json` file.
@@ -197,8 +190,8 @@ fn build(raw: RawFsc, at: &Located, player: &Player, role: Role) -> Result<Fsc, 
     if raw.player != role {
         return Err(at.key("player").error(format!(
             "the file's player is `{}`, but a controller for the `{}` is needed",
-            role_name(raw.player),
-            role_name(role)
+            raw.player.name(),
+            role.name()
         )));
     }
     if raw.nodes == 0 {
@@ -216,13 +209,6 @@ fn build(raw: RawFsc, at: &Located, player: &Player, role: Role) -> Result<Fsc, 
         initial,
         blocks,
     )
-}
-
-fn role_name(role: Role) -> &'static str {
-    match role {
-        Role::Defender => "defender",
-        Role::Adversary => "adversary",
-    }
 }
 
 fn initial(raw: &[f64], nodes: usize, at: &Located) -> Result<Vec<f64>, ModelError> {

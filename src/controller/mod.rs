@@ -7,11 +7,13 @@
 //! (formats.md section 2) and the `uniform:K` shorthand.
 
 pub mod file;
+mod mixture;
 mod support;
 
+pub(crate) use mixture::Mixture;
 pub use support::{Probabilities, Support};
 
-use crate::game::{ModelError, Player};
+use crate::game::{ModelError, Player, Posg, check_total};
 
 /// Which player a controller belongs to.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
@@ -21,6 +23,33 @@ pub enum Role {
     Defender,
     /// The minimising player.
     Adversary,
+}
+
+impl Role {
+    /// The other player.
+    pub fn other(self) -> Self {
+        match self {
+            Self::Defender => Self::Adversary,
+            Self::Adversary => Self::Defender,
+        }
+    }
+
+    /// The game's player of this role: its actions, observations and
+    /// observation distributions `O_*(o | s)`.
+    pub fn player(self, game: &Posg) -> &Player {
+        match self {
+            Self::Defender => game.defender(),
+            Self::Adversary => game.adversary(),
+        }
+    }
+
+    /// `defender` or `adversary`, as the role is written in files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Defender => "defender",
+            Self::Adversary => "adversary",
+        }
+    }
 }
 
 /// One supported choice `(g', u)` of a (node, observation) block with its
@@ -265,7 +294,8 @@ impl Fsc {
     }
 }
 
-/// Checks that finite, non-negative weights sum to 1 within 1e-6 (formats.md section 1).
+/// Checks that finite, non-negative weights sum to 1 within
+/// [`crate::game::DISTRIBUTION_TOLERANCE`] (formats.md section 1).
 pub(crate) fn check_distribution(weights: impl Iterator<Item = f64>) -> Result<(), String> {
     let mut total = 0.0;
     for w in weights {
@@ -274,10 +304,5 @@ pub(crate) fn check_distribution(weights: impl Iterator<Item = f64>) -> Result<(
         }
         total += w;
     }
-    if (total - 1.0).abs() > 1e-6 {
-        return Err(format!(
-            "probabilities sum to {total}, not 1 (tolerance 1e-6)"
-        ));
-    }
-    Ok(())
+    check_total(total, total, "probabilities")
 }

@@ -672,15 +672,11 @@ fn bad_number(text: &str) -> String {
     format!("`{text}` is not a probability (a decimal or p/q)")
 }
 
-/// A choice's successors as a game distribution: sums to 1 within 1e-6
-/// (then renormalised), zero entries dropped, sorted by successor.
+/// A choice's successors as a game distribution: sums to 1 within
+/// [`super::DISTRIBUTION_TOLERANCE`] (then renormalised), zero entries dropped, sorted by successor.
 fn normalised(successors: &[(usize, f64)]) -> Result<Distribution, String> {
     let total: f64 = successors.iter().map(|&(_, p)| p).sum();
-    if (total - 1.0).abs() > 1e-6 {
-        return Err(format!(
-            "the probabilities of this choice sum to {total}, not 1 (tolerance 1e-6)"
-        ));
-    }
+    super::check_total(total, total, "the probabilities of this choice")?;
     let renormalise = (total - 1.0).abs() > successors.len() as f64 * f64::EPSILON;
     let mut distribution: Distribution = successors
         .iter()

@@ -166,7 +166,7 @@ pub(crate) fn check_probability(p: f64, at: &Located) -> Result<(), ModelError> 
 }
 
 /// Checks that probabilities (already checked one by one) sum to 1 within
-/// 1e-6 and renormalises them (formats.md section 1). Weights that already sum
+/// [`super::DISTRIBUTION_TOLERANCE`] and renormalises them (formats.md section 1). Weights that already sum
 /// to 1 up to floating-point rounding are kept bit for bit, so that writing
 /// and reading a model gives back the same numbers.
 pub(crate) fn normalise(weights: &mut [f64], at: &Located) -> Result<(), ModelError> {
@@ -178,15 +178,11 @@ pub(crate) fn normalise(weights: &mut [f64], at: &Located) -> Result<(), ModelEr
 }
 
 /// The check of [`normalise`] on the sum `total` of `len` weights: an error
-/// when it is not 1 within 1e-6, `Some(total)` when the weights must be
+/// when it is not 1 within [`super::DISTRIBUTION_TOLERANCE`], `Some(total)` when the weights must be
 /// divided by it, `None` when they sum to 1 up to rounding (kept bit for bit).
 fn normalisation(total: f64, len: usize, at: &Located) -> Result<Option<f64>, ModelError> {
-    if (total - 1.0).abs() > 1e-6 {
-        let shown = (total * 1e9).round() / 1e9 + 0.0;
-        return Err(at.error(format!(
-            "probabilities sum to {shown}, not 1 (tolerance 1e-6)"
-        )));
-    }
+    let shown = (total * 1e9).round() / 1e9 + 0.0;
+    super::check_total(total, shown, "probabilities").map_err(|message| at.error(message))?;
     Ok(((total - 1.0).abs() > len as f64 * f64::EPSILON).then_some(total))
 }
 

@@ -37,6 +37,24 @@ impl ModelError {
     }
 }
 
+/// How far from 1 the probabilities of a distribution in an input file
+/// (game, controller, DRN model) may sum (formats.md section 1: "sums to 1
+/// within 1e-6"); a distribution within it is renormalised exactly.
+pub const DISTRIBUTION_TOLERANCE: f64 = 1e-6;
+
+/// Checks that the probabilities of a distribution, whose sum is `total`,
+/// sum to 1 within [`DISTRIBUTION_TOLERANCE`]. The error reads
+/// `"{subject} sum to {shown}, not 1 (tolerance 1e-6)"`, with `shown` the
+/// total as the caller displays it (the total itself, or a rounded form).
+pub(crate) fn check_total(total: f64, shown: f64, subject: &str) -> Result<(), String> {
+    if (total - 1.0).abs() > DISTRIBUTION_TOLERANCE {
+        return Err(format!(
+            "{subject} sum to {shown}, not 1 (tolerance {DISTRIBUTION_TOLERANCE:e})"
+        ));
+    }
+    Ok(())
+}
+
 /// A sparse probability distribution: `(outcome, probability)` pairs with
 /// distinct outcomes and positive probabilities summing to 1.
 pub type Distribution = Vec<(usize, f64)>;

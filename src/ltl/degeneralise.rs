@@ -9,6 +9,7 @@
 
 use super::{TranslateError, construct};
 use crate::automaton::{Dra, RabinPair};
+use crate::interner::{Interner, TooManyKeys};
 
 /// For an automaton whose condition is one disjunct `Fin(F) & Inf(m_1) &
 /// ... & Inf(m_k)`, the state-based Rabin automaton of the classic
@@ -29,9 +30,13 @@ pub(super) fn degeneralise(
     let marks = &disjunct.inf;
     let letters = tgr.letters;
     type Key = (u32, u32, bool, bool);
-    let mut index: rustc_hash::FxHashMap<Key, u32> = rustc_hash::FxHashMap::default();
-    let mut states: Vec<Key> = vec![(tgr.initial as u32, 0, false, false)];
-    index.insert(states[0], 0);
+    let too_large = |TooManyKeys| TranslateError::TooLarge {
+        limit: construct::MAX_STATES,
+    };
+    let mut states: Interner<Key> = Interner::default();
+    states
+        .intern((tgr.initial as u32, 0, false, false))
+        .map_err(too_large)?;
     let mut successors = Vec::new();
     let mut next = 0;
     while next < states.len() {
@@ -42,7 +47,7 @@ pub(super) fn degeneralise(
                 limit: construct::MAX_STATES,
             });
         }
-        let (q, awaited, _, _) = states[next];
+        let (q, awaited, _, _) = states.keys()[next];
         for letter in 0..letters {
             let edge = tgr.edges[q as usize * letters + letter];
             let mut i = awaited as usize;
@@ -56,15 +61,11 @@ pub(super) fn degeneralise(
                 completed,
                 edge.marks & disjunct.fin != 0,
             );
-            let fresh = states.len() as u32;
-            let target = *index.entry(key).or_insert_with(|| {
-                states.push(key);
-                fresh
-            });
-            successors.push(target);
+            successors.push(states.intern(key).map_err(too_large)?);
         }
         next += 1;
     }
+    let states = states.into_keys();
     let pair = RabinPair {
         fin: states.iter().map(|s| s.3).collect(),
         inf: states.iter().map(|s| s.2).collect(),

@@ -242,10 +242,7 @@ impl Structure {
         optimise_initial: bool,
     ) -> Self {
         let make = |role: Role, nodes: usize| {
-            let player = match role {
-                Role::Defender => game.defender(),
-                Role::Adversary => game.adversary(),
-            };
+            let player = role.player(game);
             let mut fsc = Fsc::uniform_enabled(role, nodes, player);
             if optimise_initial {
                 fsc.initial = vec![1.0 / nodes as f64; nodes];

@@ -24,9 +24,7 @@ pub(crate) struct Terms<'a> {
 
 impl<'a> Terms<'a> {
     pub(crate) fn new(game: &'a Posg, dra: &'a Dra) -> Self {
-        let letters = (0..game.num_states())
-            .map(|s| dra.letter_of(game.label_names(s)))
-            .collect();
+        let letters = dra.state_letters(game);
         Self { game, dra, letters }
     }
 

@@ -10,7 +10,7 @@
 
 use rustc_hash::FxHashMap;
 
-use crate::automaton::{Dra, Letter, RabinPair};
+use crate::automaton::{Dra, RabinPair};
 use crate::game::Posg;
 use crate::graph::{Digraph, strongly_connected_components};
 
@@ -102,9 +102,7 @@ pub struct CellGraph {
 impl CellGraph {
     /// Explores the cells reachable from the initial ones.
     pub fn build(game: &Posg, dra: &Dra, moves: &Moves) -> Self {
-        let letters: Vec<Letter> = (0..game.num_states())
-            .map(|s| dra.letter_of(game.label_names(s)))
-            .collect();
+        let letters = dra.state_letters(game);
         let nv = game.adversary().num_actions();
         let mut index: FxHashMap<(usize, usize), usize> = FxHashMap::default();
         let mut cells = Vec::new();

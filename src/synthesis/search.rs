@@ -71,9 +71,7 @@ impl<'a> Oracle<'a> {
         nodes: usize,
         mode: Mode,
     ) -> Self {
-        let letters = (0..game.num_states())
-            .map(|s| dra_not_phi.letter_of(game.label_names(s)))
-            .collect();
+        let letters = dra_not_phi.state_letters(game);
         let cells = CellGraph::build(game, dra_not_phi, moves);
         let sure = cells
             .surely_accepting(dra_not_phi.pairs())

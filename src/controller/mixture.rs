@@ -1,0 +1,128 @@
+//! One player's action mixture (method.md's `A_*`, the paper's sum over
+//! observations in `T^{phi,C_def,C_adv}`):
+//!
+//! ```text
+//! A(g', u | s, g) = sum_o O(o | s) mu(g', u | g, o),
+//! ```
+//!
+//! the probability that the controller in node `g`, in game state `s`, moves
+//! to node `g'` and plays `u`. The global Markov chain ([`crate::product`])
+//! and the certification products ([`crate::certify`]) are built from it.
+
+use super::{Fsc, Support};
+use crate::game::Player;
+
+/// The mixture on a fixed support: for each `(s, g)` the distinct supported
+/// `(g', u)` in increasing order, each with the terms `(support entry k,
+/// O(o | s))` whose products with `mu_k` sum to it (in observation order,
+/// then support order), and its value for the probabilities of the last
+/// [`Mixture::refill`].
+#[derive(Debug, Clone)]
+pub(crate) struct Mixture {
+    num_nodes: usize,
+    offsets: Vec<usize>,
+    entries: Vec<(u32, u32)>,
+    term_offsets: Vec<usize>,
+    terms: Vec<(u32, f64)>,
+    values: Vec<f64>,
+}
+
+/// A mixture entry `(g', u)`.
+type MixtureKey = (u32, u32);
+/// A term `(support entry k, O(o | s))` of a mixture entry.
+type MixtureTerm = (u32, f64);
+
+impl Mixture {
+    /// The mixture's entries and terms for `player` on `support`, over game
+    /// states `0..num_states`; every value is 0 until [`Mixture::refill`].
+    pub(crate) fn build(player: &Player, support: &Support, num_states: usize) -> Self {
+        let num_nodes = support.num_nodes();
+        let mut offsets = vec![0];
+        let mut entries = Vec::new();
+        let mut term_offsets = vec![0];
+        let mut terms = Vec::new();
+        let mut pending: Vec<(MixtureKey, Vec<MixtureTerm>)> = Vec::new();
+        for s in 0..num_states {
+            for g in 0..num_nodes {
+                pending.clear();
+                for &(o, weight) in player.observation_distribution(s) {
+                    for k in support.block(g, o) {
+                        let (next, action) = support.entry(k);
+                        let key = (next as u32, action as u32);
+                        let term = (k as u32, weight);
+                        match pending.iter_mut().find(|(e, _)| *e == key) {
+                            Some((_, list)) => list.push(term),
+                            None => pending.push((key, vec![term])),
+                        }
+                    }
+                }
+                pending.sort_by_key(|(key, _)| *key);
+                for (key, list) in &pending {
+                    entries.push(*key);
+                    terms.extend_from_slice(list);
+                    term_offsets.push(terms.len());
+                }
+                offsets.push(entries.len());
+            }
+        }
+        let values = vec![0.0; entries.len()];
+        Self {
+            num_nodes,
+            offsets,
+            entries,
+            term_offsets,
+            terms,
+            values,
+        }
+    }
+
+    /// The mixture of `controller` for `player`: [`Mixture::build`] on its
+    /// support, refilled with its probabilities.
+    pub(crate) fn of(player: &Player, controller: &Fsc, num_states: usize) -> Self {
+        let mut mixture = Self::build(player, &Support::of(controller), num_states);
+        mixture.refill(&Support::probabilities_of(controller).entries);
+        mixture
+    }
+
+    /// Writes every entry's value `sum_terms O(o | s) mu[k]` for the
+    /// probabilities `mu` (aligned with the support).
+    pub(crate) fn refill(&mut self, mu: &[f64]) {
+        for (j, value) in self.values.iter_mut().enumerate() {
+            *value = self.terms[self.term_offsets[j]..self.term_offsets[j + 1]]
+                .iter()
+                .map(|&(k, weight)| weight * mu[k as usize])
+                .sum();
+        }
+    }
+
+    /// `|G|`, the controller's number of nodes.
+    #[inline]
+    pub(crate) fn num_nodes(&self) -> usize {
+        self.num_nodes
+    }
+
+    /// The entry indices `j` of `(s, g)`.
+    #[inline]
+    pub(crate) fn at(&self, s: usize, g: usize) -> std::ops::Range<usize> {
+        let i = s * self.num_nodes + g;
+        self.offsets[i]..self.offsets[i + 1]
+    }
+
+    /// Entry `j` as `(g', u)`.
+    #[inline]
+    pub(crate) fn entry(&self, j: usize) -> (u32, u32) {
+        self.entries[j]
+    }
+
+    /// The value `A(g', u | s, g)` of every entry, as of the last refill.
+    #[inline]
+    pub(crate) fn values(&self) -> &[f64] {
+        &self.values
+    }
+
+    /// The terms `(support entry k, O(o | s))` of entry `j`.
+    #[inline]
+    pub(crate) fn terms_of(&self, j: usize) -> &[(u32, f64)] {
+        &self.terms[self.term_offsets[j]..self.term_offsets[j + 1]]
+    }
+}
