@@ -1,7 +1,7 @@
 //! The exact value of a controller pair and its gradient (method.md
 //! sections 1 and 2).
 //!
-//! With `B`, `Z`, `T` from [`crate::analysis`], `Q = P` restricted to
+//! With `B`, `Z`, `T` from [`Recurrence`], `Q = P` restricted to
 //! `T x T` and `b(m) = P(B | m)`:
 //!
 //! ```text
@@ -322,7 +322,8 @@ impl Evaluator {
         self.system.solver.method()
     }
 
-    /// Why [`Self::solver_method`] is in use ([`LinearSolver::reason`]).
+    /// Why [`Self::solver_method`] is in use: the setting, or `auto`'s size
+    /// limits, or its switch to LU after a slow BiCGSTAB solve.
     pub fn solver_reason(&self) -> &str {
         self.system.solver.reason()
     }

@@ -50,18 +50,16 @@ mod softmax;
 mod structures;
 mod warm_start;
 
-pub use ascent::ascend;
-pub use best_response::{BestResponse, best_response};
+pub(crate) use ascent::ascend;
+pub(crate) use best_response::best_response;
 pub use objective::{GmcSize, Objective, Point};
 pub use observer::{IterationRecord, Observer, ObserverError};
-pub use optimiser::{Certifier, Incumbent, Optimiser, PhaseSeconds, RunOutcome};
+pub(crate) use optimiser::{Certifier, Optimiser, PhaseSeconds, RunOutcome};
 pub use rounding::{TRUNCATION_THRESHOLDS, rounded_candidates, truncated};
 pub use settings::{MAX_LOGIT_BOUND, Settings, UpdateRule};
 pub use softmax::{Softmax, clip};
-pub use structures::{
-    ALMOST_SURE_BUDGET_SHARE, Candidates, SourceNote, StructureSource, best_by_certified_lower,
-    candidate_structures, why_others_lost,
-};
+pub use structures::{Candidates, SourceNote, StructureSource};
+pub(crate) use structures::{best_by_certified_lower, candidate_structures, why_others_lost};
 pub use warm_start::{WARM_START_MIX, embed, keep_better, pad, score, warm_started};
 
 use std::time::Instant;

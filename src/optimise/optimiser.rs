@@ -227,11 +227,6 @@ impl<'a> Optimiser<'a> {
         self
     }
 
-    /// The objective (its softmax maps turn logits into controllers).
-    pub fn objective(&self) -> &Objective {
-        &self.objective
-    }
-
     /// The objective and the random stream where the run left them.
     pub fn into_parts(self) -> (Objective, ChaCha8Rng) {
         (self.objective, self.rng)

@@ -45,7 +45,7 @@ use thiserror::Error;
 pub const DEFAULT_TOLERANCE: f64 = 1e-9;
 
 /// With [`SolverMethod::Auto`], systems with more unknowns than this use
-/// [`KrylovSolver`]; smaller ones use [`LuSolver`].
+/// BiCGSTAB preconditioned by ILU(0); smaller ones use [`LuSolver`].
 pub const DEFAULT_LU_LIMIT: usize = 50_000;
 
 /// With [`SolverMethod::Auto`], a BiCGSTAB solve that needs more iterations
@@ -172,7 +172,7 @@ pub struct SolverSettings {
     /// With [`SolverMethod::Auto`]: the most unknowns solved by LU.
     pub lu_limit: usize,
     /// With [`SolverMethod::Auto`]: the most unknowns for which slow
-    /// BiCGSTAB solves (over [`SLOW_KRYLOV_ITERATIONS`]) give way to LU.
+    /// BiCGSTAB solves (over 150 iterations) give way to LU.
     pub lu_switch_limit: usize,
     /// The most BiCGSTAB iterations per solve.
     pub max_iterations: usize,
@@ -227,7 +227,7 @@ pub struct SolveReport {
     /// included (not those of the solve for the expected time of the error
     /// bound).
     pub iterations: usize,
-    /// For [`LinearSolver::solve`]: a bound on `max_i |x_i - (A^{-1} b)_i|`,
+    /// For a solve of `A x = b`: a bound on `max_i |x_i - (A^{-1} b)_i|`,
     /// `max(t) ||r||_inf` plus the rounding in computing `r` (method.md
     /// section 8). `None` for the solves that bound nothing (transposed
     /// solves and the methods' own).
