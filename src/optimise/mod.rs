@@ -11,23 +11,23 @@
 //! * [`Objective`]: one [`crate::value::Evaluator`] per structure, giving the
 //!   value and both players' logit gradients by the adjoint method (section 2),
 //!   with the last point cached;
-//! * [`best_response`]: the adversary's best response by L-BFGS (argmin) in
+//! * `best_response`: the adversary's best response by L-BFGS (argmin) in
 //!   the coordinates `phi = c tanh(z)`, from several starts;
-//! * [`Optimiser`]: the driver of alternating projected gradient
+//! * `Optimiser`: the driver of alternating projected gradient
 //!   ascent-descent (section 4). Its solver takes one outer iteration: a
 //!   fast adversary time scale, plain or Adam (optionally optimistic)
 //!   updates; the driver owns the rest: periodic best-response checks that
 //!   also certify, a logit bound that widens when progress stalls on it,
 //!   stopping on the certified gap or a stall, the best defender seen, and
 //!   the observer;
-//! * [`ascend`]: the single-player fast path (the adversary has one action,
+//! * `ascend`: the single-player fast path (the adversary has one action,
 //!   so max-min is max): L-BFGS on `ln V`;
 //! * [`rounded_candidates`]: partial and argmax roundings of the result,
 //!   each scored exactly on its own support;
 //! * [`optimise_structure`]: parallel seeded starts on one structure, the
 //!   best certified kept, then rounded; [`optimise_structures`] does it on
 //!   several structures in parallel (rayon), the best certified lower bound
-//!   chosen; [`candidate_structures`] gathers the structures of the sources
+//!   chosen; `candidate_structures` gathers the structures of the sources
 //!   asked for (the starting structure, support synthesis by SAT, the
 //!   paper's pruning; identical structures once); [`crate::pipeline`]
 //!   does both from the full support structure of given sizes;
