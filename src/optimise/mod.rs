@@ -180,7 +180,7 @@ pub enum Method {
     /// Alternating projected gradient ascent-descent with best-response
     /// checks (method.md section 4).
     MaxMin,
-    /// The single-player L-BFGS ascent ([`ascend`]): the adversary has one
+    /// The single-player L-BFGS ascent (`ascend`): the adversary has one
     /// action, so max-min is max.
     Ascent,
 }
@@ -347,7 +347,7 @@ impl Solution {
 /// [`Objective`] and random stream (`settings.seed`, stream = its index),
 /// each reporting to the observer `observer(index, structure)` makes;
 /// returns every outcome and the best by certified lower bound
-/// ([`best_by_certified_lower`]). A structure whose linear systems cannot
+/// (`best_by_certified_lower`). A structure whose linear systems cannot
 /// be solved to the tolerance is dropped and named in
 /// [`Solution::failed`] (an error only if every structure fails). With an
 /// automaton `negated` for !phi, every best-response check also certifies
