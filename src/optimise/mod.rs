@@ -351,7 +351,7 @@ impl Solution {
 /// be solved to the tolerance is dropped and named in
 /// [`Solution::failed`] (an error only if every structure fails). With an
 /// automaton `negated` for !phi, every best-response check also certifies
-/// (see [`Certifier`]).
+/// (see `Certifier`).
 pub fn optimise_structures<F>(
     game: &Posg,
     dra: &Dra,
@@ -398,9 +398,9 @@ where
 
 /// Optimises on one structure: `settings.starts` independent starts in
 /// parallel (rayon), start `i` with random stream `stream + (i << 32)` of
-/// `settings.seed`; each runs the max-min loop ([`Optimiser`]) or, when the
+/// `settings.seed`; each runs the max-min loop (`Optimiser`) or, when the
 /// adversary has one action and `settings.single_player_ascent`, the
-/// single-player L-BFGS ascent ([`ascend`]). The start with the best score
+/// single-player L-BFGS ascent (`ascend`). The start with the best score
 /// (certified lower bound with an automaton `negated` for !phi, else
 /// worst-case estimate; the first of equals) is kept and its iteration
 /// records are replayed to `observer`; then its rounded candidates

@@ -6,7 +6,7 @@
 //! [`Settings`], [`solve`]
 //!
 //! 1. gathers the support structures of the sources asked for
-//!    ([`optimise::candidate_structures`]: the full support, support
+//!    (`candidate_structures`: the full support, support
 //!    synthesis by SAT, the paper's Algorithm 1; method.md sections 5 and 7);
 //! 2. optimises on each of them in parallel (the max-min loop or the
 //!    single-player ascent, method.md section 4), each reporting to the
