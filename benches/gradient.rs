@@ -13,7 +13,7 @@
 //! estimates into `results/gradient-cost.md`.
 //!
 //! The group `gradient-methods` compares the adjoint gradient with forward
-//! sensitivities ([`posg_fsc::sensitivity`]: one factorisation, then one
+//! sensitivities ([`posg_fsc::value::ForwardSensitivities`]: one factorisation, then one
 //! solve per parameter) on grids with about 1e3, 1e4 and 1e5 GMC states
 //! (2-node full-support controllers for both players at fixed non-uniform
 //! logits, sparse LU for both methods):
@@ -38,9 +38,9 @@ use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use posg_fsc::controller::{Probabilities, Support};
 use posg_fsc::game::grid::GridSpec;
 use posg_fsc::optimise::{Objective, Softmax, Structure};
-use posg_fsc::sensitivity::ForwardSensitivities;
-use posg_fsc::solver::{DEFAULT_TOLERANCE, SolverMethod, SolverSettings};
 use posg_fsc::value::Evaluator;
+use posg_fsc::value::ForwardSensitivities;
+use posg_fsc::value::{DEFAULT_TOLERANCE, SolverMethod, SolverSettings};
 
 /// (grid side, defender nodes, adversary nodes).
 const SIZES: [(usize, usize, usize); 3] = [(3, 1, 1), (5, 2, 1), (8, 2, 2)];

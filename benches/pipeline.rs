@@ -6,14 +6,14 @@
 //! Every fixture checks its result before it is timed.
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
-use posg_fsc::analysis::Recurrence;
 use posg_fsc::automaton::Dra;
 use posg_fsc::controller::{Fsc, Probabilities, Role, Support};
 use posg_fsc::game::Posg;
 use posg_fsc::game::grid::{GridSpec, RandomUnsafe};
-use posg_fsc::product::Gmc;
-use posg_fsc::solver::SolverSettings;
 use posg_fsc::value::Evaluator;
+use posg_fsc::value::Gmc;
+use posg_fsc::value::Recurrence;
+use posg_fsc::value::SolverSettings;
 
 const SIDES: [usize; 3] = [8, 24, 64];
 

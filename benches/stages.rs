@@ -48,7 +48,6 @@ use std::time::Duration;
 
 use criterion::measurement::WallTime;
 use criterion::{BenchmarkGroup, BenchmarkId, Criterion, criterion_group, criterion_main};
-use posg_fsc::analysis::Recurrence;
 use posg_fsc::automaton::Dra;
 use posg_fsc::certify::{lower_bound, upper_bound};
 use posg_fsc::controller::{Fsc, Probabilities, Role, Support};
@@ -56,9 +55,10 @@ use posg_fsc::game::Posg;
 use posg_fsc::game::file::{from_json_str, to_json_string};
 use posg_fsc::game::grid::GridSpec;
 use posg_fsc::optimise::{Objective, Softmax, clip};
-use posg_fsc::product::Gmc;
-use posg_fsc::solver::{DEFAULT_TOLERANCE, LuSolver, SolverSettings};
 use posg_fsc::value::Evaluator;
+use posg_fsc::value::Gmc;
+use posg_fsc::value::Recurrence;
+use posg_fsc::value::{DEFAULT_TOLERANCE, LuSolver, SolverSettings};
 
 /// (grid side, defender nodes, adversary nodes): about 1.2e3, 1.2e4,
 /// 2.8e4, 1.1e5, 2.0e5 and 1.0e6 GMC states.

@@ -27,7 +27,8 @@
 //!   `max_def min_adv V` is at most the smallest bound over the adversaries
 //!   tried.
 //!
-//! Both are [`crate::mdp::max_rabin_probability`] on the product, so the
+//! Both are the maximal Rabin probability of an MDP (end components, then
+//! maximal reachability by policy iteration) on the product, so the
 //! numbers are exact up to the reported `error_bound` (method.md section 8:
 //! every policy evaluation is a cancellation-free system with a bounded
 //! error). A lower bound above an upper bound beyond their error bounds is
@@ -55,10 +56,13 @@ use crate::automaton::{Dra, Letter, RabinPair};
 use crate::controller::{Fsc, Role};
 use crate::game::{Player, Posg};
 use crate::mdp::{
-    AcceptingComponent, Mdp, MdpBuilder, MdpError, QualitativeReachability, Reachability,
-    max_rabin_analysis, max_rabin_qualitative,
+    AcceptingComponent, Mdp, MdpBuilder, QualitativeReachability, Reachability, max_rabin_analysis,
+    max_rabin_qualitative,
 };
 use crate::solver::SolverError;
+
+pub use crate::mdp::MdpError;
+pub mod strategy;
 
 /// Why a bound could not be computed.
 #[derive(Debug, Error, Clone, PartialEq)]
@@ -121,11 +125,14 @@ pub struct Bound {
     pub mdp_states: usize,
     /// Wall-clock time to build and solve the MDP.
     pub seconds: f64,
-    /// The MDP solution's residual ([`crate::mdp::Reachability::residual`]).
+    /// The MDP solution's residual: the larger of the last policy
+    /// evaluation's `max_s |((I - Q) x - b)(s)|` and the Bellman gap
+    /// `max_s (max_a E'_a x - E'_sigma(s) x)`.
     pub residual: f64,
     /// A bound on the error of `value` from the linear solves
-    /// ([`crate::mdp::Reachability::error_bound`] plus the rounding of the
-    /// sum over the initial states).
+    /// (a bound on `|x(s) - x_sigma(s)|` for the exact reachability
+    /// probabilities `x_sigma` of the strategy found, method.md section 8,
+    /// plus the rounding of the sum over the initial states).
     pub error_bound: f64,
     /// Whether the bound is exactly 0, exactly 1 or strictly between,
     /// decided on the product's graph (not by comparing `value` with 0 or 1).
@@ -162,7 +169,7 @@ impl Qualitative {
 
 /// A memoryless deterministic strategy of the free player on the product of
 /// the game, an automaton and the fixed player's controller
-/// ([`crate::strategy`] writes and reads it as a file).
+/// ([`crate::certify::strategy`] writes and reads it as a file).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Strategy {
     /// The player who plays it (the adversary for a lower bound).

@@ -17,48 +17,72 @@
 //! probability of reaching its phi-feasible bottom strongly connected
 //! components.
 //!
-//! Data flows one way:
+//! # The public face
 //!
-//! * [`game`] and [`controller`]: the model and its files;
+//! Data flows one way through a handful of modules:
+//!
+//! * [`game`] and [`controller`]: the model (the POSG, its players, the
+//!   built-in grid family) and the controllers (FSCs, their supports), with
+//!   their files (formats.md sections 1, 2 and 6);
 //! * [`ltl`] and [`automaton`]: formulas, their translation to deterministic
-//!   Rabin automata, and HOA input/output;
-//! * [`product`]: the GMC in compressed sparse row form, built once per
-//!   support structure and refilled in place for new probabilities;
-//! * [`graph`]: strongly connected components, BSCCs, phi-feasibility and the
-//!   target sets `B`, `Z`, `T` (method.md section 1);
-//! * [`solver`]: sparse LU solves of `(I - Q) x = b` and its transpose;
-//! * [`value`]: the exact value and its adjoint gradient (method.md sections 1-2);
-//!   [`sensitivity`]: the same gradient by forward sensitivities, one solve
-//!   per parameter (a reference for comparison);
+//!   Rabin automata (DRA), and HOA input/output;
+//! * [`value`]: the global Markov chain (GMC) of a game, a DRA and two
+//!   controllers ([`value::Gmc`]), its recurrence analysis (the sets `B`,
+//!   `Z`, `T` of method.md section 1), the exact value and its adjoint
+//!   gradient (sections 1-2) on the sparse solver of [`value::SolverSettings`],
+//!   and a Monte Carlo estimate as a check ([`value::simulate`]);
+//! * [`prune`]: the paper's structural pruning (Algorithm 1, method.md
+//!   section 5);
+//! * [`synthesis`]: defender supports that win positively or almost surely
+//!   against the certification adversary, found by SAT (method.md section 7);
 //! * [`optimise`]: softmax parameters, alternating projected gradient
 //!   ascent-descent and best-response checks (method.md sections 3-4);
-//! * [`output`]: observers and plots that write the optimiser's results;
-//! * [`limits`]: the resource budget checked before large allocations;
-//! * [`mdp`] and [`certify`]: MDP analysis (maximal end components, Rabin
-//!   acceptance, maximum reachability) and the two certified bounds of
-//!   method.md section 6; [`strategy`]: their strategies as files, read
-//!   back and, where the free player observes the state, as controllers;
-//! * [`synthesis`]: defender supports that win positively or almost surely
-//!   against the certification adversary, found by SAT (method.md section 7).
+//! * [`certify`]: the two certified bounds of method.md section 6 and their
+//!   strategies as files ([`certify::strategy`]);
+//! * [`output`]: what the tool writes: curves, plots, controller drawings,
+//!   sweep shards and Slurm scripts, and the GMC for Storm and PRISM
+//!   ([`output::export`]);
+//! * [`limits`]: the resource budget checked before large allocations.
+//!
+//! The graph algorithms, the MDP analysis behind the certificates and the
+//! linear solvers' internals are private to the crate.
+//!
+//! # The value of a controller pair
+//!
+//! ```
+//! use posg_fsc::controller::{Fsc, Role};
+//! use posg_fsc::game::grid::GridSpec;
+//! use posg_fsc::value::{SolverSettings, evaluate_controllers};
+//!
+//! // The seed paper's 3x2 grid, and `!unsafe U goal` as a Rabin automaton.
+//! let game = GridSpec::default().build()?;
+//! let dra = posg_fsc::ltl::translate(&posg_fsc::ltl::parse("!unsafe U goal")?)?;
+//! // Uniform one-node controllers for both players.
+//! let defender = Fsc::uniform_enabled(Role::Defender, 1, game.defender());
+//! let adversary = Fsc::uniform_enabled(Role::Adversary, 1, game.adversary());
+//! let (_, evaluation) =
+//!     evaluate_controllers(&game, &dra, &defender, &adversary, &SolverSettings::default())?;
+//! assert!((0.0..=1.0).contains(&evaluation.value));
+//! assert!(evaluation.error_bound <= 1e-9);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
 #![warn(missing_docs)]
 
-pub mod analysis;
+mod analysis;
 pub mod automaton;
 pub mod certify;
 pub mod controller;
-pub mod export;
 pub mod game;
-pub mod graph;
+mod graph;
 pub mod limits;
 pub mod ltl;
-pub mod mdp;
+mod mdp;
 pub mod optimise;
 pub mod output;
-pub mod product;
+mod product;
 pub mod prune;
-pub mod sensitivity;
-pub mod simulate;
-pub mod solver;
-pub mod strategy;
+mod sensitivity;
+mod simulate;
+mod solver;
 pub mod synthesis;
 pub mod value;

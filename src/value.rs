@@ -21,14 +21,18 @@
 
 use thiserror::Error;
 
-use crate::analysis::{Recurrence, StateClass};
 use crate::automaton::Dra;
 use crate::controller::{Fsc, Probabilities, Support};
 use crate::game::Posg;
-use crate::product::{Gmc, ProductError};
-use crate::solver::{
-    FlushDenormals, LinearSolver, SolveReport, SolverError, SolverMethod, SolverSettings,
-    SparsePattern,
+use crate::solver::{FlushDenormals, LinearSolver, SparsePattern};
+
+pub use crate::analysis::{Bscc, Recurrence, StateClass};
+pub use crate::product::{Gmc, GmcState, PARALLEL_GRADIENT_ROWS, ProductError};
+pub use crate::sensitivity::{ForwardGradient, ForwardSensitivities};
+pub use crate::simulate::{Estimate, STEP_LIMIT, SimulationError, SimulationSettings, simulate};
+pub use crate::solver::{
+    DEFAULT_LU_LIMIT, DEFAULT_TOLERANCE, LuSolver, SolveReport, SolverError, SolverMethod,
+    SolverSettings,
 };
 
 /// Why a value could not be computed.

@@ -2,8 +2,8 @@
 //! their minimisation (also with a free start) preserve the language, checked on random automata with
 //! random acceptance formulas and random lasso words.
 
-use posg_fsc::automaton::emerson_lei::Edge;
-use posg_fsc::automaton::minimise::minimise_with_free_start;
+use posg_fsc::automaton::Edge;
+use posg_fsc::automaton::minimise_with_free_start;
 use posg_fsc::automaton::{
     Acceptance, Dra, EmersonLeiAutomaton, Letter, RabinPair, minimise, to_state_based_rabin,
 };

@@ -4,11 +4,11 @@
 //! are in `tests/data/chains/`; the 60,001-state walk is built here.
 
 use posg_fsc::automaton::Dra;
+use posg_fsc::certify::MdpError;
 use posg_fsc::certify::{CertifyError, lower_bound, upper_bound};
 use posg_fsc::controller::{Fsc, Role};
 use posg_fsc::game::Posg;
-use posg_fsc::mdp::MdpError;
-use posg_fsc::solver::{SolverError, SolverMethod, SolverSettings};
+use posg_fsc::value::{SolverError, SolverMethod, SolverSettings};
 use posg_fsc::value::{ValueError, evaluate_controllers};
 
 const CHAINS: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/chains");

@@ -11,7 +11,7 @@ use posg_fsc::game::Posg;
 use posg_fsc::game::drn::{from_drn_str, read};
 use posg_fsc::game::file::{from_json_str, to_json_string};
 use posg_fsc::ltl;
-use posg_fsc::solver::SolverSettings;
+use posg_fsc::value::SolverSettings;
 use posg_fsc::value::evaluate_controllers;
 use serde_json::json;
 

@@ -6,12 +6,12 @@ mod common;
 
 use posg_fsc::automaton::Dra;
 use posg_fsc::controller::{Fsc, Role};
-use posg_fsc::export::explicit_chain;
 use posg_fsc::game::Posg;
 use posg_fsc::game::drn::from_drn_str;
 use posg_fsc::game::file::from_json_str;
 use posg_fsc::ltl;
-use posg_fsc::solver::SolverSettings;
+use posg_fsc::output::export::explicit_chain;
+use posg_fsc::value::SolverSettings;
 use posg_fsc::value::evaluate_controllers;
 use proptest::prelude::*;
 

@@ -149,7 +149,7 @@ fn mutated_controllers_are_read_or_refused_with_the_file_and_path() {
 fn mutated_automata_are_read_or_refused_with_a_position() {
     for (k, seed) in HOA.iter().enumerate() {
         without_panics(&mutants(seed, 500, 10 + k as u64), |text| {
-            if let Err(error) = posg_fsc::automaton::hoa::read_hoa_dra(text) {
+            if let Err(error) = posg_fsc::automaton::read_hoa_dra(text) {
                 let message = error.to_string();
                 let located = message.contains("line ")
                     || message.contains("automaton")

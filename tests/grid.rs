@@ -8,9 +8,9 @@ use posg_fsc::automaton::Dra;
 use posg_fsc::controller::{Choice, Fsc, Role};
 use posg_fsc::game::Posg;
 use posg_fsc::game::grid::{GridSpec, ObservationModel};
-use posg_fsc::simulate::{SimulationSettings, simulate};
-use posg_fsc::solver::{DEFAULT_TOLERANCE, SolverSettings};
 use posg_fsc::value::evaluate_controllers;
+use posg_fsc::value::{DEFAULT_TOLERANCE, SolverSettings};
+use posg_fsc::value::{SimulationSettings, simulate};
 
 fn objectives() -> Vec<(&'static str, Dra)> {
     vec![

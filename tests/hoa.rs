@@ -1,7 +1,7 @@
 //! HOA v1 input and output: the example automata in `tests/data/ltl/examples`,
 //! round trips through the writer, and malformed inputs.
 
-use posg_fsc::automaton::emerson_lei::Edge;
+use posg_fsc::automaton::Edge;
 use posg_fsc::automaton::{
     Acceptance, EmersonLeiAutomaton, HoaError, Letter, minimise, parse_hoa, read_hoa_dra,
     to_state_based_rabin, write_hoa,

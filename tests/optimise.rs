@@ -12,8 +12,8 @@ use posg_fsc::optimise::{
     Objective, Settings, Softmax, Status, Structure, StructureSource, optimise_structure, solve,
 };
 use posg_fsc::output::CurveCsv;
-use posg_fsc::solver::SolverSettings;
 use posg_fsc::value::Evaluator;
+use posg_fsc::value::SolverSettings;
 use proptest::prelude::*;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;

@@ -17,7 +17,7 @@ use posg_fsc::optimise::{
     Method, Settings, Status, Structure, embed, keep_better, optimise_structure, pad,
     rounded_candidates, score, solve, truncated, warm_started,
 };
-use posg_fsc::solver::SolverSettings;
+use posg_fsc::value::SolverSettings;
 use posg_fsc::value::evaluate_controllers;
 use proptest::prelude::*;
 

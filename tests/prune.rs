@@ -6,16 +6,16 @@
 
 mod common;
 
-use posg_fsc::analysis::Recurrence;
 use posg_fsc::automaton::Dra;
 use posg_fsc::controller::{Choice, Fsc, Role, Support};
 use posg_fsc::game::Posg;
 use posg_fsc::game::file::from_json_str;
 use posg_fsc::game::grid::{GridSpec, ObservationModel};
-use posg_fsc::product::{Gmc, GmcState};
 use posg_fsc::prune::{PruneReport, PruneSettings, good_sets, prune};
-use posg_fsc::solver::SolverSettings;
 use posg_fsc::value::Evaluator;
+use posg_fsc::value::Recurrence;
+use posg_fsc::value::SolverSettings;
+use posg_fsc::value::{Gmc, GmcState};
 use proptest::prelude::*;
 
 fn game(text: &str) -> Posg {

@@ -6,8 +6,8 @@ use std::process::Command;
 
 use posg_fsc::controller::{Role, Support, file};
 use posg_fsc::game::Posg;
-use posg_fsc::solver::SolverSettings;
 use posg_fsc::value::Evaluator;
+use posg_fsc::value::SolverSettings;
 use serde_json::Value;
 
 /// `risky` reaches `u` from `s0` when the adversary pushes; `go` is safe.

@@ -9,9 +9,9 @@ use posg_fsc::game::Posg;
 use posg_fsc::game::file::from_json_str;
 use posg_fsc::game::grid::GridSpec;
 use posg_fsc::optimise::{Softmax, Structure};
-use posg_fsc::product::PARALLEL_GRADIENT_ROWS;
-use posg_fsc::sensitivity::ForwardSensitivities;
-use posg_fsc::solver::{DEFAULT_TOLERANCE, SolverMethod, SolverSettings};
+use posg_fsc::value::ForwardSensitivities;
+use posg_fsc::value::PARALLEL_GRADIENT_ROWS;
+use posg_fsc::value::{DEFAULT_TOLERANCE, SolverMethod, SolverSettings};
 use posg_fsc::value::{Evaluator, Gradient};
 use proptest::prelude::*;
 

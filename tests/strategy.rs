@@ -5,13 +5,13 @@
 mod common;
 
 use posg_fsc::automaton::Dra;
+use posg_fsc::certify::strategy::{Objective, StrategyFile};
 use posg_fsc::certify::{Bound, lower_bound, upper_bound};
 use posg_fsc::controller::{Fsc, Role};
 use posg_fsc::game::Posg;
 use posg_fsc::game::file::from_json_str;
 use posg_fsc::ltl;
-use posg_fsc::solver::SolverSettings;
-use posg_fsc::strategy::{Objective, StrategyFile};
+use posg_fsc::value::SolverSettings;
 use posg_fsc::value::evaluate_controllers;
 use serde_json::{Value, json};
 

@@ -8,8 +8,8 @@ use posg_fsc::controller::{Choice, Fsc, Probabilities, Role, Support};
 use posg_fsc::game::Posg;
 use posg_fsc::game::file::from_json_str;
 use posg_fsc::optimise::Softmax;
-use posg_fsc::solver::{SolverMethod, SolverSettings};
 use posg_fsc::value::{Evaluator, evaluate_controllers};
+use posg_fsc::value::{SolverMethod, SolverSettings};
 use proptest::prelude::*;
 
 fn game(text: &str) -> Posg {

@@ -10,23 +10,27 @@
 //!   **transition-based** marks and an arbitrary positive Boolean acceptance
 //!   condition over `Fin`/`Inf` of those marks (HOA's `Acceptance:` line).
 //!   HOA input and the LTL translator produce it; its conversion to a `Dra`
-//!   lives in [`emerson_lei`].
+//!   is [`to_state_based_rabin`].
 //!
-//! [`minimise()`] shrinks a `Dra` by partition refinement, and [`hoa`] reads
-//! and writes both kinds in the HOA v1 format.
+//! [`minimise()`] shrinks a `Dra` by partition refinement, and [`parse_hoa`],
+//! [`read_hoa_dra`] and [`write_hoa`] read and write both kinds in the HOA v1
+//! format.
 //!
 //! Letters are bit sets: bit `i` of a [`Letter`] is set iff the automaton's
 //! `i`-th atomic proposition holds. Transition tables are explicit over all
 //! `2^|AP|` letters, so the number of propositions is limited to
 //! [`MAX_PROPOSITIONS`].
 
-pub mod emerson_lei;
-pub mod hoa;
-pub mod minimise;
+pub(crate) mod emerson_lei;
+pub(crate) mod hoa;
+pub(crate) mod minimise;
 
-pub use emerson_lei::{Acceptance, EmersonLeiAutomaton, MarkSet, to_state_based_rabin};
+pub use emerson_lei::{
+    Acceptance, Edge, EmersonLeiAutomaton, MAX_DNF_DISJUNCTS, MAX_TABLE_ENTRIES, MarkSet,
+    to_state_based_rabin,
+};
 pub use hoa::{HoaError, parse_hoa, read_hoa_dra, write_hoa};
-pub use minimise::minimise;
+pub use minimise::{minimise, minimise_with_free_start};
 
 use thiserror::Error;
 

@@ -12,11 +12,11 @@ use std::path::{Path, PathBuf};
 
 use clap::Args;
 use posg_fsc::automaton::Dra;
+use posg_fsc::certify::strategy::StrategyFile;
 use posg_fsc::certify::{Bound, check_consistent, lower_bound, upper_bound};
 use posg_fsc::controller::Role;
 use posg_fsc::controller::file::resolve;
 use posg_fsc::game::Posg;
-use posg_fsc::strategy::StrategyFile;
 use serde::Serialize;
 
 use super::common::{self, ObjectiveArgs, Provenance};

@@ -6,10 +6,10 @@ use std::time::Instant;
 use anyhow::Context;
 use clap::Args;
 use posg_fsc::automaton::Dra;
-use posg_fsc::automaton::hoa::read_hoa_dra;
+use posg_fsc::automaton::read_hoa_dra;
 use posg_fsc::controller::{Fsc, Role};
 use posg_fsc::game::Posg;
-use posg_fsc::solver::{DEFAULT_LU_LIMIT, DEFAULT_TOLERANCE, SolverMethod, SolverSettings};
+use posg_fsc::value::{DEFAULT_LU_LIMIT, DEFAULT_TOLERANCE, SolverMethod, SolverSettings};
 use serde::Serialize;
 
 /// The objective: an LTL formula or a deterministic automaton in HOA.

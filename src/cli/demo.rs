@@ -20,8 +20,8 @@ use posg_fsc::game::grid::GridSpec;
 use posg_fsc::optimise::{self, Settings, Solution, Structure};
 use posg_fsc::output::OutputDirectory;
 use posg_fsc::prune::{PruneSettings, prune};
-use posg_fsc::solver::SolverSettings;
 use posg_fsc::synthesis::{self, Mode, synthesise};
+use posg_fsc::value::SolverSettings;
 use posg_fsc::value::evaluate_controllers;
 
 use super::solve::{SolveJob, run_job};

@@ -5,10 +5,10 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use clap::Args;
-use posg_fsc::analysis::Recurrence;
 use posg_fsc::controller::Support;
 use posg_fsc::game::Posg;
-use posg_fsc::product::Gmc;
+use posg_fsc::value::Gmc;
+use posg_fsc::value::Recurrence;
 use posg_fsc::value::{Evaluator, Gradient};
 use serde::Serialize;
 

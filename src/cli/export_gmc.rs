@@ -5,8 +5,8 @@
 use std::path::PathBuf;
 
 use clap::Args;
-use posg_fsc::export::{explicit_chain, write_explicit_chain};
 use posg_fsc::output::OutputDirectory;
+use posg_fsc::output::export::{explicit_chain, write_explicit_chain};
 use serde::Serialize;
 
 use super::common::{self, ControllerArgs, Provenance};

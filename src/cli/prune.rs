@@ -16,9 +16,9 @@ use posg_fsc::automaton::Dra;
 use posg_fsc::controller::{Fsc, Role, file};
 use posg_fsc::game::Posg;
 use posg_fsc::output::{OutputDirectory, write_file};
-use posg_fsc::product::GmcState;
 use posg_fsc::prune::{Attempt, LastOptionStop, PruneReport, PruneSettings, prune};
-use posg_fsc::solver::SolverSettings;
+use posg_fsc::value::GmcState;
+use posg_fsc::value::SolverSettings;
 use posg_fsc::value::evaluate_controllers;
 
 use super::common::{ObjectiveArgs, Provenance, objective, read_game};

@@ -4,9 +4,9 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use clap::Args;
-use posg_fsc::simulate::{Estimate, SimulationSettings, simulate};
-use posg_fsc::solver::{DEFAULT_TOLERANCE, SolverSettings};
 use posg_fsc::value::evaluate_controllers;
+use posg_fsc::value::{DEFAULT_TOLERANCE, SolverSettings};
+use posg_fsc::value::{Estimate, SimulationSettings, simulate};
 use serde::Serialize;
 
 use super::common::{self, ControllerArgs, ObjectiveArgs, Provenance};

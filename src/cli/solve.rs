@@ -23,7 +23,7 @@ use posg_fsc::optimise::{
     StructureReport, StructureSource, UpdateRule,
 };
 use posg_fsc::output::{CurveCsv, CurvePlot, OutputDirectory, Title, create_dir, write_file};
-use posg_fsc::solver::SolverMethod;
+use posg_fsc::value::SolverMethod;
 
 use super::common::{ObjectiveArgs, objective, print_text, read_game};
 use super::progress::{OutputArgs, ProgressMode, structure_progress};

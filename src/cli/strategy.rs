@@ -6,7 +6,7 @@
 use std::path::PathBuf;
 
 use clap::Args;
-use posg_fsc::strategy::StrategyFile;
+use posg_fsc::certify::strategy::StrategyFile;
 use serde::Serialize;
 
 use super::common::{self, Provenance};
@@ -33,7 +33,7 @@ struct Report<'a> {
     provenance: Provenance,
     file: String,
     player: posg_fsc::controller::Role,
-    objective: posg_fsc::strategy::Objective,
+    objective: posg_fsc::certify::strategy::Objective,
     formula: &'a str,
     free_player_value: f64,
     rules: usize,

@@ -22,7 +22,7 @@ pub fn run(args: TranslateArgs) -> anyhow::Result<()> {
     let formula = ltl::parse(&args.formula).context("cannot parse the formula")?;
     let dra = ltl::translate(&formula).context("cannot translate the formula")?;
     let text = if args.hoa {
-        posg_fsc::automaton::hoa::write_hoa(&dra, Some(&formula.to_string()))
+        posg_fsc::automaton::write_hoa(&dra, Some(&formula.to_string()))
     } else {
         table(&formula, &dra)
     };

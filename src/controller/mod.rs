@@ -3,7 +3,7 @@
 //! (node, observation) pair, and an initial node distribution.
 //!
 //! [`Fsc`] holds a controller's probabilities on its support (the paper's
-//! indicator `I_*(g', u | g, o)`); [`file`] reads and writes `*.fsc.json`
+//! indicator `I_*(g', u | g, o)`); [`file`](mod@file) reads and writes `*.fsc.json`
 //! (formats.md section 2) and the `uniform:K` shorthand.
 
 pub mod file;

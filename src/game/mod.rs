@@ -1,7 +1,7 @@
 //! The partially observable stochastic game (POSG) with labelled states:
 //! the paper's `SG = (S, U_def, U_adv, T, O_def, O_adv, O_def, O_adv, AP, L)`.
 //!
-//! [`Posg`] is the validated in-memory model; [`file`] reads and writes it as
+//! [`Posg`] is the validated in-memory model; [`file`](mod@file) reads and writes it as
 //! `*.posg.json` (formats.md section 1), [`drn`] imports Storm's explicit DRN
 //! models (formats.md section 6) and [`grid`] builds the seed paper's grid
 //! family. Every distribution held here has positive entries only (a zero

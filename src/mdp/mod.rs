@@ -14,7 +14,7 @@
 //!   Checking*, Algorithm 47);
 //! * [`max_reachability`] ([`reachability`]): `sup_sigma P^sigma(reach target)`
 //!   for every state, exact, by policy iteration with sparse LU evaluations;
-//! * [`max_rabin_probability`] ([`rabin`]): `sup_sigma P^sigma(Rabin)`, the
+//! * [`max_rabin_analysis`] ([`rabin`]): `sup_sigma P^sigma(Rabin)`, the
 //!   maximum reachability probability of the union of the accepting end
 //!   components (per pair `(L_i, K_i)`: the MECs of the sub-MDP without `L_i`
 //!   that meet `K_i`), with an optimal deterministic memoryless strategy.
@@ -24,13 +24,8 @@ pub mod rabin;
 pub mod reachability;
 
 pub use end_components::{EndComponent, maximal_end_components};
-pub use rabin::{
-    AcceptingComponent, accepting_end_components, max_rabin_analysis, max_rabin_probability,
-    max_rabin_qualitative,
-};
-pub use reachability::{
-    QualitativeReachability, Reachability, max_reachability, qualitative_reachability,
-};
+pub use rabin::{AcceptingComponent, max_rabin_analysis, max_rabin_qualitative};
+pub use reachability::{QualitativeReachability, Reachability, max_reachability};
 
 use thiserror::Error;
 
@@ -85,11 +80,6 @@ impl Mdp {
     /// positive probabilities.
     pub fn distribution(&self, s: usize, a: usize) -> &[(usize, f64)] {
         self.global_distribution(self.action_offsets[s] + a)
-    }
-
-    /// `sum_t P(t | s, a) x(t)`.
-    pub fn expectation(&self, s: usize, a: usize, x: &[f64]) -> f64 {
-        self.distribution(s, a).iter().map(|&(t, p)| p * x[t]).sum()
     }
 
     fn global_distribution(&self, action: usize) -> &[(usize, f64)] {

@@ -13,7 +13,7 @@
 //! because the states a run visits infinitely often form an end component
 //! almost surely, and inside an accepting end component a strategy can stay
 //! forever and visit `K_i` infinitely often. Memoryless deterministic
-//! strategies suffice: [`max_rabin_probability`] plays an optimal
+//! strategies suffice: [`max_rabin_analysis`] plays an optimal
 //! reachability strategy outside `U` and, inside, an *in-component
 //! attractor*: in each MEC of pair `i`, actions of the component that lead
 //! towards `K_i` by a backward search (any action of the component on `K_i`).
@@ -66,15 +66,10 @@ pub fn accepting_end_components(
 }
 
 /// `sup_sigma P^sigma_s(Rabin)` for every state, with an optimal memoryless
-/// deterministic strategy (see the module documentation). `values` and
-/// `residual` are those of the reachability problem for the union of the
-/// accepting end components.
-pub fn max_rabin_probability(mdp: &Mdp, pairs: &[RabinPair]) -> Result<Reachability, MdpError> {
-    Ok(max_rabin_analysis(mdp, pairs)?.0)
-}
-
-/// [`max_rabin_probability`] together with the accepting end components
-/// ([`accepting_end_components`]) whose union is the reachability target.
+/// deterministic strategy (see the module documentation), together with the
+/// accepting end components ([`accepting_end_components`]) whose union is the
+/// reachability target. The values and residual are those of the
+/// reachability problem for that union.
 pub fn max_rabin_analysis(
     mdp: &Mdp,
     pairs: &[RabinPair],
@@ -218,7 +213,7 @@ mod tests {
             .map(|c| c.component.states.clone())
             .collect();
         assert_eq!(states, vec![vec![1, 2]]);
-        let result = max_rabin_probability(&cycle_or_trap(), &pairs).unwrap();
+        let result = max_rabin_analysis(&cycle_or_trap(), &pairs).unwrap().0;
         assert_eq!(result.values, vec![0.5, 1.0, 1.0, 0.0, 0.0]);
         assert_eq!(result.strategy[1], 0, "1 must move on to 2, not idle");
     }
@@ -226,7 +221,7 @@ mod tests {
     #[test]
     fn a_second_pair_opens_another_component() {
         let pairs = [pair(&[4], &[2, 4], 5), pair(&[], &[3], 5)];
-        let result = max_rabin_probability(&cycle_or_trap(), &pairs).unwrap();
+        let result = max_rabin_analysis(&cycle_or_trap(), &pairs).unwrap().0;
         assert_eq!(result.values, vec![1.0, 1.0, 1.0, 1.0, 0.0]);
         assert_eq!(result.strategy[3], 0, "3 must stay in K");
     }

@@ -15,6 +15,7 @@
 
 mod directory;
 pub mod dot;
+pub mod export;
 mod plot;
 pub mod shard;
 pub mod slurm;

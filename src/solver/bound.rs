@@ -170,6 +170,7 @@ impl ExpectedTime {
     }
 
     /// The estimate `t_hat` (empty before the first [`Self::store`]).
+    #[cfg(test)]
     pub fn estimate(&self) -> &[f64] {
         &self.estimate
     }

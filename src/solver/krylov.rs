@@ -165,6 +165,7 @@ impl KrylovSolver {
 
     /// Solves `A x = b` starting from `x` (see the module documentation for
     /// starts that are zero or not finite).
+    #[cfg(test)]
     pub fn solve(&mut self, b: &[f64], x: &mut [f64]) -> Result<SolveReport, SolverError> {
         let tolerance = self.system.tolerance;
         self.solve_within(b, x, tolerance)

@@ -36,7 +36,7 @@ mod lu;
 use bound::ExpectedTime;
 pub use denormals::FlushDenormals;
 pub use ilu::Ilu0;
-pub use krylov::{KrylovProbe, KrylovSolver};
+pub use krylov::KrylovSolver;
 pub use lu::LuSolver;
 
 use thiserror::Error;
@@ -698,6 +698,7 @@ impl LinearSolver {
     }
 
     /// Solves `A^T y = c`, `y` as `x` in [`Self::solve`].
+    #[cfg(test)]
     pub fn solve_transpose(
         &mut self,
         c: &[f64],
@@ -973,6 +974,7 @@ pub(crate) mod test_systems {
 
 #[cfg(test)]
 mod tests {
+    use super::krylov::KrylovProbe;
     use super::test_systems::{random_chain, tridiagonal};
     use super::*;
 

@@ -64,10 +64,10 @@
 //!
 //! # Two engines
 //!
-//! * [`Engine::Certificate`] ([`encoding`]) puts the support, the edges and
+//! * [`Engine::Certificate`] (the `encoding` module) puts the support, the edges and
 //!   the certificates into one formula: a model is a support with its proof.
 //!   "Unsatisfiable" is a proof for one pair with the exact rank bound.
-//! * [`Engine::Lazy`] ([`search`], the default) gives the solver only the
+//! * [`Engine::Lazy`] (the `search` module, the default) gives the solver only the
 //!   support and the edges; each proposed support is judged by the exact
 //!   certification of method.md section 6, and a losing one teaches a lemma
 //!   read off the adversary's counterexample. "Unsatisfiable" is then a proof
