@@ -13,11 +13,13 @@
 //!   with the last point cached;
 //! * [`best_response`]: the adversary's best response by L-BFGS (argmin) in
 //!   the coordinates `phi = c tanh(z)`, from several starts;
-//! * [`Optimiser`]: alternating projected gradient ascent-descent with a fast
-//!   adversary time scale, plain or Adam (optionally optimistic) updates,
-//!   periodic best-response checks that also certify, a logit bound that
-//!   widens when progress stalls on it, stopping on the certified gap or a
-//!   stall (section 4);
+//! * [`Optimiser`]: the driver of alternating projected gradient
+//!   ascent-descent (section 4). Its solver takes one outer iteration: a
+//!   fast adversary time scale, plain or Adam (optionally optimistic)
+//!   updates; the driver owns the rest: periodic best-response checks that
+//!   also certify, a logit bound that widens when progress stalls on it,
+//!   stopping on the certified gap or a stall, the best defender seen, and
+//!   the observer;
 //! * [`ascend`]: the single-player fast path (the adversary has one action,
 //!   so max-min is max): L-BFGS on `ln V`;
 //! * [`rounded_candidates`]: partial and argmax roundings of the result,
@@ -41,6 +43,7 @@ mod best_response;
 mod objective;
 mod observer;
 mod optimiser;
+mod play;
 mod rounding;
 mod settings;
 mod softmax;
@@ -63,7 +66,7 @@ pub use warm_start::{WARM_START_MIX, embed, keep_better, pad, score, warm_starte
 
 use std::time::Instant;
 
-use optimiser::perturbed;
+use play::perturbed;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;

@@ -1,26 +1,30 @@
-//! Alternating projected gradient ascent-descent on one support structure
-//! (method.md section 4).
+//! The max-min loop's driver (method.md section 4), in argmin's shape: the
+//! solver `GradientPlay` (`play.rs`) takes one outer iteration of
+//! alternating projected gradient ascent-descent; the [`Optimiser`] (the
+//! executor) runs it and owns everything between iterations: the stopping
+//! rules, the schedule of best-response checks and their certification, the
+//! logit bound's widening, the bookkeeping of the best defender seen, and
+//! the [`Observer`], which it alone calls (once per iteration).
 //!
-//! Outer iteration `t`:
+//! After iteration `t` (the adversary has responded to `phi_def(t)`):
 //!
-//! 1. `k_adv` adversary steps `phi_adv <- clip_c(phi_adv - eta_adv d_adv)`;
-//! 2. at `(phi_def(t), phi_adv)`: a best-response check when `t` is a
-//!    multiple of `check_every` or the run stops;
-//! 3. one defender step `phi_def(t+1) = clip_c(phi_def(t) + eta_def(t) d_def)`,
-//!    `eta_def(t) = eta_def / sqrt(1 + decay t)`;
+//! 1. the run is due to stop at `max_iterations` or the time budget;
+//! 2. a best-response check (`optimiser/check.rs`) runs at `(phi_def(t), phi_adv(t))`
+//!    when `t` is a multiple of `check_every` or the run stops;
+//! 3. the observer sees iteration `t`'s record;
+//! 4. unless the run stops, the solver's next iteration begins with the
+//!    defender's step `phi_def(t+1)`.
 //!
-//! where `d` is the logit gradient (plain) or Adam's direction, made
-//! optimistic (`d_t + optimism (d_t - d_{t-1})`) when `optimism > 0`, and
-//! `clip_c` the projection onto `[-c, c]`. Alternating gradient play cycles around
-//! the saddle of bilinear games such as matching pennies; what converges is
-//! the *best defender seen*, helped by the fast adversary time scale and the
-//! decaying defender steps. Each check ranks two candidates: the current
-//! defender and the suffix average of its probabilities (the average over
-//! iterations `2^k..=t`, `2^k <= t` the last power of two; the average of
-//! cycling play approaches the saddle point where the iterates circle it).
-//! A candidate's score is its certified lower bound when an automaton for
-//! !phi is given (method.md section 6), else its best-response value; the
-//! result is the best-scoring candidate seen, not the last iterate.
+//! Alternating gradient play cycles around the saddle of bilinear games
+//! such as matching pennies; what converges is the *best defender seen*,
+//! helped by the fast adversary time scale and the decaying defender steps.
+//! Each check ranks two candidates: the current defender and the suffix
+//! average of its probabilities (the average over iterations `2^k..=t`,
+//! `2^k <= t` the last power of two; the average of cycling play approaches
+//! the saddle point where the iterates circle it). A candidate's score is
+//! its certified lower bound when an automaton for !phi is given (method.md
+//! section 6), else its best-response value; the result is the
+//! best-scoring candidate seen, not the last iterate.
 //!
 //! Stopping and the logit bound: the run stops when the certified gap
 //! (smallest game upper bound minus the best certified lower bound) is at
@@ -34,23 +38,24 @@
 //! `exp(-2 logit_bound) / |block|`: the support, and the GMC graph, never
 //! change.
 
+mod check;
+
 use std::time::Instant;
 
-use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
 
-use super::best_response::best_response;
 use super::objective::Objective;
 use super::observer::{IterationRecord, Observer};
-use super::rounding::truncated;
-use super::softmax::clip;
-use super::{OptimiseError, Settings, Status, UpdateRule};
+use super::play::{GradientPlay, Iterate, PlayState, perturbed};
+use super::{OptimiseError, Settings, Status};
 use crate::automaton::Dra;
-use crate::certify::{lower_value_or_trivial, upper_value_or_trivial};
 use crate::game::Posg;
+use check::{Check, SuffixAverage};
 
-/// The optimiser's state on one structure.
+/// The driver of the max-min loop on one structure: the objective, the
+/// random stream of the best-response checks, the certifier and the
+/// iterate `(phi_def, phi_adv)` it starts from (and ends at).
 pub struct Optimiser<'a> {
     objective: Objective,
     certifier: Option<Certifier<'a>>,
@@ -148,14 +153,42 @@ pub struct Certifier<'a> {
 /// A logit `phi` presses on the bound `c` when `|phi| >= NEAR_BOUND * c`.
 pub const NEAR_BOUND: f64 = 0.95;
 
-/// The numbers of one best-response check that the iteration record shows.
-struct Check {
-    worst_case: f64,
-    certified_lower: Option<f64>,
-    /// The argmax rounding of the current defender certifies within
-    /// `gap_tolerance` of the upper bound (it is then the incumbent, and
-    /// the final rounding keeps the rounded controller).
-    rounding_closes_gap: bool,
+/// What the driver keeps between iterations: the best defender seen, the
+/// smallest game upper bound, the best score after each check since the
+/// logit bound last widened, the suffix averages the checks rank, and the
+/// counters.
+struct Bookkeeping {
+    best: Option<Incumbent>,
+    upper_bound: Option<f64>,
+    history: Vec<f64>,
+    defender_average: SuffixAverage,
+    adversary_average: SuffixAverage,
+    checks: usize,
+    phases: PhaseSeconds,
+}
+
+impl Bookkeeping {
+    fn new(defender_parameters: usize, adversary_parameters: usize) -> Self {
+        Self {
+            best: None,
+            upper_bound: None,
+            history: Vec::new(),
+            defender_average: SuffixAverage::new(defender_parameters),
+            adversary_average: SuffixAverage::new(adversary_parameters),
+            checks: 0,
+            phases: PhaseSeconds::default(),
+        }
+    }
+
+    /// Adds the players' probabilities at iteration `t` to their suffix
+    /// averages.
+    fn average(&mut self, objective: &Objective, iterate: &Iterate) {
+        let t = iterate.iteration;
+        let defender = objective.defender().probabilities(&iterate.defender);
+        self.defender_average.add(t, &defender.entries);
+        let adversary = objective.adversary().probabilities(&iterate.adversary);
+        self.adversary_average.add(t, &adversary.entries);
+    }
 }
 
 impl<'a> Optimiser<'a> {
@@ -209,137 +242,124 @@ impl<'a> Optimiser<'a> {
     /// outer iteration to `observer`.
     pub fn run(&mut self, observer: &mut dyn Observer) -> Result<RunOutcome, OptimiseError> {
         let clock = Instant::now();
-        let s = self.settings.clone();
-        let mut phases = PhaseSeconds::default();
-        let mut defender_update = Update::new(s.update, s.optimism, self.defender.len());
-        let mut adversary_update = Update::new(s.update, s.optimism, self.adversary.len());
-        let mut best: Option<Incumbent> = None;
-        let mut history = Vec::new();
-        let mut average = SuffixAverage::new(self.defender.len());
-        let mut adversary_average = SuffixAverage::new(self.adversary.len());
-        let mut upper_bound = None;
-        let mut bound = s.initial_logit_bound;
-        let mut max_residual = 0.0f64;
-        let mut checks = 0;
-        let mut t = 0;
-        let (status, last_value) = loop {
-            let steps_clock = Instant::now();
-            let mut adversary_norm = 0.0;
-            for _ in 0..s.adversary_steps {
-                let point = self.objective.point(&self.defender, &self.adversary)?;
-                max_residual = max_residual.max(point.residual);
-                adversary_norm = norm(&point.adversary);
-                adversary_update.step(
-                    &mut self.adversary,
-                    &point.adversary,
-                    -s.adversary_step,
-                    bound,
-                );
-            }
-            let point = self.objective.point(&self.defender, &self.adversary)?;
-            max_residual = max_residual.max(point.residual);
-            average.add(
-                t,
-                &self
-                    .objective
-                    .defender()
-                    .probabilities(&self.defender)
-                    .entries,
-            );
-            adversary_average.add(
-                t,
-                &self
-                    .objective
-                    .adversary()
-                    .probabilities(&self.adversary)
-                    .entries,
-            );
-            phases.optimisation += steps_clock.elapsed().as_secs_f64();
-            let seconds = clock.elapsed().as_secs_f64();
-            let mut status = if t + 1 >= s.max_iterations {
-                Some(Status::MaxIterations)
-            } else if s.time_budget > 0.0 && seconds >= s.time_budget {
-                Some(Status::TimeBudget)
-            } else {
-                None
-            };
-            let checked = t % s.check_every == 0 || status.is_some();
-            let check = if checked {
-                checks += 1;
-                let check = self.check(
-                    &mut best,
-                    &mut upper_bound,
-                    t,
-                    [&average, &adversary_average],
-                    bound,
-                    &mut phases,
-                )?;
-                let incumbent = best.as_ref().ok_or(OptimiseError::BestResponse(
-                    "no best-response check ran".into(),
-                ))?;
-                history.push(incumbent.score());
-                if status.is_none() && check.rounding_closes_gap {
-                    status = Some(Status::GapClosed);
-                }
-                if status.is_none() {
-                    status = self.stop_or_widen(incumbent, upper_bound, &mut history, &mut bound);
-                }
-                Some(check)
-            } else {
-                None
-            };
-            let defender_step = s.defender_step / (1.0 + s.defender_decay * t as f64).sqrt();
-            observer.observe(&IterationRecord {
-                iteration: t,
-                seconds,
-                value: point.value,
-                defender_gradient_norm: norm(&point.defender),
-                adversary_gradient_norm: adversary_norm,
-                defender_step,
-                adversary_step: s.adversary_step,
-                worst_case: check.as_ref().map(|c| c.worst_case),
-                certified_lower: check.as_ref().and_then(|c| c.certified_lower),
-                upper_bound: upper_bound
-                    .filter(|_| check.as_ref().is_some_and(|c| c.certified_lower.is_some())),
-                logit_bound: bound,
-            });
-            if let Some(status) = status {
-                break (status, point.value);
-            }
-            let steps_clock = Instant::now();
-            defender_update.step(&mut self.defender, &point.defender, defender_step, bound);
-            phases.optimisation += steps_clock.elapsed().as_secs_f64();
-            t += 1;
+        let mut solver =
+            GradientPlay::new(&self.settings, self.defender.len(), self.adversary.len());
+        let mut books = Bookkeeping::new(self.defender.len(), self.adversary.len());
+        let start = Iterate {
+            iteration: 0,
+            defender: self.defender.clone(),
+            adversary: self.adversary.clone(),
+            bound: self.settings.initial_logit_bound,
+            max_residual: 0.0,
         };
-        let best = best.ok_or(OptimiseError::BestResponse(
+        let mut state = self.timed(&mut books, |objective| solver.init(objective, start))?;
+        loop {
+            let seconds = clock.elapsed().as_secs_f64();
+            if let Some(status) =
+                self.between_iterations(&solver, &mut state, &mut books, seconds, observer)?
+            {
+                return self.outcome(state, books, status, clock);
+            }
+            state = self.timed(&mut books, |objective| solver.next_iter(objective, state))?;
+        }
+    }
+
+    /// One of the solver's iterations, `iteration`, timed as optimisation,
+    /// its iterate added to the suffix averages.
+    fn timed(
+        &mut self,
+        books: &mut Bookkeeping,
+        iteration: impl FnOnce(&mut Objective) -> Result<PlayState, OptimiseError>,
+    ) -> Result<PlayState, OptimiseError> {
+        let clock = Instant::now();
+        let state = iteration(&mut self.objective)?;
+        books.average(&self.objective, &state.iterate);
+        books.phases.optimisation += clock.elapsed().as_secs_f64();
+        Ok(state)
+    }
+
+    /// Everything between the solver's iterations, after iteration `t` and
+    /// `seconds` into the run: the stopping rules, the best-response check
+    /// when one is due (it may widen the logit bound), and the record to
+    /// `observer`. Returns why the run stops, if it does.
+    fn between_iterations(
+        &mut self,
+        solver: &GradientPlay,
+        state: &mut PlayState,
+        books: &mut Bookkeeping,
+        seconds: f64,
+        observer: &mut dyn Observer,
+    ) -> Result<Option<Status>, OptimiseError> {
+        let mut status = self.budget_spent(state.iterate.iteration, seconds);
+        let check = if self.check_due(state.iterate.iteration, status) {
+            let check = self.check(state, books)?;
+            status = self.after_check(&check, status, &mut state.iterate, books)?;
+            Some(check)
+        } else {
+            None
+        };
+        observer.observe(&record(
+            solver,
+            state,
+            seconds,
+            check.as_ref(),
+            books.upper_bound,
+        ));
+        Ok(status)
+    }
+
+    /// [`Status::MaxIterations`] after iteration `max_iterations - 1`,
+    /// [`Status::TimeBudget`] once `seconds` reach a positive time budget.
+    fn budget_spent(&self, t: usize, seconds: f64) -> Option<Status> {
+        let s = &self.settings;
+        if t + 1 >= s.max_iterations {
+            Some(Status::MaxIterations)
+        } else if s.time_budget > 0.0 && seconds >= s.time_budget {
+            Some(Status::TimeBudget)
+        } else {
+            None
+        }
+    }
+
+    /// A check is due at multiples of `check_every` and when the run stops.
+    fn check_due(&self, t: usize, status: Option<Status>) -> bool {
+        t % self.settings.check_every == 0 || status.is_some()
+    }
+
+    /// After a check: records the best score in the stall history; unless
+    /// the run already stops (`status`), [`Status::GapClosed`] when the
+    /// current defender's rounding closes the gap, else
+    /// [`Self::stop_or_widen`].
+    fn after_check(
+        &self,
+        check: &Check,
+        status: Option<Status>,
+        iterate: &mut Iterate,
+        books: &mut Bookkeeping,
+    ) -> Result<Option<Status>, OptimiseError> {
+        let incumbent = books.best.as_ref().ok_or(OptimiseError::BestResponse(
             "no best-response check ran".into(),
         ))?;
-        Ok(RunOutcome {
-            best,
-            upper_bound,
-            last_value,
-            iterations: t + 1,
-            checks,
-            status,
-            seconds: clock.elapsed().as_secs_f64(),
-            phases,
-            logit_bound: bound,
-            max_residual,
-        })
+        books.history.push(incumbent.score());
+        if status.is_some() {
+            return Ok(status);
+        }
+        if check.rounding_closes_gap {
+            return Ok(Some(Status::GapClosed));
+        }
+        Ok(self.stop_or_widen(incumbent, books.upper_bound, &mut books.history, iterate))
     }
-}
 
-impl Optimiser<'_> {
-    /// After a check: [`Status::GapClosed`] when the certified gap is at
-    /// most `gap_tolerance`; on a stall, the doubled logit bound when some
-    /// defender or adversary logit is within [`NEAR_BOUND`] of it and it is below
-    /// `logit_bound`, else [`Status::Stalled`].
+    /// [`Status::GapClosed`] when the certified gap is at most
+    /// `gap_tolerance`; on a stall, the doubled logit bound when some
+    /// defender or adversary logit is within [`NEAR_BOUND`] of it and it is
+    /// below `logit_bound`, else [`Status::Stalled`].
     fn stop_or_widen(
         &self,
         incumbent: &Incumbent,
         upper_bound: Option<f64>,
         history: &mut Vec<f64>,
-        bound: &mut f64,
+        iterate: &mut Iterate,
     ) -> Option<Status> {
         let s = &self.settings;
         if let (Some(lower), Some(upper)) = (incumbent.certified_lower, upper_bound) {
@@ -350,9 +370,10 @@ impl Optimiser<'_> {
         if !stalled(history, s) {
             return None;
         }
-        let on_bound = |logits: &[f64]| logits.iter().any(|phi| phi.abs() >= NEAR_BOUND * *bound);
-        if *bound < s.logit_bound && (on_bound(&self.defender) || on_bound(&self.adversary)) {
-            *bound = (2.0 * *bound).min(s.logit_bound);
+        let bound = iterate.bound;
+        let on_bound = |logits: &[f64]| logits.iter().any(|phi| phi.abs() >= NEAR_BOUND * bound);
+        if bound < s.logit_bound && (on_bound(&iterate.defender) || on_bound(&iterate.adversary)) {
+            iterate.bound = (2.0 * bound).min(s.logit_bound);
             history.clear();
             None
         } else {
@@ -360,156 +381,59 @@ impl Optimiser<'_> {
         }
     }
 
-    /// The best-response check at iteration `t`: the current defender and
-    /// the suffix average of the defender's probabilities (as logits within
-    /// `bound`) each get a best response and, with a certifier, a certified
-    /// lower bound; either replaces the incumbent when its score is higher.
-    /// With a certifier the game upper bound is also taken against the
-    /// suffix average of the adversary's probabilities (where cycling play
-    /// circles a mixed saddle point, the average approaches it) and against
-    /// the best response to the current defender. Returns the current
-    /// defender's numbers.
-    fn check(
+    /// The run's outcome, stopped for `status` at `state`; the optimiser
+    /// keeps the last iterate.
+    fn outcome(
         &mut self,
-        best: &mut Option<Incumbent>,
-        upper_bound: &mut Option<f64>,
-        t: usize,
-        [average, adversary_average]: [&SuffixAverage; 2],
-        bound: f64,
-        phases: &mut PhaseSeconds,
-    ) -> Result<Check, OptimiseError> {
-        let mut averaged = self.objective.defender().probabilities(&self.defender);
-        averaged.entries.clone_from(&average.mean);
-        let averaged = self.objective.defender().logits_of(&averaged, bound);
-        if let Some(certifier) = &self.certifier {
-            let clock = Instant::now();
-            let mut mu = self.objective.adversary().probabilities(&self.adversary);
-            mu.entries.clone_from(&adversary_average.mean);
-            let logits = self
-                .objective
-                .adversary()
-                .logits_of(&mu, self.settings.logit_bound);
-            let adversary = self.objective.adversary().controller(&logits)?;
-            let upper = upper_value_or_trivial(certifier.game, certifier.phi, &adversary)?;
-            *upper_bound = Some(upper_bound.map_or(upper, |u: f64| u.min(upper)));
-            phases.certification += clock.elapsed().as_secs_f64();
-        }
-        let rounding_closes_gap = self.rounding_closes_gap(*upper_bound, phases)?;
-        let mut current = None;
-        for (i, candidate) in [self.defender.clone(), averaged].into_iter().enumerate() {
-            let clock = Instant::now();
-            let found = best_response(
-                &mut self.objective,
-                &candidate,
-                &self.adversary,
-                &self.settings,
-                &mut self.rng,
-            )?;
-            phases.best_responses += clock.elapsed().as_secs_f64();
-            let clock = Instant::now();
-            let certified_lower = match &self.certifier {
-                Some(certifier) => {
-                    let defender = self.objective.defender().controller(&candidate)?;
-                    let lower =
-                        lower_value_or_trivial(certifier.game, certifier.not_phi, &defender)?;
-                    if i == 0 {
-                        let adversary = self.objective.adversary().controller(&found.adversary)?;
-                        let upper =
-                            upper_value_or_trivial(certifier.game, certifier.phi, &adversary)?;
-                        *upper_bound = Some(upper_bound.map_or(upper, |u: f64| u.min(upper)));
-                    }
-                    Some(lower)
-                }
-                None => None,
-            };
-            phases.certification += clock.elapsed().as_secs_f64();
-            let incumbent = Incumbent {
-                defender: candidate,
-                adversary: found.adversary,
-                worst_case: found.value,
-                certified_lower,
-                iteration: t,
-            };
-            current.get_or_insert(Check {
-                worst_case: found.value,
-                certified_lower,
-                rounding_closes_gap,
-            });
-            let current_closes = i == 0 && rounding_closes_gap;
-            if current_closes || best.as_ref().is_none_or(|b| incumbent.score() > b.score()) {
-                *best = Some(incumbent);
-            }
-            if current_closes {
-                break;
-            }
-        }
-        current.ok_or(OptimiseError::BestResponse("no candidate checked".into()))
+        state: PlayState,
+        books: Bookkeeping,
+        status: Status,
+        clock: Instant,
+    ) -> Result<RunOutcome, OptimiseError> {
+        let best = books.best.ok_or(OptimiseError::BestResponse(
+            "no best-response check ran".into(),
+        ))?;
+        let PlayState { iterate, point, .. } = state;
+        self.defender = iterate.defender;
+        self.adversary = iterate.adversary;
+        Ok(RunOutcome {
+            best,
+            upper_bound: books.upper_bound,
+            last_value: point.value,
+            iterations: iterate.iteration + 1,
+            checks: books.checks,
+            status,
+            seconds: clock.elapsed().as_secs_f64(),
+            phases: books.phases,
+            logit_bound: iterate.bound,
+            max_residual: iterate.max_residual,
+        })
     }
 }
 
-impl Optimiser<'_> {
-    /// Whether, with rounding on and a certifier, the argmax rounding of the
-    /// current defender certifies within `gap_tolerance` of `upper_bound`: a
-    /// deterministic optimum is then found, though the softmax iterates
-    /// would approach it only slowly.
-    fn rounding_closes_gap(
-        &self,
-        upper_bound: Option<f64>,
-        phases: &mut PhaseSeconds,
-    ) -> Result<bool, OptimiseError> {
-        let (Some(certifier), Some(upper), true) =
-            (&self.certifier, upper_bound, self.settings.round)
-        else {
-            return Ok(false);
-        };
-        let clock = Instant::now();
-        let defender = self.objective.defender().controller(&self.defender)?;
-        let rounded = truncated(&defender, f64::INFINITY)?;
-        let lower = lower_value_or_trivial(certifier.game, certifier.not_phi, &rounded)?;
-        phases.certification += clock.elapsed().as_secs_f64();
-        Ok(upper - lower <= self.settings.gap_tolerance)
-    }
-}
-
-/// `logits` plus noise uniform in `[-spread, spread]`, clipped to `[-bound, bound]`.
-pub(super) fn perturbed(
-    logits: Vec<f64>,
-    spread: f64,
-    bound: f64,
-    rng: &mut ChaCha8Rng,
-) -> Vec<f64> {
-    let mut perturbed: Vec<f64> = logits
-        .into_iter()
-        .map(|phi| phi + spread * rng.random_range(-1.0..=1.0))
-        .collect();
-    clip(&mut perturbed, bound);
-    perturbed
-}
-
-/// The mean of the defender's probabilities over iterations `2^k..=t`.
-struct SuffixAverage {
-    mean: Vec<f64>,
-    count: usize,
-}
-
-impl SuffixAverage {
-    fn new(n: usize) -> Self {
-        Self {
-            mean: vec![0.0; n],
-            count: 0,
-        }
-    }
-
-    /// Adds iteration `t`'s probabilities, first restarting at powers of two.
-    fn add(&mut self, t: usize, mu: &[f64]) {
-        if t.is_power_of_two() {
-            self.count = 0;
-        }
-        self.count += 1;
-        let weight = 1.0 / self.count as f64;
-        for (m, &x) in self.mean.iter_mut().zip(mu) {
-            *m += weight * (x - *m);
-        }
+/// Iteration `t`'s record: the value and gradient norms at
+/// `(phi_def(t), phi_adv(t))`, the step sizes, the check's numbers when one
+/// ran (the upper bound only with a certified lower bound), the logit bound.
+fn record(
+    solver: &GradientPlay,
+    state: &PlayState,
+    seconds: f64,
+    check: Option<&Check>,
+    upper_bound: Option<f64>,
+) -> IterationRecord {
+    let t = state.iterate.iteration;
+    IterationRecord {
+        iteration: t,
+        seconds,
+        value: state.point.value,
+        defender_gradient_norm: norm(&state.point.defender),
+        adversary_gradient_norm: state.adversary_gradient_norm,
+        defender_step: solver.defender_step(t),
+        adversary_step: solver.adversary_step(),
+        worst_case: check.map(|c| c.worst_case),
+        certified_lower: check.and_then(|c| c.certified_lower),
+        upper_bound: upper_bound.filter(|_| check.is_some_and(|c| c.certified_lower.is_some())),
+        logit_bound: state.iterate.bound,
     }
 }
 
@@ -528,63 +452,7 @@ pub(super) fn gained_little(history: &[f64], window: usize, tolerance: f64) -> b
     n > window && history[n - 1] - history[n - 1 - window] <= tolerance * history[n - 1].abs()
 }
 
+/// The Euclidean norm `|v|_2`.
 pub(super) fn norm(v: &[f64]) -> f64 {
     v.iter().map(|x| x * x).sum::<f64>().sqrt()
-}
-
-const ADAM_BETA1: f64 = 0.9;
-const ADAM_BETA2: f64 = 0.999;
-const ADAM_EPSILON: f64 = 1e-8;
-
-/// One player's update rule and its state (Adam's moment estimates).
-struct Update {
-    rule: UpdateRule,
-    first: Vec<f64>,
-    second: Vec<f64>,
-    previous: Vec<f64>,
-    optimism: f64,
-    steps: i32,
-}
-
-impl Update {
-    fn new(rule: UpdateRule, optimism: f64, n: usize) -> Self {
-        Self {
-            rule,
-            first: vec![0.0; n],
-            second: vec![0.0; n],
-            previous: vec![0.0; n],
-            optimism,
-            steps: 0,
-        }
-    }
-
-    /// `phi <- clip(phi + eta (d_t + optimism (d_t - d_{t-1})))` with `d` the
-    /// gradient (plain) or Adam's bias-corrected `m_hat / (sqrt(v_hat) +
-    /// epsilon)`; `eta < 0` descends. With `optimism = 1` this is the
-    /// optimistic update (Popov 1980; Daskalakis et al. 2018), whose
-    /// iterates converge where plain alternating play cycles around a
-    /// mixed saddle point.
-    fn step(&mut self, phi: &mut [f64], gradient: &[f64], eta: f64, bound: f64) {
-        match self.rule {
-            UpdateRule::Plain => {
-                for (k, (p, &g)) in phi.iter_mut().zip(gradient).enumerate() {
-                    *p += eta * (g + self.optimism * (g - self.previous[k]));
-                    self.previous[k] = g;
-                }
-            }
-            UpdateRule::Adam => {
-                self.steps = self.steps.saturating_add(1);
-                let c1 = 1.0 - ADAM_BETA1.powi(self.steps);
-                let c2 = 1.0 - ADAM_BETA2.powi(self.steps);
-                for (k, (p, &g)) in phi.iter_mut().zip(gradient).enumerate() {
-                    self.first[k] = ADAM_BETA1 * self.first[k] + (1.0 - ADAM_BETA1) * g;
-                    self.second[k] = ADAM_BETA2 * self.second[k] + (1.0 - ADAM_BETA2) * g * g;
-                    let d = (self.first[k] / c1) / ((self.second[k] / c2).sqrt() + ADAM_EPSILON);
-                    *p += eta * (d + self.optimism * (d - self.previous[k]));
-                    self.previous[k] = d;
-                }
-            }
-        }
-        clip(phi, bound);
-    }
 }
