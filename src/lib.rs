@@ -37,6 +37,9 @@
 //!   against the certification adversary, found by SAT (method.md section 7);
 //! * [`optimise`]: softmax parameters, alternating projected gradient
 //!   ascent-descent and best-response checks (method.md sections 3-4);
+//! * [`pipeline`]: the main job end to end (structures, optimisation, the
+//!   best structure, its certified bracket) and its `solve` directory
+//!   ([`pipeline::solve`] has the example game -> solve);
 //! * [`certify`]: the two certified bounds of method.md section 6 and their
 //!   strategies as files ([`certify::strategy`]);
 //! * [`output`]: what the tool writes: curves, plots, controller drawings,
@@ -79,6 +82,7 @@ pub mod ltl;
 mod mdp;
 pub mod optimise;
 pub mod output;
+pub mod pipeline;
 mod product;
 pub mod prune;
 mod sensitivity;

@@ -398,15 +398,16 @@ fn with_full_observation_and_one_node_the_bounds_bracket_the_optimised_value() {
         let game = small_game(seed + 700, true);
         for formula in FORMULAS {
             let (phi, not_phi) = automata(formula);
-            let solution =
-                posg_fsc::optimise::solve(&game, &phi, Some(&not_phi), 1, 1, &settings, |_, _| {
-                    Box::new(())
-                })
-                .unwrap();
+            let solution = common::solve_one_node(&game, &phi, Some(&not_phi), &settings).unwrap();
             let best = solution.best();
             let value = common::reference_value(&game, &phi, &best.defender, &best.adversary);
             let lower = lower_bound(&game, &not_phi, &best.defender).unwrap().value;
             let upper = upper_bound(&game, &phi, &best.adversary).unwrap().value;
+            let bracket = solution.certified.expect("a formula's bracket");
+            assert!(
+                (bracket.certified_lower - lower).abs() < 1e-12 && bracket.upper_bound <= upper,
+                "seed {seed}, {formula}: the pipeline's bracket {bracket:?} against {lower}, {upper}"
+            );
             assert!(
                 lower <= value + 1e-9 && value <= upper + 1e-9,
                 "seed {seed}, {formula}: {lower} <= {value} <= {upper}"

@@ -9,7 +9,7 @@ use posg_fsc::controller::{Choice, Fsc, Role, Support};
 use posg_fsc::game::Posg;
 use posg_fsc::game::file::from_json_str;
 use posg_fsc::optimise::{
-    Objective, Settings, Softmax, Status, Structure, StructureSource, optimise_structure, solve,
+    Objective, Settings, Softmax, Status, Structure, StructureSource, optimise_structure,
 };
 use posg_fsc::output::CurveCsv;
 use posg_fsc::value::Evaluator;
@@ -210,10 +210,7 @@ fn single_player_reach_avoid_matches_the_best_deterministic_controller() {
     for seed in 0..8 {
         let g = game(&single_player_json(seed, 6, 0));
         let optimum = best_deterministic(&g, &dra);
-        let found = solve(&g, &dra, None, 1, 1, &single_player_settings(), |_, _| {
-            Box::new(())
-        })
-        .unwrap();
+        let found = common::solve_one_node(&g, &dra, None, &single_player_settings()).unwrap();
         let value = found.best().report.worst_case;
         assert!(
             (value - optimum).abs() < 1e-3,
@@ -230,10 +227,7 @@ fn partially_observed_single_player_is_at_least_the_best_deterministic_controlle
     for seed in 0..8 {
         let g = game(&single_player_json(100 + seed, 6, 2));
         let optimum = best_deterministic(&g, &dra);
-        let found = solve(&g, &dra, None, 1, 1, &single_player_settings(), |_, _| {
-            Box::new(())
-        })
-        .unwrap();
+        let found = common::solve_one_node(&g, &dra, None, &single_player_settings()).unwrap();
         let value = found.best().report.worst_case;
         assert!(
             value > optimum - 1e-3,
@@ -266,7 +260,7 @@ fn matching_pennies_has_max_min_value_one_half_with_both_mixing() {
             seed,
             ..Settings::default()
         };
-        let found = solve(&g, &dra, None, 1, 1, &settings, |_, _| Box::new(())).unwrap();
+        let found = common::solve_one_node(&g, &dra, None, &settings).unwrap();
         let best = found.best();
         assert!(
             (best.report.worst_case - 0.5).abs() < 1e-3,
@@ -354,7 +348,7 @@ fn settings_out_of_range_are_rejected_before_any_work() {
     ];
     for settings in bad {
         assert!(settings.validate().is_err(), "{settings:?}");
-        assert!(solve(&g, &dra, None, 1, 1, &settings, |_, _| Box::new(())).is_err());
+        assert!(common::solve_one_node(&g, &dra, None, &settings).is_err());
     }
     assert!(Settings::default().validate().is_ok());
 }
@@ -367,7 +361,7 @@ fn a_run_resumes_from_the_logits_it_wrote() {
         max_iterations: 20,
         ..Settings::default()
     };
-    let first = solve(&g, &dra, None, 1, 1, &settings, |_, _| Box::new(())).unwrap();
+    let first = common::solve_one_node(&g, &dra, None, &settings).unwrap();
     let best = first.best();
     let resumed = Structure {
         name: "resumed".into(),
@@ -400,7 +394,7 @@ fn runs_stop_on_the_time_budget_and_on_stalled_progress() {
         time_budget: 1e-9,
         ..Settings::default()
     };
-    let report = solve(&g, &dra, None, 1, 1, &timed, |_, _| Box::new(()))
+    let report = common::solve_one_node(&g, &dra, None, &timed)
         .unwrap()
         .best()
         .report
@@ -416,7 +410,7 @@ fn runs_stop_on_the_time_budget_and_on_stalled_progress() {
         initial_logit_bound: Settings::default().logit_bound,
         ..Settings::default()
     };
-    let report = solve(&g, &dra, None, 1, 1, &stalling, |_, _| Box::new(()))
+    let report = common::solve_one_node(&g, &dra, None, &stalling)
         .unwrap()
         .best()
         .report
@@ -445,14 +439,15 @@ fn solve_also_optimises_on_pruned_structures_and_picks_the_best() {
         max_iterations: 10,
         ..Settings::default()
     };
-    let found = solve(&g, &dra, None, 1, 1, &settings, |_, _| Box::new(())).unwrap();
+    let found = common::solve_one_node(&g, &dra, None, &settings).unwrap();
     let names: Vec<&str> = found
+        .solution
         .structures
         .iter()
         .map(|s| s.report.name.as_str())
         .collect();
     assert_eq!(names, ["full", "pruned-1"]);
-    assert_eq!(found.structures[0].report.worst_case, 0.0);
+    assert_eq!(found.solution.structures[0].report.worst_case, 0.0);
     assert_eq!(found.best().report.name, "pruned-1");
     assert!(
         (found.best().report.worst_case - 1.0).abs() < 1e-9,
@@ -464,8 +459,9 @@ fn solve_also_optimises_on_pruned_structures_and_picks_the_best() {
         ..settings
     };
     assert_eq!(
-        solve(&g, &dra, None, 1, 1, &unpruned, |_, _| Box::new(()))
+        common::solve_one_node(&g, &dra, None, &unpruned)
             .unwrap()
+            .solution
             .structures
             .len(),
         1

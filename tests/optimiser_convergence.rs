@@ -15,7 +15,7 @@ use posg_fsc::game::Posg;
 use posg_fsc::game::file::from_json_str;
 use posg_fsc::optimise::{
     Method, Settings, Status, Structure, embed, keep_better, optimise_structure, pad,
-    rounded_candidates, score, solve, truncated, warm_started,
+    rounded_candidates, score, truncated, warm_started,
 };
 use posg_fsc::value::SolverSettings;
 use posg_fsc::value::evaluate_controllers;
@@ -76,16 +76,7 @@ fn solve_certifies_hand_solved_matrix_games_within_1e_3() {
     ] {
         let [a, b, c, d] = matrix;
         let g = matrix_game(a, b, c, d);
-        let found = solve(
-            &g,
-            &phi,
-            Some(&not_phi),
-            1,
-            1,
-            &Settings::default(),
-            |_, _| Box::new(()),
-        )
-        .unwrap();
+        let found = common::solve_one_node(&g, &phi, Some(&not_phi), &Settings::default()).unwrap();
         let best = found.best();
         let lower = best.report.certified_lower.unwrap();
         let upper = best.report.upper_bound.unwrap();

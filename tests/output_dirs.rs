@@ -153,3 +153,26 @@ fn two_concurrent_runs_into_one_directory_one_refuses() {
     assert!(!lock.exists());
     std::fs::remove_dir_all(&base).unwrap();
 }
+
+/// `solve --lu-limit` reaches the settings recorded in summary.json (which
+/// name it only when it is not the default, so older summaries stay as they
+/// were), and `--tolerance` and its old name `--solver-tolerance` are one option.
+#[test]
+fn solve_takes_lu_limit_and_both_names_of_the_tolerance() {
+    let base = scratch("solver-options");
+    let settings = |extra: &[&'static str], name: &str| {
+        let out = base.join(name);
+        let run = posg_fsc(&solve_args(extra), &out);
+        assert!(run.status.success(), "{}", stderr(&run));
+        let text = std::fs::read_to_string(out.join("summary.json")).unwrap();
+        let summary: serde_json::Value = serde_json::from_str(&text).unwrap();
+        summary["settings"].clone()
+    };
+    let new = settings(&["--lu-limit", "7", "--tolerance", "1e-8"], "new");
+    assert_eq!(new["lu_limit"], 7);
+    assert_eq!(new["solver_tolerance"], 1e-8);
+    let old = settings(&["--solver-tolerance", "1e-8"], "old");
+    assert_eq!(old.get("lu_limit"), None, "{old}");
+    assert_eq!(old["solver_tolerance"], 1e-8);
+    std::fs::remove_dir_all(&base).unwrap();
+}

@@ -60,7 +60,7 @@ pub struct ControllerArgs {
     pub adversary: String,
 }
 
-/// How the linear systems are solved.
+/// How the linear systems are solved (`eval`, `solve`, `sweep`).
 #[derive(Debug, Clone, Args)]
 pub struct SolverArgs {
     /// `lu` (sparse LU, direct), `krylov` (BiCGSTAB with an ILU(0)
@@ -72,8 +72,9 @@ pub struct SolverArgs {
     /// With --solver auto: the most unknowns |T| solved by LU.
     #[arg(long, default_value_t = DEFAULT_LU_LIMIT)]
     pub lu_limit: usize,
-    /// Largest accepted residual max |(I - Q) x - b| of a linear solve.
-    #[arg(long, default_value_t = DEFAULT_TOLERANCE, value_parser = positive_tolerance)]
+    /// Largest accepted residual max |(I - Q) x - b| of a linear solve
+    /// (`--solver-tolerance` is an old name of it).
+    #[arg(long, alias = "solver-tolerance", default_value_t = DEFAULT_TOLERANCE, value_parser = positive_tolerance)]
     pub tolerance: f64,
 }
 

@@ -13,18 +13,20 @@ use std::path::PathBuf;
 
 use clap::Args;
 use posg_fsc::automaton::Dra;
-use posg_fsc::certify::{Bracket, lower_bound};
+use posg_fsc::certify::lower_bound;
 use posg_fsc::controller::{Choice, Fsc, Role};
 use posg_fsc::game::Posg;
 use posg_fsc::game::grid::GridSpec;
-use posg_fsc::optimise::{self, Settings, Solution, Structure};
+use posg_fsc::optimise::Settings;
 use posg_fsc::output::OutputDirectory;
+use posg_fsc::pipeline::{Automata, Job, Outcome, Sizes};
 use posg_fsc::prune::{PruneSettings, prune};
 use posg_fsc::synthesis::{self, Mode, synthesise};
 use posg_fsc::value::SolverSettings;
 use posg_fsc::value::evaluate_controllers;
 
-use super::solve::{SolveJob, run_job};
+use super::progress::ProgressMode;
+use super::solve::solve_into;
 
 /// Arguments of `demo`.
 #[derive(Debug, Args)]
@@ -33,14 +35,6 @@ pub struct DemoArgs {
     /// earlier demo's directory is replaced).
     #[arg(long, default_value = "posg-fsc-demo")]
     out: PathBuf,
-}
-
-fn translate(formula: &str) -> anyhow::Result<(Dra, Dra)> {
-    let phi = posg_fsc::ltl::parse(formula)?;
-    Ok((
-        posg_fsc::ltl::translate(&phi)?,
-        posg_fsc::ltl::translate(&phi.negate())?,
-    ))
 }
 
 /// Runs the demo.
@@ -82,28 +76,14 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
 
 /// `solve` with its defaults, 2 defender nodes against 1 adversary node,
 /// quietly, into `place`.
-fn solve_with_defaults(
-    game: &Posg,
-    dra: &Dra,
-    negated: &Dra,
-    formula: &str,
-    place: &Place,
-) -> anyhow::Result<(Solution, Option<Bracket>)> {
+fn solve_with_defaults(game: &Posg, automata: &Automata, place: &Place) -> anyhow::Result<Outcome> {
     let settings = Settings::default();
-    let start = Structure::full(game, 2, 1, settings.optimise_initial);
-    let job = SolveJob {
-        game,
-        dra,
-        negated_dra: Some(negated),
-        objective: formula,
-        candidates: optimise::candidate_structures(game, dra, Some(negated), start, &settings)?,
-        settings: &settings,
-        out: &place.staging,
-        progress: super::progress::ProgressMode::Quiet,
-        floor: None,
-        seconds_axis: false,
+    let sizes = Sizes {
+        defender: 2,
+        adversary: 1,
     };
-    run_job(&job)
+    let job = Job::full(game, automata, sizes, &settings)?;
+    solve_into(job, &place.staging, ProgressMode::Quiet, false)
 }
 
 /// Where a solve writes (inside the demo's staging directory) and where its
@@ -115,9 +95,10 @@ struct Place {
 
 fn solve_reach_avoid(game: &Posg, place: &Place, out: &mut String) -> anyhow::Result<()> {
     let formula = "!unsafe U goal";
-    let (dra, negated) = translate(formula)?;
-    let (solution, certified) = solve_with_defaults(game, &dra, &negated, formula, place)?;
-    let best = solution.best();
+    let automata = Automata::from_ltl(formula)?;
+    let dra = &automata.phi;
+    let outcome = solve_with_defaults(game, &automata, place)?;
+    let (best, certified) = (outcome.best(), outcome.certified);
     let defender = Fsc::uniform(
         Role::Defender,
         2,
@@ -130,7 +111,7 @@ fn solve_reach_avoid(game: &Posg, place: &Place, out: &mut String) -> anyhow::Re
         game.adversary().num_observations(),
         game.adversary().num_actions(),
     );
-    let uniform = value(game, &dra, &defender, &adversary)?;
+    let uniform = value(game, dra, &defender, &adversary)?;
     writeln!(
         out,
         "1. solve '{formula}' (reach the goal before touching s4), defender 2 nodes,"
@@ -180,11 +161,15 @@ fn solve_reach_avoid(game: &Posg, place: &Place, out: &mut String) -> anyhow::Re
 
 fn recurrence(game: &Posg, place: &Place, out: &mut String) -> anyhow::Result<()> {
     let formula = "GF goal & G !unsafe";
-    let (dra, negated) = translate(formula)?;
+    let automata = Automata::from_ltl(formula)?;
+    let (dra, negated) = (
+        &automata.phi,
+        automata.not_phi.as_ref().expect("a formula's negation"),
+    );
     let defender = Fsc::uniform_enabled(Role::Defender, 2, game.defender());
     let adversary = Fsc::uniform_enabled(Role::Adversary, 1, game.adversary());
-    let full = value(game, &dra, &defender, &adversary)?;
-    let report = prune(game, &dra, &defender, &adversary, &PruneSettings::default())?;
+    let full = value(game, dra, &defender, &adversary)?;
+    let report = prune(game, dra, &defender, &adversary, &PruneSettings::default())?;
     writeln!(
         out,
         "2. The paper's formula '{formula}', defender 2 nodes, adversary 1 node."
@@ -206,10 +191,10 @@ fn recurrence(game: &Posg, place: &Place, out: &mut String) -> anyhow::Result<()
         out,
         "   noisy observations mix cells that need different safe moves."
     )?;
-    synthesis_story(game, &dra, &negated, out)?;
-    tuned_story(game, &dra, &negated, formula, place, out)?;
+    synthesis_story(game, dra, negated, out)?;
+    tuned_story(game, &automata, place, out)?;
     let park = park_on_goal(game)?;
-    let lower = lower_bound(game, &negated, &park)?.value;
+    let lower = lower_bound(game, negated, &park)?.value;
     writeln!(
         out,
         "   For comparison, a hand-made 2-node defender (go R, R, D to s5, then switch"
@@ -288,14 +273,12 @@ fn synthesis_story(game: &Posg, dra: &Dra, negated: &Dra, out: &mut String) -> a
 /// of the structures it optimises on.
 fn tuned_story(
     game: &Posg,
-    dra: &Dra,
-    negated: &Dra,
-    formula: &str,
+    automata: &Automata,
     place: &Place,
     out: &mut String,
 ) -> anyhow::Result<()> {
-    let (solution, certified) = solve_with_defaults(game, dra, negated, formula, place)?;
-    let best = solution.best();
+    let outcome = solve_with_defaults(game, automata, place)?;
+    let (best, certified) = (outcome.best(), outcome.certified);
     writeln!(
         out,
         "   `solve` with its defaults optimises on every structure found (full, SAT,"

@@ -12,9 +12,7 @@ use anyhow::Context;
 use clap::Args;
 use posg_fsc::controller;
 use posg_fsc::output::{OutputDirectory, write_file};
-use posg_fsc::synthesis::{
-    self, Confirmation, Engine, Mode, RankEncoding, SatStatistics, Settings, Synthesis,
-};
+use posg_fsc::synthesis::{self, Confirmation, Mode, SatStatistics, Settings, Synthesis};
 use serde::Serialize;
 
 use super::common::{self, ObjectiveArgs, Provenance};
@@ -45,91 +43,10 @@ pub struct SupportArgs {
     #[arg(long)]
     force: bool,
     #[command(flatten)]
-    settings: SynthesisArgs,
+    settings: Settings,
     /// Also write the SAT instance (before maximisation) in DIMACS CNF here.
     #[arg(long, value_name = "FILE.cnf")]
     dimacs: Option<PathBuf>,
-}
-
-/// Support synthesis settings as command-line options (defaults:
-/// [`Settings::default`]); shared with `solve` and `sweep`.
-#[derive(Debug, Clone, Args)]
-pub struct SynthesisArgs {
-    /// `lazy`: SAT over supports, each judged by exact certification, losses
-    /// learnt as lemmas; `certificate`: supports and their certificates in one
-    /// formula (docs/method.md section 7).
-    #[arg(long, value_enum, default_value = "lazy")]
-    engine: EngineArg,
-    /// Bound on the certificate's levels and ranks (default: the number of
-    /// product states, which makes "impossible" a proof for one Rabin pair).
-    #[arg(long)]
-    rank_bound: Option<usize>,
-    /// How levels and ranks are written in CNF.
-    #[arg(long, value_enum, default_value = "binary")]
-    rank_encoding: RankEncodingArg,
-    /// Return the first support found instead of an inclusion-maximal one.
-    #[arg(long)]
-    no_maximise: bool,
-    /// Do not confirm a support found by the lazy engine with the certificate
-    /// formula (certification still checks it).
-    #[arg(long)]
-    no_confirm: bool,
-    /// Refuse SAT instances with more clauses than this.
-    #[arg(long, default_value_t = Settings::default().clause_budget)]
-    clause_budget: usize,
-    /// Seconds the SAT solver may take (0: no limit); running out is an
-    /// error for `support`; `solve` and `sweep` give the almost-sure attempt
-    /// a tenth of it, note a timeout and go on with the positive one.
-    #[arg(long, default_value_t = Settings::default().time_budget)]
-    synthesis_time_budget: f64,
-}
-
-/// `--engine`.
-#[derive(Debug, Clone, Copy, clap::ValueEnum)]
-pub enum EngineArg {
-    /// Counterexample-guided: supports only, exact judgement, lemmas.
-    Lazy,
-    /// Supports and certificates in one formula.
-    Certificate,
-}
-
-/// `--rank-encoding`.
-#[derive(Debug, Clone, Copy, clap::ValueEnum)]
-pub enum RankEncodingArg {
-    /// Binary numbers with comparator chains (log2 R variables per number).
-    Binary,
-    /// Unary order encoding (R - 1 variables per number).
-    Order,
-}
-
-impl SynthesisArgs {
-    /// The settings for `solve` and `sweep`, whose `sat` source chooses the
-    /// mode itself.
-    pub fn structure_settings(&self) -> anyhow::Result<Settings> {
-        self.settings(Settings::default().mode)
-    }
-
-    /// The settings for `mode`, validated.
-    pub fn settings(&self, mode: Mode) -> anyhow::Result<Settings> {
-        let settings = Settings {
-            mode,
-            engine: match self.engine {
-                EngineArg::Lazy => Engine::Lazy,
-                EngineArg::Certificate => Engine::Certificate,
-            },
-            confirm_certificate: !self.no_confirm,
-            rank_bound: self.rank_bound,
-            rank_encoding: match self.rank_encoding {
-                RankEncodingArg::Binary => RankEncoding::Binary,
-                RankEncodingArg::Order => RankEncoding::Order,
-            },
-            maximise: !self.no_maximise,
-            clause_budget: self.clause_budget,
-            time_budget: self.synthesis_time_budget,
-        };
-        settings.validate()?;
-        Ok(settings)
-    }
 }
 
 /// `support.json` (formats.md section 5).
@@ -161,7 +78,11 @@ pub fn run(args: SupportArgs) -> anyhow::Result<()> {
     } else {
         Mode::Positive
     };
-    let settings = args.settings.settings(mode)?;
+    let settings = Settings {
+        mode,
+        ..args.settings.clone()
+    };
+    settings.validate()?;
     let game = common::read_game(&args.game)?;
     let defender = game.defender();
     controller::Fsc::check_uniform_size(

@@ -11,17 +11,17 @@ use anyhow::Context;
 use clap::Args;
 use rayon::prelude::*;
 
-use posg_fsc::automaton::Dra;
 use posg_fsc::game::Posg;
 use posg_fsc::limits;
-use posg_fsc::optimise::{self, Settings, Structure, StructureOutcome};
+use posg_fsc::optimise::{Settings, StructureOutcome};
 use posg_fsc::output::shard::{self, Shard, ShardRecord, SweepPlan, SweepRow};
 use posg_fsc::output::slurm::{self, SlurmSweep};
 use posg_fsc::output::{OutputDirectory, Title, create_dir, write_file};
+use posg_fsc::pipeline::{self, Automata, Job};
 
-use super::common::{ObjectiveArgs, print_text};
+use super::common::{ObjectiveArgs, SolverArgs, print_text};
 use super::progress::{OutputArgs, ProgressMode, SweepProgress};
-use super::solve::{SettingsArgs, SolveJob, check_sizes, load, run_job};
+use super::solve::{check_sizes, load, settings, solve_into};
 
 /// Arguments of `sweep`.
 #[derive(Debug, Args)]
@@ -65,7 +65,9 @@ pub struct SweepArgs {
     #[arg(long, requires = "slurm")]
     shards: Option<usize>,
     #[command(flatten)]
-    settings: SettingsArgs,
+    settings: Settings,
+    #[command(flatten)]
+    solver: SolverArgs,
     #[command(flatten)]
     output: OutputArgs,
 }
@@ -115,9 +117,7 @@ pub struct SweepMergeArgs {
 /// The loaded inputs every chain of a sweep shares.
 struct Inputs<'a> {
     game: &'a Posg,
-    dra: &'a Dra,
-    negated: Option<&'a Dra>,
-    description: &'a str,
+    automata: &'a Automata,
     settings: &'a Settings,
     defender_sizes: &'a [usize],
     seconds_axis: bool,
@@ -136,13 +136,14 @@ enum PairPlace<'a> {
 /// Runs `sweep`: the adversary sizes in parallel; for each, the defender
 /// sizes in increasing order, each warm-started from the best defender of
 /// the next smaller size and kept at least as good as it
-/// ([`optimise::warm_started`], [`optimise::keep_better`]), so the results
+/// ([`Job::warm_started`]), so the results
 /// are monotone in the defender's size by construction. With `--shard K/N`
 /// only the chains (adversary sizes) of shard K; with `--slurm` nothing
 /// runs: the Slurm scripts are written ([`posg_fsc::output::shard`]).
 pub fn run(args: SweepArgs) -> anyhow::Result<()> {
-    let settings = args.settings.settings()?;
-    let (game, dra, negated, description) = load(&args.game, &args.objective)?;
+    let settings = settings(&args.settings, &args.solver)?;
+    let (game, automata) = load(&args.game, &args.objective)?;
+    let description = &automata.description;
     let count = args.def_nodes.0.len() as u128 * args.adv_nodes.0.len() as u128;
     if let Some(message) = limits::exceeded(
         "--def-nodes x --adv-nodes",
@@ -163,9 +164,7 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
     defender_sizes.dedup();
     let inputs = Inputs {
         game: &game,
-        dra: &dra,
-        negated: negated.as_ref(),
-        description: &description,
+        automata: &automata,
         settings: &settings,
         defender_sizes: &defender_sizes,
         seconds_axis: args.output.seconds_axis,
@@ -298,31 +297,17 @@ fn run_chain(
                 (Some(own), path)
             }
         };
-        let mut start = Structure::full(inputs.game, n, m, settings.optimise_initial);
-        if let Some(smaller) = &previous {
-            start = optimise::warm_started(start, &smaller.defender, settings.optimise_initial)?;
-        }
-        let job = SolveJob {
-            game: inputs.game,
-            dra: inputs.dra,
-            negated_dra: inputs.negated,
-            objective: inputs.description,
-            candidates: optimise::candidate_structures(
-                inputs.game,
-                inputs.dra,
-                inputs.negated,
-                start,
-                settings,
-            )?,
-            settings,
-            out: &out,
-            progress: ProgressMode::Quiet,
-            floor: previous.as_ref(),
-            seconds_axis: inputs.seconds_axis,
+        let sizes = pipeline::Sizes {
+            defender: n,
+            adversary: m,
         };
-        let (solution, certified) =
-            run_job(&job).with_context(|| format!("defender {n} nodes, adversary {m} nodes"))?;
-        let best = solution.best();
+        let mut job = Job::full(inputs.game, inputs.automata, sizes, settings)?;
+        if let Some(smaller) = &previous {
+            job = job.warm_started(smaller)?;
+        }
+        let outcome = solve_into(job, &out, ProgressMode::Quiet, inputs.seconds_axis)
+            .with_context(|| format!("defender {n} nodes, adversary {m} nodes"))?;
+        let (best, certified) = (outcome.best(), outcome.certified);
         let report = &best.report;
         progress.finished(n, m, report.worst_case);
         let row = SweepRow {

@@ -29,8 +29,8 @@
 //!   several structures in parallel (rayon), the best certified lower bound
 //!   chosen; [`candidate_structures`] gathers the structures of the sources
 //!   asked for (the starting structure, support synthesis by SAT, the
-//!   paper's pruning; identical structures once); [`solve`] does both from
-//!   the full support structure of given sizes;
+//!   paper's pruning; identical structures once); [`crate::pipeline`]
+//!   does both from the full support structure of given sizes;
 //! * [`embed`], [`pad`], [`warm_started`], [`keep_better`]: warm starts
 //!   across defender sizes, results monotone in size by construction.
 //!
@@ -771,43 +771,4 @@ impl Judge<'_> {
             &self.settings.solver_settings(),
         )?)
     }
-}
-
-/// The library's main job: optimise a defender of `defender_nodes` nodes
-/// against adversaries of `adversary_nodes` nodes on the structures of the
-/// sources in `settings.structures` ([`candidate_structures`], starting
-/// from [`Structure::full`]), and report the best defender found.
-pub fn solve<F>(
-    game: &Posg,
-    dra: &Dra,
-    negated: Option<&Dra>,
-    defender_nodes: usize,
-    adversary_nodes: usize,
-    settings: &Settings,
-    observer: F,
-) -> Result<Solution, OptimiseError>
-where
-    F: Fn(usize, &Structure) -> Box<dyn Observer + Send> + Sync,
-{
-    settings.validate()?;
-    if defender_nodes == 0 || adversary_nodes == 0 {
-        return Err(
-            ModelError::new("controller sizes", "a controller needs at least one node").into(),
-        );
-    }
-    let full = Structure::full(
-        game,
-        defender_nodes,
-        adversary_nodes,
-        settings.optimise_initial,
-    );
-    let candidates = candidate_structures(game, dra, negated, full, settings)?;
-    optimise_structures(
-        game,
-        dra,
-        negated,
-        &candidates.structures,
-        settings,
-        observer,
-    )
 }

@@ -4,10 +4,10 @@
 use serde::{Deserialize, Serialize};
 
 use super::{OptimiseError, StructureSource};
-use crate::solver::{SolverMethod, SolverSettings};
+use crate::solver::{DEFAULT_LU_LIMIT, SolverMethod, SolverSettings};
 
-/// How a player turns its logit gradient into a step (method.md section 4).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+/// How a player turns its logit gradient into a step (docs/method.md section 4).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "lowercase")]
 pub enum UpdateRule {
     /// `phi <- phi +/- eta * grad`.
@@ -19,98 +19,141 @@ pub enum UpdateRule {
 }
 
 /// The optimiser's settings. Every field has a default ([`Settings::default`]).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+///
+/// They are also the command-line options of `solve` and `sweep` (clap's
+/// [`clap::Args`]): each field's documentation is its help text, its name
+/// the option (`max_iterations` is `--max-iterations`), its default the
+/// option's; the linear solver's fields come from the options `--solver`,
+/// `--lu-limit` and `--tolerance`, shared with `eval`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, clap::Args)]
 #[serde(deny_unknown_fields, default)]
 pub struct Settings {
     /// Seed of every random choice (initial logits, best-response restarts).
+    #[arg(long, default_value_t = Settings::default().seed)]
     pub seed: u64,
     /// Logit bound `c_max`: every logit stays in `[-c_max, c_max]`, so every
     /// supported entry keeps probability at least `exp(-2 c_max) / |block|`
-    /// (method.md section 3): the support, hence the GMC graph, never changes.
+    /// (docs/method.md section 3): the support, hence the GMC graph, never changes.
+    #[arg(long, default_value_t = Settings::default().logit_bound)]
     pub logit_bound: f64,
     /// The max-min run's first logit bound `c_0 <= c_max`: the bound doubles
     /// (up to `logit_bound`) whenever progress stalls while some logit sits
     /// on it, so determinism is capped only by `c_max` (the single-player
     /// ascent uses `c_max` from the start).
+    #[arg(long, default_value_t = Settings::default().initial_logit_bound)]
     pub initial_logit_bound: f64,
     /// Initial logits are drawn uniformly from `[-spread, spread]` (0: uniform controllers).
+    #[arg(long, default_value_t = Settings::default().initial_spread)]
     pub initial_spread: f64,
     /// Also optimise the initial node distributions (softmax over the initial support).
+    #[arg(long)]
     pub optimise_initial: bool,
     /// Outer iterations (one defender step, or one quasi-Newton step of the
     /// single-player ascent) at most: a cap; runs normally stop on the
     /// certified gap or on stalled progress.
+    #[arg(long, default_value_t = Settings::default().max_iterations)]
     pub max_iterations: usize,
     /// Independent starts of the optimiser per structure, run in parallel
     /// (rayon), each with its own seeded random stream; the best by
     /// certified lower bound (by worst-case estimate without an automaton
     /// for !phi) is kept.
+    #[arg(long, default_value_t = Settings::default().starts)]
     pub starts: usize,
     /// Wall-clock budget in seconds for one structure (0: none).
+    #[arg(long, default_value_t = Settings::default().time_budget)]
     pub time_budget: f64,
     /// Adversary descent steps per defender ascent step (the fast time scale).
+    #[arg(long, default_value_t = Settings::default().adversary_steps)]
     pub adversary_steps: usize,
     /// Defender step size `eta_def` at iteration 0.
+    #[arg(long, default_value_t = Settings::default().defender_step)]
     pub defender_step: f64,
     /// Adversary step size `eta_adv` (constant).
+    #[arg(long, default_value_t = Settings::default().adversary_step)]
     pub adversary_step: f64,
     /// Defender step decay `d`: `eta_def(t) = eta_def / sqrt(1 + d t)`.
+    #[arg(long, default_value_t = Settings::default().defender_decay)]
     pub defender_decay: f64,
     /// The update rule of both players.
+    #[arg(long, value_enum, default_value_t = Settings::default().update)]
     pub update: UpdateRule,
     /// Optimism `o` of both players' updates: each step moves along
     /// `d_t + o (d_t - d_{t-1})` (0: plain alternating play; 1: the
     /// optimistic gradient method, which converges to mixed saddle points
     /// where plain play cycles).
+    #[arg(long, default_value_t = Settings::default().optimism)]
     pub optimism: f64,
     /// A best-response check every this many outer iterations (and at the end).
+    #[arg(long, default_value_t = Settings::default().check_every)]
     pub check_every: usize,
     /// Random restarts of each best-response minimisation (besides the
     /// start at the current adversary).
+    #[arg(long, default_value_t = Settings::default().restarts)]
     pub restarts: usize,
     /// L-BFGS iterations per best-response start.
+    #[arg(long, default_value_t = Settings::default().best_response_iterations)]
     pub best_response_iterations: u64,
     /// L-BFGS memory `m`.
+    #[arg(long, default_value_t = Settings::default().lbfgs_memory)]
     pub lbfgs_memory: usize,
     /// Stop when the best score (certified lower bound, or worst-case
     /// estimate without an automaton for !phi) has improved by at most
     /// `stall_tolerance` times its magnitude over the last `stall_checks`
     /// checks, at the widest logit bound (0: never).
+    #[arg(long, default_value_t = Settings::default().stall_checks)]
     pub stall_checks: usize,
     /// The single-player ascent's stall window: it stops when `V` has
     /// gained at most `stall_tolerance` times itself over this many
     /// iterations (0: never).
+    #[arg(long, default_value_t = Settings::default().ascent_stall_iterations)]
     pub ascent_stall_iterations: usize,
-    /// See `stall_checks`.
+    /// The relative gain below which progress counts as stalled (see
+    /// `stall_checks` and `ascent_stall_iterations`).
+    #[arg(long, default_value_t = Settings::default().stall_tolerance)]
     pub stall_tolerance: f64,
     /// Stop when the certified gap, the game upper bound minus the best
-    /// certified lower bound (method.md section 6), is at most this: the
+    /// certified lower bound (docs/method.md section 6), is at most this: the
     /// defender is then optimal within it against every adversary.
+    #[arg(long, default_value_t = Settings::default().gap_tolerance)]
     pub gap_tolerance: f64,
     /// Single-player games (the adversary has one action) are optimised by
     /// L-BFGS ascent on the defender's logits, `max V`, with no
-    /// best-response checks; off: the max-min loop runs on them too.
+    /// best-response checks; off (`--no-single-player-ascent`): the max-min
+    /// loop runs on them too.
+    #[arg(long = "no-single-player-ascent", action = clap::ArgAction::SetFalse)]
     pub single_player_ascent: bool,
     /// At the end, also evaluate the argmax-rounded defender and its partial
     /// roundings (entries below a threshold dropped) and keep whichever
-    /// scores best (the unrounded one included).
+    /// scores best (the unrounded one included); off: `--no-round`.
+    #[arg(long = "no-round", action = clap::ArgAction::SetFalse)]
     pub round: bool,
-    /// Largest residual accepted from a linear solve.
+    /// Largest residual `max |(I - Q) x - b|` accepted from a linear solve.
+    #[arg(skip = Settings::default().solver_tolerance)]
     pub solver_tolerance: f64,
     /// How the linear systems are solved (LU, BiCGSTAB, or by size).
+    #[arg(skip = Settings::default().solver)]
     pub solver: SolverMethod,
+    /// With `solver` auto: the most unknowns solved by LU. Recorded in
+    /// `summary.json` only when it is not [`crate::value::DEFAULT_LU_LIMIT`].
+    #[arg(skip = Settings::default().lu_limit)]
+    #[serde(skip_serializing_if = "is_default_lu_limit")]
+    pub lu_limit: usize,
     /// The sources of the structures to optimise on (in parallel):
-    /// the starting structure, support synthesis by SAT (method.md section
-    /// 7), the paper's Algorithm 1 (method.md section 5).
+    /// the starting structure, support synthesis by SAT (docs/method.md section
+    /// 7), the paper's Algorithm 1 (docs/method.md section 5).
+    #[arg(long, value_enum, value_delimiter = ',', default_values_t = Settings::default().structures)]
     pub structures: Vec<StructureSource>,
     /// Support synthesis for the `sat` source; its `mode` is not used (the
     /// source tries almost-sure winning, then positive winning).
+    #[command(flatten)]
     pub synthesis: crate::synthesis::Settings,
     /// Algorithm 1's lines 14-16 as printed (remove action `u` under
     /// observation `o` for all nodes) instead of only the offending entries.
+    #[arg(long)]
     pub prune_paper_literal: bool,
     /// Run Algorithm 1's lines 18-22, which restrict the adversary's support:
     /// the worst-case estimate is then against a restricted adversary.
+    #[arg(long)]
     pub prune_adversary: bool,
 }
 
@@ -143,6 +186,7 @@ impl Default for Settings {
             round: true,
             solver_tolerance: crate::solver::DEFAULT_TOLERANCE,
             solver: SolverMethod::Auto,
+            lu_limit: DEFAULT_LU_LIMIT,
             structures: StructureSource::ALL.to_vec(),
             synthesis: crate::synthesis::Settings::default(),
             prune_paper_literal: false,
@@ -152,11 +196,13 @@ impl Default for Settings {
 }
 
 impl Settings {
-    /// The linear solver's settings: [`Self::solver`] to [`Self::solver_tolerance`].
+    /// The linear solver's settings: [`Self::solver`], [`Self::solver_tolerance`]
+    /// and [`Self::lu_limit`].
     pub fn solver_settings(&self) -> SolverSettings {
         SolverSettings {
             method: self.solver,
             tolerance: self.solver_tolerance,
+            lu_limit: self.lu_limit,
             ..SolverSettings::default()
         }
     }
@@ -236,6 +282,12 @@ impl Settings {
         }
         Ok(())
     }
+}
+
+/// Whether `lu_limit` is the default (then `summary.json` leaves it out,
+/// as before the setting existed).
+fn is_default_lu_limit(lu_limit: &usize) -> bool {
+    *lu_limit == DEFAULT_LU_LIMIT
 }
 
 /// The largest accepted `logit_bound`: `exp(-2 * 100)` is about `1e-87`.

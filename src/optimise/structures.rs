@@ -28,7 +28,7 @@ use crate::prune::{PruneSettings, prune};
 use crate::synthesis::{self, Mode, SynthesisError};
 
 /// A source of support structures.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "kebab-case")]
 pub enum StructureSource {
     /// The starting structure: the full support or the user's controllers.

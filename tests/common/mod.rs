@@ -214,3 +214,23 @@ pub fn reference_value(game: &Posg, dra: &Dra, def: &Fsc, adv: &Fsc) -> f64 {
 
 pub mod dense;
 pub mod random;
+
+/// The library's pipeline ([`posg_fsc::pipeline::solve`]) with one node
+/// per player and no observers: phi, and !phi for the certified bracket.
+pub fn solve_one_node(
+    game: &Posg,
+    phi: &Dra,
+    not_phi: Option<&Dra>,
+    settings: &posg_fsc::optimise::Settings,
+) -> Result<posg_fsc::pipeline::Outcome, posg_fsc::pipeline::PipelineError> {
+    let automata = posg_fsc::pipeline::Automata {
+        phi: phi.clone(),
+        not_phi: not_phi.cloned(),
+        description: "phi".into(),
+    };
+    let sizes = posg_fsc::pipeline::Sizes {
+        defender: 1,
+        adversary: 1,
+    };
+    posg_fsc::pipeline::solve(game, &automata, sizes, settings, |_| Box::new(()))
+}

@@ -1,0 +1,394 @@
+//! The library's main job, end to end: what `posg-fsc solve`, `sweep` and
+//! `demo` run.
+//!
+//! Given a game, the objective's automata ([`Automata`]: phi, and !phi for
+//! the certified bounds), controller sizes and the optimiser's
+//! [`Settings`], [`solve`]
+//!
+//! 1. gathers the support structures of the sources asked for
+//!    ([`optimise::candidate_structures`]: the full support, support
+//!    synthesis by SAT, the paper's Algorithm 1; method.md sections 5 and 7);
+//! 2. optimises on each of them in parallel (the max-min loop or the
+//!    single-player ascent, method.md section 4), each reporting to the
+//!    observers the caller passes in;
+//! 3. keeps the structure with the best certified lower bound (else the
+//!    best worst-case estimate), at least as good as a smaller size's result
+//!    when one is given ([`Job::floor`], [`optimise::keep_better`]);
+//! 4. certifies the best defender's bracket (method.md section 6): its lower
+//!    bound against every adversary and the smallest game upper bound over
+//!    the best responses found;
+//!
+//! and returns an [`Outcome`]: the controllers, every structure's report
+//! and curve, why each other structure or source lost, the bracket and the
+//! timings. [`directory`] writes an outcome as a `solve` directory
+//! (docs/formats.md section 9). The pipeline prints nothing: progress goes
+//! to the observers, warnings into the outcome.
+
+pub mod directory;
+
+use std::sync::{Arc, Mutex, PoisonError};
+use std::time::Instant;
+
+use thiserror::Error;
+
+use crate::automaton::Dra;
+use crate::certify::{self, Bracket, CertifyError};
+use crate::game::{ModelError, Posg};
+use crate::ltl::{self, TranslateError};
+use crate::optimise::{
+    self, IterationRecord, Observer, OptimiseError, Settings, Solution, SourceNote, Structure,
+    StructureOutcome, StructureSource,
+};
+use crate::output::OutputError;
+
+/// The objective as automata: a deterministic automaton for phi, and one
+/// for !phi when the certified bracket (method.md section 6) is wanted.
+#[derive(Debug, Clone)]
+pub struct Automata {
+    /// A deterministic automaton for phi: the value is `P(trace |= phi)`.
+    pub phi: Dra,
+    /// A deterministic automaton for !phi, needed by the certified lower
+    /// bound and by the `sat` source of structures; `None`: no bracket.
+    pub not_phi: Option<Dra>,
+    /// How the objective was given (the formula, or the automaton's file),
+    /// for titles and `summary.json`.
+    pub description: String,
+}
+
+impl Automata {
+    /// The automata of the LTL formula `text` (Spot's syntax) and of its
+    /// negation, translated without a time budget.
+    pub fn from_ltl(text: &str) -> Result<Self, PipelineError> {
+        let formula = ltl::parse(text)?;
+        Ok(Self {
+            phi: ltl::translate(&formula)?,
+            not_phi: Some(ltl::translate(&formula.negate())?),
+            description: text.to_string(),
+        })
+    }
+}
+
+/// Controller sizes: the defender's and the adversary's number of nodes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Sizes {
+    /// The defender's nodes (at least 1).
+    pub defender: usize,
+    /// The adversary's nodes (at least 1; exactly 1 for a game without an adversary).
+    pub adversary: usize,
+}
+
+/// One run of the pipeline: what [`run`] optimises.
+#[derive(Debug, Clone)]
+pub struct Job<'a> {
+    /// The game.
+    pub game: &'a Posg,
+    /// The objective.
+    pub automata: &'a Automata,
+    /// The starting structure: [`Structure::full`] of the sizes, or the
+    /// user's controllers (then named `from-files`), or a warm start.
+    pub start: Structure,
+    /// The best outcome of a smaller defender size (a sweep): the result is
+    /// kept at least as good ([`optimise::keep_better`]).
+    pub floor: Option<&'a StructureOutcome>,
+    /// The optimiser's settings.
+    pub settings: &'a Settings,
+}
+
+impl<'a> Job<'a> {
+    /// The job starting from the full support structure of `sizes`
+    /// ([`Structure::full`]); checks the sizes and the settings.
+    pub fn full(
+        game: &'a Posg,
+        automata: &'a Automata,
+        sizes: Sizes,
+        settings: &'a Settings,
+    ) -> Result<Self, PipelineError> {
+        settings.validate()?;
+        if sizes.defender == 0 || sizes.adversary == 0 {
+            return Err(ModelError::new(
+                "controller sizes",
+                "a controller needs at least one node",
+            )
+            .into());
+        }
+        Ok(Self {
+            game,
+            automata,
+            start: Structure::full(
+                game,
+                sizes.defender,
+                sizes.adversary,
+                settings.optimise_initial,
+            ),
+            floor: None,
+            settings,
+        })
+    }
+
+    /// The job warm-started from `smaller`, the best outcome of a smaller
+    /// defender size ([`optimise::warm_started`]), and kept at least as good.
+    pub fn warm_started(self, smaller: &'a StructureOutcome) -> Result<Self, PipelineError> {
+        let start = optimise::warm_started(
+            self.start,
+            &smaller.defender,
+            self.settings.optimise_initial,
+        )?;
+        Ok(Self {
+            start,
+            floor: Some(smaller),
+            ..self
+        })
+    }
+}
+
+/// What an observer factory is told about the structure it will observe.
+#[derive(Debug, Clone, Copy)]
+pub struct Slot<'a> {
+    /// The structure's position among the structures tried.
+    pub index: usize,
+    /// How many structures are tried.
+    pub count: usize,
+    /// The structure.
+    pub structure: &'a Structure,
+}
+
+/// One structure's curve: the records its observers received (those of its
+/// kept start), in iteration order.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Curve {
+    /// The structure's name.
+    pub structure: String,
+    /// One record per outer iteration.
+    pub records: Vec<IterationRecord>,
+}
+
+/// What the pipeline found.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Outcome {
+    /// Every structure's outcome (controllers and report) and the best one.
+    pub solution: Solution,
+    /// What each source of structures found, proved or why it gave none.
+    pub sources: Vec<SourceNote>,
+    /// One curve per structure tried, in the order tried (a structure
+    /// dropped for numerical trouble keeps the records it had).
+    pub curves: Vec<Curve>,
+    /// The best defender's certified bracket: its lower bound against every
+    /// adversary, and the smallest game upper bound over the best responses
+    /// found (method.md section 6); `None` without an automaton for !phi or
+    /// when the defender could not be certified.
+    pub certified: Option<Bracket>,
+    /// Why `certified` is `None` although an automaton for !phi was given:
+    /// the best defender's product mixes too slowly for its bound to be
+    /// solved to the tolerance (method.md section 8).
+    pub certification_error: Option<String>,
+    /// Why the best structure won, then why each other structure or source
+    /// lost (one sentence each).
+    pub structure_choice: Vec<String>,
+    /// Wall-clock seconds of the whole job.
+    pub seconds: f64,
+    /// Seconds of support synthesis (the `sat` source).
+    pub synthesis_seconds: f64,
+}
+
+impl Outcome {
+    /// The best structure's outcome.
+    pub fn best(&self) -> &StructureOutcome {
+        self.solution.best()
+    }
+}
+
+/// Why the pipeline could not finish.
+#[derive(Debug, Error)]
+pub enum PipelineError {
+    /// The formula could not be parsed.
+    #[error(transparent)]
+    Parse(#[from] ltl::ParseError),
+    /// The formula could not be translated into an automaton.
+    #[error(transparent)]
+    Translate(#[from] TranslateError),
+    /// A size or a controller does not fit the game.
+    #[error(transparent)]
+    Model(#[from] ModelError),
+    /// Optimisation failed.
+    #[error(transparent)]
+    Optimise(#[from] OptimiseError),
+    /// The best defender's bracket could not be computed.
+    #[error(transparent)]
+    Certify(#[from] CertifyError),
+    /// An output file could not be written.
+    #[error(transparent)]
+    Output(#[from] OutputError),
+    /// A report could not be written as JSON.
+    #[error(transparent)]
+    Json(#[from] serde_json::Error),
+}
+
+/// The main job from the full support structure: optimise a defender of
+/// `sizes.defender` nodes against adversaries of `sizes.adversary` nodes on
+/// the structures of `settings.structures`, keep the best, certify it
+/// ([`run`] of [`Job::full`]). `observers` makes each structure's observer.
+///
+/// ```
+/// use posg_fsc::game::grid::GridSpec;
+/// use posg_fsc::optimise::Settings;
+/// use posg_fsc::pipeline::{self, Automata, Sizes};
+///
+/// let game = GridSpec::default().build().unwrap(); // the seed paper's 3x2 grid
+/// let automata = Automata::from_ltl("!unsafe U goal").unwrap();
+/// let settings = Settings { max_iterations: 20, starts: 1, ..Settings::default() };
+/// let sizes = Sizes { defender: 1, adversary: 1 };
+/// let outcome = pipeline::solve(&game, &automata, sizes, &settings, |_| Box::new(())).unwrap();
+/// let bracket = outcome.certified.expect("a formula gives a certified bracket");
+/// assert!(bracket.certified_lower <= bracket.upper_bound);
+/// assert!(bracket.certified_lower <= outcome.best().report.worst_case + 1e-9);
+/// assert_eq!(outcome.curves.len(), outcome.solution.structures.len());
+/// ```
+pub fn solve<F>(
+    game: &Posg,
+    automata: &Automata,
+    sizes: Sizes,
+    settings: &Settings,
+    observers: F,
+) -> Result<Outcome, PipelineError>
+where
+    F: Fn(Slot) -> Box<dyn Observer + Send> + Sync,
+{
+    run(Job::full(game, automata, sizes, settings)?, observers)
+}
+
+/// Runs `job`: gathers the structures, optimises on each (each reporting to
+/// `observers(slot)`), keeps the best (at least as good as `job.floor`),
+/// certifies its bracket.
+pub fn run<F>(job: Job, observers: F) -> Result<Outcome, PipelineError>
+where
+    F: Fn(Slot) -> Box<dyn Observer + Send> + Sync,
+{
+    let clock = Instant::now();
+    let Job {
+        game,
+        automata,
+        start,
+        floor,
+        settings,
+    } = job;
+    let (phi, not_phi) = (&automata.phi, automata.not_phi.as_ref());
+    let candidates = optimise::candidate_structures(game, phi, not_phi, start, settings)?;
+    let count = candidates.structures.len();
+    let records: Vec<Arc<Mutex<Vec<IterationRecord>>>> =
+        (0..count).map(|_| Arc::default()).collect();
+    let mut solution = optimise::optimise_structures(
+        game,
+        phi,
+        not_phi,
+        &candidates.structures,
+        settings,
+        |index, structure| {
+            let given = observers(Slot {
+                index,
+                count,
+                structure,
+            });
+            let recorder = Recorder(Arc::clone(&records[index]));
+            Box::new(vec![given, Box::new(recorder)]) as Box<dyn Observer + Send>
+        },
+    )?;
+    if let Some(floor) = floor {
+        let nodes = solution.best().defender.num_nodes();
+        optimise::keep_better(&mut solution, floor, nodes)?;
+    }
+    let (certified, certification_error) = certify_best(game, automata, &solution)?;
+    let curves = candidates
+        .structures
+        .iter()
+        .zip(records)
+        .map(|(structure, records)| Curve {
+            structure: structure.name.clone(),
+            records: std::mem::take(&mut *records.lock().unwrap_or_else(PoisonError::into_inner)),
+        })
+        .collect();
+    Ok(Outcome {
+        structure_choice: structure_choice(&solution, &candidates.notes),
+        synthesis_seconds: candidates
+            .notes
+            .iter()
+            .filter(|n| n.source == StructureSource::Sat)
+            .map(|n| n.seconds)
+            .sum(),
+        solution,
+        sources: candidates.notes,
+        curves,
+        certified,
+        certification_error,
+        seconds: clock.elapsed().as_secs_f64(),
+    })
+}
+
+/// The best defender's bracket against the adversaries of every structure
+/// (the smallest upper bound over them and the structures' own), or why a
+/// slowly mixing product has none.
+fn certify_best(
+    game: &Posg,
+    automata: &Automata,
+    solution: &Solution,
+) -> Result<(Option<Bracket>, Option<String>), PipelineError> {
+    let Some(not_phi) = &automata.not_phi else {
+        return Ok((None, None));
+    };
+    let adversaries = solution.structures.iter().map(|s| &s.adversary);
+    let bracket = match certify::bracket(
+        game,
+        &automata.phi,
+        not_phi,
+        &solution.best().defender,
+        adversaries,
+    ) {
+        Ok(bracket) => bracket,
+        Err(error) if error.is_slow_mixing() => return Ok((None, Some(error.to_string()))),
+        Err(error) => return Err(error.into()),
+    };
+    let upper_bound = solution
+        .structures
+        .iter()
+        .filter_map(|s| s.report.upper_bound)
+        .fold(bracket.upper_bound, f64::min);
+    Ok((
+        Some(Bracket {
+            upper_bound,
+            ..bracket
+        }),
+        None,
+    ))
+}
+
+/// Why the best structure won, then why each other structure or source
+/// lost (one sentence each).
+fn structure_choice(solution: &Solution, notes: &[SourceNote]) -> Vec<String> {
+    let best = solution.best();
+    let measure = match best.report.certified_lower {
+        Some(lower) => format!("the best certified lower bound, {lower:.6}"),
+        None => format!(
+            "the best worst-case estimate, {:.6}",
+            best.report.worst_case
+        ),
+    };
+    std::iter::once(format!("{} won with {measure}", best.report.name))
+        .chain(optimise::why_others_lost(
+            &solution.structures,
+            solution.best,
+            notes,
+            &solution.failed,
+        ))
+        .collect()
+}
+
+/// An observer keeping every record in a shared list.
+struct Recorder(Arc<Mutex<Vec<IterationRecord>>>);
+
+impl Observer for Recorder {
+    fn observe(&mut self, record: &IterationRecord) {
+        self.0
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner)
+            .push(*record);
+    }
+}
