@@ -53,7 +53,7 @@ use thiserror::Error;
 
 use crate::automaton::{Dra, RabinPair};
 use crate::controller::{Fsc, Mixture, Role};
-use crate::game::{Player, Posg};
+use crate::game::{AdversaryAction, DefenderAction, Player, Posg};
 use crate::interner::{Interner, TooManyKeys};
 use crate::mdp::{
     AcceptingComponent, Mdp, MdpBuilder, QualitativeReachability, Reachability, max_rabin_analysis,
@@ -485,8 +485,8 @@ impl Product {
         let letters = dra.state_letters(game);
         let mixture = Mixture::of(fixed.player(game), controller, game.num_states());
         let transition = |s: usize, f: usize, w: usize| match fixed {
-            Role::Defender => game.transition(s, f, w),
-            Role::Adversary => game.transition(s, w, f),
+            Role::Defender => game.transition(s, DefenderAction(f), AdversaryAction(w)),
+            Role::Adversary => game.transition(s, DefenderAction(w), AdversaryAction(f)),
         };
         let mut explorer: Interner<(usize, usize, usize)> = Interner::default();
         let mut initial = Vec::new();

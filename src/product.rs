@@ -19,6 +19,7 @@
 //! of threads): the optimiser does this thousands of times. The cost of both
 //! is linear in the number of terms of the sum.
 
+use crate::game::{AdversaryAction, DefenderAction};
 use rayon::prelude::*;
 use thiserror::Error;
 
@@ -88,7 +89,11 @@ impl GameTables {
         for s in 0..game.num_states() {
             let start = successors.len();
             for (u, v) in (0..nu).flat_map(|u| (0..nv).map(move |v| (u, v))) {
-                successors.extend(game.transition(s, u, v).iter().map(|&(t, _)| t as u32));
+                successors.extend(
+                    game.transition(s, DefenderAction(u), AdversaryAction(v))
+                        .iter()
+                        .map(|&(t, _)| t as u32),
+                );
             }
             successors[start..].sort_unstable();
             let mut unique = start;
@@ -101,12 +106,16 @@ impl GameTables {
             successors.truncate(unique);
             let local = &successors[start..];
             for (u, v) in (0..nu).flat_map(|u| (0..nv).map(move |v| (u, v))) {
-                local_transitions.extend(game.transition(s, u, v).iter().map(|&(t, p)| {
-                    let index = local
-                        .binary_search(&(t as u32))
-                        .expect("successor is in the union");
-                    (index as u32, p)
-                }));
+                local_transitions.extend(
+                    game.transition(s, DefenderAction(u), AdversaryAction(v))
+                        .iter()
+                        .map(|&(t, p)| {
+                            let index = local
+                                .binary_search(&(t as u32))
+                                .expect("successor is in the union");
+                            (index as u32, p)
+                        }),
+                );
             }
             successor_offsets.push(successors.len());
         }

@@ -8,6 +8,7 @@
 //! trace satisfies phi iff the run's BSCC is feasible). The estimate carries
 //! a 95% Wilson score interval.
 
+use crate::game::{AdversaryAction, DefenderAction};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
@@ -159,7 +160,9 @@ fn step(
     let adv = choose(rng, adversary.choices(state.h as usize, o_adv));
     let next = sample(
         rng,
-        game.transition(s, def.action, adv.action).iter().copied(),
+        game.transition(s, DefenderAction(def.action), AdversaryAction(adv.action))
+            .iter()
+            .copied(),
     );
     let q = dra.successor(state.q as usize, letters[next]);
     GmcState {

@@ -12,6 +12,7 @@ use posg_fsc::certify::{Bound, CertifyError, lower_bound, upper_bound};
 use posg_fsc::controller::{Fsc, Role};
 use posg_fsc::game::Posg;
 use posg_fsc::game::file::from_json_str;
+use posg_fsc::game::{AdversaryAction, DefenderAction};
 use posg_fsc::ltl;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -131,7 +132,9 @@ fn dense_mdp(game: &Posg, dra: &Dra, fixed: &Fsc) -> DenseMdp {
                                 Role::Defender => (c.action, w),
                                 Role::Adversary => (w, c.action),
                             };
-                            for &(t, pt) in game.transition(s, u, v) {
+                            for &(t, pt) in
+                                game.transition(s, DefenderAction(u), AdversaryAction(v))
+                            {
                                 let to = index(t, dra.successor(q, letter(t)), c.next);
                                 pw[(from, to)] += po * c.probability * pt;
                             }

@@ -2,6 +2,7 @@
 //! hand-written POMDP whose values are derived on paper, small MDPs and
 //! DTMCs, and one test per construct the importer must refuse.
 
+use posg_fsc::game::{AdversaryAction, DefenderAction};
 use std::path::Path;
 
 use posg_fsc::certify::{lower_bound, upper_bound};
@@ -54,9 +55,15 @@ fn the_dark_corridor_is_read_as_a_pomdp_game() {
     assert_eq!(def.observation_distribution(4), [(1, 1.0)]);
     assert_eq!(def.enabled_actions(0).collect::<Vec<_>>(), [0, 1]);
     assert_eq!(def.enabled_actions(1).collect::<Vec<_>>(), [2]);
-    assert!(g.transition(0, 2, 0).is_empty());
-    assert_eq!(g.transition(0, 0, 0).len(), 3);
-    let left = g.transition(0, 0, 0);
+    assert!(
+        g.transition(0, DefenderAction(2), AdversaryAction(0))
+            .is_empty()
+    );
+    assert_eq!(
+        g.transition(0, DefenderAction(0), AdversaryAction(0)).len(),
+        3
+    );
+    let left = g.transition(0, DefenderAction(0), AdversaryAction(0));
     assert!((left[1].1 - 0.3).abs() < 1e-15 && left[1].0 == 2);
 }
 

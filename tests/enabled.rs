@@ -10,6 +10,7 @@ use posg_fsc::controller::file::{from_json_str as fsc_from_json, resolve};
 use posg_fsc::controller::{Choice, Fsc, Role, Support};
 use posg_fsc::game::Posg;
 use posg_fsc::game::file::{from_json_str, to_json_string};
+use posg_fsc::game::{AdversaryAction, DefenderAction};
 use posg_fsc::ltl;
 use posg_fsc::prune::{PruneSettings, prune};
 use posg_fsc::value::Gmc;
@@ -88,8 +89,15 @@ fn the_enabled_map_is_read_into_the_player() {
     assert_eq!(def.enabled_actions(end).collect::<Vec<_>>(), vec![wait]);
     assert!(!def.action_enabled_in_state(0, jump));
     assert!(def.action_enabled_in_state(1, jump));
-    assert!(g.transition(0, jump, 0).is_empty());
-    assert_eq!(g.transition(1, jump, 0).len(), 2);
+    assert!(
+        g.transition(0, DefenderAction(jump), AdversaryAction(0))
+            .is_empty()
+    );
+    assert_eq!(
+        g.transition(1, DefenderAction(jump), AdversaryAction(0))
+            .len(),
+        2
+    );
     assert!(!g.adversary().restricts_actions());
 }
 

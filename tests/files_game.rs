@@ -3,6 +3,7 @@
 //! a no-panic fuzz.
 
 use posg_fsc::game::file::{from_json_str, read, to_json_string, write};
+use posg_fsc::game::{AdversaryAction, DefenderAction};
 use posg_fsc::game::{ModelError, Posg};
 use proptest::prelude::*;
 use serde_json::{Value, json};
@@ -55,8 +56,14 @@ fn base_game_is_read_with_wildcards_expanded() {
     assert_eq!(g.name(), Some("small"));
     assert_eq!(g.num_states(), 2);
     assert!(g.has_adversary());
-    assert_eq!(g.transition(0, 0, 1), &[(0, 0.3), (1, 0.7)]);
-    assert_eq!(g.transition(1, 1, 0), &[(1, 1.0)]);
+    assert_eq!(
+        g.transition(0, DefenderAction(0), AdversaryAction(1)),
+        &[(0, 0.3), (1, 0.7)]
+    );
+    assert_eq!(
+        g.transition(1, DefenderAction(1), AdversaryAction(0)),
+        &[(1, 1.0)]
+    );
     assert_eq!(g.propositions(), ["goal"]);
     assert_eq!(g.label_names(1).collect::<Vec<_>>(), ["goal"]);
     assert_eq!(g.adversary().observations(), ["a", "b"]);
@@ -90,10 +97,22 @@ fn most_specific_transition_wins() {
     t.push(json!({"state": "b", "defender": "go", "adversary": "NA", "next": {"a": 1.0}}));
     let g = load(&v).unwrap();
     let (go, stay, a, na) = (0, 1, 0, 1);
-    assert_eq!(g.transition(1, go, a), &[(0, 0.5), (1, 0.5)]);
-    assert_eq!(g.transition(1, go, na), &[(0, 1.0)]);
-    assert_eq!(g.transition(1, stay, na), &[(0, 0.75), (1, 0.25)]);
-    assert_eq!(g.transition(1, stay, a), &[(1, 1.0)]);
+    assert_eq!(
+        g.transition(1, DefenderAction(go), AdversaryAction(a)),
+        &[(0, 0.5), (1, 0.5)]
+    );
+    assert_eq!(
+        g.transition(1, DefenderAction(go), AdversaryAction(na)),
+        &[(0, 1.0)]
+    );
+    assert_eq!(
+        g.transition(1, DefenderAction(stay), AdversaryAction(na)),
+        &[(0, 0.75), (1, 0.25)]
+    );
+    assert_eq!(
+        g.transition(1, DefenderAction(stay), AdversaryAction(a)),
+        &[(1, 1.0)]
+    );
 }
 
 #[test]
@@ -107,7 +126,7 @@ fn zero_entries_are_dropped_and_near_one_sums_renormalised() {
         .unwrap()
         .push(json!({"state": "c", "defender": "*", "adversary": "*", "next": {"c": 1.0}}));
     let g = load(&v).unwrap();
-    let row = g.transition(0, 0, 0);
+    let row = g.transition(0, DefenderAction(0), AdversaryAction(0));
     assert_eq!(row.len(), 2);
     assert!((row[0].1 + row[1].1 - 1.0).abs() < 1e-15);
 }
@@ -125,7 +144,10 @@ fn pomdp_adversary_field_may_be_omitted_star_or_underscore() {
     assert!(!g.has_adversary());
     assert_eq!(g.adversary().actions(), ["_"]);
     assert_eq!(g.adversary().observations(), ["_"]);
-    assert_eq!(g.transition(0, 0, 0), &[(0, 0.3), (1, 0.7)]);
+    assert_eq!(
+        g.transition(0, DefenderAction(0), AdversaryAction(0)),
+        &[(0, 0.3), (1, 0.7)]
+    );
     let text = to_json_string(&g);
     assert!(!text.contains("adversary"), "{text}");
     assert_eq!(from_json_str(&text, FILE).unwrap(), g);
@@ -520,7 +542,10 @@ fn assert_same_up_to_rounding(a: &Posg, b: &Posg) {
         ));
         for u in 0..a.defender().num_actions() {
             for v in 0..a.adversary().num_actions() {
-                assert!(close(a.transition(s, u, v), b.transition(s, u, v)));
+                assert!(close(
+                    a.transition(s, DefenderAction(u), AdversaryAction(v)),
+                    b.transition(s, DefenderAction(u), AdversaryAction(v))
+                ));
             }
         }
     }

@@ -4,6 +4,7 @@
 use posg_fsc::game::Posg;
 use posg_fsc::game::file::{from_json_str, read, to_json_string};
 use posg_fsc::game::grid::{GridSpec, ObservationModel, RandomUnsafe};
+use posg_fsc::game::{AdversaryAction, DefenderAction};
 
 const R: usize = 0;
 const L: usize = 1;
@@ -19,7 +20,7 @@ fn sorted(row: &[(usize, f64)]) -> Vec<(usize, f64)> {
 }
 
 fn assert_row(game: &Posg, s: usize, u: usize, v: usize, expected: &[(usize, f64)]) {
-    let row = sorted(game.transition(s, u, v));
+    let row = sorted(game.transition(s, DefenderAction(u), AdversaryAction(v)));
     assert_eq!(row.len(), expected.len(), "T(.|s{s},{u},{v}) = {row:?}");
     for (&(c, p), &(ec, ep)) in row.iter().zip(expected) {
         assert_eq!(c, ec, "T(.|s{s},{u},{v}) = {row:?}");
@@ -35,7 +36,11 @@ fn assert_rows_sum_to_one(game: &Posg) {
     for s in 0..game.num_states() {
         for u in 0..nu {
             for v in 0..nv {
-                let total: f64 = game.transition(s, u, v).iter().map(|e| e.1).sum();
+                let total: f64 = game
+                    .transition(s, DefenderAction(u), AdversaryAction(v))
+                    .iter()
+                    .map(|e| e.1)
+                    .sum();
                 assert!(
                     (total - 1.0).abs() < 1e-12,
                     "T(.|{s},{u},{v}) sums to {total}"
@@ -153,7 +158,10 @@ fn one_by_one_grid_stays_put() {
     let g = spec.build().unwrap();
     for u in 0..4 {
         for v in 0..2 {
-            assert_eq!(g.transition(0, u, v), &[(0, 1.0)]);
+            assert_eq!(
+                g.transition(0, DefenderAction(u), AdversaryAction(v)),
+                &[(0, 1.0)]
+            );
         }
     }
     assert_eq!(g.defender().observation_distribution(0), &[(0, 1.0)]);
@@ -184,7 +192,10 @@ fn certain_moves_drop_zero_entries() {
         ..GridSpec::default()
     };
     let g = spec.build().unwrap();
-    assert_eq!(g.transition(0, R, NA), &[(1, 1.0)]);
+    assert_eq!(
+        g.transition(0, DefenderAction(R), AdversaryAction(NA)),
+        &[(1, 1.0)]
+    );
     assert_eq!(g.defender().observation_distribution(2), &[(2, 1.0)]);
 }
 

@@ -1,5 +1,6 @@
 //! `posg-fsc check`: validate a game file and describe it.
 
+use posg_fsc::game::{AdversaryAction, DefenderAction};
 use std::path::PathBuf;
 
 use clap::Args;
@@ -40,7 +41,10 @@ fn describe(game: &Posg) -> String {
             (0..game.defender().num_actions())
                 .flat_map(move |u| (0..game.adversary().num_actions()).map(move |v| (s, u, v)))
         })
-        .map(|(s, u, v)| game.transition(s, u, v).len())
+        .map(|(s, u, v)| {
+            game.transition(s, DefenderAction(u), AdversaryAction(v))
+                .len()
+        })
         .sum();
     let player = |name: &str, p: &posg_fsc::game::Player| {
         let observe = if p.observes_fully() {

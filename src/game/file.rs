@@ -12,6 +12,7 @@
 //! The helpers shared with the controller files (`parse`, `Located`,
 //! `distribution`) live here too.
 
+use crate::game::{AdversaryAction, DefenderAction};
 use std::fmt;
 use std::marker::PhantomData;
 use std::path::Path;
@@ -926,7 +927,10 @@ fn raw_transitions(game: &Posg) -> Vec<RawTransition> {
                     adversary: game
                         .has_adversary
                         .then(|| game.adversary.actions[v].clone()),
-                    next: named_distribution(game.transition(s, u, v), &game.states),
+                    next: named_distribution(
+                        game.transition(s, DefenderAction(u), AdversaryAction(v)),
+                        &game.states,
+                    ),
                 });
             }
         }

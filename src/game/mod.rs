@@ -55,6 +55,16 @@ pub(crate) fn check_total(total: f64, shown: f64, subject: &str) -> Result<(), S
     Ok(())
 }
 
+/// A defender action `u in U_def`: an index into the defender's
+/// [`Player::actions`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct DefenderAction(pub usize);
+
+/// An adversary action `v in U_adv`: an index into the adversary's
+/// [`Player::actions`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct AdversaryAction(pub usize);
+
 /// A sparse probability distribution: `(outcome, probability)` pairs with
 /// distinct outcomes and positive probabilities summing to 1.
 pub type Distribution = Vec<(usize, f64)>;
@@ -237,7 +247,14 @@ impl Posg {
     /// `T(. | s, u, v)` as `(successor, probability)` pairs with positive
     /// probability. Empty when `u` or `v` is enabled under no observation of
     /// `s` ([`Player::action_enabled_in_state`]): no controller plays it there.
-    pub fn transition(&self, s: StateId, u: usize, v: usize) -> &[(StateId, f64)] {
+    /// The two actions have their own index types, so that the defender's and
+    /// the adversary's action cannot be swapped by mistake.
+    pub fn transition(
+        &self,
+        s: StateId,
+        DefenderAction(u): DefenderAction,
+        AdversaryAction(v): AdversaryAction,
+    ) -> &[(StateId, f64)] {
         let t = (s * self.defender.num_actions() + u) * self.adversary.num_actions() + v;
         &self.transition_entries[self.transition_offsets[t]..self.transition_offsets[t + 1]]
     }

@@ -10,6 +10,7 @@
 //! and `T(s' | s, u, v) > 0` with `q' = delta(q, L(s'))`.
 
 use crate::automaton::{Dra, Letter};
+use crate::game::{AdversaryAction, DefenderAction};
 use crate::game::{Posg, StateId};
 use crate::product::GmcState;
 
@@ -34,7 +35,7 @@ impl<'a> Terms<'a> {
         self.dra.successor(from.q as usize, self.letters[next]) == to.q as usize
             && self
                 .game
-                .transition(from.s as usize, u, v)
+                .transition(from.s as usize, DefenderAction(u), AdversaryAction(v))
                 .iter()
                 .any(|&(t, _)| t == next)
     }

@@ -8,6 +8,7 @@
 //! `v` the possible next game states are the union over `u` of the supports
 //! of `T(. | s, u, v)`; the automaton then moves to `q' = delta(q, L(s'))`.
 
+use crate::game::{AdversaryAction, DefenderAction};
 use rustc_hash::FxHashMap;
 
 use crate::automaton::{Dra, RabinPair};
@@ -37,7 +38,11 @@ impl Moves {
         for s in 0..game.num_states() {
             for v in 0..nv {
                 let mut by_next: Vec<(usize, usize)> = (0..nu)
-                    .flat_map(|u| game.transition(s, u, v).iter().map(move |&(t, _)| (t, u)))
+                    .flat_map(|u| {
+                        game.transition(s, DefenderAction(u), AdversaryAction(v))
+                            .iter()
+                            .map(move |&(t, _)| (t, u))
+                    })
                     .collect();
                 by_next.sort_unstable();
                 let mut list: Vec<(usize, usize)> = Vec::new();

@@ -8,6 +8,7 @@ use dense::{DMatrix, DVector};
 use posg_fsc::automaton::{Dra, RabinPair};
 use posg_fsc::controller::Fsc;
 use posg_fsc::game::Posg;
+use posg_fsc::game::{AdversaryAction, DefenderAction};
 
 /// A state-based DRA from a per-state transition function over the letters of `aps`.
 pub fn dra(
@@ -121,7 +122,11 @@ pub fn dense_product(game: &Posg, dra: &Dra, def: &Fsc, adv: &Fsc) -> DenseProdu
                         for &(o2, po2) in game.adversary().observation_distribution(s) {
                             for cd in def.choices(g, o) {
                                 for ca in adv.choices(h, o2) {
-                                    for &(t, pt) in game.transition(s, cd.action, ca.action) {
+                                    for &(t, pt) in game.transition(
+                                        s,
+                                        DefenderAction(cd.action),
+                                        AdversaryAction(ca.action),
+                                    ) {
                                         let qt = dra.successor(q, letter(game, dra, t));
                                         p[(from, idx(t, qt, cd.next, ca.next))] +=
                                             po * po2 * cd.probability * ca.probability * pt;
