@@ -149,6 +149,10 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
         &args.solver.settings(),
     )?;
     let build_and_analyse = lap.seconds();
+    // The evaluator owns all it needs: free the game (tens of MB at 1e6 GMC
+    // states) before the factorisation, the step of peak memory, unless
+    // --explain names its states.
+    let game = args.explain.then_some(game);
     let (def_probabilities, adv_probabilities) = (
         Support::probabilities_of(&defender),
         Support::probabilities_of(&adversary),
@@ -188,9 +192,9 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
         seconds: common::seconds_since(start),
         phase_seconds,
         gradient: gradient.as_ref().map(GradientReport::new),
-        recurrence_classes: args
-            .explain
-            .then(|| explain(&game, evaluator.gmc(), recurrence)),
+        recurrence_classes: game
+            .as_ref()
+            .map(|game| explain(game, evaluator.gmc(), recurrence)),
     };
     common::print_json(&report)
 }
