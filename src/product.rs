@@ -19,13 +19,12 @@
 //! of threads): the optimiser does this thousands of times. The cost of both
 //! is linear in the number of terms of the sum.
 
-use crate::game::{AdversaryAction, DefenderAction};
 use rayon::prelude::*;
 use thiserror::Error;
 
 use crate::automaton::{Dra, Letter};
 use crate::controller::{Mixture, Probabilities, Support};
-use crate::game::{Player, Posg};
+use crate::game::{AdversaryAction, DefenderAction, Player, Posg};
 use crate::graph::CsrGraph;
 use crate::interner::{Interner, TooManyKeys};
 use crate::solver::FlushDenormals;

@@ -8,7 +8,6 @@
 //! trace satisfies phi iff the run's BSCC is feasible). The estimate carries
 //! a 95% Wilson score interval.
 
-use crate::game::{AdversaryAction, DefenderAction};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
@@ -16,7 +15,7 @@ use thiserror::Error;
 
 use crate::automaton::Dra;
 use crate::controller::{Choice, Fsc};
-use crate::game::Posg;
+use crate::game::{AdversaryAction, DefenderAction, Posg};
 use crate::product::GmcState;
 use crate::value::Evaluator;
 

@@ -2,15 +2,14 @@
 //! hand-written POMDP whose values are derived on paper, small MDPs and
 //! DTMCs, and one test per construct the importer must refuse.
 
-use posg_fsc::game::{AdversaryAction, DefenderAction};
 use std::path::Path;
 
 use posg_fsc::certify::{lower_bound, upper_bound};
 use posg_fsc::controller::Role;
 use posg_fsc::controller::file::{from_json_str as fsc_from_json, resolve};
-use posg_fsc::game::Posg;
 use posg_fsc::game::drn::{from_drn_str, read};
 use posg_fsc::game::file::{from_json_str, to_json_string};
+use posg_fsc::game::{AdversaryAction, DefenderAction, Posg};
 use posg_fsc::ltl;
 use posg_fsc::value::SolverSettings;
 use posg_fsc::value::evaluate_controllers;

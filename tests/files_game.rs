@@ -3,8 +3,7 @@
 //! a no-panic fuzz.
 
 use posg_fsc::game::file::{from_json_str, read, to_json_string, write};
-use posg_fsc::game::{AdversaryAction, DefenderAction};
-use posg_fsc::game::{ModelError, Posg};
+use posg_fsc::game::{AdversaryAction, DefenderAction, ModelError, Posg};
 use proptest::prelude::*;
 use serde_json::{Value, json};
 

@@ -1,10 +1,9 @@
 //! The grid family (`game::grid`): the paper's 3 x 2 instance checked by hand,
 //! row sums, degenerate grids, labels, random unsafe cells and the JSON round trip.
 
-use posg_fsc::game::Posg;
 use posg_fsc::game::file::{from_json_str, read, to_json_string};
 use posg_fsc::game::grid::{GridSpec, ObservationModel, RandomUnsafe};
-use posg_fsc::game::{AdversaryAction, DefenderAction};
+use posg_fsc::game::{AdversaryAction, DefenderAction, Posg};
 
 const R: usize = 0;
 const L: usize = 1;

@@ -1,10 +1,9 @@
 //! `posg-fsc check`: validate a game file and describe it.
 
-use posg_fsc::game::{AdversaryAction, DefenderAction};
 use std::path::PathBuf;
 
 use clap::Args;
-use posg_fsc::game::Posg;
+use posg_fsc::game::{AdversaryAction, DefenderAction, Posg};
 
 use super::common;
 

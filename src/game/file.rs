@@ -12,7 +12,6 @@
 //! The helpers shared with the controller files (`parse`, `Located`,
 //! `distribution`) live here too.
 
-use crate::game::{AdversaryAction, DefenderAction};
 use std::fmt;
 use std::marker::PhantomData;
 use std::path::Path;
@@ -23,7 +22,7 @@ use serde::de::{self, DeserializeSeed, Deserializer, MapAccess, Visitor};
 use serde::ser::{SerializeMap, Serializer};
 use serde::{Deserialize, Serialize};
 
-use super::{Distribution, ModelError, Player, Posg};
+use super::{AdversaryAction, DefenderAction, Distribution, ModelError, Player, Posg};
 
 /// The only format version this crate reads and writes (`"posg": 1`).
 pub const FORMAT_VERSION: u64 = 1;

@@ -10,8 +10,7 @@
 //! and `T(s' | s, u, v) > 0` with `q' = delta(q, L(s'))`.
 
 use crate::automaton::{Dra, Letter};
-use crate::game::{AdversaryAction, DefenderAction};
-use crate::game::{Posg, StateId};
+use crate::game::{AdversaryAction, DefenderAction, Posg, StateId};
 use crate::product::GmcState;
 
 use super::indicator::Indicator;

@@ -8,11 +8,10 @@
 //! `v` the possible next game states are the union over `u` of the supports
 //! of `T(. | s, u, v)`; the automaton then moves to `q' = delta(q, L(s'))`.
 
-use crate::game::{AdversaryAction, DefenderAction};
 use rustc_hash::FxHashMap;
 
 use crate::automaton::{Dra, RabinPair};
-use crate::game::Posg;
+use crate::game::{AdversaryAction, DefenderAction, Posg};
 use crate::graph::{Digraph, strongly_connected_components};
 
 /// The game's transitions `(s, v, s')` that some defender action allows:

@@ -7,8 +7,7 @@
 use dense::{DMatrix, DVector};
 use posg_fsc::automaton::{Dra, RabinPair};
 use posg_fsc::controller::Fsc;
-use posg_fsc::game::Posg;
-use posg_fsc::game::{AdversaryAction, DefenderAction};
+use posg_fsc::game::{AdversaryAction, DefenderAction, Posg};
 
 /// A state-based DRA from a per-state transition function over the letters of `aps`.
 pub fn dra(
