@@ -127,18 +127,8 @@ fn transient_system(side: usize) -> System {
     .expect("a valid grid");
     let formula = posg_fsc::ltl::parse("!unsafe U goal").expect("a valid formula");
     let dra = posg_fsc::ltl::translate(&formula).expect("a translatable formula");
-    let defender = Fsc::uniform(
-        Role::Defender,
-        2,
-        game.defender().num_observations(),
-        game.defender().num_actions(),
-    );
-    let adversary = Fsc::uniform(
-        Role::Adversary,
-        2,
-        game.adversary().num_observations(),
-        game.adversary().num_actions(),
-    );
+    let defender = Fsc::uniform_enabled(Role::Defender, 2, game.defender());
+    let adversary = Fsc::uniform_enabled(Role::Adversary, 2, game.adversary());
     let settings = SolverSettings {
         method: SolverMethod::Krylov,
         max_iterations: 1,

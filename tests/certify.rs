@@ -6,13 +6,14 @@
 
 mod common;
 
+use common::automata;
+
 use common::dense::{self, DMatrix, DVector};
 use posg_fsc::automaton::Dra;
 use posg_fsc::certify::{Bound, CertifyError, lower_bound, upper_bound};
 use posg_fsc::controller::{Fsc, Role};
 use posg_fsc::game::file::from_json_str;
 use posg_fsc::game::{AdversaryAction, DefenderAction, Posg};
-use posg_fsc::ltl;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde_json::{Map, Value, json};
@@ -23,15 +24,6 @@ const FORMULAS: [&str; 4] = [
     "GF goal & G !unsafe",
     "!unsafe U goal",
 ];
-
-/// The DRAs for `phi` and for `!phi` from the crate's translator.
-fn automata(formula: &str) -> (Dra, Dra) {
-    let phi = ltl::parse(formula).unwrap();
-    (
-        ltl::translate(&phi).unwrap(),
-        ltl::translate(&phi.negate()).unwrap(),
-    )
-}
 
 fn random_distribution(rng: &mut ChaCha8Rng, outcomes: &[String], most: usize) -> Value {
     let mut chosen: Vec<&String> = Vec::new();

@@ -4,13 +4,14 @@
 
 mod common;
 
+use common::automata;
+
 use posg_fsc::automaton::Dra;
 use posg_fsc::certify::strategy::{Objective, StrategyFile};
 use posg_fsc::certify::{Bound, lower_bound, upper_bound};
 use posg_fsc::controller::{Fsc, Role};
 use posg_fsc::game::Posg;
 use posg_fsc::game::file::from_json_str;
-use posg_fsc::ltl;
 use posg_fsc::value::SolverSettings;
 use posg_fsc::value::evaluate_controllers;
 use serde_json::{Value, json};
@@ -21,14 +22,6 @@ const FORMULAS: [&str; 4] = [
     "GF goal & G !unsafe",
     "!unsafe U goal",
 ];
-
-fn automata(formula: &str) -> (Dra, Dra) {
-    let phi = ltl::parse(formula).unwrap();
-    (
-        ltl::translate(&phi).unwrap(),
-        ltl::translate(&phi.negate()).unwrap(),
-    )
-}
 
 fn value(game: &Posg, dra: &Dra, def: &Fsc, adv: &Fsc) -> f64 {
     evaluate_controllers(game, dra, def, adv, &SolverSettings::default())

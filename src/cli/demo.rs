@@ -99,18 +99,8 @@ fn solve_reach_avoid(game: &Posg, place: &Place, out: &mut String) -> anyhow::Re
     let dra = &automata.phi;
     let outcome = solve_with_defaults(game, &automata, place)?;
     let (best, certified) = (outcome.best(), outcome.certified);
-    let defender = Fsc::uniform(
-        Role::Defender,
-        2,
-        game.defender().num_observations(),
-        game.defender().num_actions(),
-    );
-    let adversary = Fsc::uniform(
-        Role::Adversary,
-        1,
-        game.adversary().num_observations(),
-        game.adversary().num_actions(),
-    );
+    let defender = Fsc::uniform_enabled(Role::Defender, 2, game.defender());
+    let adversary = Fsc::uniform_enabled(Role::Adversary, 1, game.adversary());
     let uniform = value(game, dra, &defender, &adversary)?;
     writeln!(
         out,

@@ -38,6 +38,15 @@ pub fn dra(
     .unwrap()
 }
 
+/// The DRAs for `phi` and for `!phi` from the crate's translator.
+pub fn automata(formula: &str) -> (Dra, Dra) {
+    let phi = posg_fsc::ltl::parse(formula).unwrap();
+    (
+        posg_fsc::ltl::translate(&phi).unwrap(),
+        posg_fsc::ltl::translate(&phi.negate()).unwrap(),
+    )
+}
+
 /// `F goal`: 0 = not yet, 1 = goal seen (accepting sink).
 pub fn eventually_goal() -> Dra {
     dra(

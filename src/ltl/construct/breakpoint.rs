@@ -8,7 +8,7 @@
 //! from the exploration.
 
 use super::weak::weak_with_classes;
-use super::{Disjunct, Tgr, explore};
+use super::{Tgr, explore};
 use crate::automaton::Letter;
 use crate::ltl::TranslateError;
 use crate::ltl::af::Context;
@@ -94,14 +94,5 @@ pub(crate) fn guarded_globally(
             }
         }
     }
-    Ok(Tgr {
-        letters,
-        initial: 0,
-        edges,
-        num_marks: 1,
-        disjuncts: vec![Disjunct {
-            fin: 0,
-            inf: vec![0],
-        }],
-    })
+    Ok(Tgr::infinitely_often_mark_0(letters, edges))
 }

@@ -68,6 +68,22 @@ pub(crate) struct Tgr {
 }
 
 impl Tgr {
+    /// The automaton on `edges` (from state 0) whose only acceptance is
+    /// `Inf(0)`: a run is accepted iff it takes edges carrying mark 0
+    /// infinitely often.
+    pub(crate) fn infinitely_often_mark_0(letters: usize, edges: Vec<Edge>) -> Self {
+        Tgr {
+            letters,
+            initial: 0,
+            edges,
+            num_marks: 1,
+            disjuncts: vec![Disjunct {
+                fin: 0,
+                inf: vec![0],
+            }],
+        }
+    }
+
     pub(crate) fn num_states(&self) -> usize {
         self.edges.len() / self.letters
     }

@@ -13,7 +13,7 @@
 
 use rustc_hash::FxHashMap;
 
-use super::{Disjunct, Successors, Tgr, explore};
+use super::{Successors, Tgr, explore};
 use crate::automaton::emerson_lei::Edge;
 use crate::automaton::{Letter, MarkSet};
 use crate::graph;
@@ -78,16 +78,7 @@ pub(super) fn weak_with_classes(
 ) -> Result<(Vec<Node>, Tgr), TranslateError> {
     let root = context.class(formula);
     let (states, edges) = explore(root, letters, |&q, a| (context.after(q, a), 0))?;
-    let mut tgr = Tgr {
-        letters,
-        initial: 0,
-        edges,
-        num_marks: 1,
-        disjuncts: vec![Disjunct {
-            fin: 0,
-            inf: vec![0],
-        }],
-    };
+    let mut tgr = Tgr::infinitely_often_mark_0(letters, edges);
     let components = graph::strongly_connected_components(&Successors(&tgr));
     let mut verdict: Vec<Option<bool>> = vec![None; components.count];
     for (q, &class) in states.iter().enumerate() {
