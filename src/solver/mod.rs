@@ -32,6 +32,7 @@ mod denormals;
 mod ilu;
 mod krylov;
 mod lu;
+mod multifrontal;
 
 use bound::ExpectedTime;
 pub use denormals::FlushDenormals;
