@@ -33,6 +33,7 @@ mod ilu;
 mod krylov;
 mod lu;
 mod multifrontal;
+mod ordering;
 
 use bound::ExpectedTime;
 pub use denormals::FlushDenormals;

@@ -7,8 +7,8 @@
 //! no pivoting and its growth factor is at most 2 (Wilkinson). The factors
 //! then have the structure of the Cholesky factor of `P (A + A^T) P^T`:
 //! `L` its lower and `U` its upper triangle, which faer's symbolic Cholesky
-//! analysis computes, with its approximate minimum degree ordering `P` and
-//! its (relaxed) supernodes. A grid-like chain fills far less this way than
+//! analysis computes, with its (relaxed) supernodes, for the approximate
+//! minimum degree ordering `P` of [`super::ordering`]. A grid-like chain fills far less this way than
 //! under a column ordering that must leave room for row pivoting.
 //!
 //! The numeric phase is multifrontal: supernode `s` (columns `J_s`, below
@@ -26,6 +26,7 @@ use faer::linalg::matmul::matmul;
 use faer::linalg::triangular_solve::{
     solve_lower_triangular_in_place, solve_unit_lower_triangular_in_place,
 };
+use faer::perm::PermRef;
 use faer::reborrow::{Reborrow, ReborrowMut};
 use faer::sparse::SymbolicSparseColMatRef;
 use faer::sparse::linalg::SupernodalThreshold;
@@ -34,6 +35,7 @@ use faer::sparse::linalg::cholesky::{
 };
 use faer::{Accum, MatMut, Par, Side};
 
+use super::ordering::SymmetricPattern;
 use super::{SolverError, SparsePattern};
 
 /// Fronts with at least this many rows use faer's parallel dense kernels.
@@ -138,34 +140,35 @@ impl MultifrontalLu {
         stack.clear();
         for &s in &structure.postorder {
             let node = &structure.supernodes[s];
-            let front_rows = node.columns() + node.rows.len();
-            let front = &mut front[..front_rows * front_rows];
-            front.fill(0.0);
+            let (columns, below) = (node.columns(), node.rows.len());
+            let rows = columns + below;
+            let mut front = Front {
+                rows,
+                left: &mut lower[node.lower_offset..][..rows * columns],
+                right: &mut front[..rows * below],
+            };
+            front.left.fill(0.0);
+            front.right.fill(0.0);
             for &(k, position) in &structure.assembly[node.assembly.clone()] {
-                front[position as usize] += values[k as usize];
+                *front.at(position as usize) += values[k as usize];
             }
-            let children = &structure.children[node.children.clone()];
             let mut top = stack.len();
-            for &child in children.iter().rev() {
+            for &child in structure.children[node.children.clone()].iter().rev() {
                 let relative = &structure.relative[structure.supernodes[child].relative.clone()];
                 let size = relative.len() * relative.len();
                 top -= size;
-                extend_add(front, front_rows, &stack[top..][..size], relative);
+                front.extend_add(&stack[top..][..size], relative);
             }
             stack.truncate(top);
-            factor_front(front, front_rows, node.columns()).map_err(|column| {
+            front.factor().map_err(|column| {
                 SolverError::Singular(format!(
                     "zero or non-finite pivot at position {} of the elimination order",
                     node.begin + column
                 ))
             })?;
-            let factors = NodeFactors {
-                lower: &mut lower[node.lower_offset..][..front_rows * node.columns()],
-                upper: &mut upper[node.upper_offset..][..node.rows.len() * node.columns()],
-            };
-            factors.copy_from(front, node.columns());
+            front.copy_upper(&mut upper[node.upper_offset..][..below * columns]);
             if !node.relative.is_empty() {
-                push_update(stack, front, front_rows, node.columns());
+                front.push_update(stack);
             }
         }
         Ok(())
@@ -288,65 +291,92 @@ impl MultifrontalLu {
     }
 }
 
-/// Adds a child's update matrix (`relative.len()` square, column-major) to
-/// the front at the rows and columns `relative`.
-fn extend_add(front: &mut [f64], front_rows: usize, update: &[f64], relative: &[u32]) {
-    let size = relative.len();
-    for (j, &column) in relative.iter().enumerate() {
-        let target = &mut front[column as usize * front_rows..][..front_rows];
-        for (&row, &u) in relative.iter().zip(&update[j * size..][..size]) {
-            target[row as usize] += u;
+/// The dense front of one supernode, `rows x rows` column-major, split
+/// after its pivot columns: `left = [F_JJ; F_RJ]` (where `L` and `U_JJ`
+/// stay) and `right = [F_JR; F_RR]`. A position counts through `left` and
+/// then `right`, as in one column-major matrix.
+struct Front<'a> {
+    rows: usize,
+    left: &'a mut [f64],
+    right: &'a mut [f64],
+}
+
+impl Front<'_> {
+    fn columns(&self) -> usize {
+        self.left.len() / self.rows
+    }
+
+    /// The entry at column-major `position`.
+    fn at(&mut self, position: usize) -> &mut f64 {
+        match position.checked_sub(self.left.len()) {
+            Some(right) => &mut self.right[right],
+            None => &mut self.left[position],
         }
     }
-}
 
-/// Where one supernode's factors are kept.
-struct NodeFactors<'a> {
-    /// `[L_JJ\U_JJ; L_RJ]`, column-major.
-    lower: &'a mut [f64],
-    /// `U_JR`, column-major.
-    upper: &'a mut [f64],
-}
-
-impl NodeFactors<'_> {
-    /// Copies the factors out of a factorised front whose first `columns`
-    /// rows and columns are the pivots.
-    fn copy_from(self, front: &[f64], columns: usize) {
-        let front_rows = self.lower.len() / columns;
-        self.lower.copy_from_slice(&front[..front_rows * columns]);
-        for (j, target) in self.upper.chunks_exact_mut(columns).enumerate() {
-            target.copy_from_slice(&front[(columns + j) * front_rows..][..columns]);
+    /// The column `column` of the front.
+    fn column(&mut self, column: usize) -> &mut [f64] {
+        let rows = self.rows;
+        match column.checked_sub(self.columns()) {
+            Some(right) => &mut self.right[right * rows..][..rows],
+            None => &mut self.left[column * rows..][..rows],
         }
     }
-}
 
-/// Pushes the update matrix `F_RR` of a factorised front (the rows and
-/// columns after the first `columns`) onto the stack, column-major.
-fn push_update(stack: &mut Vec<f64>, front: &[f64], front_rows: usize, columns: usize) {
-    for j in columns..front_rows {
-        stack.extend_from_slice(&front[j * front_rows + columns..][..front_rows - columns]);
+    /// Adds a child's update matrix (`relative.len()` square, column-major)
+    /// at the rows and columns `relative`.
+    fn extend_add(&mut self, update: &[f64], relative: &[u32]) {
+        let size = relative.len();
+        for (&column, source) in relative.iter().zip(update.chunks_exact(size)) {
+            let target = self.column(column as usize);
+            for (&row, &u) in relative.iter().zip(source) {
+                target[row as usize] += u;
+            }
+        }
     }
-}
 
-/// Factorises a front (`rows x rows`, column-major) whose first `columns`
-/// columns and rows are the pivots: `F_JJ = L U` in place, `F_RJ <- F_RJ
-/// U^{-1}`, `F_JR <- L^{-1} F_JR`, `F_RR <- F_RR - F_RJ F_JR`. Errors with
-/// the pivot's column when a pivot is zero or not finite.
-fn factor_front(front: &mut [f64], rows: usize, columns: usize) -> Result<(), usize> {
-    let par = if rows >= PARALLEL_FRONT_ROWS {
-        Par::rayon(0)
-    } else {
-        Par::Seq
-    };
-    let matrix = MatMut::from_column_major_slice_mut(front, rows, rows);
-    let (mut jj, mut jr, mut rj, rr) = matrix.split_at_mut(columns, columns);
-    lu_without_pivoting(jj.rb_mut(), par)?;
-    if rows > columns {
-        solve_lower_triangular_in_place(jj.rb().transpose(), rj.rb_mut().transpose_mut(), par);
-        solve_unit_lower_triangular_in_place(jj.rb(), jr.rb_mut(), par);
-        matmul(rr, Accum::Add, rj.rb(), jr.rb(), -1.0, par);
+    /// `F_JJ = L U` in place, `F_RJ <- F_RJ U^{-1}`, `F_JR <- L^{-1} F_JR`,
+    /// `F_RR <- F_RR - F_RJ F_JR`. Errors with the pivot's column when a
+    /// pivot is zero or not finite.
+    fn factor(&mut self) -> Result<(), usize> {
+        let (rows, columns) = (self.rows, self.columns());
+        let par = if rows >= PARALLEL_FRONT_ROWS {
+            Par::rayon(0)
+        } else {
+            Par::Seq
+        };
+        let left = MatMut::from_column_major_slice_mut(self.left, rows, columns);
+        let (mut jj, mut rj) = left.split_at_row_mut(columns);
+        lu_without_pivoting(jj.rb_mut(), par)?;
+        if rows > columns {
+            let right = MatMut::from_column_major_slice_mut(self.right, rows, rows - columns);
+            let (mut jr, rr) = right.split_at_row_mut(columns);
+            solve_lower_triangular_in_place(jj.rb().transpose(), rj.rb_mut().transpose_mut(), par);
+            solve_unit_lower_triangular_in_place(jj.rb(), jr.rb_mut(), par);
+            matmul(rr, Accum::Add, rj.rb(), jr.rb(), -1.0, par);
+        }
+        Ok(())
     }
-    Ok(())
+
+    /// Copies `U_JR` (`|J| x |R|`, column-major) out of a factorised front.
+    fn copy_upper(&self, upper: &mut [f64]) {
+        let columns = self.columns();
+        for (target, source) in upper
+            .chunks_exact_mut(columns)
+            .zip(self.right.chunks_exact(self.rows))
+        {
+            target.copy_from_slice(&source[..columns]);
+        }
+    }
+
+    /// Pushes the update matrix `F_RR` of a factorised front onto the
+    /// stack, column-major.
+    fn push_update(&self, stack: &mut Vec<f64>) {
+        let columns = self.columns();
+        for source in self.right.chunks_exact(self.rows) {
+            stack.extend_from_slice(&source[columns..]);
+        }
+    }
 }
 
 /// Dense LU without pivoting in place (unit lower `L` below the diagonal,
@@ -393,7 +423,14 @@ fn lu_unblocked(mut a: MatMut<'_, f64>) -> Result<(), usize> {
 impl Structure {
     fn analyse(pattern: &SparsePattern) -> Result<Self, SolverError> {
         let n = pattern.n;
-        let (column_offsets, row_indices) = symmetric_upper_pattern(pattern);
+        let graph = SymmetricPattern::of(pattern);
+        let order = graph.minimum_degree_order()?;
+        let mut inverse = vec![0; n];
+        for (new, &old) in order.iter().enumerate() {
+            inverse[old] = new;
+        }
+        let (column_offsets, row_indices) = graph.upper();
+        drop(graph);
         let upper = SymbolicSparseColMatRef::new_checked(n, n, &column_offsets, None, &row_indices);
         let params = CholeskySymbolicParams {
             supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SUPERNODAL,
@@ -402,14 +439,11 @@ impl Structure {
         let symbolic = factorize_symbolic_cholesky(
             upper,
             Side::Upper,
-            SymmetricOrdering::<usize>::Amd,
+            SymmetricOrdering::Custom(PermRef::new_checked(&order, &inverse, n)),
             params,
         )
         .map_err(|_| SolverError::OutOfMemory)?;
-        let permutation = match symbolic.perm() {
-            Some(perm) => perm.arrays().0.to_vec(),
-            None => (0..n).collect(),
-        };
+        let permutation = order;
         let mut structure = Self {
             n,
             permutation,
@@ -551,7 +585,10 @@ impl Structure {
         let (mut used, mut peak) = (0usize, 0usize);
         for &s in &postorder {
             let children = &self.children[self.supernodes[s].children.clone()];
-            used -= children.iter().map(|&child| update_len(child)).sum::<usize>();
+            used -= children
+                .iter()
+                .map(|&child| update_len(child))
+                .sum::<usize>();
             used += update_len(s);
             peak = peak.max(used);
         }
@@ -602,52 +639,6 @@ impl Structure {
 fn to_u32(value: usize) -> Result<u32, SolverError> {
     u32::try_from(value)
         .map_err(|_| SolverError::Malformed("the system is too large for 32-bit indices".into()))
-}
-
-/// The upper triangle of the pattern of `A + A^T` (with the diagonal),
-/// column-compressed: column offsets and sorted row indices.
-fn symmetric_upper_pattern(pattern: &SparsePattern) -> (Vec<usize>, Vec<usize>) {
-    let n = pattern.n;
-    let mut counts = vec![0usize; n + 1];
-    for row in 0..n {
-        counts[row + 1] += 1;
-        for &column in &pattern.columns[pattern.row_range(row)] {
-            if column != row {
-                counts[row.max(column) + 1] += 1;
-            }
-        }
-    }
-    for j in 0..n {
-        counts[j + 1] += counts[j];
-    }
-    let mut rows = vec![0usize; counts[n]];
-    let mut next = counts.clone();
-    for row in 0..n {
-        rows[next[row]] = row;
-        next[row] += 1;
-        for &column in &pattern.columns[pattern.row_range(row)] {
-            if column != row {
-                let (i, j) = (row.min(column), row.max(column));
-                rows[next[j]] = i;
-                next[j] += 1;
-            }
-        }
-    }
-    let mut offsets = Vec::with_capacity(n + 1);
-    offsets.push(0);
-    let mut compact = Vec::with_capacity(rows.len());
-    for j in 0..n {
-        let column = &mut rows[counts[j]..counts[j + 1]];
-        column.sort_unstable();
-        let start = compact.len();
-        for &i in column.iter() {
-            if compact.len() == start || compact.last() != Some(&i) {
-                compact.push(i);
-            }
-        }
-        offsets.push(compact.len());
-    }
-    (offsets, compact)
 }
 
 #[cfg(test)]
