@@ -79,18 +79,17 @@ impl SymmetricPattern {
     /// The classes of vertices with equal closed neighbourhoods: each
     /// vertex's class, and the members of each class.
     fn indistinguishable_classes(&self) -> (Vec<usize>, Classes) {
-        let n = self.len();
-        let mut class_of = vec![0; n];
+        let mut class_of = vec![0; self.len()];
         let mut representatives: Vec<usize> = Vec::new();
         let mut by_hash: FxHashMap<u64, Vec<usize>> = FxHashMap::default();
-        for vertex in 0..n {
+        for (vertex, class) in class_of.iter_mut().enumerate() {
             let neighbours = self.neighbours(vertex);
             let candidates = by_hash.entry(hash_of(neighbours)).or_default();
             let found = candidates
                 .iter()
                 .copied()
                 .find(|&class| self.neighbours(representatives[class]) == neighbours);
-            class_of[vertex] = found.unwrap_or_else(|| {
+            *class = found.unwrap_or_else(|| {
                 representatives.push(vertex);
                 candidates.push(representatives.len() - 1);
                 representatives.len() - 1
