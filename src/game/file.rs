@@ -236,14 +236,15 @@ pub(crate) fn distribution<K: AsRef<str>>(
     index: impl Fn(&str) -> Option<usize>,
 ) -> Result<Distribution, ModelError> {
     let mut d: Distribution = Vec::with_capacity(map.0.len());
-    distribution_into(map, at, kind, index, &mut d)?;
+    distribution_into(map, || at.clone(), kind, index, &mut d)?;
     Ok(d)
 }
 
-/// [`distribution`] appended to `out`; returns where it lies in `out`.
-fn distribution_into<K: AsRef<str>>(
+/// [`distribution`] appended to `out`; returns where it lies in `out`. The
+/// position `at` is built only for an error message.
+fn distribution_into<'f, K: AsRef<str>>(
     map: &UniqueMap<f64, K>,
-    at: &Located,
+    at: impl Fn() -> Located<'f>,
     kind: &str,
     index: impl Fn(&str) -> Option<usize>,
     out: &mut Distribution,
@@ -253,16 +254,19 @@ fn distribution_into<K: AsRef<str>>(
     for (name, p) in &map.0 {
         let (name, p) = (name.as_ref(), *p);
         let outcome =
-            index(name).ok_or_else(|| at.key(name).error(format!("unknown {kind} `{name}`")))?;
+            index(name).ok_or_else(|| at().key(name).error(format!("unknown {kind} `{name}`")))?;
         if !is_probability(p) {
-            check_probability(p, &at.key(name))?;
+            check_probability(p, &at().key(name))?;
         }
         out.push((outcome, p));
         total += p;
     }
     let d = &mut out[start..];
-    if let Some(total) = normalisation(total, d.len(), at)? {
-        d.iter_mut().for_each(|(_, p)| *p /= total);
+    let rounding_only = (total - 1.0).abs() <= d.len() as f64 * f64::EPSILON;
+    if !rounding_only {
+        if let Some(total) = normalisation(total, d.len(), &at())? {
+            d.iter_mut().for_each(|(_, p)| *p /= total);
+        }
     }
     if d.iter().any(|&(_, p)| p <= 0.0) {
         let mut kept = start;
@@ -733,9 +737,9 @@ impl<'a, 'r> Builder<'a, 'r> {
             let s = self
                 .state(state)
                 .ok_or_else(|| here.key(state).error(format!("unknown state `{}`", &**state)))?;
-            let d = distribution(dist, &here.key(state), "observation", |o| {
-                index.get(o).copied()
-            })?;
+            let mut d = Vec::with_capacity(dist.0.len());
+            let at_state = || here.key(state);
+            distribution_into(dist, at_state, "observation", |o| index.get(o).copied(), &mut d)?;
             observe[s] = Some(d);
         }
         let observe = observe
@@ -763,25 +767,22 @@ impl<'a, 'r> Builder<'a, 'r> {
     /// Resolves the wildcards of `transitions` into one distribution per triple.
     fn transitions(&self, raw: &[RawTransition], game: &mut Posg) -> Result<(), ModelError> {
         let at = self.at("transitions");
-        let mut keyed: FxHashMap<(usize, u32, u32), Entries> =
-            FxHashMap::with_capacity_and_hasher(raw.len(), Default::default());
+        let mut keys = Vec::with_capacity(raw.len());
         let mut nexts = Vec::with_capacity(raw.len());
         let mut next_entries = Vec::with_capacity(raw.len() * 4);
         for (i, t) in raw.iter().enumerate() {
-            let here = at.index(i);
+            let here = || at.index(i);
             let key = self.transition_key(t, &here, game)?;
-            keyed
-                .entry(key)
-                .and_modify(|e| e.add(i))
-                .or_insert(Entries(i, None));
+            keys.push((key, i));
             nexts.push(distribution_into(
                 &t.next,
-                &here.key("next"),
+                || here().key("next"),
                 "state",
                 |n| self.state(n),
                 &mut next_entries,
             )?);
         }
+        let keyed = Keyed::new(keys, game.states.len());
         let (nu, nv) = (game.defender.num_actions(), game.adversary.num_actions());
         let triples = [game.states.len(), nu, nv]
             .into_iter()
@@ -829,27 +830,28 @@ impl<'a, 'r> Builder<'a, 'r> {
 
     /// `(state, defender action or WILDCARD, adversary action or WILDCARD)`.
     /// In a POMDP the adversary's single action is always taken as named.
-    fn transition_key(
+    /// The entry's position `at` is built only for an error message.
+    fn transition_key<'f>(
         &self,
         t: &RawTransition,
-        at: &Located,
+        at: &dyn Fn() -> Located<'f>,
         game: &Posg,
     ) -> Result<(usize, u32, u32), ModelError> {
         let s = self.state(&t.state).ok_or_else(|| {
-            at.key("state")
+            at().key("state")
                 .error(format!("unknown state `{}`", &*t.state))
         })?;
-        let u = action_key(&t.defender, &game.defender, &at.key("defender"))?;
+        let u = action_key(&t.defender, &game.defender, || at().key("defender"))?;
         let v = match (t.adversary.as_deref(), game.has_adversary) {
-            (Some(v), true) => action_key(v, &game.adversary, &at.key("adversary"))?,
+            (Some(v), true) => action_key(v, &game.adversary, || at().key("adversary"))?,
             (None, true) => {
-                return Err(at.error(
+                return Err(at().error(
                     "`adversary` is required because the game has an adversary \
                      (use \"*\" for every action)",
                 ));
             }
             (Some(v), false) if v != ANY && v != POMDP_SYMBOL => {
-                return Err(at.key("adversary").error(format!(
+                return Err(at().key("adversary").error(format!(
                     "the game has no adversary: `adversary` must be omitted, \"*\" or \"_\", not `{v}`"
                 )));
             }
@@ -859,18 +861,42 @@ impl<'a, 'r> Builder<'a, 'r> {
     }
 }
 
-/// The first two entries of `transitions` with one key, in file order: all
-/// that [`resolve_triple`] needs to pick an entry or name an ambiguity.
-#[derive(Debug, Clone, Copy)]
-struct Entries(usize, Option<usize>);
+/// The entries of `transitions` by key `(state, defender action or
+/// WILDCARD, adversary action or WILDCARD)`: sorted by key and then by
+/// position in the file, with the range of each state, so that looking up a
+/// key is a binary search within its state's few entries.
+struct Keyed {
+    /// `((s, u, v), i)`: entry `i` of `transitions` has key `(s, u, v)`.
+    sorted: Vec<((usize, u32, u32), usize)>,
+    /// The entries of state `s` are `sorted[state_offsets[s]..state_offsets[s + 1]]`.
+    state_offsets: Vec<usize>,
+}
 
-impl Entries {
-    fn add(&mut self, i: usize) {
-        self.1.get_or_insert(i);
+impl Keyed {
+    /// `keys` in file order; every state is below `num_states`.
+    fn new(mut keys: Vec<((usize, u32, u32), usize)>, num_states: usize) -> Self {
+        keys.sort_unstable();
+        let mut state_offsets = Vec::with_capacity(num_states + 1);
+        state_offsets.push(0);
+        let mut next = 0;
+        for s in 0..num_states {
+            next += keys[next..].partition_point(|&((t, _, _), _)| t == s);
+            state_offsets.push(next);
+        }
+        Self {
+            sorted: keys,
+            state_offsets,
+        }
     }
 
-    fn iter(self) -> impl Iterator<Item = usize> {
-        std::iter::once(self.0).chain(self.1)
+    /// The entries with key `(s, a, b)`, in file order.
+    fn entries(&self, s: usize, a: u32, b: u32) -> impl Iterator<Item = usize> + '_ {
+        let of_state = &self.sorted[self.state_offsets[s]..self.state_offsets[s + 1]];
+        let start = of_state.partition_point(|&((_, u, v), _)| (u, v) < (a, b));
+        of_state[start..]
+            .iter()
+            .take_while(move |&&((_, u, v), _)| (u, v) == (a, b))
+            .map(|&(_, i)| i)
     }
 }
 
@@ -929,8 +955,13 @@ fn enabled(
     Ok(table)
 }
 
-/// A defender or adversary field of a transition: an action index or [`WILDCARD`].
-fn action_key(name: &str, player: &Player, at: &Located) -> Result<u32, ModelError> {
+/// A defender or adversary field of a transition: an action index or
+/// [`WILDCARD`]. The position `at` is built only for an error message.
+fn action_key<'f>(
+    name: &str,
+    player: &Player,
+    at: impl Fn() -> Located<'f>,
+) -> Result<u32, ModelError> {
     if name == ANY {
         return Ok(WILDCARD);
     }
@@ -939,7 +970,7 @@ fn action_key(name: &str, player: &Player, at: &Located) -> Result<u32, ModelErr
         .iter()
         .position(|a| a == name)
         .map(|u| u as u32)
-        .ok_or_else(|| at.error(format!("unknown action `{name}`")))
+        .ok_or_else(|| at().error(format!("unknown action `{name}`")))
 }
 
 /// Why no single transition entry applies to a triple.
@@ -966,7 +997,7 @@ impl Unresolved {
 
 /// The most specific entry for `(s, u, v)`: both actions named, else one, else none.
 fn resolve_triple(
-    keyed: &FxHashMap<(usize, u32, u32), Entries>,
+    keyed: &Keyed,
     s: usize,
     u: usize,
     v: usize,
@@ -980,8 +1011,7 @@ fn resolve_triple(
     for level in levels {
         let mut matches = level
             .iter()
-            .filter_map(|&(a, b)| keyed.get(&(s, a, b)))
-            .flat_map(|e| e.iter());
+            .flat_map(|&(a, b)| keyed.entries(s, a, b));
         if let Some(first) = matches.next() {
             return match matches.next() {
                 Some(second) => Err(Unresolved::Ambiguous(first.min(second), first.max(second))),
