@@ -31,7 +31,9 @@ pub fn is_binary(bytes: &[u8]) -> bool {
 /// reads it back to an equal [`Posg`].
 pub fn to_bytes(game: &Posg) -> Vec<u8> {
     let entries = game.transition_entries.len();
-    let mut out = Writer(Vec::with_capacity(64 + 16 * game.transition_offsets.len() + 12 * entries));
+    let mut out = Writer(Vec::with_capacity(
+        64 + 16 * game.transition_offsets.len() + 12 * entries,
+    ));
     out.0.extend_from_slice(&MAGIC);
     out.u32(FORMAT_VERSION as u32);
     match &game.name {
@@ -205,10 +207,7 @@ impl<'a> Reader<'a> {
         match self.u8(at)? {
             0 => Ok(false),
             1 => Ok(true),
-            b => Err(at.error(format!(
-                "byte {} is {b}, expected 0 or 1",
-                self.pos - 1
-            ))),
+            b => Err(at.error(format!("byte {} is {b}, expected 0 or 1", self.pos - 1))),
         }
     }
 
@@ -336,10 +335,9 @@ impl<'a> Reader<'a> {
             labels.push(label);
         }
         if let Some(p) = used.iter().position(|&u| !u) {
-            return Err(at_p.index(p).error(format!(
-                "proposition `{}` labels no state",
-                propositions[p]
-            )));
+            return Err(at_p
+                .index(p)
+                .error(format!("proposition `{}` labels no state", propositions[p])));
         }
         Ok((propositions, labels))
     }

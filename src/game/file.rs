@@ -331,7 +331,9 @@ impl<V: Serialize, K: Serialize> Serialize for UniqueMap<V, K> {
 
 struct UniqueMapVisitor<V, K>(PhantomData<(V, K)>);
 
-impl<'de, V: Deserialize<'de>, K: MapKey + Deserialize<'de>> Visitor<'de> for UniqueMapVisitor<V, K> {
+impl<'de, V: Deserialize<'de>, K: MapKey + Deserialize<'de>> Visitor<'de>
+    for UniqueMapVisitor<V, K>
+{
     type Value = UniqueMap<V, K>;
 
     fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
@@ -734,12 +736,19 @@ impl<'a, 'r> Builder<'a, 'r> {
         let here = at.key("observe");
         let mut observe: Vec<Option<Distribution>> = vec![None; num_states];
         for (state, dist) in &map.0 {
-            let s = self
-                .state(state)
-                .ok_or_else(|| here.key(state).error(format!("unknown state `{}`", &**state)))?;
+            let s = self.state(state).ok_or_else(|| {
+                here.key(state)
+                    .error(format!("unknown state `{}`", &**state))
+            })?;
             let mut d = Vec::with_capacity(dist.0.len());
             let at_state = || here.key(state);
-            distribution_into(dist, at_state, "observation", |o| index.get(o).copied(), &mut d)?;
+            distribution_into(
+                dist,
+                at_state,
+                "observation",
+                |o| index.get(o).copied(),
+                &mut d,
+            )?;
             observe[s] = Some(d);
         }
         let observe = observe
@@ -924,9 +933,9 @@ fn enabled(
     let mut table = vec![true; num_observations * num_actions];
     for (observation, actions) in &map.0 {
         let at_o = here.key(observation);
-        let o = *index.get(&**observation).ok_or_else(|| {
-            at_o.error(format!("unknown observation `{}`", &**observation))
-        })?;
+        let o = *index
+            .get(&**observation)
+            .ok_or_else(|| at_o.error(format!("unknown observation `{}`", &**observation)))?;
         if actions.is_empty() {
             return Err(at_o.error("an observation needs at least one enabled action"));
         }
@@ -996,12 +1005,7 @@ impl Unresolved {
 }
 
 /// The most specific entry for `(s, u, v)`: both actions named, else one, else none.
-fn resolve_triple(
-    keyed: &Keyed,
-    s: usize,
-    u: usize,
-    v: usize,
-) -> Result<usize, Unresolved> {
+fn resolve_triple(keyed: &Keyed, s: usize, u: usize, v: usize) -> Result<usize, Unresolved> {
     let (u, v) = (u as u32, v as u32);
     let levels: [&[(u32, u32)]; 3] = [
         &[(u, v)],
@@ -1009,9 +1013,7 @@ fn resolve_triple(
         &[(WILDCARD, WILDCARD)],
     ];
     for level in levels {
-        let mut matches = level
-            .iter()
-            .flat_map(|&(a, b)| keyed.entries(s, a, b));
+        let mut matches = level.iter().flat_map(|&(a, b)| keyed.entries(s, a, b));
         if let Some(first) = matches.next() {
             return match matches.next() {
                 Some(second) => Err(Unresolved::Ambiguous(first.min(second), first.max(second))),
