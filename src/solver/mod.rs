@@ -32,6 +32,8 @@ mod denormals;
 mod ilu;
 mod krylov;
 mod lu;
+mod multifrontal;
+mod ordering;
 
 use bound::ExpectedTime;
 pub use denormals::FlushDenormals;
