@@ -1,14 +1,16 @@
 //! Reading and writing games as `*.posg.json` (formats.md section 1).
 //!
 //! Reading is two passes. serde first parses the bytes into plain types that
-//! mirror the file (`RawGame` and friends, whose names borrow from the bytes):
-//! unknown fields, duplicate keys and wrong JSON types fail here, with the
-//! JSON path of the offending value (found by a second parse with
-//! [`serde_path_to_error`] only when the first fails). The second pass checks what JSON cannot say (names,
-//! distributions, the actions `enabled` per observation, the coverage of every
-//! `(s, u_def, u_adv)` triple whose actions some observation of `s` enables by
-//! the `"*"` wildcards) and builds the [`Posg`]. Every error is a [`ModelError`]
-//! whose path is `FILE: JSON.path`, e.g. `grid.posg.json: transitions[17].next.s9`.
+//! mirror the file (`RawGame` and friends, whose names borrow from the
+//! bytes): unknown fields, duplicate keys and wrong JSON types fail here,
+//! with the JSON path of the offending value (found by a second parse with
+//! [`serde_path_to_error`] only when the first fails). The second pass
+//! checks what JSON cannot say (names, distributions, the actions `enabled`
+//! per observation, the coverage of every `(s, u_def, u_adv)` triple whose
+//! actions some observation of `s` enables by the `"*"` wildcards) and
+//! builds the [`Posg`], building the JSON path of a value only for an error.
+//! Every error is a [`ModelError`] whose path is `FILE: JSON.path`, e.g.
+//! `grid.posg.json: transitions[17].next.s9`.
 //!
 //! The helpers shared with the controller files (`parse`, `Located`,
 //! `distribution`) live here too. [`read`] also reads the optional binary
