@@ -8,17 +8,22 @@
 //! prints one CSV row (`experiments/lu-ordering/run.py` collects them):
 //!
 //! * ORDERING: `colamd` (faer's, on the columns of `A`), `amd` (approximate
-//!   minimum degree on `A + A^T`), `natural` (the GMC's state order);
+//!   minimum degree on `A + A^T`), `natural` (the GMC's state order), `auto`
+//!   (only with `multifrontal`: the order [`LuSolver`] picks, the cheaper of
+//!   AMD and nested dissection on the compressed graph of `A + A^T`);
 //! * FACTORISATION: `faer` (faer's own symbolic analysis: always COLAMD),
 //!   `supernodal` (faer's supernodal LU with the given column order: its
 //!   structure is the Cholesky factor of `A^T A`, a bound for any row
 //!   pivoting), `simplicial` (faer's left-looking LU: the fill it actually
-//!   produces).
+//!   produces), `multifrontal` (posg-fsc's own [`LuSolver`]: multifrontal,
+//!   no pivoting, on the pattern of `A + A^T`).
 //!
-//! Fill: the exact `nnz(L) + nnz(U)` for `simplicial`; for `supernodal` and
-//! `faer` the sum of the column counts of the `A^T A` Cholesky factor that
-//! the supernodal structure is built from (`L` and `U` each hold about that
-//! many entries), and the memory the numeric factorisation added.
+//! Fill: the exact `nnz(L) + nnz(U)` for `simplicial`; the entries
+//! `multifrontal` stores (dense supernode blocks counted whole,
+//! [`LuSolver::factor_entries`]); for `supernodal` and `faer` the sum of
+//! the column counts of the `A^T A` Cholesky factor that the supernodal
+//! structure is built from (`L` and `U` each hold about that many
+//! entries); and the memory the numeric factorisation added.
 
 use std::time::Instant;
 
@@ -53,8 +58,7 @@ struct Row {
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
-    let usage =
-        "usage: lu_ordering SIDE colamd|amd|natural faer|supernodal|simplicial|multifrontal";
+    let usage = "usage: lu_ordering SIDE colamd|amd|natural supernodal|simplicial, SIDE colamd faer or SIDE auto multifrontal";
     let (Some(side), Some(ordering), Some(factorisation)) = (
         args.get(1).and_then(|s| s.parse::<usize>().ok()),
         args.get(2),
@@ -77,7 +81,7 @@ fn main() {
     let mut x = b.clone();
     let row = match (ordering.as_str(), factorisation.as_str()) {
         ("colamd", "faer") => faer_default(a, &mut x),
-        ("amd", "multifrontal") => multifrontal_lu(&system, &mut x),
+        ("auto", "multifrontal") => multifrontal_lu(&system, &mut x),
         (ordering, "supernodal" | "simplicial") => {
             let start = Instant::now();
             let (perm, inverse) = column_order(a, ordering).unwrap_or_else(|| {
@@ -157,8 +161,9 @@ fn transient_system(side: usize) -> System {
     }
 }
 
-/// posg-fsc's own LU ([`LuSolver`]): AMD on `A + A^T`, multifrontal, no
-/// pivoting; the analysis (ordering included) is the symbolic time.
+/// posg-fsc's own LU ([`LuSolver`]): its own ordering of `A + A^T`,
+/// multifrontal, no pivoting; the analysis (ordering included) is the
+/// symbolic time.
 fn multifrontal_lu(system: &System, x: &mut [f64]) -> Row {
     let pattern = SparsePattern {
         n: system.n,
