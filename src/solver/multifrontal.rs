@@ -599,40 +599,68 @@ impl Structure {
     /// Where each entry of `P A P^T` goes: into the front of the supernode
     /// owning the smaller of its row and column.
     fn assemble_map(&mut self, pattern: &SparsePattern) -> Result<(), SolverError> {
+        let grouped = self.entries_by_owner(pattern)?;
+        let mut local = vec![usize::MAX; self.n];
+        self.assembly = Vec::with_capacity(grouped.len());
+        for node in &self.supernodes {
+            let rows = &self.rows[node.rows.clone()];
+            for (position, index) in (node.begin..node.end)
+                .chain(rows.iter().copied())
+                .enumerate()
+            {
+                local[index] = position;
+            }
+            let front_rows = node.columns() + rows.len();
+            let in_front = |index: usize| {
+                let position = local[index];
+                let owned = match position.checked_sub(node.columns()) {
+                    None => node.begin + position == index,
+                    Some(below) => rows.get(below) == Some(&index),
+                };
+                owned.then_some(position)
+            };
+            for &(i, j, k) in &grouped[node.assembly.clone()] {
+                let missing = || SolverError::Malformed("an entry misses its front".into());
+                let row = in_front(i as usize).ok_or_else(missing)?;
+                let column = in_front(j as usize).ok_or_else(missing)?;
+                self.assembly.push((k, to_u32(row + front_rows * column)?));
+            }
+        }
+        Ok(())
+    }
+
+    /// The entries `(i, j, k)` of `P A P^T` (row, column, index into `A`'s
+    /// values) grouped by the supernode owning `min(i, j)`; sets each
+    /// supernode's [`Supernode::assembly`] range.
+    fn entries_by_owner(
+        &mut self,
+        pattern: &SparsePattern,
+    ) -> Result<Vec<(u32, u32, u32)>, SolverError> {
         let owner = self.owners();
         let mut inverse = vec![0; self.n];
         for (new, &old) in self.permutation.iter().enumerate() {
             inverse[old] = new;
         }
         let mut counts = vec![0usize; self.supernodes.len() + 1];
-        let entry_owner = |row: usize, k: usize| {
-            let (i, j) = (inverse[row], inverse[pattern.columns[k]]);
-            (i, j, owner[i.min(j)])
-        };
         for row in 0..self.n {
-            for k in pattern.row_range(row) {
-                counts[entry_owner(row, k).2 + 1] += 1;
+            for &column in &pattern.columns[pattern.row_range(row)] {
+                counts[owner[inverse[row].min(inverse[column])] + 1] += 1;
             }
         }
         for s in 0..self.supernodes.len() {
             counts[s + 1] += counts[s];
             self.supernodes[s].assembly = counts[s]..counts[s + 1];
         }
-        self.assembly = vec![(0, 0); pattern.nnz()];
+        let mut grouped = vec![(0, 0, 0); pattern.nnz()];
         for row in 0..self.n {
             for k in pattern.row_range(row) {
-                let (i, j, s) = entry_owner(row, k);
-                let node = &self.supernodes[s];
-                let missing = || SolverError::Malformed("an entry misses its front".into());
-                let local_row = self.front_position(node, i).ok_or_else(missing)?;
-                let local_column = self.front_position(node, j).ok_or_else(missing)?;
-                let front_rows = node.columns() + node.rows.len();
-                self.assembly[counts[s]] =
-                    (to_u32(k)?, to_u32(local_row + front_rows * local_column)?);
-                counts[s] += 1;
+                let (i, j) = (inverse[row], inverse[pattern.columns[k]]);
+                let slot = &mut counts[owner[i.min(j)]];
+                grouped[*slot] = (to_u32(i)?, to_u32(j)?, to_u32(k)?);
+                *slot += 1;
             }
         }
-        Ok(())
+        Ok(grouped)
     }
 }
 
