@@ -27,7 +27,7 @@ use thiserror::Error;
 use crate::automaton::Dra;
 use crate::controller::{Fsc, Probabilities, Support};
 use crate::game::Posg;
-use crate::solver::{FlushDenormals, LinearSolver, SparsePattern};
+use crate::solver::{FlushDenormals, LinearSolver};
 
 pub use crate::analysis::{Bscc, Recurrence, StateClass};
 pub use crate::product::{Gmc, GmcState, ProductError};
@@ -35,7 +35,7 @@ pub use crate::sensitivity::{ForwardGradient, ForwardSensitivities};
 pub use crate::simulate::{Estimate, STEP_LIMIT, SimulationError, SimulationSettings, simulate};
 pub use crate::solver::{
     DEFAULT_LU_LIMIT, DEFAULT_TOLERANCE, LuSolver, SolveReport, SolverError, SolverMethod,
-    SolverSettings,
+    SolverSettings, SparsePattern,
 };
 pub use gradient::{GradientPass, PARALLEL_GRADIENT_ROWS};
 pub(crate) use gradient::{RowWorkspace, row_derivatives};

@@ -75,7 +75,7 @@ fn every_help_citation_points_to_an_existing_section_in_docs() {
 fn the_documents_have_their_numbered_sections() {
     assert_eq!(
         sections("formats.md"),
-        (1..=10).map(|n| n.to_string()).collect::<Vec<_>>()
+        (1..=11).map(|n| n.to_string()).collect::<Vec<_>>()
     );
     assert_eq!(
         sections("method.md"),

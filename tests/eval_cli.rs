@@ -60,7 +60,7 @@ fn eval_with_gradient_reports_the_norms_of_the_adjoint_gradient() {
     assert!(report["phase_seconds"]["factorise_and_solve"].is_null());
     assert_eq!(report["solver"], "lu");
     assert_eq!(
-        report["solver_reason"], "auto: lu, 1 unknowns, at most the LU limit 50000",
+        report["solver_reason"], "auto: lu, 1 unknowns, at most the LU limit 500000",
         "{report}"
     );
     std::fs::remove_dir_all(&dir).unwrap();

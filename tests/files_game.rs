@@ -173,6 +173,20 @@ fn missing_file_is_an_error_naming_it() {
 }
 
 #[test]
+fn a_file_that_is_not_utf8_is_an_error_naming_it() {
+    let path =
+        std::env::temp_dir().join(format!("posg-fsc-latin1-{}.posg.json", std::process::id()));
+    std::fs::write(&path, b"{\"posg\": 1, \"name\": \"caf\xe9\"}").unwrap();
+    let e = read(&path).unwrap_err();
+    std::fs::remove_file(&path).unwrap();
+    assert_eq!(e.path, path.display().to_string());
+    assert_eq!(
+        e.message,
+        "cannot read the file: stream did not contain valid UTF-8"
+    );
+}
+
+#[test]
 fn shipped_example_files_are_valid() {
     let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/valid");
     for entry in std::fs::read_dir(dir).unwrap() {

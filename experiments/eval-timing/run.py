@@ -6,7 +6,11 @@ it need, on 16x16, 64x64 and 128x128 grids with 2-node uniform controllers
 for both players? Writes results/eval-timing.csv (one row per grid and
 repetition) and prints the medians.
 
-Usage: python3 experiments/eval-timing/run.py [--repeats 3]
+The grids are written in the fastest form the tool reads (`--form binary`,
+the default: `example grid --binary`, docs/formats.md section 11; `--form
+json` for the pretty-printed JSON); the CSV header records the form.
+
+Usage: python3 experiments/eval-timing/run.py [--repeats 3] [--form binary|json]
 """
 import argparse
 import csv
@@ -26,12 +30,16 @@ def build():
     subprocess.run(["cargo", "build", "--release", "--quiet"], cwd=ROOT, check=True)
 
 
-def make_grid(size, path):
+# The game file's form: (`example grid` options, file extension).
+FORMS = {"binary": (["--binary"], "posg.bin"), "json": ([], "posg.json")}
+
+
+def make_grid(size, path, form):
     cells = size * size
     subprocess.run(
         [BINARY, "example", "grid", "--width", str(size), "--height", str(size),
          "--unsafe", "none", "--goal", f"s{cells - 1}", "--random-unsafe", str(max(1, cells // 20)),
-         "--seed", "1", "--out", path],
+         "--seed", "1", *FORMS[form][0], "--out", path],
         check=True)
 
 
@@ -51,13 +59,15 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--sizes", type=int, nargs="+", default=[16, 64, 128])
+    parser.add_argument("--form", choices=sorted(FORMS), default="binary",
+                        help="the game file's form (binary: docs/formats.md section 11)")
     args = parser.parse_args()
     build()
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         for size in args.sizes:
-            game = os.path.join(tmp, f"grid{size}.posg.json")
-            make_grid(size, game)
+            game = os.path.join(tmp, f"grid{size}.{FORMS[args.form][1]}")
+            make_grid(size, game, args.form)
             for repeat in range(args.repeats):
                 report, wall, peak_gib = timed_eval(game)
                 rows.append({"grid": f"{size}x{size}", "repeat": repeat, "gmc_states": report["gmc_states"],
@@ -67,7 +77,8 @@ def main():
                              "process_seconds": wall, "peak_gib": peak_gib})
     out = os.path.join(ROOT, "results", "eval-timing.csv")
     with open(out, "w", newline="") as handle:
-        handle.write(f"# {' '.join(sys.argv)}; formula '{FORMULA}', defender uniform:2, adversary uniform:2\n")
+        handle.write(f"# {' '.join(sys.argv)}; game form {args.form} (*.{FORMS[args.form][1]}); "
+                     f"formula '{FORMULA}', defender uniform:2, adversary uniform:2\n")
         writer = csv.DictWriter(handle, fieldnames=list(rows[0]))
         writer.writeheader()
         writer.writerows(rows)

@@ -8,7 +8,10 @@ sparse LU in sound mode: experiments/storm-check/recipe.py) of the same
 chain? Both compute the same value (checked to 1e-8).
 
 For each grid size it writes the paper's grid family (`example grid`,
-unsafe cell (1, 1), goal in the far corner), runs `eval` with 2-node uniform
+unsafe cell (1, 1), goal in the far corner) in the fastest form the tool
+reads (`--form binary`, the default: `example grid --binary`, the
+`*.posg.bin` of docs/formats.md section 11; `--form json` for the
+pretty-printed JSON), runs `eval` with 2-node uniform
 controllers for both players (`!unsafe U goal`) `--repeats` times under
 `/usr/bin/time` (user + system CPU of the process, wall, peak RSS), exports
 the chain once, and runs Storm's check `--repeats` times, each in a fresh
@@ -19,6 +22,7 @@ the posg-fsc version and the Storm settings in the header) and prints the
 ratio eval CPU / Storm CPU.
 
 Usage: pip install stormpy; python3 experiments/storm-timing/run.py [--sizes 96] [--repeats 3]
+       [--form binary|json]
 """
 import argparse
 import csv
@@ -62,15 +66,20 @@ def run_timed(command):
     return done.stdout, user + system, wall, peak_kib / 1024 / 1024
 
 
-def make_grid(binary, size, path):
+# The game file's form: (`example grid` options, file extension).
+FORMS = {"binary": (["--binary"], "posg.bin"), "json": ([], "posg.json")}
+
+
+def make_grid(binary, size, path, form):
     subprocess.run([binary, "example", "grid", "--width", str(size), "--height", str(size),
-                    "--unsafe", f"s{size + 1}", "--goal", f"s{size * size - 1}", "--out", path],
+                    "--unsafe", f"s{size + 1}", "--goal", f"s{size * size - 1}", *FORMS[form][0],
+                    "--out", path],
                    check=True)
 
 
-def measure(binary, size, repeats, tmp):
-    game = os.path.join(tmp, f"grid{size}.posg.json")
-    make_grid(binary, size, game)
+def measure(binary, size, repeats, tmp, form):
+    game = os.path.join(tmp, f"grid{size}.{FORMS[form][1]}")
+    make_grid(binary, size, game, form)
     evals = []
     for _ in range(repeats):
         out, cpu, wall, peak = run_timed([binary, "eval", game, "--ltl", FORMULA, *CONTROLLERS])
@@ -109,6 +118,8 @@ def main():
     parser.add_argument("--binary", default=os.path.join(ROOT, "target", "release", "posg-fsc"))
     parser.add_argument("--sizes", type=int, nargs="+", default=[96])
     parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--form", choices=sorted(FORMS), default="binary",
+                        help="the game file's form (binary: docs/formats.md section 11)")
     parser.add_argument("--out", default=os.path.join(ROOT, "results", "storm-timing.csv"))
     args = parser.parse_args()
     if args.binary == os.path.join(ROOT, "target", "release", "posg-fsc"):
@@ -117,9 +128,10 @@ def main():
                              check=True).stdout.strip()
     import stormpy
     with tempfile.TemporaryDirectory() as tmp:
-        rows = [measure(args.binary, size, args.repeats, tmp) for size in args.sizes]
+        rows = [measure(args.binary, size, args.repeats, tmp, args.form) for size in args.sizes]
     with open(args.out, "w", newline="") as handle:
         handle.write(f"# {' '.join(sys.argv)}; {version}; stormpy {stormpy.__version__}; "
+                     f"game form {args.form} (*.{FORMS[args.form][1]}; game_mib is its size); "
                      f"formula '{FORMULA}', {' '.join(CONTROLLERS)}; Storm: {STORM_SETTINGS}; "
                      f"medians of {args.repeats} runs; CPU = user + system\n")
         writer = csv.DictWriter(handle, fieldnames=list(rows[0]))

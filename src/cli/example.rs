@@ -1,4 +1,5 @@
-//! `posg-fsc example`: built-in example games, written as *.posg.json.
+//! `posg-fsc example`: built-in example games, written as *.posg.json (or,
+//! with `--binary`, as *.posg.bin).
 
 use std::path::PathBuf;
 
@@ -71,6 +72,10 @@ struct GridArgs {
     /// Write the game here instead of standard output.
     #[arg(long)]
     out: Option<PathBuf>,
+    /// Write the binary form `*.posg.bin` (docs/formats.md section 11), which
+    /// every command reads like the JSON file and much faster; needs --out.
+    #[arg(long, requires = "out")]
+    binary: bool,
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -134,6 +139,10 @@ pub fn run(args: ExampleArgs) -> anyhow::Result<()> {
         }),
     };
     let game = spec.build()?;
+    if grid.binary {
+        let path = grid.out.expect("clap requires --out with --binary");
+        return Ok(posg_fsc::game::binary::write(&path, &game)?);
+    }
     let text = posg_fsc::game::file::to_json_string(&game);
     match grid.out {
         Some(path) => {

@@ -1,19 +1,26 @@
 //! Reading and writing games as `*.posg.json` (formats.md section 1).
 //!
-//! Reading is two passes. [`serde_path_to_error`] first parses the text into
-//! plain serde types that mirror the file (`RawGame` and friends): unknown
-//! fields, duplicate keys and wrong JSON types fail here, with the JSON path
-//! of the offending value. The second pass checks what JSON cannot say (names,
-//! distributions, the actions `enabled` per observation, the coverage of every
-//! `(s, u_def, u_adv)` triple whose actions some observation of `s` enables by
-//! the `"*"` wildcards) and builds the [`Posg`]. Every error is a [`ModelError`]
-//! whose path is `FILE: JSON.path`, e.g. `grid.posg.json: transitions[17].next.s9`.
+//! Reading is two passes. serde first parses the bytes into plain types that
+//! mirror the file (`RawGame` and friends, whose names borrow from the
+//! bytes): unknown fields, duplicate keys and wrong JSON types fail here,
+//! with the JSON path of the offending value (found by a second parse with
+//! [`serde_path_to_error`] only when the first fails). The second pass
+//! checks what JSON cannot say (names, distributions, the actions `enabled`
+//! per observation, the coverage of every `(s, u_def, u_adv)` triple whose
+//! actions some observation of `s` enables by the `"*"` wildcards) and
+//! builds the [`Posg`], building the JSON path of a value only for an error.
+//! Every error is a [`ModelError`] whose path is `FILE: JSON.path`, e.g.
+//! `grid.posg.json: transitions[17].next.s9`.
 //!
 //! The helpers shared with the controller files (`parse`, `Located`,
-//! `distribution`) live here too.
+//! `distribution`) live here too. [`read`] also reads the optional binary
+//! form of [`super::binary`] (formats.md section 11), told apart by its magic bytes.
 
+use std::borrow::Cow;
 use std::fmt;
+use std::hash::Hash;
 use std::marker::PhantomData;
+use std::ops::{Deref, Range};
 use std::path::Path;
 
 use crate::limits;
@@ -27,18 +34,43 @@ use super::{AdversaryAction, DefenderAction, Distribution, ModelError, Player, P
 /// The only format version this crate reads and writes (`"posg": 1`).
 pub const FORMAT_VERSION: u64 = 1;
 
-/// Reads and validates the game file at `path` (formats.md section 1).
+/// Reads and validates the game file at `path`: JSON (formats.md section 1)
+/// or, when the file starts with [`super::binary::MAGIC`], the binary form
+/// (formats.md section 11).
 pub fn read(path: &Path) -> Result<Posg, ModelError> {
     let file_name = path.display().to_string();
-    let text = read_text(path, &file_name)?;
-    from_json_str(&text, &file_name)
+    let bytes = std::fs::read(path)
+        .map_err(|e| ModelError::new(&file_name, format!("cannot read the file: {e}")))?;
+    if super::binary::is_binary(&bytes) {
+        super::binary::from_bytes(&bytes, &file_name)
+    } else {
+        from_json_slice(&bytes, &file_name)
+    }
 }
 
 /// Parses and validates a game from JSON `text` (formats.md section 1);
 /// `file_name` prefixes the path of every error.
 pub fn from_json_str(text: &str, file_name: &str) -> Result<Posg, ModelError> {
-    let raw: RawGame = parse(text, file_name)?;
-    Builder::new(file_name).build(raw)
+    from_json_slice(text.as_bytes(), file_name)
+}
+
+/// [`from_json_str`] on the bytes of a file. Bytes that are not UTF-8 give
+/// the error of [`read_text`] ("cannot read the file: ...").
+pub fn from_json_slice(bytes: &[u8], file_name: &str) -> Result<Posg, ModelError> {
+    let raw: RawGame = match serde_json::from_slice(bytes) {
+        Ok(raw) => raw,
+        Err(_) => {
+            let text = std::str::from_utf8(bytes).map_err(|_| {
+                let e = std::io::Error::new(
+                    std::io::ErrorKind::InvalidData,
+                    "stream did not contain valid UTF-8",
+                );
+                ModelError::new(file_name, format!("cannot read the file: {e}"))
+            })?;
+            parse_tracking_paths(text, file_name)?
+        }
+    };
+    Builder::new(file_name, &raw).build()
 }
 
 /// The game as pretty-printed JSON that [`from_json_str`] reads back to an
@@ -64,7 +96,12 @@ pub(crate) fn read_text(path: &Path, file_name: &str) -> Result<String, ModelErr
 
 /// Writes a whole file; an I/O failure becomes a [`ModelError`] on the file.
 pub(crate) fn write_text(path: &Path, text: &str) -> Result<(), ModelError> {
-    std::fs::write(path, text).map_err(|e| {
+    write_bytes(path, text.as_bytes())
+}
+
+/// [`write_text`] for bytes.
+pub(crate) fn write_bytes(path: &Path, bytes: &[u8]) -> Result<(), ModelError> {
+    std::fs::write(path, bytes).map_err(|e| {
         ModelError::new(
             path.display().to_string(),
             format!("cannot write the file: {e}"),
@@ -89,8 +126,8 @@ pub(crate) fn parse<T: for<'de> Deserialize<'de>>(
 }
 
 /// [`parse`] with the JSON path of every value tracked, for its error message.
-fn parse_tracking_paths<T: for<'de> Deserialize<'de>>(
-    text: &str,
+fn parse_tracking_paths<'de, T: Deserialize<'de>>(
+    text: &'de str,
     file_name: &str,
 ) -> Result<T, ModelError> {
     let mut json = serde_json::Deserializer::from_str(text);
@@ -180,7 +217,11 @@ pub(crate) fn normalise(weights: &mut [f64], at: &Located) -> Result<(), ModelEr
 /// The check of [`normalise`] on the sum `total` of `len` weights: an error
 /// when it is not 1 within [`super::DISTRIBUTION_TOLERANCE`], `Some(total)` when the weights must be
 /// divided by it, `None` when they sum to 1 up to rounding (kept bit for bit).
-fn normalisation(total: f64, len: usize, at: &Located) -> Result<Option<f64>, ModelError> {
+pub(super) fn normalisation(
+    total: f64,
+    len: usize,
+    at: &Located,
+) -> Result<Option<f64>, ModelError> {
     let shown = (total * 1e9).round() / 1e9 + 0.0;
     super::check_total(total, shown, "probabilities").map_err(|message| at.error(message))?;
     Ok(((total - 1.0).abs() > len as f64 * f64::EPSILON).then_some(total))
@@ -190,28 +231,60 @@ fn normalisation(total: f64, len: usize, at: &Located) -> Result<Option<f64>, Mo
 /// `index` (`kind` names them in errors, e.g. "state"): checked, renormalised,
 /// zero entries dropped, sorted by outcome (so the order of keys in the file
 /// does not matter). Positions in `at` are built only for an error message.
-pub(crate) fn distribution(
-    map: &UniqueMap<f64>,
+pub(crate) fn distribution<K: AsRef<str>>(
+    map: &UniqueMap<f64, K>,
     at: &Located,
     kind: &str,
     index: impl Fn(&str) -> Option<usize>,
 ) -> Result<Distribution, ModelError> {
     let mut d: Distribution = Vec::with_capacity(map.0.len());
-    for &(ref name, p) in &map.0 {
-        let outcome =
-            index(name).ok_or_else(|| at.key(name).error(format!("unknown {kind} `{name}`")))?;
-        if !is_probability(p) {
-            check_probability(p, &at.key(name))?;
-        }
-        d.push((outcome, p));
-    }
-    let total: f64 = d.iter().map(|&(_, p)| p).sum();
-    if let Some(total) = normalisation(total, d.len(), at)? {
-        d.iter_mut().for_each(|(_, p)| *p /= total);
-    }
-    d.retain(|&(_, p)| p > 0.0);
-    d.sort_unstable_by_key(|&(o, _)| o);
+    distribution_into(map, || at.clone(), kind, index, &mut d)?;
     Ok(d)
+}
+
+/// [`distribution`] appended to `out`; returns where it lies in `out`. The
+/// position `at` is built only for an error message.
+fn distribution_into<'f, K: AsRef<str>>(
+    map: &UniqueMap<f64, K>,
+    at: impl Fn() -> Located<'f>,
+    kind: &str,
+    index: impl Fn(&str) -> Option<usize>,
+    out: &mut Distribution,
+) -> Result<Range<usize>, ModelError> {
+    let start = out.len();
+    let mut total = 0.0;
+    for (name, p) in &map.0 {
+        let (name, p) = (name.as_ref(), *p);
+        let outcome =
+            index(name).ok_or_else(|| at().key(name).error(format!("unknown {kind} `{name}`")))?;
+        if !is_probability(p) {
+            check_probability(p, &at().key(name))?;
+        }
+        out.push((outcome, p));
+        total += p;
+    }
+    let d = &mut out[start..];
+    let rounding_only = (total - 1.0).abs() <= d.len() as f64 * f64::EPSILON;
+    if !rounding_only {
+        if let Some(total) = normalisation(total, d.len(), &at())? {
+            d.iter_mut().for_each(|(_, p)| *p /= total);
+        }
+    }
+    if d.iter().any(|&(_, p)| p <= 0.0) {
+        let mut kept = start;
+        for i in start..out.len() {
+            if out[i].1 > 0.0 {
+                out[kept] = out[i];
+                kept += 1;
+            }
+        }
+        out.truncate(kept);
+    }
+    let d = &mut out[start..];
+    if !d.is_sorted_by_key(|&(o, _)| o) {
+        d.sort_unstable_by_key(|&(o, _)| o);
+    }
+    Ok(start..out.len())
 }
 
 /// Whether `name` is a valid state, action or observation name: `[A-Za-z0-9_.:-]+`.
@@ -232,17 +305,23 @@ pub(crate) fn is_valid_proposition(name: &str) -> bool {
 }
 
 /// A JSON object as its members in file order, read with duplicate keys
-/// rejected (serde_json alone would silently keep the last one).
+/// rejected (serde_json alone would silently keep the last one). The keys
+/// are `K`: owned strings, or [`Name`]s borrowed from the parsed bytes.
 #[derive(Debug, Clone, PartialEq)]
-pub(crate) struct UniqueMap<V>(pub(crate) Vec<(String, V)>);
+pub(crate) struct UniqueMap<V, K = String>(pub(crate) Vec<(K, V)>);
 
-impl<'de, V: Deserialize<'de>> Deserialize<'de> for UniqueMap<V> {
+/// The key types of a [`UniqueMap`].
+pub(crate) trait MapKey: AsRef<str> + Eq + Hash + Clone {}
+
+impl<K: AsRef<str> + Eq + Hash + Clone> MapKey for K {}
+
+impl<'de, V: Deserialize<'de>, K: MapKey + Deserialize<'de>> Deserialize<'de> for UniqueMap<V, K> {
     fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
         deserializer.deserialize_map(UniqueMapVisitor(PhantomData))
     }
 }
 
-impl<V: Serialize> Serialize for UniqueMap<V> {
+impl<V: Serialize, K: Serialize> Serialize for UniqueMap<V, K> {
     fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
         let mut map = serializer.serialize_map(Some(self.0.len()))?;
         for (key, value) in &self.0 {
@@ -252,10 +331,12 @@ impl<V: Serialize> Serialize for UniqueMap<V> {
     }
 }
 
-struct UniqueMapVisitor<V>(PhantomData<V>);
+struct UniqueMapVisitor<V, K>(PhantomData<(V, K)>);
 
-impl<'de, V: Deserialize<'de>> Visitor<'de> for UniqueMapVisitor<V> {
-    type Value = UniqueMap<V>;
+impl<'de, V: Deserialize<'de>, K: MapKey + Deserialize<'de>> Visitor<'de>
+    for UniqueMapVisitor<V, K>
+{
+    type Value = UniqueMap<V, K>;
 
     fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
         f.write_str("a JSON object")
@@ -264,7 +345,7 @@ impl<'de, V: Deserialize<'de>> Visitor<'de> for UniqueMapVisitor<V> {
     fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<Self::Value, A::Error> {
         let mut entries = Vec::new();
         let mut seen = None;
-        while let Some(key) = map.next_key::<String>()? {
+        while let Some(key) = map.next_key::<K>()? {
             if is_repeated(&entries, &mut seen, &key) {
                 map.next_value_seed(Duplicate)?;
             }
@@ -280,18 +361,14 @@ const SMALL_OBJECT: usize = 16;
 
 /// Whether `key` is already among the keys of `entries`; `seen` holds those
 /// keys as a set once the object outgrows [`SMALL_OBJECT`].
-fn is_repeated<V>(
-    entries: &[(String, V)],
-    seen: &mut Option<FxHashSet<String>>,
-    key: &str,
-) -> bool {
+fn is_repeated<V, K: MapKey>(entries: &[(K, V)], seen: &mut Option<FxHashSet<K>>, key: &K) -> bool {
     if let Some(set) = seen {
-        return !set.insert(key.to_string());
+        return !set.insert(key.clone());
     }
     let repeated = entries.iter().any(|(k, _)| k == key);
     if entries.len() >= SMALL_OBJECT {
         let keys = entries.iter().map(|(k, _)| k.clone());
-        *seen = Some(keys.chain(std::iter::once(key.to_string())).collect());
+        *seen = Some(keys.chain(std::iter::once(key.clone())).collect());
     }
     repeated
 }
@@ -320,50 +397,128 @@ impl<'de> Visitor<'de> for Duplicate {
     }
 }
 
+/// A JSON string borrowed from the parsed bytes when it has no escapes,
+/// else unescaped into an owned string (names, keys and actions).
+#[derive(Debug, Clone, PartialEq, Eq, Hash)]
+pub(crate) struct Name<'a>(Cow<'a, str>);
+
+impl Deref for Name<'_> {
+    type Target = str;
+
+    fn deref(&self) -> &str {
+        &self.0
+    }
+}
+
+impl AsRef<str> for Name<'_> {
+    fn as_ref(&self) -> &str {
+        &self.0
+    }
+}
+
+impl<'a> From<&'a str> for Name<'a> {
+    fn from(name: &'a str) -> Self {
+        Name(Cow::Borrowed(name))
+    }
+}
+
+impl<'de: 'a, 'a> Deserialize<'de> for Name<'a> {
+    fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        deserializer.deserialize_str(NameVisitor)
+    }
+}
+
+impl Serialize for Name<'_> {
+    fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        serializer.serialize_str(&self.0)
+    }
+}
+
+struct NameVisitor;
+
+impl<'de> Visitor<'de> for NameVisitor {
+    type Value = Name<'de>;
+
+    fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        f.write_str("a string")
+    }
+
+    fn visit_borrowed_str<E: de::Error>(self, value: &'de str) -> Result<Name<'de>, E> {
+        Ok(Name(Cow::Borrowed(value)))
+    }
+
+    fn visit_str<E: de::Error>(self, value: &str) -> Result<Name<'de>, E> {
+        Ok(Name(Cow::Owned(value.to_string())))
+    }
+
+    fn visit_string<E: de::Error>(self, value: String) -> Result<Name<'de>, E> {
+        Ok(Name(Cow::Owned(value)))
+    }
+}
+
+/// Owned copies of borrowed names.
+fn owned(names: &[Name]) -> Vec<String> {
+    names.iter().map(|n| n.to_string()).collect()
+}
+
+/// Borrowed names of owned strings (for writing).
+fn borrowed(names: &[String]) -> Vec<Name<'_>> {
+    names.iter().map(|n| Name::from(n.as_str())).collect()
+}
+
 /// The top-level object of a `*.posg.json` file.
 #[derive(Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
-struct RawGame {
+struct RawGame<'a> {
     posg: u64,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    name: Option<String>,
-    states: Vec<String>,
-    initial: UniqueMap<f64>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    labels: Option<UniqueMap<Vec<String>>>,
-    defender: RawPlayer,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    adversary: Option<RawPlayer>,
-    transitions: Vec<RawTransition>,
+    #[serde(default, skip_serializing_if = "Option::is_none", borrow)]
+    name: Option<Name<'a>>,
+    #[serde(borrow)]
+    states: Vec<Name<'a>>,
+    #[serde(borrow)]
+    initial: UniqueMap<f64, Name<'a>>,
+    #[serde(default, skip_serializing_if = "Option::is_none", borrow)]
+    labels: Option<UniqueMap<Vec<Name<'a>>, Name<'a>>>,
+    #[serde(borrow)]
+    defender: RawPlayer<'a>,
+    #[serde(default, skip_serializing_if = "Option::is_none", borrow)]
+    adversary: Option<RawPlayer<'a>>,
+    #[serde(borrow)]
+    transitions: Vec<RawTransition<'a>>,
 }
 
 /// `defender` or `adversary`.
 #[derive(Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
-struct RawPlayer {
-    actions: Vec<String>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    observations: Option<Vec<String>>,
-    observe: RawObserve,
+struct RawPlayer<'a> {
+    #[serde(borrow)]
+    actions: Vec<Name<'a>>,
+    #[serde(default, skip_serializing_if = "Option::is_none", borrow)]
+    observations: Option<Vec<Name<'a>>>,
+    #[serde(borrow)]
+    observe: RawObserve<'a>,
     /// Observation -> the actions enabled under it (formats.md section 6).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    enabled: Option<UniqueMap<Vec<String>>>,
+    #[serde(default, skip_serializing_if = "Option::is_none", borrow)]
+    enabled: Option<UniqueMap<Vec<Name<'a>>, Name<'a>>>,
 }
+
+/// A distribution over named outcomes, as a JSON object.
+type NamedDistribution<'a> = UniqueMap<f64, Name<'a>>;
 
 /// `observe`: `"full"` or state -> distribution over observations.
 #[derive(Debug)]
-enum RawObserve {
+enum RawObserve<'a> {
     Full,
-    Map(UniqueMap<UniqueMap<f64>>),
+    Map(UniqueMap<NamedDistribution<'a>, Name<'a>>),
 }
 
-impl<'de> Deserialize<'de> for RawObserve {
+impl<'de: 'a, 'a> Deserialize<'de> for RawObserve<'a> {
     fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
-        deserializer.deserialize_any(ObserveVisitor)
+        deserializer.deserialize_any(ObserveVisitor(PhantomData))
     }
 }
 
-impl Serialize for RawObserve {
+impl Serialize for RawObserve<'_> {
     fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
         match self {
             RawObserve::Full => serializer.serialize_str("full"),
@@ -372,16 +527,16 @@ impl Serialize for RawObserve {
     }
 }
 
-struct ObserveVisitor;
+struct ObserveVisitor<'a>(PhantomData<&'a ()>);
 
-impl<'de> Visitor<'de> for ObserveVisitor {
-    type Value = RawObserve;
+impl<'de: 'a, 'a> Visitor<'de> for ObserveVisitor<'a> {
+    type Value = RawObserve<'a>;
 
     fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
         f.write_str("\"full\" or an object state -> distribution over observations")
     }
 
-    fn visit_str<E: de::Error>(self, value: &str) -> Result<RawObserve, E> {
+    fn visit_str<E: de::Error>(self, value: &str) -> Result<RawObserve<'a>, E> {
         if value == "full" {
             Ok(RawObserve::Full)
         } else {
@@ -389,7 +544,7 @@ impl<'de> Visitor<'de> for ObserveVisitor {
         }
     }
 
-    fn visit_map<A: MapAccess<'de>>(self, map: A) -> Result<RawObserve, A::Error> {
+    fn visit_map<A: MapAccess<'de>>(self, map: A) -> Result<RawObserve<'a>, A::Error> {
         UniqueMapVisitor(PhantomData)
             .visit_map(map)
             .map(RawObserve::Map)
@@ -399,12 +554,15 @@ impl<'de> Visitor<'de> for ObserveVisitor {
 /// One entry of `transitions`.
 #[derive(Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
-struct RawTransition {
-    state: String,
-    defender: String,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    adversary: Option<String>,
-    next: UniqueMap<f64>,
+struct RawTransition<'a> {
+    #[serde(borrow)]
+    state: Name<'a>,
+    #[serde(borrow)]
+    defender: Name<'a>,
+    #[serde(default, skip_serializing_if = "Option::is_none", borrow)]
+    adversary: Option<Name<'a>>,
+    #[serde(borrow)]
+    next: NamedDistribution<'a>,
 }
 
 /// The wildcard action `"*"`.
@@ -416,16 +574,19 @@ const POMDP_SYMBOL: &str = "_";
 /// A wildcard in a transition key.
 const WILDCARD: u32 = u32::MAX;
 
-/// Checks a raw game and builds the [`Posg`].
-struct Builder<'a> {
+/// Checks a raw game and builds the [`Posg`]; names are looked up as
+/// borrowed strings of `raw`.
+struct Builder<'a, 'r> {
     file_name: &'a str,
-    states: FxHashMap<String, usize>,
+    raw: &'r RawGame<'r>,
+    states: FxHashMap<&'r str, usize>,
 }
 
-impl<'a> Builder<'a> {
-    fn new(file_name: &'a str) -> Self {
+impl<'a, 'r> Builder<'a, 'r> {
+    fn new(file_name: &'a str, raw: &'r RawGame<'r>) -> Self {
         Self {
             file_name,
+            raw,
             states: FxHashMap::default(),
         }
     }
@@ -434,7 +595,8 @@ impl<'a> Builder<'a> {
         Located::new(self.file_name, path)
     }
 
-    fn build(mut self, raw: RawGame) -> Result<Posg, ModelError> {
+    fn build(mut self) -> Result<Posg, ModelError> {
+        let raw = self.raw;
         if raw.posg != FORMAT_VERSION {
             return Err(self.at("posg").error(format!(
                 "unsupported format version {} (expected {FORMAT_VERSION})",
@@ -446,14 +608,14 @@ impl<'a> Builder<'a> {
             self.state(n)
         })?;
         let (propositions, labels) = self.labels(raw.labels.as_ref(), raw.states.len())?;
-        let defender = self.player(&raw.defender, &self.at("defender"), &raw.states)?;
+        let defender = self.player(&raw.defender, &self.at("defender"))?;
         let adversary = match &raw.adversary {
-            Some(a) => self.player(a, &self.at("adversary"), &raw.states)?,
+            Some(a) => self.player(a, &self.at("adversary"))?,
             None => pomdp_adversary(raw.states.len()),
         };
         let mut game = Posg {
-            name: raw.name,
-            states: raw.states,
+            name: raw.name.as_ref().map(|n| n.to_string()),
+            states: owned(&raw.states),
             initial,
             propositions,
             labels,
@@ -475,7 +637,7 @@ impl<'a> Builder<'a> {
     #[allow(clippy::type_complexity)]
     fn labels(
         &self,
-        raw: Option<&UniqueMap<Vec<String>>>,
+        raw: Option<&'r UniqueMap<Vec<Name<'r>>, Name<'r>>>,
         num_states: usize,
     ) -> Result<(Vec<String>, Vec<Vec<usize>>), ModelError> {
         let at = self.at("labels");
@@ -484,17 +646,18 @@ impl<'a> Builder<'a> {
             let here = at.key(state);
             let s = self
                 .state(state)
-                .ok_or_else(|| here.error(format!("unknown state `{state}`")))?;
+                .ok_or_else(|| here.error(format!("unknown state `{}`", &**state)))?;
             for (i, p) in props.iter().enumerate() {
                 if !is_valid_proposition(p) {
                     return Err(here.index(i).error(format!(
-                        "`{p}` is not a valid proposition (expected [a-z_][a-z0-9_]*)"
+                        "`{}` is not a valid proposition (expected [a-z_][a-z0-9_]*)",
+                        &**p
                     )));
                 }
-                if named[s].contains(&p.as_str()) {
+                if named[s].contains(&&**p) {
                     return Err(here
                         .index(i)
-                        .error(format!("proposition `{p}` listed twice")));
+                        .error(format!("proposition `{}` listed twice", &**p)));
                 }
                 named[s].push(p);
             }
@@ -520,12 +683,7 @@ impl<'a> Builder<'a> {
         Ok((propositions, labels))
     }
 
-    fn player(
-        &self,
-        raw: &RawPlayer,
-        at: &Located,
-        states: &[String],
-    ) -> Result<Player, ModelError> {
+    fn player(&self, raw: &'r RawPlayer<'r>, at: &Located) -> Result<Player, ModelError> {
         index_names(&raw.actions, &at.key("actions"), "action")?;
         if raw.actions.is_empty() {
             return Err(at
@@ -533,35 +691,32 @@ impl<'a> Builder<'a> {
                 .error("a player needs at least one action"));
         }
         match &raw.observe {
-            RawObserve::Full => self.full_player(raw, at, states),
-            RawObserve::Map(map) => self.partial_player(raw, map, at, states.len()),
+            RawObserve::Full => self.full_player(raw, at),
+            RawObserve::Map(map) => self.partial_player(raw, map, at),
         }
     }
 
-    fn full_player(
-        &self,
-        raw: &RawPlayer,
-        at: &Located,
-        states: &[String],
-    ) -> Result<Player, ModelError> {
-        let observations = raw.observations.clone().unwrap_or_else(|| states.to_vec());
+    fn full_player(&self, raw: &'r RawPlayer<'r>, at: &Located) -> Result<Player, ModelError> {
+        let states = &self.raw.states;
+        let observations: &[Name] = raw.observations.as_deref().unwrap_or(states);
         let here = at.key("observations");
-        let index = index_names(&observations, &here, "observation")?;
+        let index = index_names(observations, &here, "observation")?;
         let observe = states
             .iter()
             .map(|s| {
-                let o = index.get(s).copied().ok_or_else(|| {
+                let o = index.get(&**s).copied().ok_or_else(|| {
                     here.error(format!(
-                        "with \"observe\": \"full\" every state is an observation; `{s}` is missing"
+                        "with \"observe\": \"full\" every state is an observation; `{}` is missing",
+                        &**s
                     ))
                 })?;
                 Ok::<_, ModelError>(vec![(o, 1.0)])
             })
             .collect::<Result<_, _>>()?;
-        let enabled = enabled(raw, &observations, &index, at)?;
+        let enabled = enabled(raw, observations.len(), &index, at)?;
         Ok(Player {
-            actions: raw.actions.clone(),
-            observations,
+            actions: owned(&raw.actions),
+            observations: owned(observations),
             full_observation: true,
             observe,
             enabled,
@@ -570,25 +725,32 @@ impl<'a> Builder<'a> {
 
     fn partial_player(
         &self,
-        raw: &RawPlayer,
-        map: &UniqueMap<UniqueMap<f64>>,
+        raw: &'r RawPlayer<'r>,
+        map: &'r UniqueMap<NamedDistribution<'r>, Name<'r>>,
         at: &Located,
-        num_states: usize,
     ) -> Result<Player, ModelError> {
+        let num_states = self.raw.states.len();
         let observations = raw
             .observations
-            .clone()
+            .as_deref()
             .ok_or_else(|| at.error("`observations` is required unless \"observe\" is \"full\""))?;
-        let index = index_names(&observations, &at.key("observations"), "observation")?;
+        let index = index_names(observations, &at.key("observations"), "observation")?;
         let here = at.key("observe");
         let mut observe: Vec<Option<Distribution>> = vec![None; num_states];
         for (state, dist) in &map.0 {
-            let s = self
-                .state(state)
-                .ok_or_else(|| here.key(state).error(format!("unknown state `{state}`")))?;
-            let d = distribution(dist, &here.key(state), "observation", |o| {
-                index.get(o).copied()
+            let s = self.state(state).ok_or_else(|| {
+                here.key(state)
+                    .error(format!("unknown state `{}`", &**state))
             })?;
+            let mut d = Vec::with_capacity(dist.0.len());
+            let at_state = || here.key(state);
+            distribution_into(
+                dist,
+                at_state,
+                "observation",
+                |o| index.get(o).copied(),
+                &mut d,
+            )?;
             observe[s] = Some(d);
         }
         let observe = observe
@@ -598,41 +760,40 @@ impl<'a> Builder<'a> {
                 d.ok_or_else(|| {
                     here.error(format!(
                         "state `{}` has no observation distribution",
-                        self.state_name(s)
+                        &*self.raw.states[s]
                     ))
                 })
             })
             .collect::<Result<_, _>>()?;
-        let enabled = enabled(raw, &observations, &index, at)?;
+        let enabled = enabled(raw, observations.len(), &index, at)?;
         Ok(Player {
-            actions: raw.actions.clone(),
-            observations,
+            actions: owned(&raw.actions),
+            observations: owned(observations),
             full_observation: false,
             observe,
             enabled,
         })
     }
 
-    fn state_name(&self, s: usize) -> &str {
-        self.states
-            .iter()
-            .find(|&(_, &i)| i == s)
-            .map_or("?", |(n, _)| n.as_str())
-    }
-
     /// Resolves the wildcards of `transitions` into one distribution per triple.
     fn transitions(&self, raw: &[RawTransition], game: &mut Posg) -> Result<(), ModelError> {
         let at = self.at("transitions");
-        let mut keyed: FxHashMap<(usize, u32, u32), Vec<usize>> = FxHashMap::default();
+        let mut keys = Vec::with_capacity(raw.len());
         let mut nexts = Vec::with_capacity(raw.len());
+        let mut next_entries = Vec::with_capacity(raw.len() * 4);
         for (i, t) in raw.iter().enumerate() {
-            let here = at.index(i);
+            let here = || at.index(i);
             let key = self.transition_key(t, &here, game)?;
-            keyed.entry(key).or_default().push(i);
-            nexts.push(distribution(&t.next, &here.key("next"), "state", |n| {
-                self.state(n)
-            })?);
+            keys.push((key, i));
+            nexts.push(distribution_into(
+                &t.next,
+                || here().key("next"),
+                "state",
+                |n| self.state(n),
+                &mut next_entries,
+            )?);
         }
+        let keyed = Keyed::new(keys, game.states.len());
         let (nu, nv) = (game.defender.num_actions(), game.adversary.num_actions());
         let triples = [game.states.len(), nu, nv]
             .into_iter()
@@ -651,14 +812,15 @@ impl<'a> Builder<'a> {
         }
         game.transition_offsets = Vec::with_capacity(game.states.len() * nu * nv + 1);
         game.transition_offsets.push(0);
+        game.transition_entries = Vec::with_capacity(next_entries.len());
         for s in 0..game.states.len() {
             for u in 0..nu {
                 for v in 0..nv {
                     if triple_required(game, s, u, v) {
                         let entry = resolve_triple(&keyed, s, u, v)
                             .map_err(|m| at.error(m.describe(game, s, u, v)))?;
-                        let total =
-                            game.transition_entries.len() as u128 + nexts[entry].len() as u128;
+                        let next = &next_entries[nexts[entry].clone()];
+                        let total = game.transition_entries.len() as u128 + next.len() as u128;
                         if let Some(message) = limits::exceeded(
                             "the transitions with their wildcards expanded",
                             total,
@@ -668,7 +830,7 @@ impl<'a> Builder<'a> {
                         ) {
                             return Err(at.error(message));
                         }
-                        game.transition_entries.extend_from_slice(&nexts[entry]);
+                        game.transition_entries.extend_from_slice(next);
                     }
                     game.transition_offsets.push(game.transition_entries.len());
                 }
@@ -679,27 +841,28 @@ impl<'a> Builder<'a> {
 
     /// `(state, defender action or WILDCARD, adversary action or WILDCARD)`.
     /// In a POMDP the adversary's single action is always taken as named.
-    fn transition_key(
+    /// The entry's position `at` is built only for an error message.
+    fn transition_key<'f>(
         &self,
         t: &RawTransition,
-        at: &Located,
+        at: &dyn Fn() -> Located<'f>,
         game: &Posg,
     ) -> Result<(usize, u32, u32), ModelError> {
         let s = self.state(&t.state).ok_or_else(|| {
-            at.key("state")
-                .error(format!("unknown state `{}`", t.state))
+            at().key("state")
+                .error(format!("unknown state `{}`", &*t.state))
         })?;
-        let u = action_key(&t.defender, &game.defender, &at.key("defender"))?;
-        let v = match (&t.adversary, game.has_adversary) {
-            (Some(v), true) => action_key(v, &game.adversary, &at.key("adversary"))?,
+        let u = action_key(&t.defender, &game.defender, || at().key("defender"))?;
+        let v = match (t.adversary.as_deref(), game.has_adversary) {
+            (Some(v), true) => action_key(v, &game.adversary, || at().key("adversary"))?,
             (None, true) => {
-                return Err(at.error(
+                return Err(at().error(
                     "`adversary` is required because the game has an adversary \
                      (use \"*\" for every action)",
                 ));
             }
             (Some(v), false) if v != ANY && v != POMDP_SYMBOL => {
-                return Err(at.key("adversary").error(format!(
+                return Err(at().key("adversary").error(format!(
                     "the game has no adversary: `adversary` must be omitted, \"*\" or \"_\", not `{v}`"
                 )));
             }
@@ -709,10 +872,49 @@ impl<'a> Builder<'a> {
     }
 }
 
+/// The entries of `transitions` by key `(state, defender action or
+/// WILDCARD, adversary action or WILDCARD)`: sorted by key and then by
+/// position in the file, with the range of each state, so that looking up a
+/// key is a binary search within its state's few entries.
+struct Keyed {
+    /// `((s, u, v), i)`: entry `i` of `transitions` has key `(s, u, v)`.
+    sorted: Vec<((usize, u32, u32), usize)>,
+    /// The entries of state `s` are `sorted[state_offsets[s]..state_offsets[s + 1]]`.
+    state_offsets: Vec<usize>,
+}
+
+impl Keyed {
+    /// `keys` in file order; every state is below `num_states`.
+    fn new(mut keys: Vec<((usize, u32, u32), usize)>, num_states: usize) -> Self {
+        keys.sort_unstable();
+        let mut state_offsets = Vec::with_capacity(num_states + 1);
+        state_offsets.push(0);
+        let mut next = 0;
+        for s in 0..num_states {
+            next += keys[next..].partition_point(|&((t, _, _), _)| t == s);
+            state_offsets.push(next);
+        }
+        Self {
+            sorted: keys,
+            state_offsets,
+        }
+    }
+
+    /// The entries with key `(s, a, b)`, in file order.
+    fn entries(&self, s: usize, a: u32, b: u32) -> impl Iterator<Item = usize> + '_ {
+        let of_state = &self.sorted[self.state_offsets[s]..self.state_offsets[s + 1]];
+        let start = of_state.partition_point(|&((_, u, v), _)| (u, v) < (a, b));
+        of_state[start..]
+            .iter()
+            .take_while(move |&&((_, u, v), _)| (u, v) == (a, b))
+            .map(|&(_, i)| i)
+    }
+}
+
 /// Whether the game must define `T(. | s, u, v)`: some observation of `s`
 /// enables `u` for the defender and some enables `v` for the adversary
 /// (formats.md section 6). Other triples keep no entries.
-fn triple_required(game: &Posg, s: usize, u: usize, v: usize) -> bool {
+pub(super) fn triple_required(game: &Posg, s: usize, u: usize, v: usize) -> bool {
     game.defender.action_enabled_in_state(s, u) && game.adversary.action_enabled_in_state(s, v)
 }
 
@@ -721,8 +923,8 @@ fn triple_required(game: &Posg, s: usize, u: usize, v: usize) -> bool {
 /// observation needs at least one action; actions are listed at most once.
 fn enabled(
     raw: &RawPlayer,
-    observations: &[String],
-    index: &FxHashMap<String, usize>,
+    num_observations: usize,
+    index: &FxHashMap<&str, usize>,
     at: &Located,
 ) -> Result<Vec<bool>, ModelError> {
     let Some(map) = &raw.enabled else {
@@ -730,12 +932,12 @@ fn enabled(
     };
     let here = at.key("enabled");
     let num_actions = raw.actions.len();
-    let mut table = vec![true; observations.len() * num_actions];
+    let mut table = vec![true; num_observations * num_actions];
     for (observation, actions) in &map.0 {
         let at_o = here.key(observation);
         let o = *index
-            .get(observation)
-            .ok_or_else(|| at_o.error(format!("unknown observation `{observation}`")))?;
+            .get(&**observation)
+            .ok_or_else(|| at_o.error(format!("unknown observation `{}`", &**observation)))?;
         if actions.is_empty() {
             return Err(at_o.error("an observation needs at least one enabled action"));
         }
@@ -746,11 +948,14 @@ fn enabled(
                 .actions
                 .iter()
                 .position(|a| a == action)
-                .ok_or_else(|| at_o.index(i).error(format!("unknown action `{action}`")))?;
+                .ok_or_else(|| {
+                    at_o.index(i)
+                        .error(format!("unknown action `{}`", &**action))
+                })?;
             if row[u] {
                 return Err(at_o
                     .index(i)
-                    .error(format!("action `{action}` listed twice")));
+                    .error(format!("action `{}` listed twice", &**action)));
             }
             row[u] = true;
         }
@@ -761,8 +966,13 @@ fn enabled(
     Ok(table)
 }
 
-/// A defender or adversary field of a transition: an action index or [`WILDCARD`].
-fn action_key(name: &str, player: &Player, at: &Located) -> Result<u32, ModelError> {
+/// A defender or adversary field of a transition: an action index or
+/// [`WILDCARD`]. The position `at` is built only for an error message.
+fn action_key<'f>(
+    name: &str,
+    player: &Player,
+    at: impl Fn() -> Located<'f>,
+) -> Result<u32, ModelError> {
     if name == ANY {
         return Ok(WILDCARD);
     }
@@ -771,7 +981,7 @@ fn action_key(name: &str, player: &Player, at: &Located) -> Result<u32, ModelErr
         .iter()
         .position(|a| a == name)
         .map(|u| u as u32)
-        .ok_or_else(|| at.error(format!("unknown action `{name}`")))
+        .ok_or_else(|| at().error(format!("unknown action `{name}`")))
 }
 
 /// Why no single transition entry applies to a triple.
@@ -797,12 +1007,7 @@ impl Unresolved {
 }
 
 /// The most specific entry for `(s, u, v)`: both actions named, else one, else none.
-fn resolve_triple(
-    keyed: &FxHashMap<(usize, u32, u32), Vec<usize>>,
-    s: usize,
-    u: usize,
-    v: usize,
-) -> Result<usize, Unresolved> {
+fn resolve_triple(keyed: &Keyed, s: usize, u: usize, v: usize) -> Result<usize, Unresolved> {
     let (u, v) = (u as u32, v as u32);
     let levels: [&[(u32, u32)]; 3] = [
         &[(u, v)],
@@ -810,13 +1015,10 @@ fn resolve_triple(
         &[(WILDCARD, WILDCARD)],
     ];
     for level in levels {
-        let mut matches = level
-            .iter()
-            .filter_map(|&(a, b)| keyed.get(&(s, a, b)))
-            .flatten();
-        if let Some(&first) = matches.next() {
+        let mut matches = level.iter().flat_map(|&(a, b)| keyed.entries(s, a, b));
+        if let Some(first) = matches.next() {
             return match matches.next() {
-                Some(&second) => Err(Unresolved::Ambiguous(first.min(second), first.max(second))),
+                Some(second) => Err(Unresolved::Ambiguous(first.min(second), first.max(second))),
                 None => Ok(first),
             };
         }
@@ -825,19 +1027,20 @@ fn resolve_triple(
 }
 
 /// Checks names against `[A-Za-z0-9_.:-]+` and for uniqueness; returns name -> index.
-fn index_names(
-    names: &[String],
+pub(super) fn index_names<'n, N: AsRef<str>>(
+    names: &'n [N],
     at: &Located,
     kind: &str,
-) -> Result<FxHashMap<String, usize>, ModelError> {
-    let mut index = FxHashMap::default();
+) -> Result<FxHashMap<&'n str, usize>, ModelError> {
+    let mut index = FxHashMap::with_capacity_and_hasher(names.len(), Default::default());
     for (i, name) in names.iter().enumerate() {
+        let name = name.as_ref();
         if !is_valid_name(name) {
             return Err(at.index(i).error(format!(
                 "`{name}` is not a valid {kind} name (expected [A-Za-z0-9_.:-]+)"
             )));
         }
-        if let Some(first) = index.insert(name.clone(), i) {
+        if let Some(first) = index.insert(name, i) {
             return Err(at.index(i).error(format!(
                 "{kind} `{name}` already appears at {}[{first}]",
                 at.path()
@@ -858,19 +1061,19 @@ pub(crate) fn pomdp_adversary(num_states: usize) -> Player {
     }
 }
 
-impl RawGame {
-    fn from_game(game: &Posg) -> Self {
-        let labels: Vec<(String, Vec<String>)> = (0..game.num_states())
+impl<'a> RawGame<'a> {
+    fn from_game(game: &'a Posg) -> Self {
+        let labels: Vec<(Name, Vec<Name>)> = (0..game.num_states())
             .filter(|&s| !game.labels[s].is_empty())
             .map(|s| {
-                let names = game.label_names(s).map(str::to_string).collect();
-                (game.states[s].clone(), names)
+                let names = game.label_names(s).map(Name::from).collect();
+                (Name::from(game.states[s].as_str()), names)
             })
             .collect();
         Self {
             posg: FORMAT_VERSION,
-            name: game.name.clone(),
-            states: game.states.clone(),
+            name: game.name.as_deref().map(Name::from),
+            states: borrowed(&game.states),
             initial: named_distribution(&game.initial, &game.states),
             labels: (!labels.is_empty()).then_some(UniqueMap(labels)),
             defender: RawPlayer::from_player(&game.defender, &game.states),
@@ -882,8 +1085,8 @@ impl RawGame {
     }
 }
 
-impl RawPlayer {
-    fn from_player(player: &Player, states: &[String]) -> Self {
+impl<'a> RawPlayer<'a> {
+    fn from_player(player: &'a Player, states: &'a [String]) -> Self {
         let observe = if player.full_observation {
             RawObserve::Full
         } else {
@@ -891,41 +1094,44 @@ impl RawPlayer {
                 states
                     .iter()
                     .zip(&player.observe)
-                    .map(|(s, d)| (s.clone(), named_distribution(d, &player.observations)))
+                    .map(|(s, d)| {
+                        let d = named_distribution(d, &player.observations);
+                        (Name::from(s.as_str()), d)
+                    })
                     .collect(),
             ))
         };
-        let enabled: Vec<(String, Vec<String>)> = (0..player.num_observations())
+        let enabled: Vec<(Name, Vec<Name>)> = (0..player.num_observations())
             .filter(|&o| player.enabled_actions(o).count() < player.num_actions())
             .map(|o| {
                 let actions = player
                     .enabled_actions(o)
-                    .map(|u| player.actions[u].clone())
+                    .map(|u| Name::from(player.actions[u].as_str()))
                     .collect();
-                (player.observations[o].clone(), actions)
+                (Name::from(player.observations[o].as_str()), actions)
             })
             .collect();
         Self {
-            actions: player.actions.clone(),
-            observations: Some(player.observations.clone()),
+            actions: borrowed(&player.actions),
+            observations: Some(borrowed(&player.observations)),
             observe,
             enabled: (!enabled.is_empty()).then_some(UniqueMap(enabled)),
         }
     }
 }
 
-fn raw_transitions(game: &Posg) -> Vec<RawTransition> {
+fn raw_transitions(game: &Posg) -> Vec<RawTransition<'_>> {
     let (nu, nv) = (game.defender.num_actions(), game.adversary.num_actions());
     let mut out = Vec::with_capacity(game.num_states() * nu * nv);
     for s in 0..game.num_states() {
         for u in 0..nu {
             for v in (0..nv).filter(|&v| triple_required(game, s, u, v)) {
                 out.push(RawTransition {
-                    state: game.states[s].clone(),
-                    defender: game.defender.actions[u].clone(),
+                    state: Name::from(game.states[s].as_str()),
+                    defender: Name::from(game.defender.actions[u].as_str()),
                     adversary: game
                         .has_adversary
-                        .then(|| game.adversary.actions[v].clone()),
+                        .then(|| Name::from(game.adversary.actions[v].as_str())),
                     next: named_distribution(
                         game.transition(s, DefenderAction(u), AdversaryAction(v)),
                         &game.states,
@@ -937,6 +1143,10 @@ fn raw_transitions(game: &Posg) -> Vec<RawTransition> {
     out
 }
 
-fn named_distribution(d: &[(usize, f64)], names: &[String]) -> UniqueMap<f64> {
-    UniqueMap(d.iter().map(|&(i, p)| (names[i].clone(), p)).collect())
+fn named_distribution<'a>(d: &[(usize, f64)], names: &'a [String]) -> NamedDistribution<'a> {
+    UniqueMap(
+        d.iter()
+            .map(|&(i, p)| (Name::from(names[i].as_str()), p))
+            .collect(),
+    )
 }

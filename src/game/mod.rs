@@ -2,11 +2,13 @@
 //! the paper's `SG = (S, U_def, U_adv, T, O_def, O_adv, O_def, O_adv, AP, L)`.
 //!
 //! [`Posg`] is the validated in-memory model; [`file`](mod@file) reads and writes it as
-//! `*.posg.json` (formats.md section 1), [`drn`] imports Storm's explicit DRN
+//! `*.posg.json` (formats.md section 1) and, through [`binary`], in the
+//! optional binary form `*.posg.bin` (formats.md section 11), [`drn`] imports Storm's explicit DRN
 //! models (formats.md section 6) and [`grid`] builds the seed paper's grid
 //! family. Every distribution held here has positive entries only (a zero
 //! is "no edge") that sum to one exactly up to rounding.
 
+pub mod binary;
 pub mod drn;
 pub mod file;
 pub mod grid;

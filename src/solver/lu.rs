@@ -1,14 +1,8 @@
-//! Sparse LU of `A = I - Q` with faer.
-//!
-//! `A` is given row-wise (compressed sparse rows), which is the compressed
-//! sparse column form of `A^T`; faer factorises `A^T`, so `A x = b` is its
-//! transposed solve and `A^T y = c` its plain solve.
+//! Sparse LU of `A = I - Q`: the analysis once per pattern, the numeric
+//! factorisation once per values, any number of solves in both directions
+//! ([`super::multifrontal`] does the work).
 
-use faer::dyn_stack::{MemBuffer, MemStack};
-use faer::sparse::linalg::lu::{LuRef, NumericLu, SymbolicLu, factorize_symbolic_lu};
-use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
-use faer::{Conj, MatMut, Par};
-
+use super::multifrontal::MultifrontalLu;
 use super::{
     Direction, SolvePair, SolveReport, SolverError, SparsePattern, accept, check_solve_inputs,
     check_values, join_directions,
@@ -18,7 +12,6 @@ use super::{
 /// solve many times.
 pub struct LuSolver {
     system: System,
-    factorisation_workspace: MemBuffer,
     forward: Workspace,
     transposed: Workspace,
 }
@@ -26,27 +19,25 @@ pub struct LuSolver {
 /// What both directions share: `A` and its factorisation.
 struct System {
     pattern: SparsePattern,
-    symbolic: SymbolicLu<usize>,
-    numeric: NumericLu<usize, f64>,
+    lu: MultifrontalLu,
     values: Vec<f64>,
     factorised: bool,
     tolerance: f64,
 }
 
-/// The memory of one direction's solves: faer's workspace and a buffer for
-/// `A^T y`.
+/// The memory of one direction's solves: the permuted right-hand side and a
+/// buffer for `A^T y`.
 struct Workspace {
-    solve: MemBuffer,
+    permuted: Vec<f64>,
     product: Vec<f64>,
 }
 
 impl Workspace {
-    fn new(symbolic: &SymbolicLu<usize>, n: usize) -> Result<Self, SolverError> {
-        let scratch = symbolic.solve_in_place_scratch::<f64>(1, Par::Seq);
-        Ok(Self {
-            solve: MemBuffer::try_new(scratch).map_err(|_| SolverError::OutOfMemory)?,
+    fn new(n: usize) -> Self {
+        Self {
+            permuted: Vec::with_capacity(n),
             product: vec![0.0; n],
-        })
+        }
     }
 }
 
@@ -56,24 +47,18 @@ impl LuSolver {
     pub fn new(pattern: SparsePattern, tolerance: f64) -> Result<Self, SolverError> {
         super::SolverSettings::with_tolerance(tolerance).check()?;
         pattern.check()?;
-        let symbolic = factorize_symbolic_lu(transpose_view(&pattern), Default::default())
-            .map_err(|_| SolverError::OutOfMemory)?;
-        let scratch = symbolic.factorize_numeric_lu_scratch::<f64>(Par::Seq, Default::default());
-        let factorisation_workspace =
-            MemBuffer::try_new(scratch).map_err(|_| SolverError::OutOfMemory)?;
+        let lu = MultifrontalLu::new(&pattern)?;
         let values = vec![0.0; pattern.nnz()];
         Ok(Self {
-            forward: Workspace::new(&symbolic, pattern.n)?,
-            transposed: Workspace::new(&symbolic, pattern.n)?,
+            forward: Workspace::new(pattern.n),
+            transposed: Workspace::new(pattern.n),
             system: System {
                 pattern,
-                symbolic,
-                numeric: NumericLu::new(),
+                lu,
                 values,
                 factorised: false,
                 tolerance,
             },
-            factorisation_workspace,
         })
     }
 
@@ -89,19 +74,15 @@ impl LuSolver {
         check_values(&system.pattern, values)?;
         system.values.copy_from_slice(values);
         system.factorised = false;
-        let matrix = SparseColMatRef::new(transpose_view(&system.pattern), &system.values);
-        system
-            .symbolic
-            .factorize_numeric_lu(
-                &mut system.numeric,
-                matrix,
-                Par::Seq,
-                MemStack::new(&mut self.factorisation_workspace),
-                Default::default(),
-            )
-            .map_err(|e| SolverError::Singular(format!("{e:?}")))?;
+        system.lu.factorize(&system.values)?;
         system.factorised = true;
         Ok(())
+    }
+
+    /// The number of stored entries of the factors `L` and `U` (the fill:
+    /// their dense supernode blocks counted whole).
+    pub fn factor_entries(&self) -> usize {
+        self.system.lu.stored_entries()
     }
 
     /// The values of `A` as of the last factorisation.
@@ -163,7 +144,7 @@ impl System {
         Ok(Factors {
             pattern: &self.pattern,
             values: &self.values,
-            lu: LuRef::new_unchecked(&self.symbolic, &self.numeric),
+            lu: &self.lu,
         })
     }
 }
@@ -173,7 +154,7 @@ impl System {
 struct Factors<'a> {
     pattern: &'a SparsePattern,
     values: &'a [f64],
-    lu: LuRef<'a, usize, f64>,
+    lu: &'a MultifrontalLu,
 }
 
 impl Factors<'_> {
@@ -185,20 +166,16 @@ impl Factors<'_> {
         direction: Direction,
         tolerance: f64,
     ) -> Result<SolveReport, SolverError> {
-        let n = self.pattern.n;
-        check_solve_inputs(n, rhs, solution)?;
+        check_solve_inputs(self.pattern.n, rhs, solution)?;
         solution.copy_from_slice(rhs);
-        let stack = MemStack::new(&mut workspace.solve);
-        let column = MatMut::from_column_major_slice_mut(solution, n, 1);
         let residual = match direction {
             Direction::Forward => {
-                self.lu
-                    .solve_transpose_in_place_with_conj(Conj::No, column, Par::Seq, stack);
+                self.lu.solve_in_place(solution, &mut workspace.permuted);
                 self.pattern.residual(self.values, solution, rhs)
             }
             Direction::Transposed => {
                 self.lu
-                    .solve_in_place_with_conj(Conj::No, column, Par::Seq, stack);
+                    .solve_transpose_in_place(solution, &mut workspace.permuted);
                 self.pattern
                     .transposed_residual(self.values, solution, rhs, &mut workspace.product)
             }
@@ -210,17 +187,6 @@ impl Factors<'_> {
             error_bound: None,
         })
     }
-}
-
-/// The CSR pattern of `A` read as the CSC pattern of `A^T`.
-fn transpose_view(pattern: &SparsePattern) -> SymbolicSparseColMatRef<'_, usize> {
-    SymbolicSparseColMatRef::new_checked(
-        pattern.n,
-        pattern.n,
-        &pattern.row_offsets,
-        None,
-        &pattern.columns,
-    )
 }
 
 #[cfg(test)]

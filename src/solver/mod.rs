@@ -3,9 +3,10 @@
 //!
 //! Two methods share one accuracy contract:
 //!
-//! * [`LuSolver`]: faer's sparse LU. Exact up to rounding; its fill-in grows
-//!   faster than the chain, so memory and time limit it to a few 10^5
-//!   unknowns on this kind of machine.
+//! * [`LuSolver`]: a multifrontal sparse LU without pivoting on the pattern
+//!   of `A + A^T` (`multifrontal`, ordered by `ordering`). Exact up to
+//!   rounding; its fill-in grows about as `n log n` on grid-like chains, so
+//!   memory limits it to about 10^6 unknowns on this kind of machine.
 //! * [`KrylovSolver`]: BiCGSTAB (faer's) right-preconditioned by an
 //!   incomplete LU factorisation without fill-in, ILU(0). Memory stays
 //!   linear in the number of entries, and a solve starts from the caller's
@@ -32,6 +33,8 @@ mod denormals;
 mod ilu;
 mod krylov;
 mod lu;
+mod multifrontal;
+mod ordering;
 
 use bound::ExpectedTime;
 pub use denormals::FlushDenormals;
@@ -44,26 +47,29 @@ use thiserror::Error;
 /// The largest residual `max_i |(A x - b)_i|` accepted by default.
 pub const DEFAULT_TOLERANCE: f64 = 1e-9;
 
-/// With [`SolverMethod::Auto`], systems with more unknowns than this use
-/// BiCGSTAB preconditioned by ILU(0); smaller ones use [`LuSolver`].
-pub const DEFAULT_LU_LIMIT: usize = 50_000;
+/// With [`SolverMethod::Auto`], systems with at most this many unknowns use
+/// [`LuSolver`] without a trial. Measured on the grid family with 2-node
+/// controllers (`experiments/solver-choice`, one process per cell): the
+/// multifrontal LU was 3 to 13 times faster than BiCGSTAB + ILU(0) from 1.6e4
+/// to 1.5e5 unknowns, and at 3.3e5 unknowns (995,320 GMC states) value and
+/// gradient peak at 2.0 GiB.
+pub const DEFAULT_LU_LIMIT: usize = 500_000;
 
 /// With [`SolverMethod::Auto`], a BiCGSTAB solve that needs more iterations
 /// than [`lu_cost_in_iterations`], which is at most this, is abandoned for
 /// LU, which then stays in use, if the system has at most
-/// [`SolverSettings::lu_switch_limit`] unknowns. Measured on grid games: LU
-/// and BiCGSTAB took the same time at about 150 iterations both at 6e4
-/// unknowns (0.7 s against 0.8 s for 148 iterations) and at 3.3e5 (10 s
-/// against 12 s for 400 iterations).
-pub const SLOW_KRYLOV_ITERATIONS: usize = 150;
+/// [`SolverSettings::lu_switch_limit`] unknowns: a one-shot LU cost 20 to 60
+/// BiCGSTAB iterations from 1.6e4 to 1.5e5 unknowns.
+pub const SLOW_KRYLOV_ITERATIONS: usize = 60;
 
 /// With [`SolverMethod::Auto`], the BiCGSTAB iterations of the trial that
 /// predicts the cost of a whole solve (see [`LinearSolver`]).
 pub const PROBE_ITERATIONS: usize = 20;
 
-/// The default [`SolverSettings::lu_switch_limit`]: LU of a 3.3e5-unknown
-/// grid system took 4 GiB.
-pub const DEFAULT_LU_SWITCH_LIMIT: usize = 400_000;
+/// The default [`SolverSettings::lu_switch_limit`]: the factors grow about
+/// as `n log n` on grid-like chains (0.7 GiB at 3.3e5 unknowns), so LU of
+/// 1e6 unknowns needs a few GiB.
+pub const DEFAULT_LU_SWITCH_LIMIT: usize = 1_000_000;
 
 /// BiCGSTAB iterations allowed per solve by default.
 pub const DEFAULT_MAX_ITERATIONS: usize = 20_000;
@@ -172,7 +178,7 @@ pub struct SolverSettings {
     /// With [`SolverMethod::Auto`]: the most unknowns solved by LU.
     pub lu_limit: usize,
     /// With [`SolverMethod::Auto`]: the most unknowns for which slow
-    /// BiCGSTAB solves (over 150 iterations) give way to LU.
+    /// BiCGSTAB solves (over [`lu_cost_in_iterations`]) give way to LU.
     pub lu_switch_limit: usize,
     /// The most BiCGSTAB iterations per solve.
     pub max_iterations: usize,
@@ -363,13 +369,13 @@ fn join_directions(
 /// The cost of a one-shot sparse LU (symbolic analysis, numeric
 /// factorisation, one solve) of a grid-like system with `nnz` entries, in
 /// BiCGSTAB + ILU(0) iterations on the same system, whose cost is linear in
-/// `nnz`: measured on the grid family with 2-node controllers (release
-/// build, one thread; `experiments/solver-choice`), about 75 iterations at
-/// 7.3e5 entries (37k unknowns) and 150 at 2.9e6 (147k unknowns), where LU
-/// grew as `nnz^1.6`; interpolated as `75 sqrt(nnz / 7.3e5)` and capped at
-/// [`SLOW_KRYLOV_ITERATIONS`], the break-even measured at 3.3e5 unknowns.
+/// `nnz`: measured on the grid family with 2-node controllers
+/// (`experiments/solver-choice`, `results/solver-choice.csv`), 22 to 24
+/// iterations at 3.2e5 entries, 20 to 34 at 7.3e5, 31 to 37 at 1.3e6 and 23
+/// to 58 at 2.9e6 (single runs on a shared machine); modelled as
+/// `30 (nnz / 1.3e6)^(1/4)` and capped at [`SLOW_KRYLOV_ITERATIONS`].
 pub fn lu_cost_in_iterations(nnz: usize) -> f64 {
-    (75.0 * (nnz as f64 / 7.3e5).sqrt()).min(SLOW_KRYLOV_ITERATIONS as f64)
+    (30.0 * (nnz as f64 / 1.3e6).powf(0.25)).min(SLOW_KRYLOV_ITERATIONS as f64)
 }
 
 /// Why `settings` give the method [`SolverSettings::method_for`] chooses
@@ -1151,8 +1157,8 @@ mod tests {
 
     #[test]
     fn the_lu_cost_grows_with_the_entries_up_to_the_measured_break_even() {
-        assert!((lu_cost_in_iterations(730_000) - 75.0).abs() < 1e-9);
-        assert!(lu_cost_in_iterations(100_000) < lu_cost_in_iterations(730_000));
+        assert!((lu_cost_in_iterations(1_300_000) - 30.0).abs() < 1e-9);
+        assert!(lu_cost_in_iterations(100_000) < lu_cost_in_iterations(1_300_000));
         assert_eq!(
             lu_cost_in_iterations(50_000_000),
             SLOW_KRYLOV_ITERATIONS as f64

@@ -1,0 +1,750 @@
+//! Multifrontal sparse LU of `A = I - Q` without pivoting, on the symmetric
+//! pattern of `A + A^T` (method.md section 2, the transient system).
+//!
+//! `A` is a nonsingular M-matrix whose rows are weakly diagonally dominant
+//! (`Q` substochastic), and so is `P A P^T` for any permutation `P`; Gaussian
+//! elimination keeps both properties in every Schur complement, so it needs
+//! no pivoting and its growth factor is at most 2 (Wilkinson). The factors
+//! then have the structure of the Cholesky factor of `P (A + A^T) P^T`:
+//! `L` its lower and `U` its upper triangle, which faer's symbolic Cholesky
+//! analysis computes, with its (relaxed) supernodes, for the approximate
+//! minimum degree ordering `P` of [`super::ordering`]. A grid-like chain fills far less this way than
+//! under a column ordering that must leave room for row pivoting.
+//!
+//! The numeric phase is multifrontal: supernode `s` (columns `J_s`, below
+//! them the rows `R_s`) owns a dense front on the indices `J_s ∪ R_s`, into
+//! which the entries of `P A P^T` whose smaller index lies in `J_s` and the
+//! update matrices of its children are added; dense LU of the `J_s` block,
+//! two triangular solves and one product leave `L` and `U` for `J_s` and the
+//! update matrix `F_RR - L_RJ U_JR` for the parent. The dense work is faer's.
+//!
+//! A pivot that is zero or not finite (the matrix was not what this module
+//! assumes) is a [`SolverError::Singular`], never a wrong number; the caller
+//! checks every solution's residual besides.
+
+use faer::linalg::matmul::matmul;
+use faer::linalg::triangular_solve::{
+    solve_lower_triangular_in_place, solve_unit_lower_triangular_in_place,
+};
+use faer::perm::PermRef;
+use faer::reborrow::{Reborrow, ReborrowMut};
+use faer::sparse::SymbolicSparseColMatRef;
+use faer::sparse::linalg::SupernodalThreshold;
+use faer::sparse::linalg::cholesky::{
+    CholeskySymbolicParams, SymbolicCholeskyRaw, SymmetricOrdering, factorize_symbolic_cholesky,
+};
+use faer::{Accum, MatMut, Par, Side};
+
+use super::ordering::SymmetricPattern;
+use super::{SolverError, SparsePattern};
+
+/// Fronts with at least this many rows use faer's parallel dense kernels.
+const PARALLEL_FRONT_ROWS: usize = 512;
+
+/// Diagonal blocks with at most this many columns are factorised by the
+/// unblocked loop; larger ones recursively by halves.
+const UNBLOCKED_COLUMNS: usize = 16;
+
+/// One supernode: the columns `begin..end` of `P A P^T` and the rows below
+/// them, `rows` (sorted, all at least `end`).
+#[derive(Debug, Clone)]
+struct Supernode {
+    begin: usize,
+    end: usize,
+    /// Range of [`Structure::rows`] holding `R_s`.
+    rows: std::ops::Range<usize>,
+    /// Offset of the `(|J| + |R|) x |J|` panel `[L_JJ\U_JJ; L_RJ]` in
+    /// [`MultifrontalLu::lower`].
+    lower_offset: usize,
+    /// Offset of the `|J| x |R|` panel `U_JR` in [`MultifrontalLu::upper`].
+    upper_offset: usize,
+    /// Range of [`Structure::assembly`]: the entries of `A` added to the front.
+    assembly: std::ops::Range<usize>,
+    /// Range of [`Structure::children`].
+    children: std::ops::Range<usize>,
+    /// Range of [`Structure::relative`]: where each row of `R_s` sits in the
+    /// parent's front (empty for a root).
+    relative: std::ops::Range<usize>,
+}
+
+impl Supernode {
+    fn columns(&self) -> usize {
+        self.end - self.begin
+    }
+}
+
+/// The symbolic analysis: ordering, supernodes, and the maps that place the
+/// entries of `A` and the children's update matrices in each front.
+#[derive(Debug)]
+struct Structure {
+    n: usize,
+    /// `permutation[new] = old`.
+    permutation: Vec<usize>,
+    supernodes: Vec<Supernode>,
+    rows: Vec<usize>,
+    /// `(k, position)`: entry `k` of `A`'s values goes to the front's
+    /// column-major `position`.
+    assembly: Vec<(u32, u32)>,
+    children: Vec<usize>,
+    relative: Vec<u32>,
+    /// The supernodes children first, each subtree contiguous: the update
+    /// matrices of a supernode's children are then the top of a stack.
+    postorder: Vec<usize>,
+    /// The most entries the stack of update matrices holds at once.
+    stack_len: usize,
+    lower_len: usize,
+    upper_len: usize,
+    largest_front: usize,
+}
+
+/// LU factors of `P A P^T = L U` (unit lower `L`), stored by supernode.
+#[derive(Debug)]
+pub(crate) struct MultifrontalLu {
+    structure: Structure,
+    lower: Vec<f64>,
+    upper: Vec<f64>,
+    front: Vec<f64>,
+    /// The update matrices waiting for their parents, column-major, in
+    /// postorder.
+    stack: Vec<f64>,
+}
+
+impl MultifrontalLu {
+    /// Symbolic analysis of `pattern` (which must have its diagonal).
+    pub(crate) fn new(pattern: &SparsePattern) -> Result<Self, SolverError> {
+        let structure = Structure::analyse(pattern)?;
+        Ok(Self {
+            lower: vec![0.0; structure.lower_len],
+            upper: vec![0.0; structure.upper_len],
+            front: vec![0.0; structure.largest_front * structure.largest_front],
+            stack: Vec::with_capacity(structure.stack_len),
+            structure,
+        })
+    }
+
+    /// Entries stored for `L` and `U` (a pivot block's two triangles share
+    /// one square).
+    pub(crate) fn stored_entries(&self) -> usize {
+        self.lower.len() + self.upper.len()
+    }
+
+    /// Numeric factorisation with `values` aligned with the pattern's entries.
+    pub(crate) fn factorize(&mut self, values: &[f64]) -> Result<(), SolverError> {
+        let Self {
+            structure,
+            lower,
+            upper,
+            front,
+            stack,
+        } = self;
+        stack.clear();
+        for &s in &structure.postorder {
+            let node = &structure.supernodes[s];
+            let (columns, below) = (node.columns(), node.rows.len());
+            let rows = columns + below;
+            let mut front = Front {
+                rows,
+                left: &mut lower[node.lower_offset..][..rows * columns],
+                right: &mut front[..rows * below],
+            };
+            front.left.fill(0.0);
+            front.right.fill(0.0);
+            for &(k, position) in &structure.assembly[node.assembly.clone()] {
+                *front.at(position as usize) += values[k as usize];
+            }
+            let mut top = stack.len();
+            for &child in structure.children[node.children.clone()].iter().rev() {
+                let relative = &structure.relative[structure.supernodes[child].relative.clone()];
+                let size = relative.len() * relative.len();
+                top -= size;
+                front.extend_add(&stack[top..][..size], relative);
+            }
+            stack.truncate(top);
+            front.factor().map_err(|column| {
+                SolverError::Singular(format!(
+                    "zero or non-finite pivot at position {} of the elimination order",
+                    node.begin + column
+                ))
+            })?;
+            front.copy_upper(&mut upper[node.upper_offset..][..below * columns]);
+            if !node.relative.is_empty() {
+                front.push_update(stack);
+            }
+        }
+        Ok(())
+    }
+
+    /// Solves `A x = b` in place (`x` holds `b` on entry).
+    pub(crate) fn solve_in_place(&self, x: &mut [f64], work: &mut Vec<f64>) {
+        self.permute_in(x, work);
+        self.lower_solve(work);
+        self.upper_solve(work);
+        self.permute_out(work, x);
+    }
+
+    /// Solves `A^T y = c` in place (`y` holds `c` on entry).
+    pub(crate) fn solve_transpose_in_place(&self, y: &mut [f64], work: &mut Vec<f64>) {
+        self.permute_in(y, work);
+        self.upper_transpose_solve(work);
+        self.lower_transpose_solve(work);
+        self.permute_out(work, y);
+    }
+
+    fn permute_in(&self, x: &[f64], work: &mut Vec<f64>) {
+        work.clear();
+        work.extend(self.structure.permutation.iter().map(|&old| x[old]));
+    }
+
+    fn permute_out(&self, work: &[f64], x: &mut [f64]) {
+        for (&old, &value) in self.structure.permutation.iter().zip(work) {
+            x[old] = value;
+        }
+    }
+
+    /// `x <- L^{-1} x`, supernodes in increasing order.
+    fn lower_solve(&self, x: &mut [f64]) {
+        for node in &self.structure.supernodes {
+            let (columns, rows) = (node.columns(), &self.structure.rows[node.rows.clone()]);
+            let stride = columns + rows.len();
+            let panel = &self.lower[node.lower_offset..][..stride * columns];
+            for j in 0..columns {
+                let xj = x[node.begin + j];
+                let column = &panel[j * stride..][..stride];
+                for i in j + 1..columns {
+                    x[node.begin + i] -= column[i] * xj;
+                }
+                for (&row, &l) in rows.iter().zip(&column[columns..]) {
+                    x[row] -= l * xj;
+                }
+            }
+        }
+    }
+
+    /// `x <- U^{-1} x`, supernodes in decreasing order.
+    fn upper_solve(&self, x: &mut [f64]) {
+        for node in self.structure.supernodes.iter().rev() {
+            let (columns, rows) = (node.columns(), &self.structure.rows[node.rows.clone()]);
+            let below = rows.len();
+            let stride = columns + below;
+            let panel = &self.lower[node.lower_offset..][..stride * columns];
+            let upper = &self.upper[node.upper_offset..][..below * columns];
+            for (&row, column) in rows.iter().zip(upper.chunks_exact(columns)) {
+                let xr = x[row];
+                for (xi, &u) in x[node.begin..node.end].iter_mut().zip(column) {
+                    *xi -= u * xr;
+                }
+            }
+            for j in (0..columns).rev() {
+                let column = &panel[j * stride..][..stride];
+                let xj = x[node.begin + j] / column[j];
+                x[node.begin + j] = xj;
+                for i in 0..j {
+                    x[node.begin + i] -= column[i] * xj;
+                }
+            }
+        }
+    }
+
+    /// `y <- U^{-T} y`, supernodes in increasing order.
+    fn upper_transpose_solve(&self, y: &mut [f64]) {
+        for node in &self.structure.supernodes {
+            let (columns, rows) = (node.columns(), &self.structure.rows[node.rows.clone()]);
+            let below = rows.len();
+            let stride = columns + below;
+            let panel = &self.lower[node.lower_offset..][..stride * columns];
+            let upper = &self.upper[node.upper_offset..][..below * columns];
+            for j in 0..columns {
+                let column = &panel[j * stride..][..stride];
+                let sum: f64 = (0..j).map(|i| column[i] * y[node.begin + i]).sum();
+                y[node.begin + j] = (y[node.begin + j] - sum) / column[j];
+            }
+            for (&row, column) in rows.iter().zip(upper.chunks_exact(columns)) {
+                let sum: f64 = column
+                    .iter()
+                    .zip(&y[node.begin..node.end])
+                    .map(|(&u, &yi)| u * yi)
+                    .sum();
+                y[row] -= sum;
+            }
+        }
+    }
+
+    /// `y <- L^{-T} y`, supernodes in decreasing order.
+    fn lower_transpose_solve(&self, y: &mut [f64]) {
+        for node in self.structure.supernodes.iter().rev() {
+            let (columns, rows) = (node.columns(), &self.structure.rows[node.rows.clone()]);
+            let stride = columns + rows.len();
+            let panel = &self.lower[node.lower_offset..][..stride * columns];
+            for j in (0..columns).rev() {
+                let column = &panel[j * stride..][..stride];
+                let below: f64 = rows
+                    .iter()
+                    .zip(&column[columns..])
+                    .map(|(&r, &l)| l * y[r])
+                    .sum();
+                let within: f64 = (j + 1..columns)
+                    .map(|i| column[i] * y[node.begin + i])
+                    .sum();
+                y[node.begin + j] -= below + within;
+            }
+        }
+    }
+}
+
+/// The dense front of one supernode, `rows x rows` column-major, split
+/// after its pivot columns: `left = [F_JJ; F_RJ]` (where `L` and `U_JJ`
+/// stay) and `right = [F_JR; F_RR]`. A position counts through `left` and
+/// then `right`, as in one column-major matrix.
+struct Front<'a> {
+    rows: usize,
+    left: &'a mut [f64],
+    right: &'a mut [f64],
+}
+
+impl Front<'_> {
+    fn columns(&self) -> usize {
+        self.left.len() / self.rows
+    }
+
+    /// The entry at column-major `position`.
+    fn at(&mut self, position: usize) -> &mut f64 {
+        match position.checked_sub(self.left.len()) {
+            Some(right) => &mut self.right[right],
+            None => &mut self.left[position],
+        }
+    }
+
+    /// The column `column` of the front.
+    fn column(&mut self, column: usize) -> &mut [f64] {
+        let rows = self.rows;
+        match column.checked_sub(self.columns()) {
+            Some(right) => &mut self.right[right * rows..][..rows],
+            None => &mut self.left[column * rows..][..rows],
+        }
+    }
+
+    /// Adds a child's update matrix (`relative.len()` square, column-major)
+    /// at the rows and columns `relative`.
+    fn extend_add(&mut self, update: &[f64], relative: &[u32]) {
+        let size = relative.len();
+        for (&column, source) in relative.iter().zip(update.chunks_exact(size)) {
+            let target = self.column(column as usize);
+            for (&row, &u) in relative.iter().zip(source) {
+                target[row as usize] += u;
+            }
+        }
+    }
+
+    /// `F_JJ = L U` in place, `F_RJ <- F_RJ U^{-1}`, `F_JR <- L^{-1} F_JR`,
+    /// `F_RR <- F_RR - F_RJ F_JR`. Errors with the pivot's column when a
+    /// pivot is zero or not finite.
+    fn factor(&mut self) -> Result<(), usize> {
+        let (rows, columns) = (self.rows, self.columns());
+        let par = if rows >= PARALLEL_FRONT_ROWS {
+            Par::rayon(0)
+        } else {
+            Par::Seq
+        };
+        let left = MatMut::from_column_major_slice_mut(self.left, rows, columns);
+        let (mut jj, mut rj) = left.split_at_row_mut(columns);
+        lu_without_pivoting(jj.rb_mut(), par)?;
+        if rows > columns {
+            let right = MatMut::from_column_major_slice_mut(self.right, rows, rows - columns);
+            let (mut jr, rr) = right.split_at_row_mut(columns);
+            solve_lower_triangular_in_place(jj.rb().transpose(), rj.rb_mut().transpose_mut(), par);
+            solve_unit_lower_triangular_in_place(jj.rb(), jr.rb_mut(), par);
+            matmul(rr, Accum::Add, rj.rb(), jr.rb(), -1.0, par);
+        }
+        Ok(())
+    }
+
+    /// Copies `U_JR` (`|J| x |R|`, column-major) out of a factorised front.
+    fn copy_upper(&self, upper: &mut [f64]) {
+        let columns = self.columns();
+        for (target, source) in upper
+            .chunks_exact_mut(columns)
+            .zip(self.right.chunks_exact(self.rows))
+        {
+            target.copy_from_slice(&source[..columns]);
+        }
+    }
+
+    /// Pushes the update matrix `F_RR` of a factorised front onto the
+    /// stack, column-major.
+    fn push_update(&self, stack: &mut Vec<f64>) {
+        let columns = self.columns();
+        for source in self.right.chunks_exact(self.rows) {
+            stack.extend_from_slice(&source[columns..]);
+        }
+    }
+}
+
+/// Dense LU without pivoting in place (unit lower `L` below the diagonal,
+/// `U` on and above it), recursively by halves. Errors with the column of a
+/// zero or non-finite pivot.
+fn lu_without_pivoting(mut a: MatMut<'_, f64>, par: Par) -> Result<(), usize> {
+    let n = a.nrows();
+    if n <= UNBLOCKED_COLUMNS {
+        return lu_unblocked(a);
+    }
+    let half = n / 2;
+    let (mut a11, mut a12, mut a21, a22) = a.rb_mut().split_at_mut(half, half);
+    lu_without_pivoting(a11.rb_mut(), par)?;
+    solve_unit_lower_triangular_in_place(a11.rb(), a12.rb_mut(), par);
+    solve_lower_triangular_in_place(a11.rb().transpose(), a21.rb_mut().transpose_mut(), par);
+    let mut a22 = a22;
+    matmul(a22.rb_mut(), Accum::Add, a21.rb(), a12.rb(), -1.0, par);
+    lu_without_pivoting(a22, par).map_err(|column| column + half)
+}
+
+fn lu_unblocked(mut a: MatMut<'_, f64>) -> Result<(), usize> {
+    let n = a.nrows();
+    for k in 0..n {
+        let pivot = a[(k, k)];
+        if pivot == 0.0 || !pivot.is_finite() {
+            return Err(k);
+        }
+        for i in k + 1..n {
+            a[(i, k)] /= pivot;
+        }
+        for j in k + 1..n {
+            let akj = a[(k, j)];
+            if akj != 0.0 {
+                for i in k + 1..n {
+                    let l = a[(i, k)];
+                    a[(i, j)] -= l * akj;
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+impl Structure {
+    fn analyse(pattern: &SparsePattern) -> Result<Self, SolverError> {
+        let n = pattern.n;
+        let graph = SymmetricPattern::of(pattern);
+        let order = graph.minimum_degree_order()?;
+        let mut inverse = vec![0; n];
+        for (new, &old) in order.iter().enumerate() {
+            inverse[old] = new;
+        }
+        let (column_offsets, row_indices) = graph.upper();
+        drop(graph);
+        let upper = SymbolicSparseColMatRef::new_checked(n, n, &column_offsets, None, &row_indices);
+        let params = CholeskySymbolicParams {
+            supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SUPERNODAL,
+            ..Default::default()
+        };
+        let symbolic = factorize_symbolic_cholesky(
+            upper,
+            Side::Upper,
+            SymmetricOrdering::Custom(PermRef::new_checked(&order, &inverse, n)),
+            params,
+        )
+        .map_err(|_| SolverError::OutOfMemory)?;
+        let permutation = order;
+        let mut structure = Self {
+            n,
+            permutation,
+            supernodes: Vec::new(),
+            rows: Vec::new(),
+            assembly: Vec::new(),
+            children: Vec::new(),
+            relative: Vec::new(),
+            postorder: Vec::new(),
+            stack_len: 0,
+            lower_len: 0,
+            upper_len: 0,
+            largest_front: 0,
+        };
+        match symbolic.raw() {
+            SymbolicCholeskyRaw::Supernodal(supernodal) => {
+                for s in 0..supernodal.n_supernodes() {
+                    let node = supernodal.supernode(s);
+                    let end = supernodal.supernode_end()[s];
+                    structure.push_supernode(node.start(), end, node.pattern().iter().copied());
+                }
+            }
+            SymbolicCholeskyRaw::Simplicial(simplicial) => {
+                let factor = simplicial.factor();
+                for j in 0..n {
+                    let below = factor.row_idx_of_col(j).filter(|&i| i > j);
+                    structure.push_supernode(j, j + 1, below);
+                }
+            }
+        }
+        structure.link_children()?;
+        structure.order_for_the_stack();
+        structure.assemble_map(pattern)?;
+        Ok(structure)
+    }
+
+    /// Appends the supernode of columns `begin..end` with the rows `below`.
+    fn push_supernode(&mut self, begin: usize, end: usize, below: impl Iterator<Item = usize>) {
+        let first = self.rows.len();
+        self.rows.extend(below);
+        self.rows[first..].sort_unstable();
+        let rows = first..self.rows.len();
+        let (columns, below) = (end - begin, rows.len());
+        self.largest_front = self.largest_front.max(columns + below);
+        self.supernodes.push(Supernode {
+            begin,
+            end,
+            rows,
+            lower_offset: self.lower_len,
+            upper_offset: self.upper_len,
+            assembly: 0..0,
+            children: 0..0,
+            relative: 0..0,
+        });
+        self.lower_len += (columns + below) * columns;
+        self.upper_len += below * columns;
+    }
+
+    /// The supernode owning each column.
+    fn owners(&self) -> Vec<usize> {
+        let mut owner = vec![0; self.n];
+        for (s, node) in self.supernodes.iter().enumerate() {
+            owner[node.begin..node.end].fill(s);
+        }
+        owner
+    }
+
+    /// Position of `index` among the front indices `J_s ∪ R_s` of `node`.
+    fn front_position(&self, node: &Supernode, index: usize) -> Option<usize> {
+        if (node.begin..node.end).contains(&index) {
+            return Some(index - node.begin);
+        }
+        self.rows[node.rows.clone()]
+            .binary_search(&index)
+            .ok()
+            .map(|position| node.columns() + position)
+    }
+
+    /// Parents (the owner of a supernode's first row below), children lists
+    /// and each child's rows' positions in its parent's front.
+    fn link_children(&mut self) -> Result<(), SolverError> {
+        let owner = self.owners();
+        let parents: Vec<Option<usize>> = self
+            .supernodes
+            .iter()
+            .map(|node| self.rows[node.rows.clone()].first().map(|&row| owner[row]))
+            .collect();
+        let mut counts = vec![0usize; self.supernodes.len() + 1];
+        for parent in parents.iter().flatten() {
+            counts[parent + 1] += 1;
+        }
+        for s in 0..self.supernodes.len() {
+            counts[s + 1] += counts[s];
+        }
+        self.children = vec![0; counts[self.supernodes.len()]];
+        let mut next = counts.clone();
+        for (s, parent) in parents.iter().enumerate() {
+            if let Some(parent) = *parent {
+                self.children[next[parent]] = s;
+                next[parent] += 1;
+            }
+        }
+        for s in 0..self.supernodes.len() {
+            self.supernodes[s].children = counts[s]..counts[s + 1];
+            let Some(parent) = parents[s] else { continue };
+            let first = self.relative.len();
+            for k in self.supernodes[s].rows.clone() {
+                let position = self
+                    .front_position(&self.supernodes[parent], self.rows[k])
+                    .ok_or_else(|| {
+                        SolverError::Malformed("a supernode's rows miss its parent's front".into())
+                    })?;
+                self.relative.push(to_u32(position)?);
+            }
+            self.supernodes[s].relative = first..self.relative.len();
+        }
+        Ok(())
+    }
+
+    /// The postorder of the supernode tree, and the stack it needs.
+    fn order_for_the_stack(&mut self) {
+        let count = self.supernodes.len();
+        let mut postorder = Vec::with_capacity(count);
+        let mut pending: Vec<(usize, usize)> = Vec::new();
+        for root in (0..count).filter(|&s| self.supernodes[s].relative.is_empty()) {
+            pending.push((root, 0));
+            while let Some((node, next)) = pending.last_mut() {
+                let children = &self.children[self.supernodes[*node].children.clone()];
+                if let Some(&child) = children.get(*next) {
+                    *next += 1;
+                    pending.push((child, 0));
+                } else {
+                    postorder.push(*node);
+                    pending.pop();
+                }
+            }
+        }
+        let update_len = |s: usize| self.supernodes[s].relative.len().pow(2);
+        let (mut used, mut peak) = (0usize, 0usize);
+        for &s in &postorder {
+            let children = &self.children[self.supernodes[s].children.clone()];
+            used -= children
+                .iter()
+                .map(|&child| update_len(child))
+                .sum::<usize>();
+            used += update_len(s);
+            peak = peak.max(used);
+        }
+        self.postorder = postorder;
+        self.stack_len = peak;
+    }
+
+    /// Where each entry of `P A P^T` goes: into the front of the supernode
+    /// owning the smaller of its row and column.
+    fn assemble_map(&mut self, pattern: &SparsePattern) -> Result<(), SolverError> {
+        let owner = self.owners();
+        let mut inverse = vec![0; self.n];
+        for (new, &old) in self.permutation.iter().enumerate() {
+            inverse[old] = new;
+        }
+        let mut counts = vec![0usize; self.supernodes.len() + 1];
+        let entry_owner = |row: usize, k: usize| {
+            let (i, j) = (inverse[row], inverse[pattern.columns[k]]);
+            (i, j, owner[i.min(j)])
+        };
+        for row in 0..self.n {
+            for k in pattern.row_range(row) {
+                counts[entry_owner(row, k).2 + 1] += 1;
+            }
+        }
+        for s in 0..self.supernodes.len() {
+            counts[s + 1] += counts[s];
+            self.supernodes[s].assembly = counts[s]..counts[s + 1];
+        }
+        self.assembly = vec![(0, 0); pattern.nnz()];
+        for row in 0..self.n {
+            for k in pattern.row_range(row) {
+                let (i, j, s) = entry_owner(row, k);
+                let node = &self.supernodes[s];
+                let missing = || SolverError::Malformed("an entry misses its front".into());
+                let local_row = self.front_position(node, i).ok_or_else(missing)?;
+                let local_column = self.front_position(node, j).ok_or_else(missing)?;
+                let front_rows = node.columns() + node.rows.len();
+                self.assembly[counts[s]] =
+                    (to_u32(k)?, to_u32(local_row + front_rows * local_column)?);
+                counts[s] += 1;
+            }
+        }
+        Ok(())
+    }
+}
+
+fn to_u32(value: usize) -> Result<u32, SolverError> {
+    u32::try_from(value)
+        .map_err(|_| SolverError::Malformed("the system is too large for 32-bit indices".into()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::test_systems::{grid_walk, random_chain, tridiagonal};
+    use super::*;
+
+    /// `max_i |(A x - b)_i| / max(1, |x|_inf)` and the same for `A^T y = c`
+    /// after both solves (`|A|_inf <= 2`: a relative residual).
+    fn residuals(pattern: &SparsePattern, values: &[f64]) -> (f64, f64) {
+        let mut lu = MultifrontalLu::new(pattern).unwrap();
+        lu.factorize(values).unwrap();
+        let n = pattern.n;
+        let b: Vec<f64> = (0..n).map(|i| 1.0 + (i % 5) as f64).collect();
+        let mut work = Vec::new();
+        let mut x = b.clone();
+        lu.solve_in_place(&mut x, &mut work);
+        let mut y = b.clone();
+        lu.solve_transpose_in_place(&mut y, &mut work);
+        let mut product = vec![0.0; n];
+        let scale = |v: &[f64]| v.iter().fold(1.0f64, |m, e| m.max(e.abs()));
+        (
+            pattern.residual(values, &x, &b) / scale(&x),
+            pattern.transposed_residual(values, &y, &b, &mut product) / scale(&y),
+        )
+    }
+
+    #[test]
+    fn a_nonsymmetric_chain_is_solved_by_hand() {
+        let pattern = SparsePattern {
+            n: 3,
+            row_offsets: vec![0, 2, 4, 5],
+            columns: vec![0, 1, 1, 2, 2],
+        };
+        let values = [1.0, -0.5, 1.0, -0.25, 1.0];
+        let mut lu = MultifrontalLu::new(&pattern).unwrap();
+        lu.factorize(&values).unwrap();
+        let mut work = Vec::new();
+        let mut x = vec![0.0, 0.0, 1.0];
+        lu.solve_in_place(&mut x, &mut work);
+        assert_eq!(x, [0.125, 0.25, 1.0]);
+        let mut y = vec![1.0, 0.0, 0.0];
+        lu.solve_transpose_in_place(&mut y, &mut work);
+        assert_eq!(y, [1.0, 0.5, 0.125]);
+    }
+
+    #[test]
+    fn random_chains_are_solved_in_both_directions() {
+        for (n, per_row, seed) in [(1, 1, 1), (7, 2, 2), (60, 3, 3), (400, 5, 4), (2000, 4, 5)] {
+            let (pattern, values) = random_chain(n, per_row, 0.05, seed);
+            let (forward, transposed) = residuals(&pattern, &values);
+            assert!(
+                forward < 1e-14 && transposed < 1e-14,
+                "n {n}: {forward:e} {transposed:e}"
+            );
+        }
+    }
+
+    #[test]
+    fn grid_walks_with_large_fronts_are_solved() {
+        for side in [2, 9, 70] {
+            let (pattern, values) = grid_walk(side);
+            let (forward, transposed) = residuals(&pattern, &values);
+            assert!(
+                forward < 1e-14 && transposed < 1e-14,
+                "side {side}: {forward:e} {transposed:e}"
+            );
+        }
+    }
+
+    #[test]
+    fn a_dense_chain_uses_the_blocked_and_parallel_kernels() {
+        let (pattern, values) = random_chain(700, 700, 0.01, 6);
+        let (forward, transposed) = residuals(&pattern, &values);
+        assert!(
+            forward < 1e-14 && transposed < 1e-14,
+            "{forward:e} {transposed:e}"
+        );
+    }
+
+    #[test]
+    fn refactorisation_matches_a_fresh_factorisation() {
+        let (pattern, mut values) = tridiagonal(300, 0.4);
+        let mut reused = MultifrontalLu::new(&pattern).unwrap();
+        reused.factorize(&values).unwrap();
+        for (k, v) in values.iter_mut().enumerate() {
+            if *v != 1.0 {
+                *v = -0.3 - 1e-3 * (k % 7) as f64;
+            }
+        }
+        reused.factorize(&values).unwrap();
+        let mut fresh = MultifrontalLu::new(&pattern).unwrap();
+        fresh.factorize(&values).unwrap();
+        assert_eq!(reused.lower, fresh.lower);
+        assert_eq!(reused.upper, fresh.upper);
+    }
+
+    #[test]
+    fn a_zero_pivot_is_an_error() {
+        let pattern = SparsePattern {
+            n: 2,
+            row_offsets: vec![0, 2, 4],
+            columns: vec![0, 1, 0, 1],
+        };
+        let mut lu = MultifrontalLu::new(&pattern).unwrap();
+        let error = lu.factorize(&[1.0, -1.0, -1.0, 1.0]).unwrap_err();
+        assert!(matches!(error, SolverError::Singular(_)), "{error}");
+    }
+}
