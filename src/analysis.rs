@@ -20,9 +20,7 @@
 use serde::Serialize;
 
 use crate::automaton::Dra;
-use crate::graph::{
-    CsrGraph, backward_reachable, bottom_components, reverse_csr, strongly_connected_components,
-};
+use crate::graph::{Components, CsrGraph, Digraph, strongly_connected_components};
 use crate::product::Gmc;
 
 /// The class of a GMC state with respect to the target set.
@@ -75,48 +73,24 @@ pub struct Recurrence {
 
 impl Recurrence {
     /// Analyses the sparsity pattern of `gmc` against the Rabin pairs of `dra`
-    /// (the automaton the GMC was built with). `O(states + transitions)`.
+    /// (the automaton the GMC was built with). `O(states + transitions)`:
+    /// one pass of Tarjan's algorithm and one pass over the components in
+    /// its order, in which every edge leaving a component leads to one
+    /// already classified.
     pub fn analyse(gmc: &Gmc, dra: &Dra) -> Self {
         let graph = gmc.graph();
         let components = strongly_connected_components(&graph);
-        let bottom = bottom_components(&graph, &components);
         let mut bsccs = Vec::new();
-        let mut in_target = vec![false; gmc.num_states()];
-        for (c, states) in components.members().into_iter().enumerate() {
-            if !bottom[c] {
-                continue;
-            }
-            let bscc = classify(gmc, dra, states);
-            if bscc.is_feasible() {
-                for &m in &bscc.states {
-                    in_target[m] = true;
-                }
-            }
+        let flags = component_flags(&graph, &components, |members| {
+            let bscc = classify(gmc, dra, members.iter().map(|&v| v as usize).collect());
+            let feasible = bscc.is_feasible();
             bsccs.push(bscc);
-        }
-        let (offsets, targets) = reverse_csr(&graph);
-        let reaches = backward_reachable(
-            &CsrGraph {
-                offsets: &offsets,
-                targets: &targets,
-            },
-            &in_target,
-        );
-        let zero: Vec<bool> = reaches.iter().map(|&r| !r).collect();
-        let reaches_zero = backward_reachable(
-            &CsrGraph {
-                offsets: &offsets,
-                targets: &targets,
-            },
-            &zero,
-        );
-        let classes: Vec<StateClass> = (0..gmc.num_states())
-            .map(|m| match (in_target[m], reaches[m], reaches_zero[m]) {
-                (true, _, _) => StateClass::Target,
-                (false, false, _) => StateClass::Zero,
-                (false, true, false) => StateClass::Sure,
-                (false, true, true) => StateClass::Transient,
-            })
+            feasible
+        });
+        let classes: Vec<StateClass> = components
+            .component
+            .iter()
+            .map(|&c| flags[c as usize].class())
             .collect();
         let transient: Vec<usize> = (0..classes.len())
             .filter(|&m| classes[m] == StateClass::Transient)
@@ -136,6 +110,61 @@ impl Recurrence {
     /// The phi-feasible BSCCs.
     pub fn feasible(&self) -> impl Iterator<Item = &Bscc> {
         self.bsccs.iter().filter(|b| b.is_feasible())
+    }
+}
+
+/// The [`ComponentFlags`] of every component of `graph`, visiting the
+/// components in Tarjan's order (successor components first) and asking
+/// `feasible` about each bottom component (its vertices, increasing) in
+/// that order.
+fn component_flags(
+    graph: &CsrGraph<'_>,
+    components: &Components,
+    mut feasible: impl FnMut(&[u32]) -> bool,
+) -> Vec<ComponentFlags> {
+    let (offsets, vertices) = components.grouped();
+    let mut flags = vec![ComponentFlags::default(); components.count];
+    for c in 0..components.count {
+        let members = &vertices[offsets[c]..offsets[c + 1]];
+        let (mut leaves, mut to_target, mut to_zero) = (false, false, false);
+        for &v in members {
+            for w in graph.successors(v as usize) {
+                let d = components.component[w] as usize;
+                if d != c {
+                    leaves = true;
+                    to_target |= flags[d].reaches_target;
+                    to_zero |= flags[d].reaches_zero;
+                }
+            }
+        }
+        if !leaves {
+            to_target = feasible(members);
+            flags[c].target = to_target;
+        }
+        flags[c].reaches_target = to_target;
+        flags[c].reaches_zero = !to_target || to_zero;
+    }
+    flags
+}
+
+/// What [`Recurrence::analyse`] knows of a strongly connected component:
+/// whether it is a phi-feasible BSCC, can reach one (`B`), or can reach a
+/// state that cannot (`Z`). All states of a component share these.
+#[derive(Debug, Clone, Copy, Default)]
+struct ComponentFlags {
+    target: bool,
+    reaches_target: bool,
+    reaches_zero: bool,
+}
+
+impl ComponentFlags {
+    fn class(self) -> StateClass {
+        match (self.target, self.reaches_target, self.reaches_zero) {
+            (true, _, _) => StateClass::Target,
+            (false, false, _) => StateClass::Zero,
+            (false, true, false) => StateClass::Sure,
+            (false, true, true) => StateClass::Transient,
+        }
     }
 }
 
@@ -164,5 +193,86 @@ fn classify(gmc: &Gmc, dra: &Dra, states: Vec<usize>) -> Bscc {
         states,
         feasible_pairs,
         good,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::graph::{backward_reachable, bottom_components, reverse_csr};
+    use proptest::prelude::*;
+
+    /// The classes by the definitions: `B` the feasible bottom components,
+    /// `Z` the vertices that cannot reach `B`, `Sure` those of the rest
+    /// that cannot reach `Z` (backward searches on the reverse graph).
+    fn reference_classes(
+        graph: &CsrGraph<'_>,
+        feasible: &dyn Fn(&[usize]) -> bool,
+    ) -> Vec<StateClass> {
+        let components = strongly_connected_components(graph);
+        let bottom = bottom_components(graph, &components);
+        let members = components.members();
+        let n = graph.num_vertices();
+        let mut target = vec![false; n];
+        for (c, states) in members.iter().enumerate() {
+            if bottom[c] && feasible(states) {
+                for &v in states {
+                    target[v] = true;
+                }
+            }
+        }
+        let (offsets, targets) = reverse_csr(graph);
+        let reverse = CsrGraph {
+            offsets: &offsets,
+            targets: &targets,
+        };
+        let reaches = backward_reachable(&reverse, &target);
+        let zero: Vec<bool> = reaches.iter().map(|&r| !r).collect();
+        let reaches_zero = backward_reachable(&reverse, &zero);
+        (0..n)
+            .map(|v| {
+                ComponentFlags {
+                    target: target[v],
+                    reaches_target: reaches[v],
+                    reaches_zero: reaches_zero[v],
+                }
+                .class()
+            })
+            .collect()
+    }
+
+    proptest! {
+        #[test]
+        fn one_pass_over_the_components_gives_the_classes_of_the_definitions(
+            n in 1usize..14,
+            raw in proptest::collection::vec((0usize..14, 0usize..14), 0..40),
+            parity in 0usize..2,
+        ) {
+            let mut rows = vec![Vec::new(); n];
+            for (a, b) in raw {
+                rows[a % n].push((b % n) as u32);
+            }
+            let mut offsets = vec![0];
+            let mut targets = Vec::new();
+            for mut row in rows {
+                row.sort_unstable();
+                row.dedup();
+                targets.extend(row);
+                offsets.push(targets.len());
+            }
+            let graph = CsrGraph { offsets: &offsets, targets: &targets };
+            let feasible = |states: &[usize]| states[0] % 2 == parity;
+            let components = strongly_connected_components(&graph);
+            let flags = component_flags(&graph, &components, |members| {
+                let states: Vec<usize> = members.iter().map(|&v| v as usize).collect();
+                feasible(&states)
+            });
+            let classes: Vec<StateClass> = components
+                .component
+                .iter()
+                .map(|&c| flags[c as usize].class())
+                .collect();
+            prop_assert_eq!(classes, reference_classes(&graph, &feasible));
+        }
     }
 }

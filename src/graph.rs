@@ -58,6 +58,26 @@ impl Components {
         }
         members
     }
+
+    /// The vertices of each component in one array: those of component `c`
+    /// are `vertices[offsets[c]..offsets[c + 1]]`, in increasing order
+    /// (a counting sort, `O(|V|)`). Returns `(offsets, vertices)`.
+    pub fn grouped(&self) -> (Vec<usize>, Vec<u32>) {
+        let mut offsets = vec![0usize; self.count + 1];
+        for &c in &self.component {
+            offsets[c as usize + 1] += 1;
+        }
+        for c in 0..self.count {
+            offsets[c + 1] += offsets[c];
+        }
+        let mut fill = offsets.clone();
+        let mut vertices = vec![0u32; self.component.len()];
+        for (v, &c) in self.component.iter().enumerate() {
+            vertices[fill[c as usize]] = v as u32;
+            fill[c as usize] += 1;
+        }
+        (offsets, vertices)
+    }
 }
 
 const UNVISITED: u32 = u32::MAX;
@@ -263,6 +283,15 @@ mod tests {
                         prop_assert!(sccs.component[b] < sccs.component[a]);
                     }
                 }
+            }
+            let (group_offsets, grouped) = sccs.grouped();
+            let members = sccs.members();
+            for c in 0..sccs.count {
+                let group: Vec<usize> = grouped[group_offsets[c]..group_offsets[c + 1]]
+                    .iter()
+                    .map(|&v| v as usize)
+                    .collect();
+                prop_assert_eq!(&group, &members[c]);
             }
             let (roffsets, rtargets) = reverse_csr(&graph);
             let target: Vec<bool> = (0..n).map(|v| v == n - 1).collect();

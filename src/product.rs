@@ -20,13 +20,13 @@
 //! is linear in the number of terms of the sum.
 
 use rayon::prelude::*;
+use rustc_hash::FxHashMap;
 use thiserror::Error;
 
 use crate::automaton::{Dra, Letter};
 use crate::controller::{Mixture, Probabilities, Support};
 use crate::game::{AdversaryAction, DefenderAction, Player, Posg};
 use crate::graph::CsrGraph;
-use crate::interner::{Interner, TooManyKeys};
 use crate::solver::FlushDenormals;
 
 /// A state `(s, q, g, h)` of the GMC: game state, automaton state, defender
@@ -130,12 +130,38 @@ impl GameTables {
         }
     }
 
+    /// The index of `(s, u, v)` in the transition table.
+    fn pair_index(&self, s: usize, u: usize, v: usize) -> usize {
+        (s * self.num_defender_actions + u) * self.num_adversary_actions + v
+    }
+
+    /// For each `(s, u, v)` ([`Self::pair_index`]), the set of local
+    /// successors of `T(. | s, u, v)` as a bit mask, or `None` if no state
+    /// has at most 64 successors. The masks of a state with more are
+    /// incomplete and not to be used.
+    fn successor_masks(&self) -> Option<Vec<u64>> {
+        let pairs = self.transition_offsets.len() - 1;
+        let any_small =
+            (0..self.successor_offsets.len() - 1).any(|s| self.successors(s).len() <= 64);
+        any_small.then(|| {
+            (0..pairs)
+                .map(|t| {
+                    self.local_transitions
+                        [self.transition_offsets[t]..self.transition_offsets[t + 1]]
+                        .iter()
+                        .filter(|&&(local, _)| local < 64)
+                        .fold(0u64, |mask, &(local, _)| mask | (1 << local))
+                })
+                .collect()
+        })
+    }
+
     fn successors(&self, s: usize) -> &[u32] {
         &self.successors[self.successor_offsets[s]..self.successor_offsets[s + 1]]
     }
 
     fn transition(&self, s: usize, u: usize, v: usize) -> &[(u32, f64)] {
-        let t = (s * self.num_defender_actions + u) * self.num_adversary_actions + v;
+        let t = self.pair_index(s, u, v);
         &self.local_transitions[self.transition_offsets[t]..self.transition_offsets[t + 1]]
     }
 }
@@ -150,7 +176,7 @@ pub struct Gmc {
     tables: GameTables,
     defender: Mixture,
     adversary: Mixture,
-    states: Interner<GmcState>,
+    states: StateIndex,
     row_offsets: Vec<usize>,
     columns: Vec<u32>,
     cells: Vec<u32>,
@@ -205,7 +231,7 @@ impl Gmc {
             tables,
             defender: defender_mixture,
             adversary: adversary_mixture,
-            states: Interner::default(),
+            states: StateIndex::new(game.num_states(), dra.num_states(), num_g, num_h),
             row_offsets: vec![0],
             columns: Vec::new(),
             cells: Vec::new(),
@@ -237,28 +263,23 @@ impl Gmc {
     }
 
     fn intern(&mut self, state: GmcState) -> Result<u32, ProductError> {
-        self.states
-            .intern(state)
-            .map_err(|TooManyKeys| ProductError::TooLarge)
+        self.states.intern(state)
     }
 
     fn explore(&mut self, dra: &Dra) -> Result<(), ProductError> {
-        let mut cell_seen = vec![false; self.max_cells];
-        let mut row_cells: Vec<u32> = Vec::new();
+        let mut pattern = RowPattern {
+            successor_masks: self.tables.successor_masks(),
+            cell_seen: vec![false; self.max_cells],
+            covered: vec![0; self.defender.num_nodes() * self.adversary.num_nodes()],
+            cells: Vec::new(),
+        };
         let mut row: Vec<(u32, u32)> = Vec::new();
         let mut m = 0;
         while m < self.states.len() {
             let state = self.states.keys()[m];
-            row_cells.clear();
-            self.for_each_term(state, |cell, _, _, _| {
-                if !cell_seen[cell] {
-                    cell_seen[cell] = true;
-                    row_cells.push(cell as u32);
-                }
-            });
+            let row_cells = self.row_pattern(state, &mut pattern);
             row.clear();
-            for &cell in &row_cells {
-                cell_seen[cell as usize] = false;
+            for &cell in row_cells {
                 let target = self.cell_state(state, cell as usize, dra);
                 row.push((self.intern(target)?, cell));
             }
@@ -278,6 +299,52 @@ impl Gmc {
             m += 1;
         }
         Ok(())
+    }
+
+    /// The distinct cells of row `state`, in the order in which
+    /// [`Gmc::for_each_term`] meets them first. A pair of mixture entries
+    /// `(g', u)`, `(h', v)` whose successors `T(. | s, u, v)` were all met
+    /// with `(g', h')` before adds no cell: its terms are skipped.
+    fn row_pattern<'p>(&self, state: GmcState, pattern: &'p mut RowPattern) -> &'p [u32] {
+        let RowPattern {
+            successor_masks,
+            cell_seen,
+            covered,
+            cells,
+        } = pattern;
+        for &cell in cells.iter() {
+            cell_seen[cell as usize] = false;
+        }
+        cells.clear();
+        covered.fill(0);
+        let s = state.s as usize;
+        let masks = successor_masks
+            .as_deref()
+            .filter(|_| self.tables.successors(s).len() <= 64);
+        let (num_g, num_h) = (self.defender.num_nodes(), self.adversary.num_nodes());
+        for j in self.defender.at(s, state.g as usize) {
+            let (g_next, u) = self.defender.entry(j);
+            for l in self.adversary.at(s, state.h as usize) {
+                let (h_next, v) = self.adversary.entry(l);
+                let (u, v) = (u as usize, v as usize);
+                if let Some(masks) = masks {
+                    let mask = masks[self.tables.pair_index(s, u, v)];
+                    let pair = &mut covered[g_next as usize * num_h + h_next as usize];
+                    if mask & !*pair == 0 {
+                        continue;
+                    }
+                    *pair |= mask;
+                }
+                for &(local, _) in self.tables.transition(s, u, v) {
+                    let cell = (local as usize * num_g + g_next as usize) * num_h + h_next as usize;
+                    if !cell_seen[cell] {
+                        cell_seen[cell] = true;
+                        cells.push(cell as u32);
+                    }
+                }
+            }
+        }
+        cells
     }
 
     /// The GMC state of `cell = (local s', g', h')` in the row of `state`.
@@ -445,6 +512,144 @@ impl Gmc {
             let s = self.states.keys()[m as usize].s as usize;
             (m as usize, self.game_initial[s])
         })
+    }
+}
+
+/// Scratch of [`Gmc::row_pattern`]: the successor masks of the game, the
+/// cells met in the current row (as flags and in order of first meeting)
+/// and, per node pair `(g', h')`, the local successors met with it (a bit
+/// mask).
+struct RowPattern {
+    successor_masks: Option<Vec<u64>>,
+    cell_seen: Vec<bool>,
+    covered: Vec<u64>,
+    cells: Vec<u32>,
+}
+
+/// The GMC states found so far, numbered `0, 1, ...` in order of discovery,
+/// and the map from a state to its number. When `|Q| |G| |H|` is small the
+/// map is dense: each game state `s` met gets a block of `|Q| |G| |H|`
+/// slots holding the numbers of the states `(s, q, g, h)`, which costs 4
+/// bytes per slot and no hashing; otherwise it is a hash map.
+#[derive(Debug, Clone)]
+struct StateIndex {
+    keys: Vec<GmcState>,
+    lookup: StateLookup,
+}
+
+#[derive(Debug, Clone)]
+enum StateLookup {
+    Blocks(BlockLookup),
+    Hashed(FxHashMap<GmcState, u32>),
+}
+
+/// The dense map: `slots[block_of[s] + (q |G| + g) |H| + h]` is the number
+/// of `(s, q, g, h)`, [`NO_INDEX`] for a state not found (yet) and for the
+/// block of a game state not met.
+#[derive(Debug, Clone)]
+struct BlockLookup {
+    num_q: usize,
+    num_g: usize,
+    num_h: usize,
+    block_len: usize,
+    block_of: Vec<u32>,
+    slots: Vec<u32>,
+}
+
+/// An empty slot; also caps the number of states at `2^32 - 1`.
+const NO_INDEX: u32 = u32::MAX;
+
+/// The largest block `|Q| |G| |H|` of the dense state map (16 KiB): a game
+/// state met costs at most this many slots even if few of its GMC states
+/// are reachable.
+const MAX_BLOCK_SLOTS: usize = 4096;
+
+impl StateIndex {
+    fn new(num_game_states: usize, num_q: usize, num_g: usize, num_h: usize) -> Self {
+        let block_len = num_q * num_g * num_h;
+        let dense = block_len <= MAX_BLOCK_SLOTS
+            && num_game_states
+                .checked_mul(block_len)
+                .is_some_and(|slots| slots < NO_INDEX as usize);
+        let lookup = if dense {
+            StateLookup::Blocks(BlockLookup {
+                num_q,
+                num_g,
+                num_h,
+                block_len,
+                block_of: vec![NO_INDEX; num_game_states],
+                slots: Vec::new(),
+            })
+        } else {
+            StateLookup::Hashed(FxHashMap::default())
+        };
+        Self {
+            keys: Vec::new(),
+            lookup,
+        }
+    }
+
+    /// The number of `state`, numbering it next if it is new.
+    fn intern(&mut self, state: GmcState) -> Result<u32, ProductError> {
+        let next = self.keys.len();
+        let slot = match &mut self.lookup {
+            StateLookup::Blocks(blocks) => blocks.slot_mut(state),
+            StateLookup::Hashed(map) => map.entry(state).or_insert(NO_INDEX),
+        };
+        if *slot == NO_INDEX {
+            *slot = u32::try_from(next)
+                .ok()
+                .filter(|&m| m != NO_INDEX)
+                .ok_or(ProductError::TooLarge)?;
+            self.keys.push(state);
+        }
+        Ok(*slot)
+    }
+
+    /// The number of `state`, if it has been found.
+    fn get(&self, state: &GmcState) -> Option<u32> {
+        match &self.lookup {
+            StateLookup::Blocks(blocks) => blocks.get(state),
+            StateLookup::Hashed(map) => map.get(state).copied(),
+        }
+    }
+
+    fn len(&self) -> usize {
+        self.keys.len()
+    }
+
+    fn keys(&self) -> &[GmcState] {
+        &self.keys
+    }
+}
+
+impl BlockLookup {
+    fn offset(&self, state: &GmcState) -> usize {
+        (state.q as usize * self.num_g + state.g as usize) * self.num_h + state.h as usize
+    }
+
+    /// The slot of `state`, giving its game state a block if it has none.
+    fn slot_mut(&mut self, state: GmcState) -> &mut u32 {
+        let offset = self.offset(&state);
+        let start = &mut self.block_of[state.s as usize];
+        if *start == NO_INDEX {
+            *start = self.slots.len() as u32;
+            self.slots
+                .resize(self.slots.len() + self.block_len, NO_INDEX);
+        }
+        &mut self.slots[*start as usize + offset]
+    }
+
+    fn get(&self, state: &GmcState) -> Option<u32> {
+        let start = *self.block_of.get(state.s as usize)?;
+        let in_block = (state.q as usize) < self.num_q
+            && (state.g as usize) < self.num_g
+            && (state.h as usize) < self.num_h;
+        if start == NO_INDEX || !in_block {
+            return None;
+        }
+        let slot = self.slots[start as usize + self.offset(state)];
+        (slot != NO_INDEX).then_some(slot)
     }
 }
 

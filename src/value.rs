@@ -117,43 +117,45 @@ impl TransientSystem {
         recurrence: &Recurrence,
         settings: &SolverSettings,
     ) -> Result<Self, SolverError> {
-        let mut row_offsets = vec![0];
-        let mut columns = Vec::new();
-        let mut sources = Vec::new();
-        let mut diagonal = Vec::new();
-        let mut target_offsets = vec![0];
+        let n = recurrence.transient.len();
+        let most_entries = n + recurrence
+            .transient
+            .iter()
+            .map(|&m| gmc.row_range(m).len())
+            .sum::<usize>();
+        let mut row_offsets = Vec::with_capacity(n + 1);
+        row_offsets.push(0);
+        let mut columns = Vec::with_capacity(most_entries);
+        let mut sources = Vec::with_capacity(most_entries);
+        let mut diagonal = Vec::with_capacity(n);
+        let mut target_offsets = Vec::with_capacity(n + 1);
+        target_offsets.push(0);
         let mut target_sources = Vec::new();
-        let mut entries: Vec<(usize, u32)> = Vec::new();
         for (i, &m) in recurrence.transient.iter().enumerate() {
-            entries.clear();
+            let row_start = columns.len();
             let (row_columns, _) = gmc.row(m);
             for (k, &c) in gmc.row_range(m).zip(row_columns) {
                 match recurrence.classes[c as usize] {
                     StateClass::Transient => {
-                        entries.push((recurrence.transient_index[c as usize] as usize, k as u32))
+                        columns.push(recurrence.transient_index[c as usize] as usize);
+                        sources.push(k as u32);
                     }
                     StateClass::Target | StateClass::Sure => target_sources.push(k as u32),
                     StateClass::Zero => {}
                 }
             }
-            if !entries.iter().any(|&(c, _)| c == i) {
-                entries.push((i, NO_SOURCE));
-                entries.sort_unstable();
+            let entry = row_start + columns[row_start..].partition_point(|&c| c < i);
+            if columns.get(entry) != Some(&i) {
+                columns.insert(entry, i);
+                sources.insert(entry, NO_SOURCE);
             }
-            for &(c, source) in &entries {
-                if c == i {
-                    diagonal.push(Diagonal {
-                        entry: columns.len(),
-                        state: m as u32,
-                    });
-                }
-                columns.push(c);
-                sources.push(source);
-            }
+            diagonal.push(Diagonal {
+                entry,
+                state: m as u32,
+            });
             row_offsets.push(columns.len());
             target_offsets.push(target_sources.len());
         }
-        let n = recurrence.transient.len();
         let matrix_values = vec![0.0; columns.len()];
         let solver = LinearSolver::new(
             SparsePattern {

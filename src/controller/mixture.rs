@@ -41,25 +41,21 @@ impl Mixture {
         let mut entries = Vec::new();
         let mut term_offsets = vec![0];
         let mut terms = Vec::new();
-        let mut pending: Vec<(MixtureKey, Vec<MixtureTerm>)> = Vec::new();
+        let mut pending: Vec<(MixtureKey, MixtureTerm)> = Vec::new();
         for s in 0..num_states {
             for g in 0..num_nodes {
                 pending.clear();
                 for &(o, weight) in player.observation_distribution(s) {
                     for k in support.block(g, o) {
                         let (next, action) = support.entry(k);
-                        let key = (next as u32, action as u32);
-                        let term = (k as u32, weight);
-                        match pending.iter_mut().find(|(e, _)| *e == key) {
-                            Some((_, list)) => list.push(term),
-                            None => pending.push((key, vec![term])),
-                        }
+                        pending.push(((next as u32, action as u32), (k as u32, weight)));
                     }
                 }
-                pending.sort_by_key(|(key, _)| *key);
-                for (key, list) in &pending {
-                    entries.push(*key);
-                    terms.extend_from_slice(list);
+                // Stable: an entry's terms keep the order in which they were met.
+                pending.sort_by_key(|&(key, _)| key);
+                for group in pending.chunk_by(|a, b| a.0 == b.0) {
+                    entries.push(group[0].0);
+                    terms.extend(group.iter().map(|&(_, term)| term));
                     term_offsets.push(terms.len());
                 }
                 offsets.push(entries.len());

@@ -271,14 +271,7 @@ fn distribution_into<'f, K: AsRef<str>>(
         }
     }
     if d.iter().any(|&(_, p)| p <= 0.0) {
-        let mut kept = start;
-        for i in start..out.len() {
-            if out[i].1 > 0.0 {
-                out[kept] = out[i];
-                kept += 1;
-            }
-        }
-        out.truncate(kept);
+        super::drop_zero_outcomes(out, start);
     }
     let d = &mut out[start..];
     if !d.is_sorted_by_key(|&(o, _)| o) {

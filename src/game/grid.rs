@@ -336,14 +336,7 @@ fn spread_into(out: &mut Distribution, main: usize, p: f64, others: &[usize]) {
     out.extend(others.iter().map(|&c| (c, rest)));
     out.push((main, p));
     out[start..].sort_unstable_by_key(|&(c, _)| c);
-    let mut kept = start;
-    for i in start..out.len() {
-        if out[i].1 > 0.0 {
-            out[kept] = out[i];
-            kept += 1;
-        }
-    }
-    out.truncate(kept);
+    super::drop_zero_outcomes(out, start);
 }
 
 fn positive(d: Distribution) -> Distribution {

@@ -71,6 +71,19 @@ pub struct AdversaryAction(pub usize);
 /// distinct outcomes and positive probabilities summing to 1.
 pub type Distribution = Vec<(usize, f64)>;
 
+/// Removes the outcomes of probability zero from `out[start..]`, the
+/// distribution being built at the end of a flat buffer.
+pub(crate) fn drop_zero_outcomes(out: &mut Vec<(usize, f64)>, start: usize) {
+    let mut kept = start;
+    for i in start..out.len() {
+        if out[i].1 > 0.0 {
+            out[kept] = out[i];
+            kept += 1;
+        }
+    }
+    out.truncate(kept);
+}
+
 /// One player's side of the game: actions `U_*`, observations `O_*`, the
 /// observation function `O_*(o | s)` and the actions enabled under each
 /// observation (formats.md section 6; by default every action).
