@@ -417,7 +417,7 @@ impl Structure {
     fn analyse(pattern: &SparsePattern) -> Result<Self, SolverError> {
         let n = pattern.n;
         let graph = SymmetricPattern::of(pattern);
-        let order = graph.minimum_degree_order()?;
+        let order = graph.fill_reducing_order()?;
         let mut inverse = vec![0; n];
         for (new, &old) in order.iter().enumerate() {
             inverse[old] = new;
