@@ -55,7 +55,7 @@ pub fn from_json_str(text: &str, file_name: &str) -> Result<Posg, ModelError> {
 }
 
 /// [`from_json_str`] on the bytes of a file. Bytes that are not UTF-8 give
-/// the error of [`read_text`] ("cannot read the file: ...").
+/// the error of `read_text` ("cannot read the file: ...").
 pub fn from_json_slice(bytes: &[u8], file_name: &str) -> Result<Posg, ModelError> {
     let raw: RawGame = match serde_json::from_slice(bytes) {
         Ok(raw) => raw,

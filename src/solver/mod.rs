@@ -178,7 +178,7 @@ pub struct SolverSettings {
     /// With [`SolverMethod::Auto`]: the most unknowns solved by LU.
     pub lu_limit: usize,
     /// With [`SolverMethod::Auto`]: the most unknowns for which slow
-    /// BiCGSTAB solves (over [`lu_cost_in_iterations`]) give way to LU.
+    /// BiCGSTAB solves (over the iterations one LU costs) give way to LU.
     pub lu_switch_limit: usize,
     /// The most BiCGSTAB iterations per solve.
     pub max_iterations: usize,
