@@ -33,7 +33,8 @@ use faer::reborrow::{Reborrow, ReborrowMut};
 use faer::sparse::SymbolicSparseColMatRef;
 use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::linalg::cholesky::{
-    CholeskySymbolicParams, SymbolicCholeskyRaw, SymmetricOrdering, factorize_symbolic_cholesky,
+    CholeskySymbolicParams, SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering,
+    factorize_symbolic_cholesky,
 };
 use faer::{Accum, MatMut, Par, Side};
 
@@ -418,24 +419,7 @@ impl Structure {
         let n = pattern.n;
         let graph = SymmetricPattern::of(pattern);
         let order = graph.fill_reducing_order()?;
-        let mut inverse = vec![0; n];
-        for (new, &old) in order.iter().enumerate() {
-            inverse[old] = new;
-        }
-        let (column_offsets, row_indices) = graph.upper();
-        drop(graph);
-        let upper = SymbolicSparseColMatRef::new_checked(n, n, &column_offsets, None, &row_indices);
-        let params = CholeskySymbolicParams {
-            supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SUPERNODAL,
-            ..Default::default()
-        };
-        let symbolic = factorize_symbolic_cholesky(
-            upper,
-            Side::Upper,
-            SymmetricOrdering::Custom(PermRef::new_checked(&order, &inverse, n)),
-            params,
-        )
-        .map_err(|_| SolverError::OutOfMemory)?;
+        let symbolic = cholesky_structure(graph, &order)?;
         let permutation = order;
         let mut structure = Self {
             n,
@@ -679,6 +663,33 @@ impl Structure {
         }
         Ok(grouped)
     }
+}
+
+/// faer's supernodal symbolic Cholesky analysis of `graph` (the pattern of
+/// `A + A^T`) permuted by `order`.
+fn cholesky_structure(
+    graph: SymmetricPattern,
+    order: &[usize],
+) -> Result<SymbolicCholesky<usize>, SolverError> {
+    let n = graph.len();
+    let mut inverse = vec![0; n];
+    for (new, &old) in order.iter().enumerate() {
+        inverse[old] = new;
+    }
+    let (column_offsets, row_indices) = graph.upper();
+    drop(graph);
+    let upper = SymbolicSparseColMatRef::new_checked(n, n, &column_offsets, None, &row_indices);
+    let params = CholeskySymbolicParams {
+        supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SUPERNODAL,
+        ..Default::default()
+    };
+    factorize_symbolic_cholesky(
+        upper,
+        Side::Upper,
+        SymmetricOrdering::Custom(PermRef::new_checked(order, &inverse, n)),
+        params,
+    )
+    .map_err(|_| SolverError::OutOfMemory)
 }
 
 fn to_u32(value: usize) -> Result<u32, SolverError> {
