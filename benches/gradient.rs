@@ -57,15 +57,7 @@ fn game_and_structure(
     def: usize,
     adv: usize,
 ) -> (posg_fsc::game::Posg, posg_fsc::automaton::Dra, Structure) {
-    let cells = side * side;
-    let spec = GridSpec {
-        width: side,
-        height: side,
-        unsafe_cells: vec![side + 1],
-        goal_cells: vec![cells - 1],
-        ..GridSpec::default()
-    };
-    let game = spec.build().expect("a valid grid");
+    let game = GridSpec::square(side).build().expect("a valid grid");
     let formula = posg_fsc::ltl::parse("!unsafe U goal").expect("a valid formula");
     let dra = posg_fsc::ltl::translate(&formula).expect("a translatable formula");
     let structure = Structure::full(&game, def, adv, false);

@@ -103,15 +103,7 @@ fn neighbour_of(fsc: &Fsc) -> Probabilities {
 }
 
 fn fixture(side: usize, def_nodes: usize, adv_nodes: usize) -> Fixture {
-    let game = GridSpec {
-        width: side,
-        height: side,
-        unsafe_cells: vec![side + 1],
-        goal_cells: vec![side * side - 1],
-        ..GridSpec::default()
-    }
-    .build()
-    .expect("a valid grid");
+    let game = GridSpec::square(side).build().expect("a valid grid");
     let formula = posg_fsc::ltl::parse(FORMULA).expect("a valid formula");
     let dra = posg_fsc::ltl::translate(&formula).expect("a translatable formula");
     let dra_not = posg_fsc::ltl::translate(&formula.negate()).expect("a translatable negation");

@@ -122,15 +122,7 @@ fn main() {
 /// are filled before the solve, so one BiCGSTAB iteration (not converged)
 /// is enough to get them.
 fn transient_system(side: usize) -> System {
-    let game = GridSpec {
-        width: side,
-        height: side,
-        unsafe_cells: vec![side + 1],
-        goal_cells: vec![side * side - 1],
-        ..GridSpec::default()
-    }
-    .build()
-    .expect("a valid grid");
+    let game = GridSpec::square(side).build().expect("a valid grid");
     let formula = posg_fsc::ltl::parse("!unsafe U goal").expect("a valid formula");
     let dra = posg_fsc::ltl::translate(&formula).expect("a translatable formula");
     let defender = Fsc::uniform_enabled(Role::Defender, 2, game.defender());

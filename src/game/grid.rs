@@ -111,6 +111,19 @@ impl Default for GridSpec {
 const MOVES: [(&str, isize, isize); 4] = [("R", 1, 0), ("L", -1, 0), ("U", 0, -1), ("D", 0, 1)];
 
 impl GridSpec {
+    /// The `side x side` grid of the paper's family used for scaling: the
+    /// unsafe cell `(1, 1)` (`s(side + 1)`), the goal in the far corner, the
+    /// start `s0`, the paper's probabilities.
+    pub fn square(side: usize) -> Self {
+        Self {
+            width: side,
+            height: side,
+            unsafe_cells: vec![side + 1],
+            goal_cells: vec![side * side - 1],
+            ..Self::default()
+        }
+    }
+
     /// The number of cells `W H`.
     pub fn num_cells(&self) -> usize {
         self.width * self.height

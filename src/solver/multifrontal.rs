@@ -97,7 +97,8 @@ struct Structure {
     stack_len: usize,
     lower_len: usize,
     upper_len: usize,
-    largest_front: usize,
+    /// The most entries of a front's columns `[F_JR; F_RR]`.
+    largest_right: usize,
 }
 
 /// LU factors of `P A P^T = L U` (unit lower `L`), stored by supernode.
@@ -122,7 +123,7 @@ impl MultifrontalLu {
         Ok(Self {
             lower: vec![0.0; structure.lower_len],
             upper: vec![0.0; structure.upper_len],
-            front: vec![0.0; structure.largest_front * structure.largest_front],
+            front: vec![0.0; structure.largest_right],
             stack: Vec::with_capacity(structure.stack_len),
             structure,
         })
@@ -433,7 +434,7 @@ impl Structure {
             stack_len: 0,
             lower_len: 0,
             upper_len: 0,
-            largest_front: 0,
+            largest_right: 0,
         };
         match symbolic.raw() {
             SymbolicCholeskyRaw::Supernodal(supernodal) => {
@@ -464,7 +465,7 @@ impl Structure {
         self.rows[first..].sort_unstable();
         let rows = first..self.rows.len();
         let (columns, below) = (end - begin, rows.len());
-        self.largest_front = self.largest_front.max(columns + below);
+        self.largest_right = self.largest_right.max((columns + below) * below);
         self.supernodes.push(Supernode {
             begin,
             end,
