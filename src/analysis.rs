@@ -16,6 +16,12 @@
 //! their value is exactly 1 for every probability on the supports, so they
 //! join `B` in the linear system, which makes it smaller and their values
 //! exact rather than `1 - 1e-15`.
+//!
+//! A GMC explored [`crate::product::Exploration::UntilDecided`] has leaves,
+//! the decided states: they are no BSCC, and their class comes from their
+//! verdict ([`Gmc::verdict`]): `Sure` if the formula holds, `Zero` if not.
+//! These are the classes the full chain gives them (from such a state
+//! every run is accepted, or none is), so `T` and its system are the same.
 
 use serde::Serialize;
 
@@ -81,7 +87,8 @@ impl Recurrence {
         let graph = gmc.graph();
         let components = strongly_connected_components(&graph);
         let mut bsccs = Vec::new();
-        let flags = component_flags(&graph, &components, |members| {
+        let verdict = |v: u32| gmc.verdict(v as usize);
+        let flags = component_flags(&graph, &components, verdict, |members| {
             let bscc = classify(gmc, dra, members.iter().map(|&v| v as usize).collect());
             let feasible = bscc.is_feasible();
             bsccs.push(bscc);
@@ -116,10 +123,12 @@ impl Recurrence {
 /// The [`ComponentFlags`] of every component of `graph`, visiting the
 /// components in Tarjan's order (successor components first) and asking
 /// `feasible` about each bottom component (its vertices, increasing) in
-/// that order.
+/// that order, except the leaves with a `verdict` (decided states), which
+/// reach the target set iff their verdict is `true`.
 fn component_flags(
     graph: &CsrGraph<'_>,
     components: &Components,
+    verdict: impl Fn(u32) -> Option<bool>,
     mut feasible: impl FnMut(&[u32]) -> bool,
 ) -> Vec<ComponentFlags> {
     let (offsets, vertices) = components.grouped();
@@ -138,8 +147,12 @@ fn component_flags(
             }
         }
         if !leaves {
-            to_target = feasible(members);
-            flags[c].target = to_target;
+            if let Some(holds) = verdict(members[0]) {
+                to_target = holds;
+            } else {
+                to_target = feasible(members);
+                flags[c].target = to_target;
+            }
         }
         flags[c].reaches_target = to_target;
         flags[c].reaches_zero = !to_target || to_zero;
@@ -202,11 +215,13 @@ mod tests {
     use crate::graph::{backward_reachable, bottom_components, reverse_csr};
     use proptest::prelude::*;
 
-    /// The classes by the definitions: `B` the feasible bottom components,
-    /// `Z` the vertices that cannot reach `B`, `Sure` those of the rest
-    /// that cannot reach `Z` (backward searches on the reverse graph).
+    /// The classes by the definitions: `B` the feasible bottom components
+    /// that are no leaf with a verdict, `Z` the vertices that cannot reach
+    /// `B` or a leaf whose verdict is `true`, `Sure` those of the rest that
+    /// cannot reach `Z` (backward searches on the reverse graph).
     fn reference_classes(
         graph: &CsrGraph<'_>,
+        verdict: &dyn Fn(usize) -> Option<bool>,
         feasible: &dyn Fn(&[usize]) -> bool,
     ) -> Vec<StateClass> {
         let components = strongly_connected_components(graph);
@@ -215,18 +230,21 @@ mod tests {
         let n = graph.num_vertices();
         let mut target = vec![false; n];
         for (c, states) in members.iter().enumerate() {
-            if bottom[c] && feasible(states) {
+            if bottom[c] && verdict(states[0]).is_none() && feasible(states) {
                 for &v in states {
                     target[v] = true;
                 }
             }
         }
+        let accepting: Vec<bool> = (0..n)
+            .map(|v| target[v] || verdict(v) == Some(true))
+            .collect();
         let (offsets, targets) = reverse_csr(graph);
         let reverse = CsrGraph {
             offsets: &offsets,
             targets: &targets,
         };
-        let reaches = backward_reachable(&reverse, &target);
+        let reaches = backward_reachable(&reverse, &accepting);
         let zero: Vec<bool> = reaches.iter().map(|&r| !r).collect();
         let reaches_zero = backward_reachable(&reverse, &zero);
         (0..n)
@@ -247,6 +265,7 @@ mod tests {
             n in 1usize..14,
             raw in proptest::collection::vec((0usize..14, 0usize..14), 0..40),
             parity in 0usize..2,
+            verdicts in proptest::collection::vec(0u8..3, 14),
         ) {
             let mut rows = vec![Vec::new(); n];
             for (a, b) in raw {
@@ -261,9 +280,15 @@ mod tests {
                 offsets.push(targets.len());
             }
             let graph = CsrGraph { offsets: &offsets, targets: &targets };
+            let verdict = |v: usize| match verdicts[v] {
+                _ if offsets[v + 1] > offsets[v] => None,
+                0 => None,
+                leaf => Some(leaf == 1),
+            };
             let feasible = |states: &[usize]| states[0] % 2 == parity;
             let components = strongly_connected_components(&graph);
-            let flags = component_flags(&graph, &components, |members| {
+            let leaf_verdict = |v: u32| verdict(v as usize);
+            let flags = component_flags(&graph, &components, leaf_verdict, |members| {
                 let states: Vec<usize> = members.iter().map(|&v| v as usize).collect();
                 feasible(&states)
             });
@@ -272,7 +297,7 @@ mod tests {
                 .iter()
                 .map(|&c| flags[c as usize].class())
                 .collect();
-            prop_assert_eq!(classes, reference_classes(&graph, &feasible));
+            prop_assert_eq!(classes, reference_classes(&graph, &verdict, &feasible));
         }
     }
 }

@@ -62,6 +62,20 @@ pub enum ProductError {
     Budget(String),
 }
 
+/// How far [`Gmc::build_with`] explores the chain.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Exploration {
+    /// Every state reachable from the initial distribution, with its row.
+    Full,
+    /// Stop at *decided* states, whose automaton state decides the formula
+    /// on every word over the game's letters ([`Dra::decided_states`]):
+    /// they are kept as leaves without a row, and their value (1 or 0) is
+    /// [`Gmc::verdict`]. The states reachable from a decided state are
+    /// decided alike, so the value of every other state is unchanged
+    /// (method.md section 1, "decided states").
+    UntilDecided,
+}
+
 /// Game-level tables: for each state `s`, its possible successors over all
 /// action pairs (numbered locally `0..`), the transitions rewritten to those
 /// local numbers, and the automaton letter `L(s)`.
@@ -171,6 +185,8 @@ impl GameTables {
 /// Row `m` holds `P(. | m)`; within a row the columns are sorted. Each
 /// stored entry also remembers its *cell* `(local s', g', h')`, which lets
 /// [`Gmc::refill`] and the gradient pass find an entry without searching.
+/// Built with [`Exploration::UntilDecided`], the rows of decided states are
+/// empty ([`Gmc::verdict`]).
 #[derive(Debug, Clone)]
 pub struct Gmc {
     tables: GameTables,
@@ -185,6 +201,7 @@ pub struct Gmc {
     initial_probabilities: Vec<f64>,
     game_initial: Vec<f64>,
     max_cells: usize,
+    decided: Vec<Option<bool>>,
 }
 
 /// Rows refilled by one parallel task of [`Gmc::refill`].
@@ -192,13 +209,25 @@ const REFILL_CHUNK_ROWS: usize = 8192;
 
 impl Gmc {
     /// Explores the GMC reachable from the initial distribution under the
-    /// controllers' supports and stores its sparsity pattern. The numbers are
-    /// zero until [`Gmc::refill`] is called.
+    /// controllers' supports and stores its sparsity pattern
+    /// ([`Exploration::Full`]). The numbers are zero until [`Gmc::refill`]
+    /// is called.
     pub fn build(
         game: &Posg,
         dra: &Dra,
         defender: &Support,
         adversary: &Support,
+    ) -> Result<Self, ProductError> {
+        Self::build_with(game, dra, defender, adversary, Exploration::Full)
+    }
+
+    /// [`Gmc::build`], exploring as far as `exploration` says.
+    pub fn build_with(
+        game: &Posg,
+        dra: &Dra,
+        defender: &Support,
+        adversary: &Support,
+        exploration: Exploration,
     ) -> Result<Self, ProductError> {
         check_support("defender", game.defender(), defender)?;
         check_support("adversary", game.adversary(), adversary)?;
@@ -227,6 +256,15 @@ impl Gmc {
         for &(s, p) in game.initial() {
             game_initial[s] = p;
         }
+        let decided = match exploration {
+            Exploration::Full => vec![None; dra.num_states()],
+            Exploration::UntilDecided => {
+                let mut letters = tables.letters.clone();
+                letters.sort_unstable();
+                letters.dedup();
+                dra.decided_states(&letters)
+            }
+        };
         let mut gmc = Self {
             tables,
             defender: defender_mixture,
@@ -240,6 +278,7 @@ impl Gmc {
             initial_probabilities: Vec::new(),
             game_initial,
             max_cells,
+            decided,
         };
         for &(s, _) in game.initial() {
             let q = dra.successor(dra.initial(), gmc.tables.letters[s]) as u32;
@@ -277,6 +316,11 @@ impl Gmc {
         let mut m = 0;
         while m < self.states.len() {
             let state = self.states.keys()[m];
+            if self.decided[state.q as usize].is_some() {
+                self.row_offsets.push(self.columns.len());
+                m += 1;
+                continue;
+            }
             let row_cells = self.row_pattern(state, &mut pattern);
             row.clear();
             for &cell in row_cells {
@@ -422,6 +466,10 @@ impl Gmc {
         let (defender_mixture, adversary_mixture) =
             (self.defender.values(), self.adversary.values());
         for m in rows {
+            if self.row_range(m).is_empty() {
+                // A decided state: no row, and no terms to collect.
+                continue;
+            }
             self.for_each_term(self.states.keys()[m], |cell, j, l, p| {
                 scratch[cell] += defender_mixture[j] * adversary_mixture[l] * p;
             });
@@ -436,6 +484,25 @@ impl Gmc {
     /// The number of states.
     pub fn num_states(&self) -> usize {
         self.states.len()
+    }
+
+    /// `Some(phi holds)` for a state at which the exploration stopped
+    /// because its automaton state decides the formula
+    /// ([`Exploration::UntilDecided`]): its value is exactly 1 or 0 and its
+    /// row is empty. `None` for every state of a full exploration.
+    pub fn verdict(&self, m: usize) -> Option<bool> {
+        self.decided[self.states.keys()[m].q as usize]
+    }
+
+    /// The number of states at which the exploration stopped
+    /// ([`Gmc::verdict`]).
+    pub fn num_decided(&self) -> usize {
+        if self.decided.iter().all(Option::is_none) {
+            return 0;
+        }
+        (0..self.num_states())
+            .filter(|&m| self.verdict(m).is_some())
+            .count()
     }
 
     /// The number of transitions (stored entries).

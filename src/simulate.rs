@@ -5,8 +5,10 @@
 //! controllers' choices, the successor state) and tracks the automaton. It
 //! ends when it enters a bottom strongly connected component of the GMC;
 //! that component's phi-feasibility decides the run (with probability 1 the
-//! trace satisfies phi iff the run's BSCC is feasible). The estimate carries
-//! a 95% Wilson score interval.
+//! trace satisfies phi iff the run's BSCC is feasible). A run also ends at a
+//! decided state, whose automaton state decides phi whatever follows
+//! ([`crate::product::Gmc::verdict`]). The estimate carries a 95% Wilson
+//! score interval.
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -29,7 +31,7 @@ pub enum SimulationError {
         /// The run's number.
         run: u64,
     },
-    /// A run did not reach a BSCC within the step limit.
+    /// A run did not reach a BSCC or a decided state within the step limit.
     #[error("run {run} did not reach a recurrence class within {limit} steps")]
     StepLimit {
         /// The run's number.
@@ -44,7 +46,7 @@ pub enum SimulationError {
 pub struct Estimate {
     /// Number of runs.
     pub runs: u64,
-    /// Runs that ended in a phi-feasible BSCC.
+    /// Runs that ended in a phi-feasible BSCC or a decided state where phi holds.
     pub successes: u64,
     /// `successes / runs`.
     pub mean: f64,
@@ -120,7 +122,7 @@ pub fn simulate(
             let m = gmc
                 .index_of(state)
                 .ok_or(SimulationError::OutsideChain { run })?;
-            if let Some(feasible) = bscc_of[m] {
+            if let Some(feasible) = bscc_of[m].or(gmc.verdict(m)) {
                 break feasible;
             }
             steps += 1;

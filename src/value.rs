@@ -30,7 +30,7 @@ use crate::game::Posg;
 use crate::solver::{FlushDenormals, LinearSolver};
 
 pub use crate::analysis::{Bscc, Recurrence, StateClass};
-pub use crate::product::{Gmc, GmcState, ProductError};
+pub use crate::product::{Exploration, Gmc, GmcState, ProductError};
 pub use crate::sensitivity::{ForwardGradient, ForwardSensitivities};
 pub use crate::simulate::{Estimate, STEP_LIMIT, SimulationError, SimulationSettings, simulate};
 pub use crate::solver::{
@@ -280,7 +280,8 @@ pub struct Evaluator {
 }
 
 impl Evaluator {
-    /// Builds the GMC under the supports, analyses its recurrence classes and
+    /// Builds the GMC under the supports up to its decided states
+    /// ([`Exploration::UntilDecided`]), analyses its recurrence classes and
     /// prepares the solver of `I - Q` chosen by `settings`.
     pub fn new(
         game: &Posg,
@@ -289,7 +290,23 @@ impl Evaluator {
         adversary: &Support,
         settings: &SolverSettings,
     ) -> Result<Self, ValueError> {
-        let gmc = Gmc::build(game, dra, defender, adversary)?;
+        let exploration = Exploration::UntilDecided;
+        Self::with_exploration(game, dra, defender, adversary, settings, exploration)
+    }
+
+    /// [`Evaluator::new`] on the GMC explored as far as `exploration` says:
+    /// [`Exploration::Full`] keeps the recurrence classes that lie beyond
+    /// the decided states (as `eval --explain` lists them); the value and
+    /// the gradient are the same.
+    pub fn with_exploration(
+        game: &Posg,
+        dra: &Dra,
+        defender: &Support,
+        adversary: &Support,
+        settings: &SolverSettings,
+        exploration: Exploration,
+    ) -> Result<Self, ValueError> {
+        let gmc = Gmc::build_with(game, dra, defender, adversary, exploration)?;
         let recurrence = Recurrence::analyse(&gmc, dra);
         let system = TransientSystem::build(&gmc, &recurrence, settings)?;
         let values = recurrence

@@ -8,7 +8,7 @@ use posg_fsc::controller::{Choice, Fsc, Probabilities, Role, Support};
 use posg_fsc::game::Posg;
 use posg_fsc::game::file::from_json_str;
 use posg_fsc::optimise::Softmax;
-use posg_fsc::value::{Evaluator, evaluate_controllers};
+use posg_fsc::value::{Evaluator, Exploration, StateClass, evaluate_controllers};
 use posg_fsc::value::{SolverMethod, SolverSettings};
 use proptest::prelude::*;
 
@@ -196,9 +196,15 @@ fn a_chain_with_no_feasible_class_has_value_zero_and_no_system() {
     assert_eq!(ev.evaluate(&def, &adv).unwrap().value, 0.0);
 }
 
+/// Every row sums to 1, except the rows of decided states, which are empty.
 fn check_rows_sum_to_one(ev: &Evaluator) -> Result<(), TestCaseError> {
     for m in 0..ev.gmc().num_states() {
-        let total: f64 = ev.gmc().row(m).1.iter().sum();
+        let row = ev.gmc().row(m).1;
+        if ev.gmc().verdict(m).is_some() {
+            prop_assert!(row.is_empty(), "decided state {} has a row", m);
+            continue;
+        }
+        let total: f64 = row.iter().sum();
         prop_assert!((total - 1.0).abs() < 1e-12, "row {} sums to {}", m, total);
     }
     let p0: f64 = ev.gmc().initial().map(|(_, p)| p).sum();
@@ -313,4 +319,62 @@ proptest! {
             }
         }
     }
+}
+
+/// Stopping the exploration at decided states changes neither the value,
+/// nor the gradient, nor the linear system: on 300 random games the
+/// truncated GMC's states are those of the full one that are not reached
+/// through a decided state only, each decided state gets the class the full
+/// chain gives it (`Zero`, or `Target`/`Sure`), and the transient states
+/// are the same.
+#[test]
+fn stopping_at_decided_states_changes_no_value_gradient_or_system() {
+    let mut truncated_chains = 0;
+    for seed in 0..300u64 {
+        let g = game(&common::random::game_json(seed));
+        let dra = common::random::dra(seed);
+        let def = common::random::controller(seed, &g, Role::Defender);
+        let adv = common::random::controller(seed, &g, Role::Adversary);
+        let (pd, pa) = (Support::probabilities_of(&def), Support::probabilities_of(&adv));
+        let with = |exploration| {
+            let (sd, sa) = (Support::of(&def), Support::of(&adv));
+            let settings = SolverSettings::default();
+            Evaluator::with_exploration(&g, &dra, &sd, &sa, &settings, exploration).unwrap()
+        };
+        let (mut full, mut truncated) = (with(Exploration::Full), with(Exploration::UntilDecided));
+        let (v_full, g_full) = full.evaluate_with_gradient(&pd, &pa).unwrap();
+        let (v_cut, g_cut) = truncated.evaluate_with_gradient(&pd, &pa).unwrap();
+        assert!((v_full.value - v_cut.value).abs() < 1e-12, "seed {seed}: {v_full:?} vs {v_cut:?}");
+        let pairs = g_full.defender.iter().zip(&g_cut.defender)
+            .chain(g_full.adversary.iter().zip(&g_cut.adversary))
+            .chain(g_full.defender_initial.iter().zip(&g_cut.defender_initial))
+            .chain(g_full.adversary_initial.iter().zip(&g_cut.adversary_initial));
+        for (a, b) in pairs {
+            assert!((a - b).abs() < 1e-12 * (1.0 + a.abs()), "seed {seed}: gradient {a} vs {b}");
+        }
+        let (cut_gmc, full_gmc) = (truncated.gmc(), full.gmc());
+        assert_eq!(full_gmc.num_decided(), 0);
+        assert!(cut_gmc.num_states() <= full_gmc.num_states());
+        truncated_chains += usize::from(cut_gmc.num_states() < full_gmc.num_states());
+        let transient_states = |ev: &Evaluator| -> Vec<_> {
+            ev.recurrence().transient.iter().map(|&m| ev.gmc().state(m)).collect()
+        };
+        assert_eq!(transient_states(&full), transient_states(&truncated), "seed {seed}");
+        for m in 0..cut_gmc.num_states() {
+            let state = cut_gmc.state(m);
+            let in_full = full_gmc.index_of(state).expect("every explored state is in the full chain");
+            let (cut_class, full_class) =
+                (truncated.recurrence().classes[m], full.recurrence().classes[in_full]);
+            match cut_gmc.verdict(m) {
+                None => assert_eq!(cut_class, full_class, "seed {seed}, state {state:?}"),
+                Some(holds) => {
+                    assert_eq!(cut_class, if holds { StateClass::Sure } else { StateClass::Zero });
+                    let full_holds = matches!(full_class, StateClass::Target | StateClass::Sure);
+                    assert!(full_class != StateClass::Transient && full_holds == holds,
+                        "seed {seed}, decided state {state:?}: {full_class:?} in the full chain");
+                }
+            }
+        }
+    }
+    assert!(truncated_chains >= 100, "only {truncated_chains} of 300 random chains had decided states");
 }

@@ -172,19 +172,20 @@ impl Dra {
     }
 
     /// Whether the automaton accepts some infinite word whose letters all
-    /// satisfy `allowed`: for some pair `(L_i, K_i)`, a state reachable from
-    /// `q_0` by allowed letters lies on a cycle of allowed letters that
-    /// avoids `L_i` and meets `K_i` (a strongly connected component of the
-    /// reachable graph without `L_i` that contains a `K_i` state and a cycle).
+    /// satisfy `allowed`: a state of [`Dra::accepting_cycle_states`] over
+    /// the allowed letters is reachable from `q_0` by allowed letters.
     pub fn accepts_some_word(&self, allowed: impl Fn(Letter) -> bool) -> bool {
         let letters: Vec<Letter> = (0..1 << self.propositions.len())
             .filter(|&a| allowed(a))
             .collect();
-        let n = self.num_states();
-        let mut reachable = vec![false; n];
+        let live = self.accepting_cycle_states(&letters);
+        let mut reachable = vec![false; self.num_states()];
         reachable[self.initial] = true;
         let mut frontier = vec![self.initial];
         while let Some(q) = frontier.pop() {
+            if live[q] {
+                return true;
+            }
             for &a in &letters {
                 let t = self.successor(q, a);
                 if !reachable[t] {
@@ -193,16 +194,63 @@ impl Dra {
                 }
             }
         }
-        self.pairs.iter().any(|pair| {
-            let keep: Vec<bool> = (0..n).map(|q| reachable[q] && !pair.fin[q]).collect();
-            let graph = LetterGraph::new(self, &letters, &keep);
+        false
+    }
+
+    /// The states that lie on an accepting cycle over `letters`: for some
+    /// pair `(L_i, K_i)`, a cycle that avoids `L_i` and meets `K_i` (the
+    /// states of a strongly connected component of the graph without `L_i`
+    /// that contains a `K_i` state and a cycle). A word read from `q` can be
+    /// accepted iff such a state is reachable from `q`.
+    fn accepting_cycle_states(&self, letters: &[Letter]) -> Vec<bool> {
+        let n = self.num_states();
+        let mut live = vec![false; n];
+        for pair in &self.pairs {
+            let keep: Vec<bool> = pair.fin.iter().map(|&fin| !fin).collect();
+            let graph = LetterGraph::new(self, letters, &keep);
             let components = crate::graph::strongly_connected_components(&graph);
-            components.members().iter().any(|members| {
+            for members in components.members() {
                 let cyclic =
                     members.len() > 1 || graph.successors[members[0]].contains(&members[0]);
-                keep[members[0]] && cyclic && members.iter().any(|&q| pair.inf[q])
-            })
-        })
+                if keep[members[0]] && cyclic && members.iter().any(|&q| pair.inf[q]) {
+                    for &q in &members {
+                        live[q] = true;
+                    }
+                }
+            }
+        }
+        live
+    }
+
+    /// Which states decide the formula whatever the input, for words over
+    /// `letters`: `Some(false)` when no word read from `q` is accepted (no
+    /// state of [`Dra::accepting_cycle_states`] is reachable from `q`),
+    /// `Some(true)` when every word is (for some pair `i`, every state
+    /// reachable from `q` is in `K_i` and not in `L_i`: a sufficient
+    /// condition, exact for accepting sinks), `None` otherwise. The states
+    /// reachable from a decided state are decided the same way (method.md
+    /// section 1, "decided states").
+    pub fn decided_states(&self, letters: &[Letter]) -> Vec<Option<bool>> {
+        let everything = vec![true; self.num_states()];
+        let graph = LetterGraph::new(self, letters, &everything);
+        let live = self.accepting_cycle_states(letters);
+        let can_accept = graph.reaching(&live);
+        let mut decided: Vec<Option<bool>> = can_accept
+            .iter()
+            .map(|&can| (!can).then_some(false))
+            .collect();
+        for pair in &self.pairs {
+            let outside: Vec<bool> = (0..self.num_states())
+                .map(|q| pair.fin[q] || !pair.inf[q])
+                .collect();
+            let can_leave = graph.reaching(&outside);
+            for (q, verdict) in decided.iter_mut().enumerate() {
+                if !can_leave[q] {
+                    *verdict = Some(true);
+                }
+            }
+        }
+        decided
     }
 
     /// Whether the automaton accepts the ultimately periodic word
@@ -261,6 +309,28 @@ impl LetterGraph {
             .collect();
         Self { successors }
     }
+
+    /// The states from which some state of `targets` is reachable
+    /// (including the targets themselves).
+    fn reaching(&self, targets: &[bool]) -> Vec<bool> {
+        let mut predecessors = vec![Vec::new(); self.successors.len()];
+        for (q, next) in self.successors.iter().enumerate() {
+            for &t in next {
+                predecessors[t].push(q);
+            }
+        }
+        let mut reaches = targets.to_vec();
+        let mut frontier: Vec<usize> = (0..reaches.len()).filter(|&q| reaches[q]).collect();
+        while let Some(t) = frontier.pop() {
+            for &q in &predecessors[t] {
+                if !reaches[q] {
+                    reaches[q] = true;
+                    frontier.push(q);
+                }
+            }
+        }
+        reaches
+    }
 }
 
 impl crate::graph::Digraph for LetterGraph {
@@ -270,5 +340,83 @@ impl crate::graph::Digraph for LetterGraph {
 
     fn successors(&self, v: usize) -> impl Iterator<Item = usize> + '_ {
         self.successors[v].iter().copied()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    /// `!a U b` over propositions `a` (bit 0) and `b` (bit 1): state 0
+    /// waits, 1 is the accepting sink (b seen), 2 the rejecting sink.
+    fn until() -> Dra {
+        let successors = vec![0, 2, 1, 1, 1, 1, 1, 1, 2, 2, 2, 2];
+        let pair = RabinPair {
+            fin: vec![false; 3],
+            inf: vec![false, true, false],
+        };
+        Dra::new(vec!["a".into(), "b".into()], 3, 0, successors, vec![pair]).unwrap()
+    }
+
+    #[test]
+    fn the_sinks_of_an_until_are_decided_and_the_waiting_state_is_not() {
+        assert_eq!(
+            until().decided_states(&[0, 1, 2, 3]),
+            vec![None, Some(true), Some(false)]
+        );
+        assert_eq!(
+            until().decided_states(&[0, 1]),
+            vec![Some(false), Some(true), Some(false)],
+            "without a letter holding b, the waiting state can never accept"
+        );
+    }
+
+    prop_compose! {
+        /// A random complete automaton over two propositions with up to five
+        /// states and one or two Rabin pairs, and a non-empty set of letters.
+        fn random_automaton()(n in 1usize..6)(
+            successors in proptest::collection::vec(0..n as u32, n * 4),
+            marks in proptest::collection::vec((any::<bool>(), any::<bool>()), n * 2),
+            two_pairs in any::<bool>(),
+            letters in 1u32..16,
+            n in Just(n),
+        ) -> (Dra, Vec<Letter>) {
+            let pairs = (0..1 + usize::from(two_pairs))
+                .map(|i| RabinPair {
+                    fin: (0..n).map(|q| marks[i * n + q].0).collect(),
+                    inf: (0..n).map(|q| marks[i * n + q].1).collect(),
+                })
+                .collect();
+            let letters = (0..4).filter(|a| letters & (1 << a) != 0).collect();
+            (Dra::new(vec!["a".into(), "b".into()], n, 0, successors, pairs).unwrap(), letters)
+        }
+    }
+
+    proptest! {
+        #[test]
+        fn every_lasso_word_read_from_a_decided_state_gets_its_verdict(
+            (dra, letters) in random_automaton(),
+            picks in proptest::collection::vec(
+                (proptest::collection::vec(any::<prop::sample::Index>(), 0..6),
+                 proptest::collection::vec(any::<prop::sample::Index>(), 1..6)),
+                32,
+            ),
+        ) {
+            let decided = dra.decided_states(&letters);
+            for (q, verdict) in decided.iter().enumerate() {
+                let from_q = Dra { initial: q, ..dra.clone() };
+                let can_accept = from_q.accepts_some_word(|a| letters.contains(&a));
+                prop_assert_eq!(*verdict == Some(false), !can_accept, "state {}", q);
+                let Some(verdict) = *verdict else { continue };
+                for (u, v) in &picks {
+                    let word = |picks: &Vec<prop::sample::Index>| -> Vec<Letter> {
+                        picks.iter().map(|i| *i.get(&letters)).collect()
+                    };
+                    prop_assert_eq!(from_q.accepts_lasso(&word(u), &word(v)), verdict,
+                        "state {} on {:?} ({:?})^omega", q, word(u), word(v));
+                }
+            }
+        }
     }
 }

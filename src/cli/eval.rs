@@ -9,7 +9,7 @@ use posg_fsc::controller::Support;
 use posg_fsc::game::Posg;
 use posg_fsc::value::Gmc;
 use posg_fsc::value::Recurrence;
-use posg_fsc::value::{Evaluator, Gradient};
+use posg_fsc::value::{Evaluator, Exploration, Gradient};
 use serde::Serialize;
 
 use super::common::{self, ControllerArgs, ObjectiveArgs, Provenance};
@@ -25,7 +25,8 @@ pub struct EvalArgs {
     pub controllers: ControllerArgs,
     /// Also list every recurrence class (BSCC) with its members (s, q, g, h),
     /// whether it is phi-feasible and through which Rabin pairs, and its Good
-    /// set (the paper's Algorithm 2).
+    /// set (the paper's Algorithm 2). The GMC is then explored in full,
+    /// beyond the states whose automaton state already decides the formula.
     #[arg(long)]
     pub explain: bool,
     #[command(flatten)]
@@ -46,8 +47,13 @@ struct Report {
     provenance: Provenance,
     formula: String,
     value: f64,
+    /// The states explored; without `--explain` the exploration stops at the
+    /// decided states.
     gmc_states: usize,
     gmc_transitions: usize,
+    /// The explored states whose automaton state decides the formula
+    /// (value 1 or 0 whatever follows): not expanded, and in no BSCC.
+    decided_states: usize,
     bsccs: usize,
     feasible_bsccs: usize,
     transient_states: usize,
@@ -141,12 +147,18 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
     let automaton = lap.seconds();
     let (defender, adversary) = common::controllers(&args.controllers, &game)?;
     let controllers = lap.seconds();
-    let mut evaluator = Evaluator::new(
+    let exploration = if args.explain {
+        Exploration::Full
+    } else {
+        Exploration::UntilDecided
+    };
+    let mut evaluator = Evaluator::with_exploration(
         &game,
         &dra,
         &Support::of(&defender),
         &Support::of(&adversary),
         &args.solver.settings(),
+        exploration,
     )?;
     let build_and_analyse = lap.seconds();
     // The evaluator owns all it needs: free the game (tens of MB at 1e6 GMC
@@ -181,6 +193,7 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
         value: evaluation.value,
         gmc_states: evaluator.gmc().num_states(),
         gmc_transitions: evaluator.gmc().num_transitions(),
+        decided_states: evaluator.gmc().num_decided(),
         bsccs: recurrence.bsccs.len(),
         feasible_bsccs: recurrence.feasible().count(),
         transient_states: recurrence.transient.len(),

@@ -42,14 +42,18 @@ pub struct Objective {
 /// The size of a structure's GMC.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 pub struct GmcSize {
-    /// Reachable GMC states.
+    /// Reachable GMC states, up to the decided states (method.md section
+    /// 1, "decided states").
     pub states: usize,
     /// Nonzero transitions.
     pub transitions: usize,
     /// Transient states `|T|`: the order of the linear system.
     pub transient: usize,
-    /// States in phi-feasible BSCCs `|B|`.
+    /// States in phi-feasible BSCCs `|B|` before the decided states.
     pub target: usize,
+    /// Decided states: their automaton state decides phi whatever follows,
+    /// so the exploration stopped there.
+    pub decided: usize,
 }
 
 impl Objective {
@@ -102,6 +106,7 @@ impl Objective {
             transitions: self.evaluator.gmc().num_transitions(),
             transient: self.evaluator.recurrence().transient.len(),
             target: classes.iter().filter(|&&c| c == StateClass::Target).count(),
+            decided: self.evaluator.gmc().num_decided(),
         }
     }
 
