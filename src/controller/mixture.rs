@@ -37,10 +37,13 @@ impl Mixture {
     /// states `0..num_states`; every value is 0 until [`Mixture::refill`].
     pub(crate) fn build(player: &Player, support: &Support, num_states: usize) -> Self {
         let num_nodes = support.num_nodes();
-        let mut offsets = vec![0];
-        let mut entries = Vec::new();
-        let mut term_offsets = vec![0];
-        let mut terms = Vec::new();
+        let most_terms = Self::count_terms(player, support, num_states);
+        let mut offsets = Vec::with_capacity(num_states * num_nodes + 1);
+        offsets.push(0);
+        let mut entries = Vec::with_capacity(most_terms);
+        let mut term_offsets = Vec::with_capacity(most_terms + 1);
+        term_offsets.push(0);
+        let mut terms = Vec::with_capacity(most_terms);
         let mut pending: Vec<(MixtureKey, MixtureTerm)> = Vec::new();
         for s in 0..num_states {
             for g in 0..num_nodes {
@@ -52,7 +55,9 @@ impl Mixture {
                     }
                 }
                 // Stable: an entry's terms keep the order in which they were met.
-                pending.sort_by_key(|&(key, _)| key);
+                if !pending.is_sorted_by_key(|&(key, _)| key) {
+                    pending.sort_by_key(|&(key, _)| key);
+                }
                 for group in pending.chunk_by(|a, b| a.0 == b.0) {
                     entries.push(group[0].0);
                     terms.extend(group.iter().map(|&(_, term)| term));
@@ -70,6 +75,18 @@ impl Mixture {
             terms,
             values,
         }
+    }
+
+    /// The number of terms `(k, O(o | s))` over all `(s, g)`: the length of
+    /// the term list, and a bound on the number of entries.
+    fn count_terms(player: &Player, support: &Support, num_states: usize) -> usize {
+        let per_observation: Vec<usize> = (0..support.num_observations())
+            .map(|o| (0..support.num_nodes()).map(|g| support.block(g, o).len()).sum())
+            .collect();
+        (0..num_states)
+            .flat_map(|s| player.observation_distribution(s))
+            .map(|&(o, _)| per_observation[o])
+            .sum()
     }
 
     /// The mixture of `controller` for `player`: [`Mixture::build`] on its

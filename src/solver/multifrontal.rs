@@ -31,14 +31,14 @@ use faer::linalg::triangular_solve::{
 use faer::perm::PermRef;
 use faer::reborrow::{Reborrow, ReborrowMut};
 use faer::sparse::SymbolicSparseColMatRef;
-use faer::sparse::linalg::SupernodalThreshold;
+use faer::sparse::linalg::{SupernodalThreshold, SymbolicSupernodalParams};
 use faer::sparse::linalg::cholesky::{
     CholeskySymbolicParams, SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering,
     factorize_symbolic_cholesky,
 };
 use faer::{Accum, MatMut, Par, Side};
 
-use super::ordering::SymmetricPattern;
+use super::ordering::{ClassOrder, SymmetricPattern};
 use super::{SolverError, SparsePattern};
 
 /// Fronts with at least this many rows use faer's parallel dense kernels.
@@ -418,13 +418,11 @@ fn lu_unblocked(mut a: MatMut<'_, f64>) -> Result<(), usize> {
 impl Structure {
     fn analyse(pattern: &SparsePattern) -> Result<Self, SolverError> {
         let n = pattern.n;
-        let graph = SymmetricPattern::of(pattern);
-        let order = graph.fill_reducing_order()?;
-        let symbolic = cholesky_structure(graph, &order)?;
-        let permutation = order;
+        let order = SymmetricPattern::of(pattern).fill_reducing_order()?;
+        let symbolic = cholesky_structure(&order)?;
         let mut structure = Self {
             n,
-            permutation,
+            permutation: Vec::new(),
             supernodes: Vec::new(),
             rows: Vec::new(),
             assembly: Vec::new(),
@@ -436,22 +434,29 @@ impl Structure {
             upper_len: 0,
             largest_right: 0,
         };
+        let members = |classes: std::ops::Range<usize>| {
+            order.members_at(classes.start).start..order.members_at(classes.end - 1).end
+        };
+        let expand = |class: usize| order.members_at(class);
         match symbolic.raw() {
             SymbolicCholeskyRaw::Supernodal(supernodal) => {
                 for s in 0..supernodal.n_supernodes() {
                     let node = supernodal.supernode(s);
-                    let end = supernodal.supernode_end()[s];
-                    structure.push_supernode(node.start(), end, node.pattern().iter().copied());
+                    let columns = members(node.start()..supernodal.supernode_end()[s]);
+                    let below = node.pattern().iter().flat_map(|&class| expand(class));
+                    structure.push_supernode(columns.start, columns.end, below);
                 }
             }
             SymbolicCholeskyRaw::Simplicial(simplicial) => {
                 let factor = simplicial.factor();
-                for j in 0..n {
-                    let below = factor.row_idx_of_col(j).filter(|&i| i > j);
-                    structure.push_supernode(j, j + 1, below);
+                for j in 0..order.classes.len() {
+                    let below = factor.row_idx_of_col(j).filter(|&i| i > j).flat_map(expand);
+                    let columns = expand(j);
+                    structure.push_supernode(columns.start, columns.end, below);
                 }
             }
         }
+        structure.permutation = order.permutation;
         structure.link_children()?;
         structure.order_for_the_stack();
         structure.assemble_map(pattern)?;
@@ -666,32 +671,49 @@ impl Structure {
     }
 }
 
-/// faer's supernodal symbolic Cholesky analysis of `graph` (the pattern of
-/// `A + A^T`) permuted by `order`.
-fn cholesky_structure(
-    graph: SymmetricPattern,
-    order: &[usize],
-) -> Result<SymbolicCholesky<usize>, SolverError> {
+/// faer's supernodal symbolic Cholesky analysis of the quotient of the
+/// pattern of `A + A^T` by classes of indistinguishable vertices, in the
+/// class order ([`ClassOrder`]): once each class is expanded to its
+/// members, its supernodes are those of `A + A^T`. faer merges adjacent
+/// supernodes when the merged one has few explicit zeros, with thresholds
+/// on the number of columns (its default relaxation); here a column stands
+/// for a class, so the thresholds are divided by the mean class size.
+fn cholesky_structure(order: &ClassOrder) -> Result<SymbolicCholesky<usize>, SolverError> {
+    let graph = &order.quotient;
     let n = graph.len();
     let mut inverse = vec![0; n];
-    for (new, &old) in order.iter().enumerate() {
+    for (new, &old) in order.classes.iter().enumerate() {
         inverse[old] = new;
     }
     let (column_offsets, row_indices) = graph.upper();
-    drop(graph);
     let upper = SymbolicSparseColMatRef::new_checked(n, n, &column_offsets, None, &row_indices);
+    let class_size = (order.permutation.len() as f64 / n.max(1) as f64).round().max(1.0) as usize;
+    let relax: Vec<(usize, f64)> = DEFAULT_RELAXATION
+        .iter()
+        .map(|&(columns, zeros)| ((columns / class_size).max(1), zeros))
+        .chain([(usize::MAX, LARGE_SUPERNODE_ZEROS)])
+        .collect();
     let params = CholeskySymbolicParams {
         supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SUPERNODAL,
+        supernodal_params: SymbolicSupernodalParams { relax: Some(&relax) },
         ..Default::default()
     };
     factorize_symbolic_cholesky(
         upper,
         Side::Upper,
-        SymmetricOrdering::Custom(PermRef::new_checked(order, &inverse, n)),
+        SymmetricOrdering::Custom(PermRef::new_checked(&order.classes, &inverse, n)),
         params,
     )
     .map_err(|_| SolverError::OutOfMemory)
 }
+
+/// faer's default supernode relaxation below its last step: two adjacent
+/// supernodes with at most this many columns together are merged if at
+/// most this fraction of the merged one's entries are zeros.
+const DEFAULT_RELAXATION: [(usize, f64); 3] = [(4, 1.0), (16, 0.8), (48, 0.1)];
+
+/// faer's default fraction of zeros for merging larger supernodes.
+const LARGE_SUPERNODE_ZEROS: f64 = 0.05;
 
 fn to_u32(value: usize) -> Result<u32, SolverError> {
     u32::try_from(value)

@@ -75,26 +75,35 @@ impl SymmetricPattern {
         (offsets, indices)
     }
 
-    /// The fill-reducing order, `order[new] = old`: approximate minimum
-    /// degree or nested dissection, both computed on the quotient graph of
-    /// indistinguishable vertices, whichever eliminates it more cheaply (the
-    /// quotient's cost counts classes, not their sizes: a proxy when the
-    /// classes are of equal size, as with uniform controllers).
-    pub(crate) fn fill_reducing_order(&self) -> Result<Vec<usize>, SolverError> {
+    /// The fill-reducing order: approximate minimum degree or nested
+    /// dissection, both computed on the quotient graph of indistinguishable
+    /// vertices, whichever eliminates it more cheaply (the quotient's cost
+    /// counts classes, not their sizes: a proxy when the classes are of
+    /// equal size, as with uniform controllers).
+    pub(crate) fn fill_reducing_order(&self) -> Result<ClassOrder, SolverError> {
         let (class_of, members) = self.indistinguishable_classes();
         let quotient = self.quotient(&class_of, &members);
         let by_degree = amd_order(&quotient)?;
         let by_dissection = nested_dissection(&quotient)?;
-        let class_order =
+        let classes =
             if quotient.elimination_cost(&by_dissection) < quotient.elimination_cost(&by_degree) {
                 by_dissection
             } else {
                 by_degree
             };
-        Ok(class_order
-            .into_iter()
-            .flat_map(|class| members.members(class).iter().copied())
-            .collect())
+        let mut starts = Vec::with_capacity(classes.len() + 1);
+        starts.push(0);
+        let mut permutation = Vec::with_capacity(self.len());
+        for &class in &classes {
+            permutation.extend_from_slice(members.members(class));
+            starts.push(permutation.len());
+        }
+        Ok(ClassOrder {
+            quotient,
+            classes,
+            starts,
+            permutation,
+        })
     }
 
     /// The multiplications of a Cholesky factorisation in `order`
@@ -175,6 +184,32 @@ impl SymmetricPattern {
             offsets.push(indices.len());
         }
         SymmetricPattern { offsets, indices }
+    }
+}
+
+/// A fill-reducing order of a graph by classes of indistinguishable
+/// vertices: the classes are eliminated in the order `classes`, the members
+/// of each consecutively. Since members share their closed neighbourhood,
+/// they share their column of the Cholesky factor below the class, so the
+/// factor's structure is the quotient's with every class expanded to its
+/// members ([`ClassOrder::members_at`]).
+pub(crate) struct ClassOrder {
+    /// The graph with one vertex per class.
+    pub(crate) quotient: SymmetricPattern,
+    /// `classes[new] = class`: the classes in elimination order.
+    pub(crate) classes: Vec<usize>,
+    /// The members of `classes[new]` are the positions
+    /// `starts[new]..starts[new + 1]` of the full order.
+    starts: Vec<usize>,
+    /// The full order, `permutation[new] = old`.
+    pub(crate) permutation: Vec<usize>,
+}
+
+impl ClassOrder {
+    /// The positions in the full order of the members of the class at
+    /// position `new` of the class order.
+    pub(crate) fn members_at(&self, new: usize) -> std::ops::Range<usize> {
+        self.starts[new]..self.starts[new + 1]
     }
 }
 
@@ -464,7 +499,7 @@ mod tests {
         let (class_of, classes) = symmetric.indistinguishable_classes();
         assert_eq!(class_of[0], class_of[2]);
         assert_eq!(classes.len(), 3);
-        let order = symmetric.fill_reducing_order().unwrap();
+        let order = symmetric.fill_reducing_order().unwrap().permutation;
         let position = |v: usize| order.iter().position(|&o| o == v).unwrap();
         assert_eq!(position(0).abs_diff(position(2)), 1);
     }
@@ -475,7 +510,8 @@ mod tests {
             let (pattern, _) = random_chain(300, 3, 0.05, seed);
             let mut order = SymmetricPattern::of(&pattern)
                 .fill_reducing_order()
-                .unwrap();
+                .unwrap()
+                .permutation;
             order.sort_unstable();
             assert!(order.iter().enumerate().all(|(i, &o)| i == o));
         }
