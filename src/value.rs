@@ -92,7 +92,6 @@ struct TransientSystem {
     solver: LinearSolver,
     sources: Vec<u32>,
     diagonal: Vec<Diagonal>,
-    matrix_values: Vec<f64>,
     target_offsets: Vec<usize>,
     target_sources: Vec<u32>,
     b: Vec<f64>,
@@ -156,7 +155,6 @@ impl TransientSystem {
             row_offsets.push(columns.len());
             target_offsets.push(target_sources.len());
         }
-        let matrix_values = vec![0.0; columns.len()];
         let solver = LinearSolver::new(
             SparsePattern {
                 n,
@@ -169,7 +167,6 @@ impl TransientSystem {
             solver,
             sources,
             diagonal,
-            matrix_values,
             target_offsets,
             target_sources,
             b: vec![0.0; n],
@@ -190,28 +187,30 @@ impl TransientSystem {
     /// none (method.md section 8).
     fn factorize(&mut self, gmc: &Gmc) -> Result<(), SolverError> {
         let p = gmc.values();
-        for (value, &source) in self.matrix_values.iter_mut().zip(&self.sources) {
-            *value = if source == NO_SOURCE {
-                0.0
-            } else {
-                -p[source as usize]
-            };
-        }
-        for diagonal in &self.diagonal {
-            let stay = self.sources[diagonal.entry] as usize;
-            self.matrix_values[diagonal.entry] = gmc
-                .row_range(diagonal.state as usize)
-                .filter(|&k| k != stay)
-                .map(|k| p[k])
-                .sum();
-        }
         for (b, w) in self.b.iter_mut().zip(self.target_offsets.windows(2)) {
             *b = self.target_sources[w[0]..w[1]]
                 .iter()
                 .map(|&k| p[k as usize])
                 .sum();
         }
-        self.solver.factorize(&self.matrix_values)
+        let (sources, diagonal) = (&self.sources, &self.diagonal);
+        self.solver.factorize_with(|matrix_values| {
+            for (value, &source) in matrix_values.iter_mut().zip(sources) {
+                *value = if source == NO_SOURCE {
+                    0.0
+                } else {
+                    -p[source as usize]
+                };
+            }
+            for diagonal in diagonal {
+                let stay = sources[diagonal.entry] as usize;
+                matrix_values[diagonal.entry] = gmc
+                    .row_range(diagonal.state as usize)
+                    .filter(|&k| k != stay)
+                    .map(|k| p[k])
+                    .sum();
+            }
+        })
     }
 
     /// Solves `(I - Q) x = b` from the previous `x`.
@@ -349,7 +348,7 @@ impl Evaluator {
 
     /// The pattern of `I - Q` on `T` and its numbers as of the last evaluation.
     pub fn system(&self) -> (&SparsePattern, &[f64]) {
-        (self.system.solver.pattern(), &self.system.matrix_values)
+        (self.system.solver.pattern(), self.system.solver.values())
     }
 
     /// `x(m)`, the probability of phi from each GMC state, as of the last evaluation.

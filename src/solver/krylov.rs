@@ -154,10 +154,18 @@ impl KrylovSolver {
 
     /// Takes the values of `A` and computes its ILU(0) preconditioner.
     pub fn factorize(&mut self, values: &[f64]) -> Result<(), SolverError> {
+        check_values(&self.system.pattern, values)?;
+        self.factorize_with(|own| own.copy_from_slice(values))
+    }
+
+    /// [`Self::factorize`] with the values that `fill` writes into the
+    /// solver's own copy of `A` (aligned with the pattern; it holds the
+    /// previous values on entry), without a second copy.
+    pub fn factorize_with(&mut self, fill: impl FnOnce(&mut [f64])) -> Result<(), SolverError> {
         let system = &mut self.system;
-        check_values(&system.pattern, values)?;
         system.factorised = false;
-        system.values.copy_from_slice(values);
+        fill(&mut system.values);
+        check_values(&system.pattern, &system.values)?;
         system.ilu.factorize(&system.pattern, &system.values)?;
         system.factorised = true;
         Ok(())

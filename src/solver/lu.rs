@@ -70,10 +70,18 @@ impl LuSolver {
     /// Numeric LU of `A` with `values` (aligned with the pattern's entries),
     /// reusing the symbolic analysis and the numeric storage.
     pub fn factorize(&mut self, values: &[f64]) -> Result<(), SolverError> {
+        check_values(&self.system.pattern, values)?;
+        self.factorize_with(|own| own.copy_from_slice(values))
+    }
+
+    /// [`Self::factorize`] with the values that `fill` writes into the
+    /// solver's own copy of `A` (aligned with the pattern; it holds the
+    /// previous values on entry), without a second copy.
+    pub fn factorize_with(&mut self, fill: impl FnOnce(&mut [f64])) -> Result<(), SolverError> {
         let system = &mut self.system;
-        check_values(&system.pattern, values)?;
-        system.values.copy_from_slice(values);
         system.factorised = false;
+        fill(&mut system.values);
+        check_values(&system.pattern, &system.values)?;
         system.lu.factorize(&system.values)?;
         system.factorised = true;
         Ok(())

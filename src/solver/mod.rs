@@ -525,7 +525,7 @@ impl LinearSolver {
     }
 
     /// The values of `A` as of the last factorisation.
-    fn values(&self) -> &[f64] {
+    pub fn values(&self) -> &[f64] {
         match &self.backend {
             Backend::Lu(lu) => lu.values(),
             Backend::Krylov(krylov) => krylov.values(),
@@ -560,6 +560,16 @@ impl LinearSolver {
         match &mut self.backend {
             Backend::Lu(lu) => lu.factorize(values),
             Backend::Krylov(krylov) => krylov.factorize(values),
+        }
+    }
+
+    /// [`Self::factorize`] with the values that `fill` writes into the
+    /// solver's own copy of `A` (aligned with the pattern; it holds the
+    /// previous values on entry), without a second copy.
+    pub fn factorize_with(&mut self, fill: impl FnOnce(&mut [f64])) -> Result<(), SolverError> {
+        match &mut self.backend {
+            Backend::Lu(lu) => lu.factorize_with(fill),
+            Backend::Krylov(krylov) => krylov.factorize_with(fill),
         }
     }
 
