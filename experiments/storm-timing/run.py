@@ -13,13 +13,20 @@ reads (`--form binary`, the default: `example grid --binary`, the
 `*.posg.bin` of docs/formats.md section 11; `--form json` for the
 pretty-printed JSON), runs `eval` with 2-node uniform
 controllers for both players (`!unsafe U goal`) `--repeats` times under
-`/usr/bin/time` (user + system CPU of the process, wall, peak RSS), exports
+`/usr/bin/time` (user + system CPU of the process, wall, peak RSS), and
+as often with one worker thread (`RAYON_NUM_THREADS=1`: Storm's check runs
+on one thread, and on a loaded 2-core machine eval's parallel parts cost
+CPU without saving wall time), exports
 the chain once, and runs Storm's check `--repeats` times, each in a fresh
 Python process that reads the DRN file first (not timed) and then times
 `model_checking` alone with `time.process_time` (CPU of that process, all
 threads). Writes results/storm-timing.csv (medians per size, the command,
 the posg-fsc version and the Storm settings in the header) and prints the
-ratio eval CPU / Storm CPU.
+ratios eval CPU / Storm CPU, with the default threads and with one.
+
+`gmc_states` counts the states eval explores: it stops at decided states
+(docs/method.md section 1); Storm builds the whole product of the chain
+with its automaton.
 
 Usage: pip install stormpy; python3 experiments/storm-timing/run.py [--sizes 96] [--repeats 3]
        [--form binary|json]
@@ -57,10 +64,10 @@ print(json.dumps({"value": result.get_value(model.initial_states[0]), "cpu": cpu
 """
 
 
-def run_timed(command):
+def run_timed(command, env=None):
     """Runs `command` under /usr/bin/time; returns (stdout, cpu s, wall s, peak GiB)."""
     timed = ["/usr/bin/time", "-f", "TIMING %U %S %e %M", *command]
-    done = subprocess.run(timed, capture_output=True, text=True, check=True)
+    done = subprocess.run(timed, capture_output=True, text=True, check=True, env=env)
     line = next(l for l in done.stderr.splitlines() if l.startswith("TIMING"))
     user, system, wall, peak_kib = map(float, line.split()[1:])
     return done.stdout, user + system, wall, peak_kib / 1024 / 1024
@@ -80,10 +87,13 @@ def make_grid(binary, size, path, form):
 def measure(binary, size, repeats, tmp, form):
     game = os.path.join(tmp, f"grid{size}.{FORMS[form][1]}")
     make_grid(binary, size, game, form)
-    evals = []
+    command = [binary, "eval", game, "--ltl", FORMULA, *CONTROLLERS]
+    evals, one_thread = [], []
     for _ in range(repeats):
-        out, cpu, wall, peak = run_timed([binary, "eval", game, "--ltl", FORMULA, *CONTROLLERS])
+        out, cpu, wall, peak = run_timed(command)
         evals.append((json.loads(out), cpu, wall, peak))
+        _, cpu, wall, _ = run_timed(command, env={**os.environ, "RAYON_NUM_THREADS": "1"})
+        one_thread.append((cpu, wall))
     chain = os.path.join(tmp, f"chain{size}")
     subprocess.run([binary, "export-gmc", game, *CONTROLLERS, "--out", chain, "--force"],
                    check=True, stdout=subprocess.DEVNULL)
@@ -97,19 +107,24 @@ def measure(binary, size, repeats, tmp, form):
     if abs(storm_value - report["value"]) > 1e-8:
         sys.exit(f"{size}x{size}: eval {report['value']} but Storm {storm_value}")
     eval_cpu = statistics.median(e[1] for e in evals)
+    eval_cpu_one_thread = statistics.median(e[0] for e in one_thread)
     storm_cpu = statistics.median(s["cpu"] for s in storms)
     phases = {k: statistics.median(e[0]["phase_seconds"][k] for e in evals)
               for k in report["phase_seconds"]}
     return {
         "grid": f"{size}x{size}", "gmc_states": report["gmc_states"],
+        "decided_states": report["decided_states"],
         "transient_states": report["transient_states"], "game_mib": os.path.getsize(game) / 2**20,
         "value": report["value"], "storm_value": storm_value, "solver": report["solver"],
         "eval_cpu_s": eval_cpu, "eval_wall_s": statistics.median(e[2] for e in evals),
         "eval_peak_gib": statistics.median(e[3] for e in evals),
+        "eval_cpu_one_thread_s": eval_cpu_one_thread,
+        "eval_wall_one_thread_s": statistics.median(e[1] for e in one_thread),
         **{f"eval_{k}_s": v for k, v in phases.items()},
         "storm_chain_states": storms[0]["states"], "storm_check_cpu_s": storm_cpu,
         "storm_check_wall_s": statistics.median(s["wall"] for s in storms),
         "ratio_eval_to_storm_cpu": eval_cpu / storm_cpu,
+        "ratio_one_thread_eval_to_storm_cpu": eval_cpu_one_thread / storm_cpu,
     }
 
 
@@ -140,7 +155,9 @@ def main():
     for row in rows:
         print(f"{row['grid']}: {row['gmc_states']} GMC states, eval CPU {row['eval_cpu_s']:.2f} s, "
               f"Storm check CPU {row['storm_check_cpu_s']:.2f} s, ratio "
-              f"{row['ratio_eval_to_storm_cpu']:.2f}")
+              f"{row['ratio_eval_to_storm_cpu']:.2f} (one thread: eval CPU "
+              f"{row['eval_cpu_one_thread_s']:.2f} s, ratio "
+              f"{row['ratio_one_thread_eval_to_storm_cpu']:.2f})")
 
 
 if __name__ == "__main__":
