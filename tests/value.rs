@@ -335,7 +335,10 @@ fn stopping_at_decided_states_changes_no_value_gradient_or_system() {
         let dra = common::random::dra(seed);
         let def = common::random::controller(seed, &g, Role::Defender);
         let adv = common::random::controller(seed, &g, Role::Adversary);
-        let (pd, pa) = (Support::probabilities_of(&def), Support::probabilities_of(&adv));
+        let (pd, pa) = (
+            Support::probabilities_of(&def),
+            Support::probabilities_of(&adv),
+        );
         let with = |exploration| {
             let (sd, sa) = (Support::of(&def), Support::of(&adv));
             let settings = SolverSettings::default();
@@ -344,37 +347,75 @@ fn stopping_at_decided_states_changes_no_value_gradient_or_system() {
         let (mut full, mut truncated) = (with(Exploration::Full), with(Exploration::UntilDecided));
         let (v_full, g_full) = full.evaluate_with_gradient(&pd, &pa).unwrap();
         let (v_cut, g_cut) = truncated.evaluate_with_gradient(&pd, &pa).unwrap();
-        assert!((v_full.value - v_cut.value).abs() < 1e-12, "seed {seed}: {v_full:?} vs {v_cut:?}");
-        let pairs = g_full.defender.iter().zip(&g_cut.defender)
+        assert!(
+            (v_full.value - v_cut.value).abs() < 1e-12,
+            "seed {seed}: {v_full:?} vs {v_cut:?}"
+        );
+        let pairs = g_full
+            .defender
+            .iter()
+            .zip(&g_cut.defender)
             .chain(g_full.adversary.iter().zip(&g_cut.adversary))
             .chain(g_full.defender_initial.iter().zip(&g_cut.defender_initial))
-            .chain(g_full.adversary_initial.iter().zip(&g_cut.adversary_initial));
+            .chain(
+                g_full
+                    .adversary_initial
+                    .iter()
+                    .zip(&g_cut.adversary_initial),
+            );
         for (a, b) in pairs {
-            assert!((a - b).abs() < 1e-12 * (1.0 + a.abs()), "seed {seed}: gradient {a} vs {b}");
+            assert!(
+                (a - b).abs() < 1e-12 * (1.0 + a.abs()),
+                "seed {seed}: gradient {a} vs {b}"
+            );
         }
         let (cut_gmc, full_gmc) = (truncated.gmc(), full.gmc());
         assert_eq!(full_gmc.num_decided(), 0);
         assert!(cut_gmc.num_states() <= full_gmc.num_states());
         truncated_chains += usize::from(cut_gmc.num_states() < full_gmc.num_states());
         let transient_states = |ev: &Evaluator| -> Vec<_> {
-            ev.recurrence().transient.iter().map(|&m| ev.gmc().state(m)).collect()
+            ev.recurrence()
+                .transient
+                .iter()
+                .map(|&m| ev.gmc().state(m))
+                .collect()
         };
-        assert_eq!(transient_states(&full), transient_states(&truncated), "seed {seed}");
+        assert_eq!(
+            transient_states(&full),
+            transient_states(&truncated),
+            "seed {seed}"
+        );
         for m in 0..cut_gmc.num_states() {
             let state = cut_gmc.state(m);
-            let in_full = full_gmc.index_of(state).expect("every explored state is in the full chain");
-            let (cut_class, full_class) =
-                (truncated.recurrence().classes[m], full.recurrence().classes[in_full]);
+            let in_full = full_gmc
+                .index_of(state)
+                .expect("every explored state is in the full chain");
+            let (cut_class, full_class) = (
+                truncated.recurrence().classes[m],
+                full.recurrence().classes[in_full],
+            );
             match cut_gmc.verdict(m) {
                 None => assert_eq!(cut_class, full_class, "seed {seed}, state {state:?}"),
                 Some(holds) => {
-                    assert_eq!(cut_class, if holds { StateClass::Sure } else { StateClass::Zero });
+                    assert_eq!(
+                        cut_class,
+                        if holds {
+                            StateClass::Sure
+                        } else {
+                            StateClass::Zero
+                        }
+                    );
                     let full_holds = matches!(full_class, StateClass::Target | StateClass::Sure);
-                    assert!(full_class != StateClass::Transient && full_holds == holds,
-                        "seed {seed}, decided state {state:?}: {full_class:?} in the full chain");
+                    assert!(
+                        full_class != StateClass::Transient && full_holds == holds,
+                        "seed {seed}, decided state {state:?}: {full_class:?} in the full chain"
+                    );
                 }
             }
         }
     }
-    assert!(truncated_chains >= 100, "only {truncated_chains} of 300 random chains had decided states");
+    assert!(
+        truncated_chains >= 100,
+        "only {truncated_chains} of 300 random chains had decided states"
+    );
 }

@@ -81,7 +81,11 @@ impl Mixture {
     /// the term list, and a bound on the number of entries.
     fn count_terms(player: &Player, support: &Support, num_states: usize) -> usize {
         let per_observation: Vec<usize> = (0..support.num_observations())
-            .map(|o| (0..support.num_nodes()).map(|g| support.block(g, o).len()).sum())
+            .map(|o| {
+                (0..support.num_nodes())
+                    .map(|g| support.block(g, o).len())
+                    .sum()
+            })
             .collect();
         (0..num_states)
             .flat_map(|s| player.observation_distribution(s))

@@ -31,11 +31,11 @@ use faer::linalg::triangular_solve::{
 use faer::perm::PermRef;
 use faer::reborrow::{Reborrow, ReborrowMut};
 use faer::sparse::SymbolicSparseColMatRef;
-use faer::sparse::linalg::{SupernodalThreshold, SymbolicSupernodalParams};
 use faer::sparse::linalg::cholesky::{
     CholeskySymbolicParams, SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering,
     factorize_symbolic_cholesky,
 };
+use faer::sparse::linalg::{SupernodalThreshold, SymbolicSupernodalParams};
 use faer::{Accum, MatMut, Par, Side};
 
 use super::ordering::{ClassOrder, SymmetricPattern};
@@ -687,7 +687,9 @@ fn cholesky_structure(order: &ClassOrder) -> Result<SymbolicCholesky<usize>, Sol
     }
     let (column_offsets, row_indices) = graph.upper();
     let upper = SymbolicSparseColMatRef::new_checked(n, n, &column_offsets, None, &row_indices);
-    let class_size = (order.permutation.len() as f64 / n.max(1) as f64).round().max(1.0) as usize;
+    let class_size = (order.permutation.len() as f64 / n.max(1) as f64)
+        .round()
+        .max(1.0) as usize;
     let relax: Vec<(usize, f64)> = DEFAULT_RELAXATION
         .iter()
         .map(|&(columns, zeros)| ((columns / class_size).max(1), zeros))
@@ -695,7 +697,9 @@ fn cholesky_structure(order: &ClassOrder) -> Result<SymbolicCholesky<usize>, Sol
         .collect();
     let params = CholeskySymbolicParams {
         supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SUPERNODAL,
-        supernodal_params: SymbolicSupernodalParams { relax: Some(&relax) },
+        supernodal_params: SymbolicSupernodalParams {
+            relax: Some(&relax),
+        },
         ..Default::default()
     };
     factorize_symbolic_cholesky(
