@@ -35,6 +35,7 @@ pub use minimise::{minimise, minimise_with_free_start};
 use thiserror::Error;
 
 use crate::game::Posg;
+use crate::graph::backward_reachable;
 
 /// A letter of the alphabet `2^AP`: bit `i` is set iff proposition `i` holds.
 pub type Letter = u32;
@@ -172,29 +173,16 @@ impl Dra {
     }
 
     /// Whether the automaton accepts some infinite word whose letters all
-    /// satisfy `allowed`: a state of [`Dra::accepting_cycle_states`] over
-    /// the allowed letters is reachable from `q_0` by allowed letters.
+    /// satisfy `allowed`: a state on an accepting cycle of allowed letters
+    /// (for some pair `(L_i, K_i)`, a cycle that avoids `L_i` and meets
+    /// `K_i`) is reachable from `q_0` by allowed letters.
     pub fn accepts_some_word(&self, allowed: impl Fn(Letter) -> bool) -> bool {
         let letters: Vec<Letter> = (0..1 << self.propositions.len())
             .filter(|&a| allowed(a))
             .collect();
-        let live = self.accepting_cycle_states(&letters);
-        let mut reachable = vec![false; self.num_states()];
-        reachable[self.initial] = true;
-        let mut frontier = vec![self.initial];
-        while let Some(q) = frontier.pop() {
-            if live[q] {
-                return true;
-            }
-            for &a in &letters {
-                let t = self.successor(q, a);
-                if !reachable[t] {
-                    reachable[t] = true;
-                    frontier.push(t);
-                }
-            }
-        }
-        false
+        let everything = vec![true; self.num_states()];
+        let reverse = LetterGraph::new(self, &letters, &everything).reversed();
+        backward_reachable(&reverse, &self.accepting_cycle_states(&letters))[self.initial]
     }
 
     /// The states that lie on an accepting cycle over `letters`: for some
@@ -224,7 +212,7 @@ impl Dra {
 
     /// Which states decide the formula whatever the input, for words over
     /// `letters`: `Some(false)` when no word read from `q` is accepted (no
-    /// state of [`Dra::accepting_cycle_states`] is reachable from `q`),
+    /// state on an accepting cycle is reachable from `q`),
     /// `Some(true)` when every word is (for some pair `i`, every state
     /// reachable from `q` is in `K_i` and not in `L_i`: a sufficient
     /// condition, exact for accepting sinks), `None` otherwise. The states
@@ -232,9 +220,9 @@ impl Dra {
     /// section 1, "decided states").
     pub fn decided_states(&self, letters: &[Letter]) -> Vec<Option<bool>> {
         let everything = vec![true; self.num_states()];
-        let graph = LetterGraph::new(self, letters, &everything);
+        let reverse = LetterGraph::new(self, letters, &everything).reversed();
         let live = self.accepting_cycle_states(letters);
-        let can_accept = graph.reaching(&live);
+        let can_accept = backward_reachable(&reverse, &live);
         let mut decided: Vec<Option<bool>> = can_accept
             .iter()
             .map(|&can| (!can).then_some(false))
@@ -243,7 +231,7 @@ impl Dra {
             let outside: Vec<bool> = (0..self.num_states())
                 .map(|q| pair.fin[q] || !pair.inf[q])
                 .collect();
-            let can_leave = graph.reaching(&outside);
+            let can_leave = backward_reachable(&reverse, &outside);
             for (q, verdict) in decided.iter_mut().enumerate() {
                 if !can_leave[q] {
                     *verdict = Some(true);
@@ -310,26 +298,17 @@ impl LetterGraph {
         Self { successors }
     }
 
-    /// The states from which some state of `targets` is reachable
-    /// (including the targets themselves).
-    fn reaching(&self, targets: &[bool]) -> Vec<bool> {
+    /// The same graph with every edge reversed.
+    fn reversed(&self) -> Self {
         let mut predecessors = vec![Vec::new(); self.successors.len()];
         for (q, next) in self.successors.iter().enumerate() {
             for &t in next {
                 predecessors[t].push(q);
             }
         }
-        let mut reaches = targets.to_vec();
-        let mut frontier: Vec<usize> = (0..reaches.len()).filter(|&q| reaches[q]).collect();
-        while let Some(t) = frontier.pop() {
-            for &q in &predecessors[t] {
-                if !reaches[q] {
-                    reaches[q] = true;
-                    frontier.push(q);
-                }
-            }
+        Self {
+            successors: predecessors,
         }
-        reaches
     }
 }
 

@@ -55,9 +55,7 @@ impl Mixture {
                     }
                 }
                 // Stable: an entry's terms keep the order in which they were met.
-                if !pending.is_sorted_by_key(|&(key, _)| key) {
-                    pending.sort_by_key(|&(key, _)| key);
-                }
+                pending.sort_by_key(|&(key, _)| key);
                 for group in pending.chunk_by(|a, b| a.0 == b.0) {
                     entries.push(group[0].0);
                     terms.extend(group.iter().map(|&(_, term)| term));

@@ -434,15 +434,12 @@ impl Structure {
             upper_len: 0,
             largest_right: 0,
         };
-        let members = |classes: std::ops::Range<usize>| {
-            order.members_at(classes.start).start..order.members_at(classes.end - 1).end
-        };
-        let expand = |class: usize| order.members_at(class);
+        let expand = |class: usize| order.positions(class..class + 1);
         match symbolic.raw() {
             SymbolicCholeskyRaw::Supernodal(supernodal) => {
                 for s in 0..supernodal.n_supernodes() {
                     let node = supernodal.supernode(s);
-                    let columns = members(node.start()..supernodal.supernode_end()[s]);
+                    let columns = order.positions(node.start()..supernodal.supernode_end()[s]);
                     let below = node.pattern().iter().flat_map(|&class| expand(class));
                     structure.push_supernode(columns.start, columns.end, below);
                 }

@@ -192,13 +192,13 @@ impl SymmetricPattern {
 /// of each consecutively. Since members share their closed neighbourhood,
 /// they share their column of the Cholesky factor below the class, so the
 /// factor's structure is the quotient's with every class expanded to its
-/// members ([`ClassOrder::members_at`]).
+/// members ([`ClassOrder::positions`]).
 pub(crate) struct ClassOrder {
     /// The graph with one vertex per class.
     pub(crate) quotient: SymmetricPattern,
     /// `classes[new] = class`: the classes in elimination order.
     pub(crate) classes: Vec<usize>,
-    /// The members of `classes[new]` are the positions
+    /// The members of `classes[new]` are at the positions
     /// `starts[new]..starts[new + 1]` of the full order.
     starts: Vec<usize>,
     /// The full order, `permutation[new] = old`.
@@ -206,10 +206,10 @@ pub(crate) struct ClassOrder {
 }
 
 impl ClassOrder {
-    /// The positions in the full order of the members of the class at
-    /// position `new` of the class order.
-    pub(crate) fn members_at(&self, new: usize) -> std::ops::Range<usize> {
-        self.starts[new]..self.starts[new + 1]
+    /// The positions in the full order of the members of the classes at
+    /// positions `classes` of the class order.
+    pub(crate) fn positions(&self, classes: std::ops::Range<usize>) -> std::ops::Range<usize> {
+        self.starts[classes.start]..self.starts[classes.end]
     }
 }
 
