@@ -116,6 +116,23 @@ impl LuSolver {
         factors.solve(&mut self.forward, b, x, Direction::Forward, tolerance)
     }
 
+    /// Solves `A x = b` into `x` and `A t = c` into `t` (entry values
+    /// ignored), each accepted within its own tolerance, in one pass over
+    /// the factors; each solution is the one [`Self::solve_within`] gives.
+    pub fn solve_pair_within(
+        &mut self,
+        (b, x, tolerance): (&[f64], &mut [f64], f64),
+        (c, t, c_tolerance): (&[f64], &mut [f64], f64),
+    ) -> SolvePair {
+        let factors = match self.system.factors() {
+            Ok(factors) => factors,
+            Err(error) => return (Err(error.clone()), Err(error)),
+        };
+        let [first, second] =
+            factors.solve_forward(&mut self.forward, [b, c], [x, t], [tolerance, c_tolerance]);
+        (first, second)
+    }
+
     /// Solves `A^T y = c` into `y` (whose entry value is ignored).
     pub fn solve_transpose(
         &mut self,
@@ -174,26 +191,53 @@ impl Factors<'_> {
         direction: Direction,
         tolerance: f64,
     ) -> Result<SolveReport, SolverError> {
+        if direction == Direction::Forward {
+            let [report] = self.solve_forward(workspace, [rhs], [solution], [tolerance]);
+            return report;
+        }
         check_solve_inputs(self.pattern.n, rhs, solution)?;
         solution.copy_from_slice(rhs);
-        let residual = match direction {
-            Direction::Forward => {
-                self.lu.solve_in_place(solution, &mut workspace.permuted);
-                self.pattern.residual(self.values, solution, rhs)
+        self.lu
+            .solve_transpose_in_place(solution, &mut workspace.permuted);
+        let residual =
+            self.pattern
+                .transposed_residual(self.values, solution, rhs, &mut workspace.product);
+        Ok(report_of(accept(residual, solution, tolerance)?))
+    }
+
+    /// Solves `A x_r = b_r` for `K` right-hand sides in one pass over the
+    /// factors, each accepted within its own tolerance.
+    fn solve_forward<const K: usize>(
+        &self,
+        workspace: &mut Workspace,
+        rhs: [&[f64]; K],
+        mut solutions: [&mut [f64]; K],
+        tolerances: [f64; K],
+    ) -> [Result<SolveReport, SolverError>; K] {
+        let checked: [Result<(), SolverError>; K] =
+            std::array::from_fn(|r| check_solve_inputs(self.pattern.n, rhs[r], solutions[r]));
+        if checked.iter().all(Result::is_ok) {
+            for (solution, rhs) in solutions.iter_mut().zip(rhs) {
+                solution.copy_from_slice(rhs);
             }
-            Direction::Transposed => {
-                self.lu
-                    .solve_transpose_in_place(solution, &mut workspace.permuted);
-                self.pattern
-                    .transposed_residual(self.values, solution, rhs, &mut workspace.product)
-            }
-        };
-        let residual = accept(residual, solution, tolerance)?;
-        Ok(SolveReport {
-            residual,
-            iterations: 0,
-            error_bound: None,
+            let in_place = solutions.each_mut().map(|solution| &mut **solution);
+            self.lu
+                .solve_many_in_place(in_place, &mut workspace.permuted);
+        }
+        std::array::from_fn(|r| {
+            checked[r].clone()?;
+            let residual = self.pattern.residual(self.values, solutions[r], rhs[r]);
+            Ok(report_of(accept(residual, solutions[r], tolerances[r])?))
         })
+    }
+}
+
+/// The report of a direct solve with this residual.
+fn report_of(residual: f64) -> SolveReport {
+    SolveReport {
+        residual,
+        iterations: 0,
+        error_bound: None,
     }
 }
 

@@ -580,20 +580,45 @@ impl LinearSolver {
     /// return it is the solution.
     pub fn solve(&mut self, b: &[f64], x: &mut [f64]) -> Result<SolveReport, SolverError> {
         let probe_iterations = self.choose_by_trial(b, x, 1)?;
-        let mut report = self.solve_in(Direction::Forward, b, x, None)?;
+        let (mut report, largest_time) = self.solve_with_expected_time(b, x)?;
         report.iterations += probe_iterations;
-        self.bound_error(b, x, report)
+        self.bound_error(b, x, report, largest_time)
     }
 
-    /// `max(t)` for `t = A^{-1} 1` (module [`bound`]): re-certified from the
-    /// previous estimate when it still fits the matrix, solved for otherwise.
-    fn expected_time_bound(&mut self) -> Result<f64, SolverError> {
-        if let Some(largest) =
-            self.expected_time
-                .certify(self.pattern(), self.values(), bound::REUSE_LIMIT)
-        {
-            return Ok(largest);
+    /// The forward solve of `A x = b`, with `max(t)` for the error bound
+    /// if the previous estimate of `t` still certifies it. Otherwise, with
+    /// LU, the expected times `A t = 1` are solved together with `x`,
+    /// reading the factors once.
+    fn solve_with_expected_time(
+        &mut self,
+        b: &[f64],
+        x: &mut [f64],
+    ) -> Result<(SolveReport, Option<f64>), SolverError> {
+        let reused = self.reused_expected_time();
+        let n = self.pattern().n;
+        match &mut self.backend {
+            Backend::Lu(lu) if n > 0 && reused.is_none() => {
+                self.scratch.ones.resize(n, 1.0);
+                let (value, time) = lu.solve_pair_within(
+                    (b, x, self.tolerance),
+                    (
+                        &self.scratch.ones,
+                        self.expected_time.estimate_mut(n),
+                        EXPECTED_TIME_TOLERANCE,
+                    ),
+                );
+                self.expected_time.store();
+                let report = value?;
+                time?;
+                Ok((report, Some(self.certified_expected_time()?)))
+            }
+            _ => Ok((self.solve_in(Direction::Forward, b, x, None)?, reused)),
         }
+    }
+
+    /// `max(t)` for `t = A^{-1} 1` (module [`bound`]) from a new estimate,
+    /// solved for.
+    fn solved_expected_time(&mut self) -> Result<f64, SolverError> {
         let n = self.pattern().n;
         self.scratch.ones.resize(n, 1.0);
         let ones = std::mem::take(&mut self.scratch.ones);
@@ -608,6 +633,18 @@ impl LinearSolver {
         self.scratch.ones = ones;
         self.expected_time = time;
         solved?;
+        self.certified_expected_time()
+    }
+
+    /// `max(t)` certified by the previous estimate of `t`, if it still fits
+    /// the matrix within [`bound::REUSE_LIMIT`].
+    fn reused_expected_time(&self) -> Option<f64> {
+        self.expected_time
+            .certify(self.pattern(), self.values(), bound::REUSE_LIMIT)
+    }
+
+    /// `max(t)` certified by an estimate of `t` just solved for.
+    fn certified_expected_time(&self) -> Result<f64, SolverError> {
         self.expected_time
             .certify(self.pattern(), self.values(), 1.0)
             .ok_or(SolverError::Unbounded {
@@ -620,18 +657,24 @@ impl LinearSolver {
     /// Adds the error bound to the report of a forward solve, refining `x`
     /// (iterative refinement with a compensated residual, each correction
     /// solved with the same factors) while the bound exceeds the tolerance.
+    /// `largest_time` is `max(t)` (module [`bound`]) if the previous
+    /// estimate of `t` certified it; otherwise `t` is solved for.
     fn bound_error(
         &mut self,
         b: &[f64],
         x: &mut [f64],
         mut report: SolveReport,
+        largest_time: Option<f64>,
     ) -> Result<SolveReport, SolverError> {
         let n = self.pattern().n;
         if n == 0 {
             report.error_bound = Some(0.0);
             return Ok(report);
         }
-        let largest_time = self.expected_time_bound()?;
+        let largest_time = match largest_time {
+            Some(largest) => largest,
+            None => self.solved_expected_time()?,
+        };
         let scale = largest_time * (1.0 + 4.0 * f64::EPSILON);
         let plain = bound::residual_bound(
             self.pattern(),
@@ -763,7 +806,8 @@ impl LinearSolver {
         let (forward, transposed) = self.solve_both_unbounded(b, x, c, y);
         let forward = forward.and_then(|mut report| {
             report.iterations += probe_iterations;
-            self.bound_error(b, x, report)
+            let largest_time = self.reused_expected_time();
+            self.bound_error(b, x, report, largest_time)
         });
         (forward, transposed)
     }
