@@ -23,14 +23,18 @@ pub(crate) struct Mixture {
     offsets: Vec<usize>,
     entries: Vec<(u32, u32)>,
     term_offsets: Vec<usize>,
-    terms: Vec<(u32, f64)>,
+    /// The support entry `k` of each term.
+    term_entries: Vec<u32>,
+    /// The weight `O(o | s)` of each term.
+    term_weights: Vec<f64>,
     values: Vec<f64>,
 }
 
-/// A mixture entry `(g', u)`.
-type MixtureKey = (u32, u32);
-/// A term `(support entry k, O(o | s))` of a mixture entry.
-type MixtureTerm = (u32, f64);
+/// The key sorting a term of support entry `(g', u)` met at position
+/// `met`: by `g'`, then `u`, then `met` (32 bits each).
+fn sort_key((next, action): (usize, usize), met: usize) -> u128 {
+    ((next as u128) << 64) | ((action as u128) << 32) | met as u128
+}
 
 impl Mixture {
     /// The mixture's entries and terms for `player` on `support`, over game
@@ -43,23 +47,31 @@ impl Mixture {
         let mut entries = Vec::with_capacity(most_terms);
         let mut term_offsets = Vec::with_capacity(most_terms + 1);
         term_offsets.push(0);
-        let mut terms = Vec::with_capacity(most_terms);
-        let mut pending: Vec<(MixtureKey, MixtureTerm)> = Vec::new();
+        let mut term_entries = Vec::with_capacity(most_terms);
+        let mut term_weights = Vec::with_capacity(most_terms);
+        let mut met: Vec<(u32, f64)> = Vec::new();
+        let mut order: Vec<u128> = Vec::new();
         for s in 0..num_states {
             for g in 0..num_nodes {
-                pending.clear();
+                met.clear();
+                order.clear();
                 for &(o, weight) in player.observation_distribution(s) {
                     for k in support.block(g, o) {
-                        let (next, action) = support.entry(k);
-                        pending.push(((next as u32, action as u32), (k as u32, weight)));
+                        order.push(sort_key(support.entry(k), met.len()));
+                        met.push((k as u32, weight));
                     }
                 }
-                // Stable: an entry's terms keep the order in which they were met.
-                pending.sort_by_key(|&(key, _)| key);
-                for group in pending.chunk_by(|a, b| a.0 == b.0) {
-                    entries.push(group[0].0);
-                    terms.extend(group.iter().map(|&(_, term)| term));
-                    term_offsets.push(terms.len());
+                // The met position breaks ties: an entry's terms keep the
+                // order in which they were met.
+                order.sort_unstable();
+                for group in order.chunk_by(|a, b| a >> 32 == b >> 32) {
+                    entries.push(((group[0] >> 64) as u32, (group[0] >> 32) as u32));
+                    for &key in group {
+                        let (k, weight) = met[key as u32 as usize];
+                        term_entries.push(k);
+                        term_weights.push(weight);
+                    }
+                    term_offsets.push(term_entries.len());
                 }
                 offsets.push(entries.len());
             }
@@ -70,7 +82,8 @@ impl Mixture {
             offsets,
             entries,
             term_offsets,
-            terms,
+            term_entries,
+            term_weights,
             values,
         }
     }
@@ -102,12 +115,11 @@ impl Mixture {
     /// Writes every entry's value `sum_terms O(o | s) mu[k]` for the
     /// probabilities `mu` (aligned with the support).
     pub(crate) fn refill(&mut self, mu: &[f64]) {
-        for (j, value) in self.values.iter_mut().enumerate() {
-            *value = self.terms[self.term_offsets[j]..self.term_offsets[j + 1]]
-                .iter()
-                .map(|&(k, weight)| weight * mu[k as usize])
-                .sum();
+        let mut values = std::mem::take(&mut self.values);
+        for (j, value) in values.iter_mut().enumerate() {
+            *value = self.terms_of(j).map(|(k, weight)| weight * mu[k]).sum();
         }
+        self.values = values;
     }
 
     /// `|G|`, the controller's number of nodes.
@@ -137,7 +149,11 @@ impl Mixture {
 
     /// The terms `(support entry k, O(o | s))` of entry `j`.
     #[inline]
-    pub(crate) fn terms_of(&self, j: usize) -> &[(u32, f64)] {
-        &self.terms[self.term_offsets[j]..self.term_offsets[j + 1]]
+    pub(crate) fn terms_of(&self, j: usize) -> impl Iterator<Item = (usize, f64)> + '_ {
+        let terms = self.term_offsets[j]..self.term_offsets[j + 1];
+        let entries = self.term_entries[terms.clone()].iter();
+        entries
+            .zip(&self.term_weights[terms])
+            .map(|(&k, &weight)| (k as usize, weight))
     }
 }

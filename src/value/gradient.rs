@@ -230,13 +230,13 @@ pub(crate) fn row_derivatives(
         d_adv[l - adv_start] += def_values[j] * w;
     });
     for (offset, j) in def_range.enumerate() {
-        for &(k, weight) in defender_mixture.terms_of(j) {
-            defender(k as usize, weight * d_def[offset]);
+        for (k, weight) in defender_mixture.terms_of(j) {
+            defender(k, weight * d_def[offset]);
         }
     }
     for (offset, l) in adv_range.enumerate() {
-        for &(k, weight) in adversary_mixture.terms_of(l) {
-            adversary(k as usize, weight * d_adv[offset]);
+        for (k, weight) in adversary_mixture.terms_of(l) {
+            adversary(k, weight * d_adv[offset]);
         }
     }
 }
