@@ -38,7 +38,7 @@ use faer::sparse::linalg::cholesky::{
 use faer::sparse::linalg::{SupernodalThreshold, SymbolicSupernodalParams};
 use faer::{Accum, MatMut, Par, Side};
 
-use super::ordering::{ClassOrder, SymmetricPattern};
+use super::ordering::{ClassOrder, fill_reducing_order};
 use super::{SolverError, SparsePattern};
 
 /// Fronts with at least this many rows use faer's parallel dense kernels.
@@ -442,7 +442,7 @@ fn lu_unblocked(mut a: MatMut<'_, f64>) -> Result<(), usize> {
 impl Structure {
     fn analyse(pattern: &SparsePattern) -> Result<Self, SolverError> {
         let n = pattern.n;
-        let order = SymmetricPattern::of(pattern).fill_reducing_order()?;
+        let order = fill_reducing_order(pattern)?;
         let symbolic = cholesky_structure(&order)?;
         let mut structure = Self {
             n,

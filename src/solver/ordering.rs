@@ -38,19 +38,28 @@ pub(crate) struct SymmetricPattern {
 
 impl SymmetricPattern {
     /// The pattern of `A + A^T` (with every diagonal entry) of `pattern`.
+    #[cfg(test)]
     pub(crate) fn of(pattern: &SparsePattern) -> Self {
-        let n = pattern.n;
-        let (transposed_offsets, transposed) = transpose(pattern);
-        let mut offsets = Vec::with_capacity(n + 1);
-        offsets.push(0);
-        let mut indices = Vec::with_capacity(2 * pattern.nnz() + n);
-        for vertex in 0..n {
-            let row = &pattern.columns[pattern.row_range(vertex)];
-            let column = &transposed[transposed_offsets[vertex]..transposed_offsets[vertex + 1]];
-            merge_sorted(row, column, vertex, &mut indices);
-            offsets.push(indices.len());
+        let neighbourhoods = ClosedNeighbourhoods::of(pattern);
+        let mut symmetric = Self::empty();
+        let mut scratch = Vec::new();
+        for vertex in 0..pattern.n {
+            symmetric.push(neighbourhoods.of_vertex(vertex, &mut scratch));
         }
-        Self { offsets, indices }
+        symmetric
+    }
+
+    fn empty() -> Self {
+        Self {
+            offsets: vec![0],
+            indices: Vec::new(),
+        }
+    }
+
+    /// Appends a vertex with the neighbours `neighbours`.
+    fn push(&mut self, neighbours: &[usize]) {
+        self.indices.extend_from_slice(neighbours);
+        self.offsets.push(self.indices.len());
     }
 
     /// The number of vertices.
@@ -73,37 +82,6 @@ impl SymmetricPattern {
             offsets.push(indices.len());
         }
         (offsets, indices)
-    }
-
-    /// The fill-reducing order: approximate minimum degree or nested
-    /// dissection, both computed on the quotient graph of indistinguishable
-    /// vertices, whichever eliminates it more cheaply (the quotient's cost
-    /// counts classes, not their sizes: a proxy when the classes are of
-    /// equal size, as with uniform controllers).
-    pub(crate) fn fill_reducing_order(&self) -> Result<ClassOrder, SolverError> {
-        let (class_of, members) = self.indistinguishable_classes();
-        let quotient = self.quotient(&class_of, &members);
-        let by_degree = amd_order(&quotient)?;
-        let by_dissection = nested_dissection(&quotient)?;
-        let classes =
-            if quotient.elimination_cost(&by_dissection) < quotient.elimination_cost(&by_degree) {
-                by_dissection
-            } else {
-                by_degree
-            };
-        let mut starts = Vec::with_capacity(classes.len() + 1);
-        starts.push(0);
-        let mut permutation = Vec::with_capacity(self.len());
-        for &class in &classes {
-            permutation.extend_from_slice(members.members(class));
-            starts.push(permutation.len());
-        }
-        Ok(ClassOrder {
-            quotient,
-            classes,
-            starts,
-            permutation,
-        })
     }
 
     /// The multiplications of a Cholesky factorisation in `order`
@@ -140,51 +118,115 @@ impl SymmetricPattern {
         counts.iter().map(|&c| (c as f64).powi(2)).sum()
     }
 
-    /// The classes of vertices with equal closed neighbourhoods: each
-    /// vertex's class, and the members of each class.
-    fn indistinguishable_classes(&self) -> (Vec<usize>, Classes) {
-        let mut class_of = vec![0; self.len()];
-        let mut representatives: Vec<usize> = Vec::new();
-        let mut by_hash: FxHashMap<u64, Vec<usize>> = FxHashMap::default();
-        for (vertex, class) in class_of.iter_mut().enumerate() {
-            let neighbours = self.neighbours(vertex);
-            let candidates = by_hash.entry(hash_of(neighbours)).or_default();
-            let found = candidates
-                .iter()
-                .copied()
-                .find(|&class| self.neighbours(representatives[class]) == neighbours);
-            *class = found.unwrap_or_else(|| {
-                representatives.push(vertex);
-                candidates.push(representatives.len() - 1);
-                representatives.len() - 1
-            });
-        }
-        let members = Classes::of(&class_of, representatives.len());
-        (class_of, members)
-    }
-
-    /// The graph with one vertex per class, adjacent when their members are.
-    fn quotient(&self, class_of: &[usize], classes: &Classes) -> SymmetricPattern {
-        let count = classes.len();
-        let mut offsets = Vec::with_capacity(count + 1);
-        offsets.push(0);
-        let mut indices = Vec::new();
+    /// The graph with one vertex per class, adjacent when their members
+    /// are, from the neighbourhoods of one member per class (`self`).
+    fn quotient(&self, class_of: &[usize]) -> SymmetricPattern {
+        let count = self.len();
+        let mut quotient = Self::empty();
         let mut seen = vec![usize::MAX; count];
+        let mut neighbours = Vec::new();
         for class in 0..count {
-            let start = indices.len();
-            let representative = classes.members(class)[0];
-            for &neighbour in self.neighbours(representative) {
+            neighbours.clear();
+            for &neighbour in self.neighbours(class) {
                 let other = class_of[neighbour];
                 if seen[other] != class {
                     seen[other] = class;
-                    indices.push(other);
+                    neighbours.push(other);
                 }
             }
-            indices[start..].sort_unstable();
-            offsets.push(indices.len());
+            neighbours.sort_unstable();
+            quotient.push(&neighbours);
         }
-        SymmetricPattern { offsets, indices }
+        quotient
     }
+}
+
+/// The closed neighbourhoods in `A + A^T` of the pattern of `A`, each
+/// merged on demand from a row of `A` and a row of `A^T`.
+struct ClosedNeighbourhoods<'a> {
+    pattern: &'a SparsePattern,
+    transposed_offsets: Vec<usize>,
+    transposed: Vec<usize>,
+}
+
+impl<'a> ClosedNeighbourhoods<'a> {
+    fn of(pattern: &'a SparsePattern) -> Self {
+        let (transposed_offsets, transposed) = transpose(pattern);
+        Self {
+            pattern,
+            transposed_offsets,
+            transposed,
+        }
+    }
+
+    /// The closed neighbourhood of `vertex`, sorted, written to `out`.
+    fn of_vertex<'o>(&self, vertex: usize, out: &'o mut Vec<usize>) -> &'o [usize] {
+        let row = &self.pattern.columns[self.pattern.row_range(vertex)];
+        let column = &self.transposed
+            [self.transposed_offsets[vertex]..self.transposed_offsets[vertex + 1]];
+        out.clear();
+        merge_sorted(row, column, vertex, out);
+        out
+    }
+}
+
+/// The classes of vertices of `A + A^T` with equal closed neighbourhoods,
+/// numbered in the order of their first members: each vertex's class, the
+/// members of each class, and the neighbourhood of each class. Only one
+/// neighbourhood per class is kept, never the whole graph.
+fn indistinguishable_classes(pattern: &SparsePattern) -> (Vec<usize>, Classes, SymmetricPattern) {
+    let neighbourhoods = ClosedNeighbourhoods::of(pattern);
+    let mut class_of = vec![0; pattern.n];
+    let mut of_class = SymmetricPattern::empty();
+    let mut by_hash: FxHashMap<u64, Vec<usize>> = FxHashMap::default();
+    let mut scratch = Vec::new();
+    for (vertex, class) in class_of.iter_mut().enumerate() {
+        let neighbours = neighbourhoods.of_vertex(vertex, &mut scratch);
+        let candidates = by_hash.entry(hash_of(neighbours)).or_default();
+        let found = candidates
+            .iter()
+            .copied()
+            .find(|&class| of_class.neighbours(class) == neighbours);
+        *class = found.unwrap_or_else(|| {
+            of_class.push(neighbours);
+            candidates.push(of_class.len() - 1);
+            of_class.len() - 1
+        });
+    }
+    let members = Classes::of(&class_of, of_class.len());
+    (class_of, members, of_class)
+}
+
+/// The fill-reducing order of `A + A^T` for the pattern of `A`:
+/// approximate minimum degree or nested dissection, both computed on
+/// the quotient graph of indistinguishable vertices, whichever
+/// eliminates it more cheaply (the quotient's cost counts classes, not
+/// their sizes: a proxy when the classes are of equal size, as with
+/// uniform controllers).
+pub(crate) fn fill_reducing_order(pattern: &SparsePattern) -> Result<ClassOrder, SolverError> {
+    let (class_of, members, neighbourhoods) = indistinguishable_classes(pattern);
+    let quotient = neighbourhoods.quotient(&class_of);
+    let by_degree = amd_order(&quotient)?;
+    let by_dissection = nested_dissection(&quotient)?;
+    let classes =
+        if quotient.elimination_cost(&by_dissection) < quotient.elimination_cost(&by_degree) {
+            by_dissection
+        } else {
+            by_degree
+        };
+    let mut starts = Vec::with_capacity(classes.len() + 1);
+    starts.push(0);
+    let mut permutation = Vec::with_capacity(pattern.n);
+    for &class in &classes {
+        permutation.extend_from_slice(members.members(class));
+        starts.push(permutation.len());
+    }
+    Ok(ClassOrder {
+        quotient,
+        classes,
+        starts,
+        permutation,
+    })
 }
 
 /// A fill-reducing order of a graph by classes of indistinguishable
@@ -235,10 +277,6 @@ impl Classes {
             next[class] += 1;
         }
         Self { offsets, members }
-    }
-
-    fn len(&self) -> usize {
-        self.offsets.len() - 1
     }
 
     fn members(&self, class: usize) -> &[usize] {
@@ -495,11 +533,13 @@ mod tests {
             row_offsets: vec![0, 2, 4, 6, 7],
             columns: vec![1, 2, 0, 3, 0, 1, 3],
         };
-        let symmetric = SymmetricPattern::of(&pattern);
-        let (class_of, classes) = symmetric.indistinguishable_classes();
+        let (class_of, classes, neighbourhoods) = indistinguishable_classes(&pattern);
         assert_eq!(class_of[0], class_of[2]);
-        assert_eq!(classes.len(), 3);
-        let order = symmetric.fill_reducing_order().unwrap().permutation;
+        assert_eq!(neighbourhoods.len(), 3);
+        assert_eq!(classes.members(class_of[0]), [0, 2]);
+        assert_eq!(neighbourhoods.neighbours(class_of[2]), [0, 1, 2]);
+        assert_eq!(neighbourhoods.neighbours(class_of[3]), [1, 3]);
+        let order = fill_reducing_order(&pattern).unwrap().permutation;
         let position = |v: usize| order.iter().position(|&o| o == v).unwrap();
         assert_eq!(position(0).abs_diff(position(2)), 1);
     }
@@ -508,10 +548,7 @@ mod tests {
     fn the_order_is_a_permutation() {
         for seed in 0..5 {
             let (pattern, _) = random_chain(300, 3, 0.05, seed);
-            let mut order = SymmetricPattern::of(&pattern)
-                .fill_reducing_order()
-                .unwrap()
-                .permutation;
+            let mut order = fill_reducing_order(&pattern).unwrap().permutation;
             order.sort_unstable();
             assert!(order.iter().enumerate().all(|(i, &o)| i == o));
         }
