@@ -186,6 +186,32 @@ impl TransientSystem {
     /// when `P(m | m)` is within rounding of 1, where `1 - P(m | m)` keeps
     /// none (method.md section 8).
     fn factorize(&mut self, gmc: &Gmc) -> Result<(), SolverError> {
+        self.write_b(gmc);
+        let (sources, diagonal) = (&self.sources, &self.diagonal);
+        self.solver
+            .factorize_with(|matrix_values| write_matrix(matrix_values, sources, diagonal, gmc))
+    }
+
+    /// [`Self::factorize`] and the solve of `(I - Q) x = b` (from the
+    /// previous `x`) for a system solved once
+    /// ([`LinearSolver::factorize_and_solve`]: with LU, `L` is applied
+    /// during the factorisation, not stored).
+    fn factorize_and_solve_value(&mut self, gmc: &Gmc) -> Result<SolveReport, SolverError> {
+        if self.len() == 0 {
+            self.factorize(gmc)?;
+            return Ok(NO_SOLVE);
+        }
+        self.write_b(gmc);
+        let (sources, diagonal) = (&self.sources, &self.diagonal);
+        self.solver.factorize_and_solve(
+            |matrix_values| write_matrix(matrix_values, sources, diagonal, gmc),
+            &self.b,
+            &mut self.x,
+        )
+    }
+
+    /// `b(m) = sum_{m' in B} P(m' | m)` from the GMC's numbers.
+    fn write_b(&mut self, gmc: &Gmc) {
         let p = gmc.values();
         for (b, w) in self.b.iter_mut().zip(self.target_offsets.windows(2)) {
             *b = self.target_sources[w[0]..w[1]]
@@ -193,32 +219,6 @@ impl TransientSystem {
                 .map(|&k| p[k as usize])
                 .sum();
         }
-        let (sources, diagonal) = (&self.sources, &self.diagonal);
-        self.solver.factorize_with(|matrix_values| {
-            for (value, &source) in matrix_values.iter_mut().zip(sources) {
-                *value = if source == NO_SOURCE {
-                    0.0
-                } else {
-                    -p[source as usize]
-                };
-            }
-            for diagonal in diagonal {
-                let stay = sources[diagonal.entry] as usize;
-                matrix_values[diagonal.entry] = gmc
-                    .row_range(diagonal.state as usize)
-                    .filter(|&k| k != stay)
-                    .map(|k| p[k])
-                    .sum();
-            }
-        })
-    }
-
-    /// Solves `(I - Q) x = b` from the previous `x`.
-    fn solve_value(&mut self) -> Result<SolveReport, SolverError> {
-        if self.len() == 0 {
-            return Ok(NO_SOLVE);
-        }
-        self.solver.solve(&self.b, &mut self.x)
     }
 
     /// Solves `(I - Q) x = b` and `(I - Q)^T y = p0` from the previous `x`
@@ -243,6 +243,28 @@ const NO_SOLVE: SolveReport = SolveReport {
     iterations: 0,
     error_bound: Some(0.0),
 };
+
+/// Writes `I - Q` on `T` from the GMC's numbers into `matrix_values`:
+/// `-P(c | m)` at each entry's `source` in the GMC, and on the diagonal the
+/// probability of leaving `m` (see [`TransientSystem::factorize`]).
+fn write_matrix(matrix_values: &mut [f64], sources: &[u32], diagonal: &[Diagonal], gmc: &Gmc) {
+    let p = gmc.values();
+    for (value, &source) in matrix_values.iter_mut().zip(sources) {
+        *value = if source == NO_SOURCE {
+            0.0
+        } else {
+            -p[source as usize]
+        };
+    }
+    for diagonal in diagonal {
+        let stay = sources[diagonal.entry] as usize;
+        matrix_values[diagonal.entry] = gmc
+            .row_range(diagonal.state as usize)
+            .filter(|&k| k != stay)
+            .map(|k| p[k])
+            .sum();
+    }
+}
 
 /// The evaluator for the supports of two controllers and the value of
 /// their probabilities: the one-shot form of [`Evaluator::new`] followed by
@@ -363,8 +385,8 @@ impl Evaluator {
         adversary: &Probabilities,
     ) -> Result<Evaluation, ValueError> {
         let _flush = FlushDenormals::on_this_thread();
-        self.refill_and_factorize(defender, adversary)?;
-        let report = self.system.solve_value()?;
+        self.gmc.refill(defender, adversary);
+        let report = self.system.factorize_and_solve_value(&self.gmc)?;
         Ok(self.store_values(report))
     }
 

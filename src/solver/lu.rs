@@ -78,13 +78,54 @@ impl LuSolver {
     /// solver's own copy of `A` (aligned with the pattern; it holds the
     /// previous values on entry), without a second copy.
     pub fn factorize_with(&mut self, fill: impl FnOnce(&mut [f64])) -> Result<(), SolverError> {
+        self.set_values_with(fill)?;
         let system = &mut self.system;
-        system.factorised = false;
-        fill(&mut system.values);
-        check_values(&system.pattern, &system.values)?;
         system.lu.factorize(&system.values)?;
         system.factorised = true;
         Ok(())
+    }
+
+    /// Takes the values that `fill` writes into the solver's own copy of
+    /// `A` (as [`Self::factorize_with`]) without factorising them: for
+    /// [`Self::factorize_and_solve`], after the caller has looked at them
+    /// ([`Self::values`]).
+    pub fn set_values_with(&mut self, fill: impl FnOnce(&mut [f64])) -> Result<(), SolverError> {
+        let system = &mut self.system;
+        system.factorised = false;
+        fill(&mut system.values);
+        check_values(&system.pattern, &system.values)
+    }
+
+    /// Factorises the values of the last [`Self::set_values_with`] and
+    /// solves `A x_r = b_r` for `K` right-hand sides on the way, each
+    /// accepted within its own tolerance (the outer error: the inputs or
+    /// the factorisation). `L` is not stored but applied front by front
+    /// (forward elimination during the factorisation), which saves the
+    /// larger half of the factors' memory; a later solve factorises again,
+    /// keeping `L`. The solutions are bit for bit those of
+    /// [`Self::factorize_with`] and [`Self::solve_within`].
+    pub fn factorize_and_solve<const K: usize>(
+        &mut self,
+        rhs: [&[f64]; K],
+        mut solutions: [&mut [f64]; K],
+        tolerances: [f64; K],
+    ) -> Result<[Result<SolveReport, SolverError>; K], SolverError> {
+        let system = &mut self.system;
+        system.factorised = false;
+        for (b, x) in rhs.iter().zip(solutions.iter_mut()) {
+            check_solve_inputs(system.pattern.n, b, x)?;
+            x.copy_from_slice(b);
+        }
+        let in_place = solutions.each_mut().map(|solution| &mut **solution);
+        let work = &mut self.forward.permuted;
+        system
+            .lu
+            .factorize_and_solve(&system.values, in_place, work)?;
+        system.factorised = true;
+        let factors = system.factors_as_factorised();
+        Ok(std::array::from_fn(|r| {
+            factors.accepted(rhs[r], solutions[r], tolerances[r])
+        }))
     }
 
     /// The number of stored entries of the factors `L` and `U` (the fill:
@@ -139,19 +180,19 @@ impl LuSolver {
         c: &[f64],
         y: &mut [f64],
     ) -> Result<SolveReport, SolverError> {
-        let factors = self.system.factors()?;
         let tolerance = self.system.tolerance;
+        let factors = self.system.factors()?;
         factors.solve(&mut self.transposed, c, y, Direction::Transposed, tolerance)
     }
 
     /// [`Self::solve`] and [`Self::solve_transpose`] at once, on two threads.
     pub fn solve_both(&mut self, b: &[f64], x: &mut [f64], c: &[f64], y: &mut [f64]) -> SolvePair {
+        let tolerance = self.system.tolerance;
         let factors = match self.system.factors() {
             Ok(factors) => factors,
             Err(error) => return (Err(error.clone()), Err(error)),
         };
         let (forward, transposed) = (&mut self.forward, &mut self.transposed);
-        let tolerance = self.system.tolerance;
         join_directions(
             || factors.solve(forward, b, x, Direction::Forward, tolerance),
             || factors.solve(transposed, c, y, Direction::Transposed, tolerance),
@@ -160,17 +201,29 @@ impl LuSolver {
 }
 
 impl System {
-    fn factors(&self) -> Result<Factors<'_>, SolverError> {
+    /// The factors for any solve: after [`LuSolver::factorize_and_solve`],
+    /// which did not keep `L`, the values are factorised again, keeping it.
+    fn factors(&mut self) -> Result<Factors<'_>, SolverError> {
         if !self.factorised {
             return Err(SolverError::Malformed(
                 "solve called before a successful factorisation".into(),
             ));
         }
-        Ok(Factors {
+        if !self.lu.lower_kept() {
+            self.factorised = false;
+            self.lu.factorize(&self.values)?;
+            self.factorised = true;
+        }
+        Ok(self.factors_as_factorised())
+    }
+
+    /// The factors as the last factorisation left them.
+    fn factors_as_factorised(&self) -> Factors<'_> {
+        Factors {
             pattern: &self.pattern,
             values: &self.values,
             lu: &self.lu,
-        })
+        }
     }
 }
 
@@ -205,6 +258,18 @@ impl Factors<'_> {
         Ok(report_of(accept(residual, solution, tolerance)?))
     }
 
+    /// The report of a forward solution `solution` of `A x = rhs`, if its
+    /// residual is within `tolerance`.
+    fn accepted(
+        &self,
+        rhs: &[f64],
+        solution: &[f64],
+        tolerance: f64,
+    ) -> Result<SolveReport, SolverError> {
+        let residual = self.pattern.residual(self.values, solution, rhs);
+        Ok(report_of(accept(residual, solution, tolerance)?))
+    }
+
     /// Solves `A x_r = b_r` for `K` right-hand sides in one pass over the
     /// factors, each accepted within its own tolerance.
     fn solve_forward<const K: usize>(
@@ -226,8 +291,7 @@ impl Factors<'_> {
         }
         std::array::from_fn(|r| {
             checked[r].clone()?;
-            let residual = self.pattern.residual(self.values, solutions[r], rhs[r]);
-            Ok(report_of(accept(residual, solutions[r], tolerances[r])?))
+            self.accepted(rhs[r], solutions[r], tolerances[r])
         })
     }
 }

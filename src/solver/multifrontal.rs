@@ -61,6 +61,9 @@ struct Supernode {
     lower_offset: usize,
     /// Offset of the `|J| x |R|` panel `U_JR` in [`MultifrontalLu::upper`].
     upper_offset: usize,
+    /// Offset of the `|J| x |J|` pivot block `L_JJ\U_JJ` in
+    /// [`MultifrontalLu::pivots`].
+    pivot_offset: usize,
     /// Range of [`Structure::assembly`]: the entries of `A` added to the front.
     assembly: std::ops::Range<usize>,
     /// Range of [`Structure::children`].
@@ -97,18 +100,36 @@ struct Structure {
     stack_len: usize,
     lower_len: usize,
     upper_len: usize,
+    pivots_len: usize,
+    /// The most entries of a front's columns `[F_JJ; F_RJ]`.
+    largest_left: usize,
     /// The most entries of a front's columns `[F_JR; F_RR]`.
     largest_right: usize,
 }
 
 /// LU factors of `P A P^T = L U` (unit lower `L`), stored by supernode.
+///
+/// [`Self::factorize`] keeps `L` and `U`, for any number of solves in both
+/// directions. [`Self::factorize_and_solve`] applies `L^{-1}` to its
+/// right-hand sides front by front while it factorises, and keeps of `L`
+/// only the pivot blocks that `U^{-1}` needs: `L` below them, the larger
+/// part of `L`, is never stored (forward elimination during the
+/// factorisation, as in MUMPS), and the factors then serve no other solve.
 #[derive(Debug)]
 pub(crate) struct MultifrontalLu {
     structure: Structure,
+    /// The panels `[L_JJ\U_JJ; L_RJ]`, if `L` is kept.
     lower: Vec<f64>,
     upper: Vec<f64>,
-    /// The columns `[F_JR; F_RR]` of the front being factorised (its
-    /// columns `[F_JJ; F_RJ]` are assembled in place in [`Self::lower`]).
+    /// The pivot blocks `L_JJ\U_JJ` alone, if `L` is not kept.
+    pivots: Vec<f64>,
+    /// Whether the last factorisation kept `L` (in [`Self::lower`]).
+    lower_kept: bool,
+    /// The columns `[F_JJ; F_RJ]` of the front being factorised when `L`
+    /// is not kept (otherwise they are assembled in place in
+    /// [`Self::lower`]).
+    left: Vec<f64>,
+    /// The columns `[F_JR; F_RR]` of the front being factorised.
     front: Vec<f64>,
     /// The update matrices waiting for their parents, column-major, in
     /// postorder.
@@ -117,12 +138,15 @@ pub(crate) struct MultifrontalLu {
 
 impl MultifrontalLu {
     /// Symbolic analysis of `pattern`: ordering, supernodes, assembly maps,
-    /// and the storage of the factors.
+    /// and the storage of the factors (allocated, touched only when used).
     pub(crate) fn new(pattern: &SparsePattern) -> Result<Self, SolverError> {
         let structure = Structure::analyse(pattern)?;
         Ok(Self {
             lower: vec![0.0; structure.lower_len],
             upper: vec![0.0; structure.upper_len],
+            pivots: Vec::new(),
+            lower_kept: false,
+            left: Vec::new(),
             front: vec![0.0; structure.largest_right],
             stack: Vec::with_capacity(structure.stack_len),
             structure,
@@ -135,23 +159,73 @@ impl MultifrontalLu {
         self.lower.len() + self.upper.len()
     }
 
-    /// Numeric factorisation with `values` aligned with the pattern's entries.
+    /// Whether the last factorisation kept `L`: the factors then serve
+    /// [`Self::solve_many_in_place`] and [`Self::solve_transpose_in_place`].
+    pub(crate) fn lower_kept(&self) -> bool {
+        self.lower_kept
+    }
+
+    /// Numeric factorisation with `values` aligned with the pattern's
+    /// entries, keeping `L` and `U`.
     pub(crate) fn factorize(&mut self, values: &[f64]) -> Result<(), SolverError> {
+        self.factorize_fronts::<1>(values, None)
+    }
+
+    /// Numeric factorisation with `values` that solves `A x_r = b_r` for
+    /// `K` right-hand sides on the way (`x_r` holds `b_r` on entry) and
+    /// keeps `U` and the pivot blocks only. Each solution is bit for bit
+    /// the one [`Self::factorize`] and [`Self::solve_many_in_place`] give.
+    pub(crate) fn factorize_and_solve<const K: usize>(
+        &mut self,
+        values: &[f64],
+        mut xs: [&mut [f64]; K],
+        work: &mut Vec<f64>,
+    ) -> Result<(), SolverError> {
+        self.permute_many_in(&xs, work);
+        self.factorize_fronts::<K>(values, Some(work))?;
+        self.upper_solve::<K>(work);
+        self.permute_many_out(work, &mut xs);
+        Ok(())
+    }
+
+    /// The fronts in postorder: assembly, dense factorisation, `U_JR` and
+    /// the update matrix. With `forward` (`K` vectors interleaved in the
+    /// elimination order), also `x_r <- L^{-1} x_r` front by front, keeping
+    /// only the pivot blocks of `L`; without, keeping `L` whole.
+    fn factorize_fronts<const K: usize>(
+        &mut self,
+        values: &[f64],
+        mut forward: Option<&mut [f64]>,
+    ) -> Result<(), SolverError> {
+        let keep_lower = forward.is_none();
+        if !keep_lower {
+            self.pivots.resize(self.structure.pivots_len, 0.0);
+            self.left.resize(self.structure.largest_left, 0.0);
+        }
         let Self {
             structure,
             lower,
             upper,
+            pivots,
+            lower_kept,
+            left,
             front,
             stack,
         } = self;
+        *lower_kept = false;
         stack.clear();
         for &s in &structure.postorder {
             let node = &structure.supernodes[s];
             let (columns, below) = (node.columns(), node.rows.len());
             let rows = columns + below;
+            let left = if keep_lower {
+                &mut lower[node.lower_offset..][..rows * columns]
+            } else {
+                &mut left[..rows * columns]
+            };
             let mut front = Front {
                 rows,
-                left: &mut lower[node.lower_offset..][..rows * columns],
+                left,
                 right: &mut front[..rows * below],
             };
             structure.assemble(node, &mut front, values, stack);
@@ -165,19 +239,34 @@ impl MultifrontalLu {
             if !node.relative.is_empty() {
                 front.push_update(stack);
             }
+            if let Some(x) = forward.as_deref_mut() {
+                let below = &structure.rows[node.rows.clone()];
+                forward_through::<K>(node, below, front.left, x);
+                front.copy_pivot_block(&mut pivots[node.pivot_offset..][..columns * columns]);
+            }
         }
+        *lower_kept = keep_lower;
         Ok(())
     }
 
     /// Solves `A x_r = b_r` in place for `K` right-hand sides at once
     /// (`x_r` holds `b_r` on entry), reading the factors once. Each
     /// solution gets exactly the operations, in the same order, of a solve
-    /// of its own.
+    /// of its own. The factors must keep `L` ([`Self::lower_kept`]).
     pub(crate) fn solve_many_in_place<const K: usize>(
         &self,
         mut xs: [&mut [f64]; K],
         work: &mut Vec<f64>,
     ) {
+        debug_assert!(self.lower_kept, "a solve needs L");
+        self.permute_many_in(&xs, work);
+        self.lower_solve::<K>(work);
+        self.upper_solve::<K>(work);
+        self.permute_many_out(work, &mut xs);
+    }
+
+    /// The `K` vectors `xs` interleaved in the elimination order into `work`.
+    fn permute_many_in<const K: usize>(&self, xs: &[&mut [f64]; K], work: &mut Vec<f64>) {
         work.clear();
         work.extend(
             self.structure
@@ -185,8 +274,10 @@ impl MultifrontalLu {
                 .iter()
                 .flat_map(|&old| xs.each_ref().map(|x| x[old])),
         );
-        self.lower_solve::<K>(work);
-        self.upper_solve::<K>(work);
+    }
+
+    /// The inverse of [`Self::permute_many_in`].
+    fn permute_many_out<const K: usize>(&self, work: &[f64], xs: &mut [&mut [f64]; K]) {
         for (&old, values) in self.structure.permutation.iter().zip(work.chunks_exact(K)) {
             for (x, &value) in xs.iter_mut().zip(values) {
                 x[old] = value;
@@ -214,22 +305,30 @@ impl MultifrontalLu {
     }
 
     /// `x_r <- L^{-1} x_r` for the `K` vectors interleaved in `x` (entry
-    /// `i` of vector `r` at `i * K + r`), supernodes in increasing order.
+    /// `i` of vector `r` at `i * K + r`), supernodes in postorder, as
+    /// [`Self::factorize_and_solve`] meets them.
     fn lower_solve<const K: usize>(&self, x: &mut [f64]) {
-        for node in &self.structure.supernodes {
-            let (columns, rows) = (node.columns(), &self.structure.rows[node.rows.clone()]);
-            let stride = columns + rows.len();
-            let panel = &self.lower[node.lower_offset..][..stride * columns];
-            for j in 0..columns {
-                let xj: [f64; K] = std::array::from_fn(|r| x[(node.begin + j) * K + r]);
-                let column = &panel[j * stride..][..stride];
-                let targets = (node.begin + j + 1..node.end).zip(&column[j + 1..columns]);
-                for (row, &l) in targets.chain(rows.iter().copied().zip(&column[columns..])) {
-                    for (target, xj) in x[row * K..][..K].iter_mut().zip(xj) {
-                        *target -= l * xj;
-                    }
-                }
-            }
+        for &s in &self.structure.postorder {
+            let node = &self.structure.supernodes[s];
+            let below = &self.structure.rows[node.rows.clone()];
+            let panel =
+                &self.lower[node.lower_offset..][..(node.columns() + below.len()) * node.columns()];
+            forward_through::<K>(node, below, panel, x);
+        }
+    }
+
+    /// The pivot block `L_JJ\U_JJ` of `node`, column-major, and its column
+    /// stride: in the panel of `L` if kept, else in [`Self::pivots`].
+    fn pivot_block(&self, node: &Supernode) -> (&[f64], usize) {
+        let columns = node.columns();
+        if self.lower_kept {
+            let stride = columns + node.rows.len();
+            (&self.lower[node.lower_offset..][..stride * columns], stride)
+        } else {
+            (
+                &self.pivots[node.pivot_offset..][..columns * columns],
+                columns,
+            )
         }
     }
 
@@ -239,8 +338,7 @@ impl MultifrontalLu {
         for node in self.structure.supernodes.iter().rev() {
             let (columns, rows) = (node.columns(), &self.structure.rows[node.rows.clone()]);
             let below = rows.len();
-            let stride = columns + below;
-            let panel = &self.lower[node.lower_offset..][..stride * columns];
+            let (panel, stride) = self.pivot_block(node);
             let upper = &self.upper[node.upper_offset..][..below * columns];
             for (&row, column) in rows.iter().zip(upper.chunks_exact(columns)) {
                 let xr: [f64; K] = std::array::from_fn(|r| x[row * K + r]);
@@ -305,6 +403,30 @@ impl MultifrontalLu {
                     .map(|i| column[i] * y[node.begin + i])
                     .sum();
                 y[node.begin + j] -= below + within;
+            }
+        }
+    }
+}
+
+/// `x_r <- L_s^{-1} x_r` for the columns of supernode `node`: with the
+/// factorised panel `[L_JJ\U_JJ; L_RJ]` (column-major, `|J| + |R|` rows,
+/// `below` the rows `R`), subtracts each column's multiples from the rows
+/// below it, for the `K` vectors interleaved in `x`.
+fn forward_through<const K: usize>(
+    node: &Supernode,
+    below: &[usize],
+    panel: &[f64],
+    x: &mut [f64],
+) {
+    let columns = node.columns();
+    let stride = columns + below.len();
+    for j in 0..columns {
+        let xj: [f64; K] = std::array::from_fn(|r| x[(node.begin + j) * K + r]);
+        let column = &panel[j * stride..][..stride];
+        let targets = (node.begin + j + 1..node.end).zip(&column[j + 1..columns]);
+        for (row, &l) in targets.chain(below.iter().copied().zip(&column[columns..])) {
+            for (target, xj) in x[row * K..][..K].iter_mut().zip(xj) {
+                *target -= l * xj;
             }
         }
     }
@@ -388,6 +510,18 @@ impl Front<'_> {
         }
     }
 
+    /// Copies the pivot block `L_JJ\U_JJ` (`|J| x |J|`, column-major) out
+    /// of a factorised front.
+    fn copy_pivot_block(&self, pivots: &mut [f64]) {
+        let columns = self.columns();
+        for (target, source) in pivots
+            .chunks_exact_mut(columns)
+            .zip(self.left.chunks_exact(self.rows))
+        {
+            target.copy_from_slice(&source[..columns]);
+        }
+    }
+
     /// Pushes the update matrix `F_RR` of a factorised front onto the
     /// stack, column-major.
     fn push_update(&self, stack: &mut Vec<f64>) {
@@ -456,6 +590,8 @@ impl Structure {
             stack_len: 0,
             lower_len: 0,
             upper_len: 0,
+            pivots_len: 0,
+            largest_left: 0,
             largest_right: 0,
         };
         let expand = |class: usize| order.positions(class..class + 1);
@@ -491,6 +627,7 @@ impl Structure {
         self.rows[first..].sort_unstable();
         let rows = first..self.rows.len();
         let (columns, below) = (end - begin, rows.len());
+        self.largest_left = self.largest_left.max((columns + below) * columns);
         self.largest_right = self.largest_right.max((columns + below) * below);
         self.supernodes.push(Supernode {
             begin,
@@ -498,12 +635,14 @@ impl Structure {
             rows,
             lower_offset: self.lower_len,
             upper_offset: self.upper_len,
+            pivot_offset: self.pivots_len,
             assembly: 0..0,
             children: 0..0,
             relative: 0..0,
         });
         self.lower_len += (columns + below) * columns;
         self.upper_len += below * columns;
+        self.pivots_len += columns * columns;
     }
 
     /// The supernode owning each column.
@@ -823,6 +962,46 @@ mod tests {
                 "expected times are at least 1"
             );
         }
+    }
+
+    #[test]
+    fn solving_during_the_factorisation_matches_solving_after_it_bit_for_bit() {
+        // In the first two chains, solving supernode by supernode in
+        // increasing order (not the postorder of the factorisation) sums
+        // some entries in another order and changes their last bits.
+        let mut postorder_differs = false;
+        let systems = [
+            random_chain(600, 2, 0.02, 8),
+            random_chain(950, 5, 0.02, 15),
+            grid_walk(45),
+            tridiagonal(300, 0.45),
+        ];
+        for (pattern, values) in systems {
+            let n = pattern.n;
+            let b: Vec<f64> = (0..n).map(|i| ((i * 7919) % 101) as f64 / 101.0).collect();
+            let mut work = Vec::new();
+            let mut lu = MultifrontalLu::new(&pattern).unwrap();
+            lu.factorize(&values).unwrap();
+            let (mut x_after, mut t_after) = (b.clone(), vec![1.0; n]);
+            lu.solve_many_in_place([&mut x_after, &mut t_after], &mut work);
+            let (mut x, mut t) = (b.clone(), vec![1.0; n]);
+            lu.factorize_and_solve(&values, [&mut x, &mut t], &mut work)
+                .unwrap();
+            assert!(!lu.lower_kept());
+            let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&x), bits(&x_after));
+            assert_eq!(bits(&t), bits(&t_after));
+            let mut x_alone = b;
+            lu.factorize_and_solve(&values, [&mut x_alone], &mut work)
+                .unwrap();
+            assert_eq!(bits(&x_alone), bits(&x_after));
+            let postorder = &lu.structure.postorder;
+            postorder_differs |= postorder.iter().enumerate().any(|(i, &s)| i != s);
+        }
+        assert!(
+            postorder_differs,
+            "no system tried a postorder unlike 0, 1, ..."
+        );
     }
 
     #[test]

@@ -162,8 +162,8 @@ impl<'a> ClosedNeighbourhoods<'a> {
     /// The closed neighbourhood of `vertex`, sorted, written to `out`.
     fn of_vertex<'o>(&self, vertex: usize, out: &'o mut Vec<usize>) -> &'o [usize] {
         let row = &self.pattern.columns[self.pattern.row_range(vertex)];
-        let column = &self.transposed
-            [self.transposed_offsets[vertex]..self.transposed_offsets[vertex + 1]];
+        let column =
+            &self.transposed[self.transposed_offsets[vertex]..self.transposed_offsets[vertex + 1]];
         out.clear();
         merge_sorted(row, column, vertex, out);
         out
