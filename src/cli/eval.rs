@@ -146,6 +146,15 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
     let (dra, formula) = common::objective(&args.objective, &game)?;
     let automaton = lap.seconds();
     let (defender, adversary) = common::controllers(&args.controllers, &game)?;
+    // The supports and probabilities are all that is needed of the
+    // controllers: free them (tens of MB for `uniform:K` at 1e5 states)
+    // before the chain is built, which reuses their memory.
+    let (def_support, adv_support) = (Support::of(&defender), Support::of(&adversary));
+    let (def_probabilities, adv_probabilities) = (
+        Support::probabilities_of(&defender),
+        Support::probabilities_of(&adversary),
+    );
+    drop((defender, adversary));
     let controllers = lap.seconds();
     let exploration = if args.explain {
         Exploration::Full
@@ -155,8 +164,8 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
     let mut evaluator = Evaluator::with_exploration(
         &game,
         &dra,
-        &Support::of(&defender),
-        &Support::of(&adversary),
+        &def_support,
+        &adv_support,
         &args.solver.settings(),
         exploration,
     )?;
@@ -165,10 +174,6 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
     // states) before the factorisation, the step of peak memory, unless
     // --explain names its states.
     let game = args.explain.then_some(game);
-    let (def_probabilities, adv_probabilities) = (
-        Support::probabilities_of(&defender),
-        Support::probabilities_of(&adversary),
-    );
     let (evaluation, gradient) = if args.gradient {
         let (evaluation, gradient) =
             evaluator.evaluate_with_gradient(&def_probabilities, &adv_probabilities)?;

@@ -13,20 +13,30 @@ use super::{Fsc, Support};
 use crate::game::Player;
 
 /// The mixture on a fixed support: for each `(s, g)` the distinct supported
-/// `(g', u)` in increasing order, each with the terms `(support entry k,
-/// O(o | s))` whose products with `mu_k` sum to it (in observation order,
-/// then support order), and its value for the probabilities of the last
-/// [`Mixture::refill`].
+/// `(g', u)` in increasing order and their values for the probabilities of
+/// the last [`Mixture::refill`]. A value is the sum of its *terms*
+/// `O(o | s) mu_k`, one per observation `o` of `s` and support entry `k` of
+/// block `(g, o)` with `k = (g', u)`; the terms are met in that order (`o`
+/// as `O(. | s)` lists them, then `k`), and each records only the entry it
+/// adds to: `O(. | s)` and the blocks are kept once, not per term.
 #[derive(Debug, Clone)]
 pub(crate) struct Mixture {
     num_nodes: usize,
+    num_observations: usize,
+    /// The entries of `(s, g)` are `offsets[s |G| + g]..offsets[s |G| + g + 1]`.
     offsets: Vec<usize>,
     entries: Vec<(u32, u32)>,
+    /// The terms of `(s, g)` are `term_offsets[s |G| + g]..`, in the order met.
     term_offsets: Vec<usize>,
-    /// The support entry `k` of each term.
+    /// The entry of each term, counted from the first entry of its `(s, g)`.
     term_entries: Vec<u32>,
-    /// The weight `O(o | s)` of each term.
-    term_weights: Vec<f64>,
+    /// `O(. | s)`: the pairs `(o, O(o | s))` of `s` are
+    /// `observations[observation_offsets[s]..observation_offsets[s + 1]]`.
+    observation_offsets: Vec<usize>,
+    observations: Vec<(u32, f64)>,
+    /// The support entries `k` of block `b = g |O| + o` are
+    /// `block_offsets[b]..block_offsets[b + 1]`.
+    block_offsets: Vec<usize>,
     values: Vec<f64>,
 }
 
@@ -44,46 +54,52 @@ impl Mixture {
         let most_terms = Self::count_terms(player, support, num_states);
         let mut offsets = Vec::with_capacity(num_states * num_nodes + 1);
         offsets.push(0);
-        let mut entries = Vec::with_capacity(most_terms);
-        let mut term_offsets = Vec::with_capacity(most_terms + 1);
+        let mut entries = Vec::new();
+        let mut term_offsets = Vec::with_capacity(num_states * num_nodes + 1);
         term_offsets.push(0);
-        let mut term_entries = Vec::with_capacity(most_terms);
-        let mut term_weights = Vec::with_capacity(most_terms);
-        let mut met: Vec<(u32, f64)> = Vec::new();
+        let mut term_entries = vec![0; most_terms];
         let mut order: Vec<u128> = Vec::new();
         for s in 0..num_states {
             for g in 0..num_nodes {
-                met.clear();
                 order.clear();
-                for &(o, weight) in player.observation_distribution(s) {
+                for &(o, _) in player.observation_distribution(s) {
                     for k in support.block(g, o) {
-                        order.push(sort_key(support.entry(k), met.len()));
-                        met.push((k as u32, weight));
+                        order.push(sort_key(support.entry(k), order.len()));
                     }
                 }
-                // The met position breaks ties: an entry's terms keep the
-                // order in which they were met.
                 order.sort_unstable();
+                let first_term = term_offsets[term_offsets.len() - 1];
+                let first_entry = entries.len();
                 for group in order.chunk_by(|a, b| a >> 32 == b >> 32) {
-                    entries.push(((group[0] >> 64) as u32, (group[0] >> 32) as u32));
+                    let entry = (entries.len() - first_entry) as u32;
                     for &key in group {
-                        let (k, weight) = met[key as u32 as usize];
-                        term_entries.push(k);
-                        term_weights.push(weight);
+                        term_entries[first_term + key as u32 as usize] = entry;
                     }
-                    term_offsets.push(term_entries.len());
+                    entries.push(((group[0] >> 64) as u32, (group[0] >> 32) as u32));
                 }
+                term_offsets.push(first_term + order.len());
                 offsets.push(entries.len());
             }
+        }
+        let mut observation_offsets = Vec::with_capacity(num_states + 1);
+        observation_offsets.push(0);
+        let mut observations = Vec::new();
+        for s in 0..num_states {
+            let distribution = player.observation_distribution(s);
+            observations.extend(distribution.iter().map(|&(o, p)| (o as u32, p)));
+            observation_offsets.push(observations.len());
         }
         let values = vec![0.0; entries.len()];
         Self {
             num_nodes,
+            num_observations: support.num_observations(),
             offsets,
             entries,
             term_offsets,
             term_entries,
-            term_weights,
+            observation_offsets,
+            observations,
+            block_offsets: support.block_offsets().to_vec(),
             values,
         }
     }
@@ -112,12 +128,18 @@ impl Mixture {
         mixture
     }
 
-    /// Writes every entry's value `sum_terms O(o | s) mu[k]` for the
-    /// probabilities `mu` (aligned with the support).
+    /// Writes every entry's value, the sum of its terms `O(o | s) mu[k]`
+    /// in the order met, for the probabilities `mu` (aligned with the
+    /// support).
     pub(crate) fn refill(&mut self, mu: &[f64]) {
         let mut values = std::mem::take(&mut self.values);
-        for (j, value) in values.iter_mut().enumerate() {
-            *value = self.terms_of(j).map(|(k, weight)| weight * mu[k]).sum();
+        values.fill(0.0);
+        let num_states = self.observation_offsets.len() - 1;
+        for s in 0..num_states {
+            for g in 0..self.num_nodes {
+                let own = &mut values[self.at(s, g)];
+                self.for_each_term(s, g, |entry, k, weight| own[entry] += weight * mu[k]);
+            }
         }
         self.values = values;
     }
@@ -147,13 +169,25 @@ impl Mixture {
         &self.values
     }
 
-    /// The terms `(support entry k, O(o | s))` of entry `j`.
+    /// Calls `visit(entry, k, O(o | s))` for every term of `(s, g)` in the
+    /// order met, `entry` counted from the first entry of `(s, g)`
+    /// ([`Self::at`]): the term `O(o | s) mu_k` adds to that entry. Each
+    /// support entry `k` has at most one term in `(s, g)`.
     #[inline]
-    pub(crate) fn terms_of(&self, j: usize) -> impl Iterator<Item = (usize, f64)> + '_ {
-        let terms = self.term_offsets[j]..self.term_offsets[j + 1];
-        let entries = self.term_entries[terms.clone()].iter();
-        entries
-            .zip(&self.term_weights[terms])
-            .map(|(&k, &weight)| (k as usize, weight))
+    pub(crate) fn for_each_term(
+        &self,
+        s: usize,
+        g: usize,
+        mut visit: impl FnMut(usize, usize, f64),
+    ) {
+        let i = s * self.num_nodes + g;
+        let mut terms = self.term_entries[self.term_offsets[i]..self.term_offsets[i + 1]].iter();
+        let observations = self.observation_offsets[s]..self.observation_offsets[s + 1];
+        for &(o, weight) in &self.observations[observations] {
+            let b = g * self.num_observations + o as usize;
+            for (k, &entry) in (self.block_offsets[b]..self.block_offsets[b + 1]).zip(&mut terms) {
+                visit(entry as usize, k, weight);
+            }
+        }
     }
 }

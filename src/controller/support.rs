@@ -90,6 +90,12 @@ impl Support {
         self.block_offsets[b]..self.block_offsets[b + 1]
     }
 
+    /// The offsets of the blocks: block `b` holds the entries
+    /// `block_offsets[b]..block_offsets[b + 1]`.
+    pub(crate) fn block_offsets(&self) -> &[usize] {
+        &self.block_offsets
+    }
+
     /// Entry `k` as `(g', u)`.
     pub fn entry(&self, k: usize) -> (usize, usize) {
         let (next, action) = self.entries[k];

@@ -229,16 +229,9 @@ pub(crate) fn row_derivatives(
         d_def[j - def_start] += adv_values[l] * w;
         d_adv[l - adv_start] += def_values[j] * w;
     });
-    for (offset, j) in def_range.enumerate() {
-        for (k, weight) in defender_mixture.terms_of(j) {
-            defender(k, weight * d_def[offset]);
-        }
-    }
-    for (offset, l) in adv_range.enumerate() {
-        for (k, weight) in adversary_mixture.terms_of(l) {
-            adversary(k, weight * d_adv[offset]);
-        }
-    }
+    let (s, g, h) = (state.s as usize, state.g as usize, state.h as usize);
+    defender_mixture.for_each_term(s, g, |entry, k, weight| defender(k, weight * d_def[entry]));
+    adversary_mixture.for_each_term(s, h, |entry, k, weight| adversary(k, weight * d_adv[entry]));
 }
 
 /// Adds to `initial_defender[g]` and `initial_adversary[h]` the partial
