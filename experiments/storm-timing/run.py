@@ -20,9 +20,13 @@ CPU without saving wall time), exports
 the chain once, and runs Storm's check `--repeats` times, each in a fresh
 Python process that reads the DRN file first (not timed) and then times
 `model_checking` alone with `time.process_time` (CPU of that process, all
-threads). Writes results/storm-timing.csv (medians per size, the command,
-the posg-fsc version and the Storm settings in the header) and prints the
-ratios eval CPU / Storm CPU, with the default threads and with one.
+threads). Each repeat runs `eval`, `eval` on one thread and Storm's check
+one after the other, so that the load of the shared machine affects all
+three alike; a ratio is the median over the repeats of the ratio within
+each repeat. Writes results/storm-timing.csv (medians per size, the
+command, the posg-fsc version and the Storm settings in the header) and
+prints the ratios eval CPU / Storm CPU, with the default threads and with
+one.
 
 `gmc_states` counts the states eval explores: it stops at decided states
 (docs/method.md section 1); Storm builds the whole product of the chain
@@ -88,17 +92,17 @@ def measure(binary, size, repeats, tmp, form):
     game = os.path.join(tmp, f"grid{size}.{FORMS[form][1]}")
     make_grid(binary, size, game, form)
     command = [binary, "eval", game, "--ltl", FORMULA, *CONTROLLERS]
-    evals, one_thread = [], []
+    chain = os.path.join(tmp, f"chain{size}")
+    subprocess.run([binary, "export-gmc", game, *CONTROLLERS, "--out", chain, "--force"],
+                   check=True, stdout=subprocess.DEVNULL)
+    # One repeat runs all three, so that each ratio compares runs made
+    # under the same load of this shared machine.
+    evals, one_thread, storms = [], [], []
     for _ in range(repeats):
         out, cpu, wall, peak = run_timed(command)
         evals.append((json.loads(out), cpu, wall, peak))
         _, cpu, wall, _ = run_timed(command, env={**os.environ, "RAYON_NUM_THREADS": "1"})
         one_thread.append((cpu, wall))
-    chain = os.path.join(tmp, f"chain{size}")
-    subprocess.run([binary, "export-gmc", game, *CONTROLLERS, "--out", chain, "--force"],
-                   check=True, stdout=subprocess.DEVNULL)
-    storms = []
-    for _ in range(repeats):
         done = subprocess.run([sys.executable, "-c", STORM_CHILD, os.path.join(chain, "chain.drn"),
                                STORM_FORMULA], capture_output=True, text=True, check=True)
         storms.append(json.loads(done.stdout.strip().splitlines()[-1]))
@@ -123,8 +127,10 @@ def measure(binary, size, repeats, tmp, form):
         **{f"eval_{k}_s": v for k, v in phases.items()},
         "storm_chain_states": storms[0]["states"], "storm_check_cpu_s": storm_cpu,
         "storm_check_wall_s": statistics.median(s["wall"] for s in storms),
-        "ratio_eval_to_storm_cpu": eval_cpu / storm_cpu,
-        "ratio_one_thread_eval_to_storm_cpu": eval_cpu_one_thread / storm_cpu,
+        "ratio_eval_to_storm_cpu": statistics.median(
+            e[1] / s["cpu"] for e, s in zip(evals, storms)),
+        "ratio_one_thread_eval_to_storm_cpu": statistics.median(
+            e[0] / s["cpu"] for e, s in zip(one_thread, storms)),
     }
 
 
@@ -148,7 +154,8 @@ def main():
         handle.write(f"# {' '.join(sys.argv)}; {version}; stormpy {stormpy.__version__}; "
                      f"game form {args.form} (*.{FORMS[args.form][1]}; game_mib is its size); "
                      f"formula '{FORMULA}', {' '.join(CONTROLLERS)}; Storm: {STORM_SETTINGS}; "
-                     f"medians of {args.repeats} runs; CPU = user + system\n")
+                     f"medians of {args.repeats} runs, eval and Storm interleaved; ratios: median of the "
+                     f"per-repeat ratios; CPU = user + system\n")
         writer = csv.DictWriter(handle, fieldnames=list(rows[0]))
         writer.writeheader()
         writer.writerows(rows)

@@ -134,6 +134,12 @@ impl LuSolver {
         self.system.lu.stored_entries()
     }
 
+    /// Whether the factors keep `L`: false after [`Self::factorize_and_solve`]
+    /// until a later solve factorises again.
+    pub fn keeps_lower(&self) -> bool {
+        self.system.lu.lower_kept()
+    }
+
     /// The values of `A` as of the last factorisation.
     pub fn values(&self) -> &[f64] {
         &self.system.values
