@@ -501,25 +501,13 @@ impl Front<'_> {
 
     /// Copies `U_JR` (`|J| x |R|`, column-major) out of a factorised front.
     fn copy_upper(&self, upper: &mut [f64]) {
-        let columns = self.columns();
-        for (target, source) in upper
-            .chunks_exact_mut(columns)
-            .zip(self.right.chunks_exact(self.rows))
-        {
-            target.copy_from_slice(&source[..columns]);
-        }
+        copy_leading_rows(self.right, self.rows, self.columns(), upper);
     }
 
     /// Copies the pivot block `L_JJ\U_JJ` (`|J| x |J|`, column-major) out
     /// of a factorised front.
     fn copy_pivot_block(&self, pivots: &mut [f64]) {
-        let columns = self.columns();
-        for (target, source) in pivots
-            .chunks_exact_mut(columns)
-            .zip(self.left.chunks_exact(self.rows))
-        {
-            target.copy_from_slice(&source[..columns]);
-        }
+        copy_leading_rows(self.left, self.rows, self.columns(), pivots);
     }
 
     /// Pushes the update matrix `F_RR` of a factorised front onto the
@@ -529,6 +517,18 @@ impl Front<'_> {
         for source in self.right.chunks_exact(self.rows) {
             stack.extend_from_slice(&source[columns..]);
         }
+    }
+}
+
+/// Copies the first `count` entries of each column of the column-major
+/// `source` (columns of `stride` entries) into consecutive columns of
+/// `count` entries of `target`.
+fn copy_leading_rows(source: &[f64], stride: usize, count: usize, target: &mut [f64]) {
+    for (target, source) in target
+        .chunks_exact_mut(count)
+        .zip(source.chunks_exact(stride))
+    {
+        target.copy_from_slice(&source[..count]);
     }
 }
 
