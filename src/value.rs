@@ -378,7 +378,9 @@ impl Evaluator {
         &self.values
     }
 
-    /// The value `V` for the given probabilities (one factorisation, one solve).
+    /// The value `V` for the given probabilities: one factorisation, with
+    /// the solve done during it ([`LinearSolver::factorize_and_solve`]; a
+    /// correction of the solution for its error bound factorises again).
     pub fn evaluate(
         &mut self,
         defender: &Probabilities,

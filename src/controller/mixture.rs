@@ -133,7 +133,8 @@ impl Mixture {
     /// support).
     pub(crate) fn refill(&mut self, mu: &[f64]) {
         let mut values = std::mem::take(&mut self.values);
-        values.fill(0.0);
+        // -0.0, the neutral element of f64 addition, as `Iterator::sum` starts.
+        values.fill(-0.0);
         let num_states = self.observation_offsets.len() - 1;
         for s in 0..num_states {
             for g in 0..self.num_nodes {
@@ -188,6 +189,69 @@ impl Mixture {
             for (k, &entry) in (self.block_offsets[b]..self.block_offsets[b + 1]).zip(&mut terms) {
                 visit(entry as usize, k, weight);
             }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::controller::Role;
+    use crate::game::grid::GridSpec;
+
+    /// The grid's players observe their cell with noise: several
+    /// observations per state, so entries have several terms.
+    #[test]
+    fn refill_sums_each_entrys_terms_in_the_order_met() {
+        let game = GridSpec::square(7).build().unwrap();
+        for (player, role) in [
+            (game.defender(), Role::Defender),
+            (game.adversary(), Role::Adversary),
+        ] {
+            let support = Support::of(&Fsc::uniform_enabled(role, 3, player));
+            let mu: Vec<f64> = (0..support.num_entries())
+                .map(|k| ((k * 7919) % 97 + 1) as f64 / 97.0)
+                .collect();
+            let mut mixture = Mixture::build(player, &support, game.num_states());
+            mixture.refill(&mu);
+            let mut several_terms = false;
+            for s in 0..game.num_states() {
+                for g in 0..support.num_nodes() {
+                    let entries = mixture.at(s, g);
+                    let mut seen = vec![false; support.num_entries()];
+                    mixture.for_each_term(s, g, |entry, k, _| {
+                        let (next, action) = support.entry(k);
+                        let key = mixture.entry(entries.start + entry);
+                        assert_eq!((key.0 as usize, key.1 as usize), (next, action));
+                        assert!(!std::mem::replace(&mut seen[k], true), "k twice");
+                    });
+                    let mu = &mu;
+                    for j in entries.clone() {
+                        let (next, action) = mixture.entry(j);
+                        let terms: Vec<f64> = player
+                            .observation_distribution(s)
+                            .iter()
+                            .flat_map(|&(o, weight)| {
+                                support
+                                    .block(g, o)
+                                    .filter(|&k| {
+                                        support.entry(k) == (next as usize, action as usize)
+                                    })
+                                    .map(move |k| weight * mu[k])
+                            })
+                            .collect();
+                        several_terms |= terms.len() > 1;
+                        let expected: f64 = terms.iter().sum();
+                        assert_eq!(mixture.values()[j].to_bits(), expected.to_bits());
+                    }
+                    let keys: Vec<_> = entries.map(|j| mixture.entry(j)).collect();
+                    assert!(
+                        keys.windows(2).all(|w| w[0] < w[1]),
+                        "entries sorted, distinct"
+                    );
+                }
+            }
+            assert!(several_terms, "no entry with several terms was tried");
         }
     }
 }

@@ -21,6 +21,8 @@ struct System {
     pattern: SparsePattern,
     lu: MultifrontalLu,
     values: Vec<f64>,
+    /// Whether `values` passed [`check_values`] when they were last set.
+    values_checked: bool,
     factorised: bool,
     tolerance: f64,
 }
@@ -56,6 +58,7 @@ impl LuSolver {
                 pattern,
                 lu,
                 values,
+                values_checked: false,
                 factorised: false,
                 tolerance,
             },
@@ -93,17 +96,22 @@ impl LuSolver {
         let system = &mut self.system;
         system.factorised = false;
         fill(&mut system.values);
-        check_values(&system.pattern, &system.values)
+        let checked = check_values(&system.pattern, &system.values);
+        system.values_checked = checked.is_ok();
+        checked
     }
 
     /// Factorises the values of the last [`Self::set_values_with`] and
     /// solves `A x_r = b_r` for `K` right-hand sides on the way, each
-    /// accepted within its own tolerance (the outer error: the inputs or
-    /// the factorisation). `L` is not stored but applied front by front
-    /// (forward elimination during the factorisation), which saves the
-    /// larger half of the factors' memory; a later solve factorises again,
-    /// keeping `L`. The solutions are bit for bit those of
-    /// [`Self::factorize_with`] and [`Self::solve_within`].
+    /// accepted within its own tolerance (the outer error: the values, the
+    /// right-hand sides or the factorisation). `L` is not stored but
+    /// applied front by front (forward elimination during the
+    /// factorisation), which saves the larger half of the factors' memory;
+    /// a later solve factorises again, keeping `L`. The solutions are bit
+    /// for bit those of [`Self::factorize_with`] and [`Self::solve_within`],
+    /// and so are the errors and the state they leave: with a right-hand
+    /// side that cannot be solved for, the values are factorised (keeping
+    /// `L`) and the error returned.
     pub fn factorize_and_solve<const K: usize>(
         &mut self,
         rhs: [&[f64]; K],
@@ -111,9 +119,21 @@ impl LuSolver {
         tolerances: [f64; K],
     ) -> Result<[Result<SolveReport, SolverError>; K], SolverError> {
         let system = &mut self.system;
-        system.factorised = false;
-        for (b, x) in rhs.iter().zip(solutions.iter_mut()) {
-            check_solve_inputs(system.pattern.n, b, x)?;
+        if !system.values_checked {
+            return Err(SolverError::Malformed(
+                "factorize_and_solve without values set by set_values_with".into(),
+            ));
+        }
+        let n = system.pattern.n;
+        let inputs: Result<Vec<()>, SolverError> = (0..K)
+            .map(|r| check_solve_inputs(n, rhs[r], solutions[r]))
+            .collect();
+        if let Err(error) = inputs {
+            system.lu.factorize(&system.values)?;
+            system.factorised = true;
+            return Err(error);
+        }
+        for (x, b) in solutions.iter_mut().zip(rhs) {
             x.copy_from_slice(b);
         }
         let in_place = solutions.each_mut().map(|solution| &mut **solution);
@@ -122,14 +142,15 @@ impl LuSolver {
             .lu
             .factorize_and_solve(&system.values, in_place, work)?;
         system.factorised = true;
-        let factors = system.factors_as_factorised();
+        let (pattern, values) = (&system.pattern, &system.values[..]);
         Ok(std::array::from_fn(|r| {
-            factors.accepted(rhs[r], solutions[r], tolerances[r])
+            accepted(pattern, values, rhs[r], solutions[r], tolerances[r])
         }))
     }
 
-    /// The number of stored entries of the factors `L` and `U` (the fill:
-    /// their dense supernode blocks counted whole).
+    /// The number of entries of the factors `L` and `U` (the structural
+    /// fill: their dense supernode blocks counted whole), whether or not the
+    /// last factorisation stored `L`.
     pub fn factor_entries(&self) -> usize {
         self.system.lu.stored_entries()
     }
@@ -140,7 +161,8 @@ impl LuSolver {
         self.system.lu.lower_kept()
     }
 
-    /// The values of `A` as of the last factorisation.
+    /// The values of `A` as last set: factorised, unless
+    /// [`Self::set_values_with`] set them since.
     pub fn values(&self) -> &[f64] {
         &self.system.values
     }
@@ -220,16 +242,11 @@ impl System {
             self.lu.factorize(&self.values)?;
             self.factorised = true;
         }
-        Ok(self.factors_as_factorised())
-    }
-
-    /// The factors as the last factorisation left them.
-    fn factors_as_factorised(&self) -> Factors<'_> {
-        Factors {
+        Ok(Factors {
             pattern: &self.pattern,
             values: &self.values,
             lu: &self.lu,
-        }
+        })
     }
 }
 
@@ -264,18 +281,6 @@ impl Factors<'_> {
         Ok(report_of(accept(residual, solution, tolerance)?))
     }
 
-    /// The report of a forward solution `solution` of `A x = rhs`, if its
-    /// residual is within `tolerance`.
-    fn accepted(
-        &self,
-        rhs: &[f64],
-        solution: &[f64],
-        tolerance: f64,
-    ) -> Result<SolveReport, SolverError> {
-        let residual = self.pattern.residual(self.values, solution, rhs);
-        Ok(report_of(accept(residual, solution, tolerance)?))
-    }
-
     /// Solves `A x_r = b_r` for `K` right-hand sides in one pass over the
     /// factors, each accepted within its own tolerance.
     fn solve_forward<const K: usize>(
@@ -285,21 +290,41 @@ impl Factors<'_> {
         mut solutions: [&mut [f64]; K],
         tolerances: [f64; K],
     ) -> [Result<SolveReport, SolverError>; K] {
-        let checked: [Result<(), SolverError>; K] =
-            std::array::from_fn(|r| check_solve_inputs(self.pattern.n, rhs[r], solutions[r]));
-        if checked.iter().all(Result::is_ok) {
-            for (solution, rhs) in solutions.iter_mut().zip(rhs) {
-                solution.copy_from_slice(rhs);
-            }
-            let in_place = solutions.each_mut().map(|solution| &mut **solution);
-            self.lu
-                .solve_many_in_place(in_place, &mut workspace.permuted);
+        let inputs: Result<Vec<()>, SolverError> = (0..K)
+            .map(|r| check_solve_inputs(self.pattern.n, rhs[r], solutions[r]))
+            .collect();
+        if let Err(error) = inputs {
+            return std::array::from_fn(|_| Err(error.clone()));
         }
+        for (solution, rhs) in solutions.iter_mut().zip(rhs) {
+            solution.copy_from_slice(rhs);
+        }
+        let in_place = solutions.each_mut().map(|solution| &mut **solution);
+        self.lu
+            .solve_many_in_place(in_place, &mut workspace.permuted);
         std::array::from_fn(|r| {
-            checked[r].clone()?;
-            self.accepted(rhs[r], solutions[r], tolerances[r])
+            accepted(
+                self.pattern,
+                self.values,
+                rhs[r],
+                solutions[r],
+                tolerances[r],
+            )
         })
     }
+}
+
+/// The report of a forward solution `solution` of `A x = rhs` (`A` of
+/// `pattern` and `values`), if its residual is within `tolerance`.
+fn accepted(
+    pattern: &SparsePattern,
+    values: &[f64],
+    rhs: &[f64],
+    solution: &[f64],
+    tolerance: f64,
+) -> Result<SolveReport, SolverError> {
+    let residual = pattern.residual(values, solution, rhs);
+    Ok(report_of(accept(residual, solution, tolerance)?))
 }
 
 /// The report of a direct solve with this residual.
@@ -357,6 +382,65 @@ mod tests {
             let mut x = vec![0.0; 50];
             assert!(solver.solve(&[1.0; 50], &mut x).unwrap().residual < 1e-12);
         }
+    }
+
+    #[test]
+    fn after_an_error_solving_while_factorising_leaves_the_state_of_the_two_steps() {
+        let (pattern, values) = tridiagonal(30, 0.4);
+        let singular = [1.0, -1.0, -1.0, 1.0];
+        let two_by_two = SparsePattern {
+            n: 2,
+            row_offsets: vec![0, 2, 4],
+            columns: vec![0, 1, 0, 1],
+        };
+        let mut solver = LuSolver::new(two_by_two, DEFAULT_TOLERANCE).unwrap();
+        let mut x = [0.0; 2];
+        assert!(
+            solver
+                .factorize_and_solve([&[0.0, 1.0]], [&mut x], [1e-9])
+                .is_err()
+        );
+        solver
+            .set_values_with(|own| own.copy_from_slice(&singular))
+            .unwrap();
+        let outcome = solver.factorize_and_solve([&[0.0, 1.0]], [&mut x], [1e-9]);
+        assert!(
+            matches!(outcome, Err(SolverError::Singular(_))),
+            "{outcome:?}"
+        );
+        assert!(solver.solve(&[0.0, 1.0], &mut x).is_err());
+        solver
+            .set_values_with(|own| own.copy_from_slice(&[1.0, -0.5, -0.5, 1.0]))
+            .unwrap();
+        let [report] = solver
+            .factorize_and_solve([&[0.5, 0.5]], [&mut x], [1e-12])
+            .unwrap();
+        assert!(report.unwrap().residual <= 1e-12 && (x[0] - 1.0).abs() < 1e-12);
+
+        let (mut at_once, mut two_steps) = (
+            LuSolver::new(pattern.clone(), DEFAULT_TOLERANCE).unwrap(),
+            LuSolver::new(pattern, DEFAULT_TOLERANCE).unwrap(),
+        );
+        let mut not_finite = vec![1.0; 30];
+        not_finite[7] = f64::NAN;
+        let mut y = vec![0.0; 30];
+        at_once
+            .set_values_with(|own| own.copy_from_slice(&values))
+            .unwrap();
+        let outcome = at_once.factorize_and_solve([&not_finite], [&mut y], [1e-9]);
+        assert!(
+            matches!(outcome, Err(SolverError::NonFinite(_))),
+            "{outcome:?}"
+        );
+        two_steps.factorize(&values).unwrap();
+        assert!(two_steps.solve(&not_finite, &mut y).is_err());
+        let (mut x_at_once, mut x_two_steps) = (vec![0.0; 30], vec![0.0; 30]);
+        let ones = vec![1.0; 30];
+        assert_eq!(
+            at_once.solve(&ones, &mut x_at_once),
+            two_steps.solve(&ones, &mut x_two_steps)
+        );
+        assert_eq!(x_at_once, x_two_steps);
     }
 
     #[test]

@@ -553,7 +553,8 @@ impl LinearSolver {
         })
     }
 
-    /// The values of `A` as of the last factorisation.
+    /// The values of `A` as of the last factorisation (during
+    /// [`Self::factorize_and_solve`], as just set).
     pub fn values(&self) -> &[f64] {
         match &self.backend {
             Backend::Lu(lu) => lu.values(),
@@ -639,12 +640,13 @@ impl LinearSolver {
             }
             None => {
                 self.scratch.ones.resize(n, 1.0);
-                let [value, solved] = lu.factorize_and_solve(
+                let solves = lu.factorize_and_solve(
                     [b, &self.scratch.ones],
                     [x, time.estimate_mut(n)],
                     [self.tolerance, EXPECTED_TIME_TOLERANCE],
-                )?;
+                );
                 time.store();
+                let [value, solved] = solves?;
                 let report = value?;
                 solved?;
                 let certified = certify_solved(time, lu.pattern(), lu.values(), self.tolerance);
@@ -741,8 +743,9 @@ impl LinearSolver {
     /// Adds the error bound to the report of a forward solve, refining `x`
     /// (iterative refinement with a compensated residual, each correction
     /// solved with the same factors) while the bound exceeds the tolerance.
-    /// `largest_time` is `max(t)` (module [`bound`]) if the previous
-    /// estimate of `t` certified it; otherwise `t` is solved for.
+    /// `largest_time` is `max(t)` (module [`bound`]) if the caller has it
+    /// certified already, from an earlier estimate of `t` or one just solved
+    /// for; otherwise `t` is solved for here.
     fn bound_error(
         &mut self,
         b: &[f64],

@@ -120,6 +120,7 @@ pub(crate) struct MultifrontalLu {
     structure: Structure,
     /// The panels `[L_JJ\U_JJ; L_RJ]`, if `L` is kept.
     lower: Vec<f64>,
+    /// The panels `U_JR`.
     upper: Vec<f64>,
     /// The pivot blocks `L_JJ\U_JJ` alone, if `L` is not kept.
     pivots: Vec<f64>,
@@ -153,8 +154,8 @@ impl MultifrontalLu {
         })
     }
 
-    /// Entries stored for `L` and `U` (a pivot block's two triangles share
-    /// one square).
+    /// Entries of `L` and `U` (a pivot block's two triangles share one
+    /// square): the structural fill, whether or not `L` is kept.
     pub(crate) fn stored_entries(&self) -> usize {
         self.lower.len() + self.upper.len()
     }
@@ -287,6 +288,7 @@ impl MultifrontalLu {
 
     /// Solves `A^T y = c` in place (`y` holds `c` on entry).
     pub(crate) fn solve_transpose_in_place(&self, y: &mut [f64], work: &mut Vec<f64>) {
+        debug_assert!(self.lower_kept, "a solve needs L");
         self.permute_in(y, work);
         self.upper_transpose_solve(work);
         self.lower_transpose_solve(work);
@@ -968,11 +970,14 @@ mod tests {
     fn solving_during_the_factorisation_matches_solving_after_it_bit_for_bit() {
         // In the first two chains, solving supernode by supernode in
         // increasing order (not the postorder of the factorisation) sums
-        // some entries in another order and changes their last bits.
+        // some entries in another order and changes their last bits. The
+        // third has fronts of about 700 rows, factorised by the blocked and
+        // parallel dense kernels.
         let mut postorder_differs = false;
         let systems = [
             random_chain(600, 2, 0.02, 8),
             random_chain(950, 5, 0.02, 15),
+            random_chain(700, 700, 0.01, 6),
             grid_walk(45),
             tridiagonal(300, 0.45),
         ];
