@@ -379,8 +379,8 @@ impl Evaluator {
     }
 
     /// The value `V` for the given probabilities: one factorisation, with
-    /// the solve done during it ([`LinearSolver::factorize_and_solve`]; a
-    /// correction of the solution for its error bound factorises again).
+    /// the solve done during it (docs/method.md section 1; a correction of
+    /// the solution for its error bound factorises again).
     pub fn evaluate(
         &mut self,
         defender: &Probabilities,
