@@ -17,11 +17,12 @@ kind and solver, fitted exponents in the header) and results/scaling.svg.
 
 "One optimiser iteration" is `posg-fsc solve --automaton` (no certified
 bracket) with --max-iterations 1 --adversary-steps 1 --check-every 1
---restarts 0 --best-response-iterations 1 --structures full: one adversary and one
-defender step (two value + gradient evaluations) plus the best-response
-check `solve` always runs at iteration 0 (one L-BFGS iteration from the
-current adversary, for the defender and for its suffix average, each with
-a line search), the set-up (GMC, analysis, solver) and the output files.
+--restarts 0 --starts 1 --best-response-iterations 1 --structures full: one
+start, one adversary and one defender step (two value + gradient
+evaluations) plus the best-response check `solve` always runs at
+iteration 0 (one L-BFGS iteration from the current adversary, for the
+defender and for its suffix average, each with a line search), the
+set-up (GMC, analysis, solver) and the output files.
 
 Usage: python3 experiments/scaling/run.py [--sides 10 20 ...] [--repeats 3]
        python3 experiments/scaling/run.py --plot-only
@@ -114,7 +115,9 @@ def command_for(kind, solver, game, hoa, out):
     if kind == "one-iteration":
         return [BINARY, "solve", game, "--automaton", hoa, "--def-nodes", "2", "--adv-nodes", "2",
                 "--out", out, "--max-iterations", "1", "--adversary-steps", "1", "--check-every", "1",
-                "--restarts", "0", "--best-response-iterations", "1", "--structures", "full", "--solver", solver]
+                "--restarts", "0", "--starts", "1", "--best-response-iterations", "1", "--structures", "full",
+                "--solver", solver,
+                "--force"]
     command = [BINARY, "eval", game, "--ltl", FORMULA, "--defender", "uniform:2", "--adversary", "uniform:2",
                "--solver", solver]
     return command + (["--gradient"] if kind == "eval+gradient" else [])
