@@ -384,16 +384,20 @@ mod tests {
         }
     }
 
+    /// The pattern of a full 2 x 2 matrix.
+    fn dense_two_by_two() -> SparsePattern {
+        SparsePattern {
+            n: 2,
+            row_offsets: vec![0, 2, 4],
+            columns: vec![0, 1, 0, 1],
+        }
+    }
+
     #[test]
     fn after_an_error_solving_while_factorising_leaves_the_state_of_the_two_steps() {
         let (pattern, values) = tridiagonal(30, 0.4);
         let singular = [1.0, -1.0, -1.0, 1.0];
-        let two_by_two = SparsePattern {
-            n: 2,
-            row_offsets: vec![0, 2, 4],
-            columns: vec![0, 1, 0, 1],
-        };
-        let mut solver = LuSolver::new(two_by_two, DEFAULT_TOLERANCE).unwrap();
+        let mut solver = LuSolver::new(dense_two_by_two(), DEFAULT_TOLERANCE).unwrap();
         let mut x = [0.0; 2];
         assert!(
             solver
@@ -445,12 +449,7 @@ mod tests {
 
     #[test]
     fn a_singular_system_is_an_error_not_a_number() {
-        let pattern = SparsePattern {
-            n: 2,
-            row_offsets: vec![0, 2, 4],
-            columns: vec![0, 1, 0, 1],
-        };
-        let mut solver = LuSolver::new(pattern, DEFAULT_TOLERANCE).unwrap();
+        let mut solver = LuSolver::new(dense_two_by_two(), DEFAULT_TOLERANCE).unwrap();
         let mut x = [0.0; 2];
         let result = solver
             .factorize(&[1.0, -1.0, -1.0, 1.0])
