@@ -289,21 +289,11 @@ impl MultifrontalLu {
     /// Solves `A^T y = c` in place (`y` holds `c` on entry).
     pub(crate) fn solve_transpose_in_place(&self, y: &mut [f64], work: &mut Vec<f64>) {
         debug_assert!(self.lower_kept, "a solve needs L");
-        self.permute_in(y, work);
+        let mut ys = [y];
+        self.permute_many_in(&ys, work);
         self.upper_transpose_solve(work);
         self.lower_transpose_solve(work);
-        self.permute_out(work, y);
-    }
-
-    fn permute_in(&self, x: &[f64], work: &mut Vec<f64>) {
-        work.clear();
-        work.extend(self.structure.permutation.iter().map(|&old| x[old]));
-    }
-
-    fn permute_out(&self, work: &[f64], x: &mut [f64]) {
-        for (&old, &value) in self.structure.permutation.iter().zip(work) {
-            x[old] = value;
-        }
+        self.permute_many_out(work, &mut ys);
     }
 
     /// `x_r <- L^{-1} x_r` for the `K` vectors interleaved in `x` (entry
