@@ -83,7 +83,13 @@ fn solve_with_defaults(game: &Posg, automata: &Automata, place: &Place) -> anyho
         adversary: 1,
     };
     let job = Job::full(game, automata, sizes, &settings)?;
-    solve_into(job, &place.staging, ProgressMode::Quiet, false)
+    solve_into(
+        job,
+        &place.staging,
+        ProgressMode::Quiet,
+        false,
+        posg_fsc::output::PlotFormat::Svg,
+    )
 }
 
 /// Where a solve writes (inside the demo's staging directory) and where its

@@ -59,7 +59,9 @@ pub use rounding::{TRUNCATION_THRESHOLDS, rounded_candidates, truncated};
 pub use settings::{MAX_LOGIT_BOUND, Settings, UpdateRule};
 pub use softmax::{Softmax, clip};
 pub use structures::{Candidates, SourceNote, StructureSource};
-pub(crate) use structures::{best_by_certified_lower, candidate_structures, why_others_lost};
+pub(crate) use structures::{
+    best_by_certified_lower, candidate_structures, described, why_others_lost,
+};
 pub use warm_start::{WARM_START_MIX, embed, keep_better, pad, score, warm_started};
 
 use std::time::Instant;

@@ -1,8 +1,9 @@
 //! A `solve` directory (docs/formats.md section 9): the pipeline's
-//! [`Outcome`] as `curve.csv`, `curve.svg`, `defender.fsc.json`,
-//! `defender.dot`, `adversary.fsc.json` and `summary.json` (with several
-//! structures, each one's curve as `curve-<name>.csv`/`.svg`, the best one's
-//! copied to `curve.csv`/`curve.svg`).
+//! [`Outcome`] as `curve.csv`, `curve.svg` (or `curve.png`),
+//! `defender.fsc.json`, `defender.dot`, `adversary.fsc.json` and
+//! `summary.json` (with several structures, each one's curve as
+//! `curve-<name>.csv`/`.svg`, the best one's copied to
+//! `curve.csv`/`curve.svg`).
 
 use std::path::{Path, PathBuf};
 
@@ -12,20 +13,30 @@ use super::{Automata, Job, Outcome, PipelineError, Slot, run};
 use crate::certify::Bracket;
 use crate::controller::{self, Fsc};
 use crate::game::Posg;
+use crate::optimise::StructureOutcome;
 use crate::optimise::{
     IterationRecord, Observer, ObserverError, Settings, SourceNote, StructureReport,
 };
-use crate::output::{CurveCsv, CurvePlot, OutputError, Title, create_dir, write_file};
+use crate::output::{
+    CurveCsv, CurvePlot, OutputError, PlotFormat, Returned, Title, create_dir, plot_curve,
+    write_file,
+};
 
-/// The files of a solve directory, as `summary.json` lists them.
-pub const FILES: [&str; 6] = [
-    "curve.csv",
-    "curve.svg",
-    "defender.fsc.json",
-    "defender.dot",
-    "adversary.fsc.json",
-    "summary.json",
-];
+/// The files of a solve directory whose plots are in `format`, as
+/// `summary.json` lists them.
+pub fn files(format: PlotFormat) -> Vec<String> {
+    let plot = format!("curve.{format}");
+    [
+        "curve.csv",
+        &plot,
+        "defender.fsc.json",
+        "defender.dot",
+        "adversary.fsc.json",
+        "summary.json",
+    ]
+    .map(String::from)
+    .to_vec()
+}
 
 /// Where and how a solve directory is written.
 #[derive(Debug, Clone, Copy)]
@@ -35,13 +46,16 @@ pub struct SolveDirectory<'a> {
     pub path: &'a Path,
     /// Whether `curve.svg` gets a top axis with the seconds elapsed.
     pub seconds_axis: bool,
+    /// The plots' file format.
+    pub plot_format: PlotFormat,
     /// The command line recorded in `summary.json`.
     pub command_line: &'a [String],
 }
 
 impl SolveDirectory<'_> {
-    /// Runs `job` ([`run`]) with the curve writers and `observers(slot)` as
-    /// each structure's observers, then writes the other files.
+    /// Runs `job` ([`run`]) with the curve tables and `observers(slot)` as
+    /// each structure's observers, then draws the curves and writes the
+    /// other files.
     pub fn solve<F>(&self, job: Job, observers: F) -> Result<Outcome, PipelineError>
     where
         F: Fn(Slot) -> Box<dyn Observer + Send> + Sync,
@@ -49,7 +63,7 @@ impl SolveDirectory<'_> {
         create_dir(self.path)?;
         let (game, automata, settings) = (job.game, job.automata, job.settings);
         let outcome = run(job, |slot| {
-            let mut list = self.curve_observers(game, automata, slot);
+            let mut list = self.curve_observers(slot);
             list.push(observers(slot));
             Box::new(list) as Box<dyn Observer + Send>
         })?;
@@ -57,37 +71,68 @@ impl SolveDirectory<'_> {
         Ok(outcome)
     }
 
-    /// The CSV writer and the plot of the structure in `slot`: `curve.csv`
-    /// and `curve.svg` when it is the only one, else `curve-<name>.*`.
-    fn curve_observers(
+    /// The CSV writer of the structure in `slot`: `curve.csv` when it is
+    /// the only one, else `curve-<name>.csv`.
+    fn curve_observers(&self, slot: Slot) -> Vec<Box<dyn Observer + Send>> {
+        let table = self.path.join(format!(
+            "{}.csv",
+            curve_stem(slot.count, &slot.structure.name)
+        ));
+        let csv: Box<dyn Observer + Send> = match CurveCsv::create(&table) {
+            Ok(csv) => Box::new(Named(table, csv)),
+            Err(error) => Box::new(Failed(Some(error.into()))),
+        };
+        vec![csv]
+    }
+
+    /// Draws each structure's curve with what it returned (the best one's
+    /// with the certified bracket `solve` prints): `curve.svg` with one
+    /// structure, else `curve-<name>.svg`.
+    fn draw_curves(
         &self,
         game: &Posg,
         automata: &Automata,
-        slot: Slot,
-    ) -> Vec<Box<dyn Observer + Send>> {
-        let stem = if slot.count > 1 {
-            format!("curve-{}", slot.structure.name)
-        } else {
-            "curve".to_string()
-        };
-        let mut list: Vec<Box<dyn Observer + Send>> = Vec::new();
-        let (table, plot) = (
-            self.path.join(format!("{stem}.csv")),
-            self.path.join(format!("{stem}.svg")),
-        );
-        match CurveCsv::create(&table) {
-            Ok(csv) => list.push(Box::new(Named(table, csv))),
-            Err(error) => list.push(Box::new(Failed(Some(error.into())))),
+        outcome: &Outcome,
+    ) -> Result<(), OutputError> {
+        let count = outcome.curves.len();
+        for curve in &outcome.curves {
+            // None: dropped for numerical trouble, nothing returned.
+            let kept = (outcome.solution.structures.iter().enumerate())
+                .find(|(_, s)| s.report.name == curve.structure);
+            let returned = kept.map(|(index, structure)| {
+                let report = &structure.report;
+                let certified = if index == outcome.solution.best {
+                    outcome.certified
+                } else {
+                    report.certified_lower.zip(report.upper_bound).map(
+                        |(certified_lower, upper_bound)| Bracket {
+                            certified_lower,
+                            upper_bound,
+                        },
+                    )
+                };
+                Returned {
+                    worst_case: report.worst_case,
+                    certified,
+                }
+            });
+            let title = plot_title(game, automata, outcome.best(), &curve.structure);
+            let plot = CurvePlot {
+                title: &title,
+                records: &curve.records,
+                returned,
+                seconds_axis: self.seconds_axis,
+            };
+            let stem = curve_stem(count, &curve.structure);
+            let path = self.path.join(format!("{stem}.{}", self.plot_format));
+            plot_curve(&path, self.plot_format, &plot)?;
         }
-        let title = plot_title(game, automata, slot);
-        let curve = CurvePlot::new(&plot, title).with_seconds_axis(self.seconds_axis);
-        list.push(Box::new(Named(plot, curve)));
-        list
+        Ok(())
     }
 
-    /// Copies the best structure's curve to `curve.csv`/`curve.svg` (with
-    /// several structures), writes the controllers, the defender's picture
-    /// and `summary.json`.
+    /// Draws the curves, copies the best structure's curve to
+    /// `curve.csv`/`curve.svg` (with several structures), writes the
+    /// controllers, the defender's picture and `summary.json`.
     fn write(
         &self,
         game: &Posg,
@@ -95,10 +140,11 @@ impl SolveDirectory<'_> {
         settings: &Settings,
         outcome: &Outcome,
     ) -> Result<(), PipelineError> {
+        self.draw_curves(game, automata, outcome)?;
         let best = outcome.best();
         let best_curve = |ext: &str| self.path.join(format!("curve-{}.{ext}", best.report.name));
         if outcome.curves.len() > 1 && best_curve("csv").exists() {
-            for ext in ["csv", "svg"] {
+            for ext in ["csv", self.plot_format.extension()] {
                 let from = best_curve(ext);
                 std::fs::copy(&from, self.path.join(format!("curve.{ext}")))
                     .map_err(|e| OutputError::io("copying", &from, e))?;
@@ -136,7 +182,7 @@ impl SolveDirectory<'_> {
                 .iter()
                 .map(|s| &s.report)
                 .collect(),
-            files: FILES,
+            files: files(self.plot_format),
         };
         write_file(
             &self.path.join("summary.json"),
@@ -176,7 +222,7 @@ struct Summary<'a> {
     /// What each source of structures found, proved or why it gave none.
     sources: &'a [SourceNote],
     structures: Vec<&'a StructureReport>,
-    files: [&'static str; 6],
+    files: Vec<String>,
 }
 
 /// The Graphviz picture of the best defender (`dot -Tsvg defender.dot`).
@@ -203,9 +249,19 @@ fn write_defender_dot(
     write_file(path, &text)
 }
 
-/// The title of a structure's `curve.svg`: game and objective, then sizes
-/// and structure.
-fn plot_title(game: &Posg, automata: &Automata, slot: Slot) -> Title {
+/// The file name of a structure's curve without its extension: `curve`
+/// when it is the only structure, else `curve-<name>`.
+fn curve_stem(count: usize, name: &str) -> String {
+    if count > 1 {
+        format!("curve-{name}")
+    } else {
+        "curve".to_string()
+    }
+}
+
+/// The title of the curve of the structure `name`: game and objective, then
+/// the sizes (those of `best`, the same for every structure) and the name.
+fn plot_title(game: &Posg, automata: &Automata, best: &StructureOutcome, name: &str) -> Title {
     let nodes = |n: usize| {
         if n == 1 {
             "1 node".to_string()
@@ -213,9 +269,8 @@ fn plot_title(game: &Posg, automata: &Automata, slot: Slot) -> Title {
             format!("{n} nodes")
         }
     };
-    let structure = slot.structure;
     let adversary = if game.has_adversary() {
-        format!(", adversary {}", nodes(structure.adversary.num_nodes()))
+        format!(", adversary {}", nodes(best.adversary.num_nodes()))
     } else {
         String::new()
     };
@@ -227,8 +282,8 @@ fn plot_title(game: &Posg, automata: &Automata, slot: Slot) -> Title {
         ),
         detail: format!(
             "defender {}{adversary}, structure {}, game of {} states",
-            nodes(structure.defender.num_nodes()),
-            structure.name,
+            nodes(best.defender.num_nodes()),
+            name,
             game.num_states()
         ),
     }
