@@ -66,7 +66,7 @@ pub struct ControllerArgs {
 pub struct PlotArgs {
     /// The plots' file format: `svg` (curve.svg, sweep.svg) or `png`
     /// (curve.png, sweep.png: 900 x 520 pixels, for slides).
-    #[arg(long, default_value = "svg", value_parser = plot_format, help_heading = "Output")]
+    #[arg(long, default_value = "svg", value_parser = plot_format)]
     pub format: PlotFormat,
 }
 

@@ -13,7 +13,7 @@ use rayon::prelude::*;
 
 use posg_fsc::game::Posg;
 use posg_fsc::limits;
-use posg_fsc::optimise::{Settings, StructureOutcome};
+use posg_fsc::optimise::{Settings, StructureOutcome, StructureReport};
 use posg_fsc::output::shard::{self, Shard, ShardRecord, SweepPlan, SweepRow};
 use posg_fsc::output::slurm::{self, SlurmSweep};
 use posg_fsc::output::{OutputDirectory, PlotFormat, Title, create_dir, write_file};
@@ -283,6 +283,26 @@ fn run_chains(
         .collect())
 }
 
+/// Where a pair's reported defender came from, for the `result` column of
+/// `sweep.csv`.
+fn result_in_words(report: &StructureReport, previous: Option<&StructureOutcome>) -> String {
+    let smaller = previous.map(|p| p.defender.num_nodes());
+    match smaller {
+        Some(k) if report.name.starts_with("from-") => {
+            format!("the {k}-node result, kept: optimising found nothing better")
+        }
+        Some(k) if report.best_iteration == 0 => format!(
+            "the {k}-node result it started from, kept: optimising on {} found nothing better",
+            report.name
+        ),
+        Some(k) => format!(
+            "optimised on {}, starting from the {k}-node result",
+            report.name
+        ),
+        None => format!("optimised on {}", report.name),
+    }
+}
+
 /// One chain: adversary size `m`, the defender sizes in increasing order,
 /// each warm-started from the best defender of the previous size.
 fn run_chain(
@@ -339,6 +359,7 @@ fn run_chain(
             iterations: report.iterations,
             seconds: report.seconds,
             warm_started: previous.is_some(),
+            result: result_in_words(report, previous.as_ref()),
         };
         if let Some(own) = own {
             let table = shard::sweep_table(std::slice::from_ref(&row))

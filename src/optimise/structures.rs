@@ -333,7 +333,7 @@ pub fn why_others_lost(
         }
         if note.structures.is_empty() && note.duplicates.is_empty() {
             lines.push(format!(
-                "Nothing to optimise from {}: {}.",
+                "No structure from {} ({}).",
                 source_in_words(note.source),
                 note.note
             ));

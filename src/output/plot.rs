@@ -1007,8 +1007,15 @@ where
         BLACK.stroke_width(1),
     ))?;
     let (ticks, decimals) = value_ticks(scale.low, scale.high);
+    let ends = distinct_decimals([scale.low, scale.high].into_iter()).max(decimals);
     let style = TextStyle::from((FONT, 13).into_font()).pos(anchor(HPos::Left, VPos::Center));
-    for t in ticks {
+    // The two ends, with the ticks between them that do not crowd them.
+    for v in [scale.low, scale.high] {
+        let label = format!("{v:.ends$}");
+        area.draw(&Text::new(label, (right + 8, y_of(v)), style.clone()))?;
+    }
+    let clear = |y: i32| (y - top).abs() > 16 && (y - bottom).abs() > 16;
+    for t in ticks.into_iter().filter(|&t| clear(y_of(t))) {
         let y = y_of(t);
         area.draw(&PathElement::new(
             vec![(right, y), (right + 5, y)],

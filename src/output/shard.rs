@@ -107,6 +107,11 @@ pub struct SweepRow {
     pub seconds: f64,
     /// Whether the run started from the best defender of the next smaller size.
     pub warm_started: bool,
+    /// Where the reported defender came from, in words: optimised on
+    /// `structure`, or a smaller size's result kept because optimising
+    /// found nothing better (then `last_value` is that of a run whose
+    /// result was not kept).
+    pub result: String,
 }
 
 impl SweepRow {
@@ -688,6 +693,7 @@ mod tests {
             iterations: 5,
             seconds: 0.25,
             warm_started: true,
+            result: "optimised on full, starting from the 1-node result".into(),
         };
         write_file(
             &dir.join(ROW_FILE),
