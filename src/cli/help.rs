@@ -93,7 +93,7 @@ const HEADINGS: &[(&str, &[&str])] = &[
         ],
     ),
     ("Linear solver", &["solver", "lu_limit", "tolerance"]),
-    ("Output", &["seconds_axis"]),
+    ("Output", &["progress_every", "seconds_axis"]),
 ];
 
 /// The heading of an option in no list (one added later).

@@ -188,7 +188,7 @@ pub fn run(args: SolveArgs) -> anyhow::Result<()> {
         agree("--adv-nodes", args.adv_nodes, spec, &job.start.adversary)?;
     }
     let out = OutputDirectory::create(&args.out, args.force)?;
-    let progress = ProgressMode::detect(args.output.quiet);
+    let progress = ProgressMode::detect(&args.output);
     let format = args.plot.format;
     let outcome = solve_into(job, out.path(), progress, args.output.seconds_axis, format)?;
     out.commit()?;

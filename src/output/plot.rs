@@ -1091,6 +1091,7 @@ mod tests {
 
     fn record(iteration: usize, seconds: f64) -> IterationRecord {
         IterationRecord {
+            start: 0,
             iteration,
             seconds,
             value: 0.5,

@@ -116,10 +116,17 @@ impl SolveDirectory<'_> {
                     certified,
                 }
             });
+            // The records of the kept start (start 0's for a structure
+            // dropped for numerical trouble).
+            let start = kept.map_or(0, |(_, s)| s.report.best_start);
+            let records: Vec<IterationRecord> = (curve.records.iter())
+                .filter(|r| r.start == start)
+                .copied()
+                .collect();
             let title = plot_title(game, automata, outcome.best(), &curve.structure);
             let plot = CurvePlot {
                 title: &title,
-                records: &curve.records,
+                records: &records,
                 returned,
                 seconds_axis: self.seconds_axis,
             };
