@@ -98,7 +98,7 @@ fn solve_writes_a_titled_curve_with_the_certified_band_and_a_controller_picture(
     assert!(summary.contains("\"defender.dot\""));
     let stderr = String::from_utf8(output.stderr).unwrap();
     assert!(
-        stderr.contains("[full] iteration 30/30: value "),
+        stderr.contains("[full] start ") && stderr.contains(" at iteration 30: value "),
         "{stderr}"
     );
 }
@@ -297,8 +297,17 @@ fn solve_writes_png_plots_with_format_png() {
 fn solve_help_shows_the_common_options_first_and_the_others_under_headings() {
     let output = posg_fsc(&["solve", "--help"]);
     let help = String::from_utf8(output.stdout).unwrap();
-    let common = help.split("Options:").nth(1).unwrap();
-    let common = &common[..common.find(":\n").unwrap()];
+    // From "Options:" to the next heading (a line at the margin ending in ':').
+    let common = help.split("\nOptions:\n").nth(1).unwrap();
+    let end = common
+        .match_indices('\n')
+        .map(|(i, _)| i)
+        .find(|&i| {
+            let line = common[i + 1..].lines().next().unwrap_or("");
+            !line.starts_with(' ') && line.ends_with(':')
+        })
+        .unwrap();
+    let common = &common[..end];
     for option in [
         "--ltl",
         "--def-nodes",
