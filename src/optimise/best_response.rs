@@ -44,21 +44,34 @@ const START_RANGE: f64 = 1.0;
 /// `tanh` still has slope `1 - START_CLAMP^2`.
 const START_CLAMP: f64 = 0.99;
 
+/// Where a best-response minimisation starts: at given adversaries
+/// (warm starts: the current adversary, the last best response found) and
+/// from `restarts` random points.
+#[derive(Debug, Clone, Copy)]
+pub struct Starts<'a> {
+    /// Adversary logits to start from (at least one).
+    pub at: &'a [&'a [f64]],
+    /// Random starts besides them.
+    pub restarts: usize,
+}
+
 /// Minimises `V` over the adversary's logits with the defender's fixed at
-/// `defender`: from the logits `current` and from `settings.restarts` random
-/// starts, each with at most `settings.best_response_iterations` L-BFGS iterations.
+/// `defender`, from each of `starts`, each with at most
+/// `settings.best_response_iterations` L-BFGS iterations.
 pub fn best_response(
     objective: &mut Objective,
     defender: &[f64],
-    current: &[f64],
+    starts: Starts<'_>,
     settings: &Settings,
     rng: &mut ChaCha8Rng,
 ) -> Result<BestResponse, OptimiseError> {
     let bound = settings.logit_bound;
-    let at_current = current
-        .iter()
-        .map(|&phi| (phi / bound).clamp(-START_CLAMP, START_CLAMP).atanh())
-        .collect();
+    let unsquashed = |logits: &[f64]| -> Vec<f64> {
+        logits
+            .iter()
+            .map(|&phi| (phi / bound).clamp(-START_CLAMP, START_CLAMP).atanh())
+            .collect()
+    };
     let mut best: Option<BestResponse> = None;
     let mut dropped = None;
     let mut keep = |found: Result<BestResponse, OptimiseError>| match found {
@@ -74,9 +87,17 @@ pub fn best_response(
         }
         Err(error) => Err(error),
     };
-    keep(minimise_from(objective, defender, at_current, settings))?;
-    for _ in 0..settings.restarts {
-        let start = (0..current.len())
+    let parameters = starts.at.first().map_or(0, |logits| logits.len());
+    for logits in starts.at {
+        keep(minimise_from(
+            objective,
+            defender,
+            unsquashed(logits),
+            settings,
+        ))?;
+    }
+    for _ in 0..starts.restarts {
+        let start = (0..parameters)
             .map(|_| rng.random_range(-START_RANGE..=START_RANGE))
             .collect();
         keep(minimise_from(objective, defender, start, settings))?;
@@ -84,7 +105,9 @@ pub fn best_response(
     match (best, dropped) {
         (Some(best), _) => Ok(best),
         (None, Some(error)) => Err(error),
-        (None, None) => unreachable!("at least the start at the current adversary ran"),
+        (None, None) => Err(OptimiseError::BestResponse(
+            "no start to minimise from".into(),
+        )),
     }
 }
 

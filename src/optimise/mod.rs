@@ -52,7 +52,7 @@ mod structures;
 mod warm_start;
 
 pub(crate) use ascent::ascend;
-pub(crate) use best_response::best_response;
+pub(crate) use best_response::{Starts, best_response};
 pub use cancel::Cancel;
 pub use objective::{GmcSize, Objective, Point};
 pub use observer::{IterationRecord, Observer, ObserverError};
@@ -457,7 +457,7 @@ pub fn optimise_structure(
                 dra,
                 certifier,
                 structure,
-                settings,
+                &settings.for_start(start),
                 start_stream,
                 method,
                 (&mut live, cancel),
@@ -781,7 +781,10 @@ impl Judge<'_> {
         let found = best_response(
             &mut objective,
             &logits,
-            self.adversary_logits,
+            Starts {
+                at: &[self.adversary_logits],
+                restarts: self.settings.restarts,
+            },
             self.settings,
             rng,
         )?;

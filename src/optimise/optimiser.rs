@@ -28,8 +28,9 @@
 //!
 //! Stopping and the logit bound: the run stops when the certified gap
 //! (smallest game upper bound minus the best certified lower bound) is at
-//! most `gap_tolerance`, or when the best score has gained less than
-//! `stall_tolerance` over `stall_checks` checks. A stall while some logit
+//! most `gap_tolerance`, or when the best score has gained at most
+//! `stall_gain` (relative) over the second half of its checks, once there
+//! are `stall_checks` of them ([`stalled`]). A stall while some logit
 //! sits on the bound `c` and `c < logit_bound` does not stop the run: `c`
 //! doubles (capped at `logit_bound`) and the stall count restarts. So `c`
 //! starts small (`initial_logit_bound`, where the softmax is far from
@@ -162,8 +163,13 @@ struct Bookkeeping {
     best: Option<Incumbent>,
     upper_bound: Option<f64>,
     history: Vec<f64>,
+    /// The best score at the end of each suffix-averaging window since the
+    /// logit bound last widened.
+    window_ends: Vec<f64>,
     defender_average: SuffixAverage,
     adversary_average: SuffixAverage,
+    /// The adversary of the last L-BFGS best response (a warm start).
+    last_response: Option<Vec<f64>>,
     checks: usize,
     phases: PhaseSeconds,
 }
@@ -174,8 +180,10 @@ impl Bookkeeping {
             best: None,
             upper_bound: None,
             history: Vec::new(),
+            window_ends: Vec::new(),
             defender_average: SuffixAverage::new(defender_parameters),
             adversary_average: SuffixAverage::new(adversary_parameters),
+            last_response: None,
             checks: 0,
             phases: PhaseSeconds::default(),
         }
@@ -296,7 +304,8 @@ impl<'a> Optimiser<'a> {
     ) -> Result<Option<Status>, OptimiseError> {
         let mut status = self.budget_spent(state.iterate.iteration, seconds);
         let check = if self.check_due(state.iterate.iteration, status) {
-            let check = self.check(state, books)?;
+            let deep = books.checks % self.settings.best_response_every == 0;
+            let check = self.check(state, books, deep)?;
             status = self.after_check(&check, status, &mut state.iterate, books)?;
             Some(check)
         } else {
@@ -328,9 +337,11 @@ impl<'a> Optimiser<'a> {
         }
     }
 
-    /// A check is due at multiples of `check_every` and when the run stops.
+    /// A check is due at multiples of `check_every`, at the end of each
+    /// suffix-averaging window (`t + 1` a power of two, where the stall
+    /// rule is judged) and when the run stops.
     fn check_due(&self, t: usize, status: Option<Status>) -> bool {
-        t % self.settings.check_every == 0 || status.is_some()
+        t % self.settings.check_every == 0 || window_ends(t) || status.is_some()
     }
 
     /// After a check: records the best score in the stall history; unless
@@ -344,44 +355,47 @@ impl<'a> Optimiser<'a> {
         iterate: &mut Iterate,
         books: &mut Bookkeeping,
     ) -> Result<Option<Status>, OptimiseError> {
-        let incumbent = books.best.as_ref().ok_or(OptimiseError::BestResponse(
-            "no best-response check ran".into(),
-        ))?;
-        books.history.push(incumbent.score());
+        let score = books
+            .best
+            .as_ref()
+            .ok_or(OptimiseError::BestResponse(
+                "no best-response check ran".into(),
+            ))?
+            .score();
+        books.history.push(score);
+        if window_ends(iterate.iteration) {
+            books.window_ends.push(score);
+        }
         if status.is_some() {
             return Ok(status);
         }
         if check.rounding_closes_gap {
             return Ok(Some(Status::GapClosed));
         }
-        Ok(self.stop_or_widen(incumbent, books.upper_bound, &mut books.history, iterate))
+        Ok(self.stop_or_widen(books, iterate))
     }
 
     /// [`Status::GapClosed`] when the certified gap is at most
     /// `gap_tolerance`; on a stall, the doubled logit bound when some
     /// defender or adversary logit is within [`NEAR_BOUND`] of it and it is
     /// below `logit_bound`, else [`Status::Stalled`].
-    fn stop_or_widen(
-        &self,
-        incumbent: &Incumbent,
-        upper_bound: Option<f64>,
-        history: &mut Vec<f64>,
-        iterate: &mut Iterate,
-    ) -> Option<Status> {
+    fn stop_or_widen(&self, books: &mut Bookkeeping, iterate: &mut Iterate) -> Option<Status> {
         let s = &self.settings;
-        if let (Some(lower), Some(upper)) = (incumbent.certified_lower, upper_bound) {
+        let incumbent = books.best.as_ref()?;
+        if let (Some(lower), Some(upper)) = (incumbent.certified_lower, books.upper_bound) {
             if upper - lower <= s.gap_tolerance {
                 return Some(Status::GapClosed);
             }
         }
-        if !stalled(history, s) {
+        if !(window_ends(iterate.iteration) && stalled(&books.history, &books.window_ends, s)) {
             return None;
         }
         let bound = iterate.bound;
         let on_bound = |logits: &[f64]| logits.iter().any(|phi| phi.abs() >= NEAR_BOUND * bound);
         if bound < s.logit_bound && (on_bound(&iterate.defender) || on_bound(&iterate.adversary)) {
             iterate.bound = (2.0 * bound).min(s.logit_bound);
-            history.clear();
+            books.history.clear();
+            books.window_ends.clear();
             None
         } else {
             Some(Status::Stalled)
@@ -393,10 +407,11 @@ impl<'a> Optimiser<'a> {
     fn outcome(
         &mut self,
         state: PlayState,
-        books: Bookkeeping,
+        mut books: Bookkeeping,
         status: Status,
         clock: Instant,
     ) -> Result<RunOutcome, OptimiseError> {
+        self.settle(&mut books)?;
         let best = books.best.ok_or(OptimiseError::BestResponse(
             "no best-response check ran".into(),
         ))?;
@@ -438,18 +453,33 @@ fn record(
         adversary_gradient_norm: state.adversary_gradient_norm,
         defender_step: solver.defender_step(t),
         adversary_step: solver.adversary_step(),
-        worst_case: check.map(|c| c.worst_case),
+        worst_case: check.and_then(|c| c.worst_case),
         certified_lower: check.and_then(|c| c.certified_lower),
         upper_bound: upper_bound.filter(|_| check.is_some_and(|c| c.certified_lower.is_some())),
         logit_bound: state.iterate.bound,
     }
 }
 
-/// Whether the best score improved by less than `stall_tolerance` times
-/// its current magnitude over the last `stall_checks` entries of `history`
-/// (relative, so that a climb from a tiny value is not taken for a stall).
-pub(super) fn stalled(history: &[f64], s: &Settings) -> bool {
-    s.stall_checks > 0 && gained_little(history, s.stall_checks, s.stall_tolerance)
+/// Whether iteration `t` ends a suffix-averaging window (`t + 1` is a
+/// power of two): the windows are the second halves of the run so far.
+fn window_ends(t: usize) -> bool {
+    (t + 1).is_power_of_two()
+}
+
+/// The max-min loop's stall rule, judged where a suffix-averaging window
+/// ends: with at least `stall_checks` checks in `history` since the logit
+/// bound last widened, whether the best score gained at most `stall_gain`
+/// times its magnitude (relative, so that a climb from a tiny value is not
+/// taken for a stall) over the last window, from the previous entry of
+/// `window_ends` (the best score at each window's end) to the last. The
+/// window is the second half of the run so far, so a run that creeps stops
+/// within about twice the iterations of its last real progress; and it
+/// counts iterations, not seconds, so a seeded run stops at the same
+/// iteration on every machine.
+pub(super) fn stalled(history: &[f64], window_ends: &[f64], s: &Settings) -> bool {
+    s.stall_checks > 0
+        && history.len() >= s.stall_checks
+        && gained_little(window_ends, 1, s.stall_gain)
 }
 
 /// Whether the last entry of `history` exceeds the one `window` entries

@@ -74,6 +74,13 @@ pub struct Settings {
     /// Defender step decay `d`: `eta_def(t) = eta_def / sqrt(1 + d t)`.
     #[arg(long, default_value_t = Settings::default().defender_decay)]
     pub defender_decay: f64,
+    /// The max-min loop's starts are a portfolio: odd-numbered starts take
+    /// defender steps this many times larger, without decay (bold steps
+    /// reach near-deterministic optima in few iterations; the even starts'
+    /// small decaying steps settle on mixed saddle points, where bold play
+    /// cycles). The best certified start is kept. 1: every start alike.
+    #[arg(long, default_value_t = Settings::default().bold_step_factor)]
+    pub bold_step_factor: f64,
     /// The update rule of both players.
     #[arg(long, value_enum, default_value_t = Settings::default().update)]
     pub update: UpdateRule,
@@ -86,8 +93,16 @@ pub struct Settings {
     /// A best-response check every this many outer iterations (and at the end).
     #[arg(long, default_value_t = Settings::default().check_every)]
     pub check_every: usize,
-    /// Random restarts of each best-response minimisation (besides the
-    /// start at the current adversary).
+    /// With a certified lower bound (an automaton for !phi), every this
+    /// many checks is deep: the current defender also gets an L-BFGS best
+    /// response, warm-started from the current adversary and the last best
+    /// response, which tightens the game upper bound (the other checks
+    /// certify only: one MDP solve per candidate). Without one, every check
+    /// is deep.
+    #[arg(long, default_value_t = Settings::default().best_response_every)]
+    pub best_response_every: usize,
+    /// Random restarts of the final best-response minimisation of the kept
+    /// defender (besides its warm starts), and of the rounded candidates'.
     #[arg(long, default_value_t = Settings::default().restarts)]
     pub restarts: usize,
     /// L-BFGS iterations per best-response start.
@@ -96,19 +111,24 @@ pub struct Settings {
     /// L-BFGS memory `m`.
     #[arg(long, default_value_t = Settings::default().lbfgs_memory)]
     pub lbfgs_memory: usize,
-    /// Stop when the best score (certified lower bound, or worst-case
-    /// estimate without an automaton for !phi) has improved by at most
-    /// `stall_tolerance` times its magnitude over the last `stall_checks`
-    /// checks, at the widest logit bound (0: never).
+    /// The max-min loop's stall rule applies once this many checks ran
+    /// since the logit bound last widened (0: never): it stops (or widens
+    /// the bound) when the best score (certified lower bound, or worst-case
+    /// estimate without an automaton for !phi) gained at most `stall_gain`
+    /// times its magnitude over the second half of those checks.
     #[arg(long, default_value_t = Settings::default().stall_checks)]
     pub stall_checks: usize,
+    /// The relative gain below which the max-min loop counts as stalled
+    /// (see `stall_checks`).
+    #[arg(long, default_value_t = Settings::default().stall_gain)]
+    pub stall_gain: f64,
     /// The single-player ascent's stall window: it stops when `V` has
     /// gained at most `stall_tolerance` times itself over this many
     /// iterations (0: never).
     #[arg(long, default_value_t = Settings::default().ascent_stall_iterations)]
     pub ascent_stall_iterations: usize,
-    /// The relative gain below which progress counts as stalled (see
-    /// `stall_checks` and `ascent_stall_iterations`).
+    /// The relative gain below which the single-player ascent counts as
+    /// stalled (see `ascent_stall_iterations`).
     #[arg(long, default_value_t = Settings::default().stall_tolerance)]
     pub stall_tolerance: f64,
     /// Stop when the certified gap, the game upper bound minus the best
@@ -172,13 +192,16 @@ impl Default for Settings {
             defender_step: 0.05,
             adversary_step: 0.5,
             defender_decay: 0.05,
+            bold_step_factor: 4.0,
             update: UpdateRule::Adam,
             optimism: 0.0,
             check_every: 5,
+            best_response_every: 20,
             restarts: 4,
             best_response_iterations: 100,
             lbfgs_memory: 7,
-            stall_checks: 200,
+            stall_checks: 40,
+            stall_gain: 1e-3,
             ascent_stall_iterations: 100,
             stall_tolerance: 1e-5,
             gap_tolerance: 1e-4,
@@ -207,6 +230,21 @@ impl Settings {
         }
     }
 
+    /// The settings start `start` of a structure runs with: odd-numbered
+    /// starts take bold defender steps (`bold_step_factor` times larger,
+    /// no decay), the others these settings as they are.
+    pub fn for_start(&self, start: usize) -> Self {
+        if start % 2 == 1 {
+            Self {
+                defender_step: self.defender_step * self.bold_step_factor,
+                defender_decay: 0.0,
+                ..self.clone()
+            }
+        } else {
+            self.clone()
+        }
+    }
+
     /// Checks every field's range; the optimiser cannot fail on settings afterwards.
     pub fn validate(&self) -> Result<(), OptimiseError> {
         self.synthesis.validate()?;
@@ -222,6 +260,7 @@ impl Settings {
             ("defender_step", self.defender_step),
             ("adversary_step", self.adversary_step),
             ("solver_tolerance", self.solver_tolerance),
+            ("bold_step_factor", self.bold_step_factor),
         ];
         for (name, value) in positive {
             if !(value.is_finite() && value > 0.0) {
@@ -236,6 +275,7 @@ impl Settings {
             ("time_budget", self.time_budget),
             ("defender_decay", self.defender_decay),
             ("stall_tolerance", self.stall_tolerance),
+            ("stall_gain", self.stall_gain),
             ("gap_tolerance", self.gap_tolerance),
             ("optimism", self.optimism),
         ];
@@ -273,6 +313,7 @@ impl Settings {
             ("starts", self.starts),
             ("adversary_steps", self.adversary_steps),
             ("check_every", self.check_every),
+            ("best_response_every", self.best_response_every),
             ("lbfgs_memory", self.lbfgs_memory),
         ];
         for (name, value) in at_least_one {

@@ -1,22 +1,35 @@
-//! The driver's best-response check at `(phi_def(t), phi_adv(t))` and its
-//! certification hooks (method.md sections 4 and 6): two candidates (the
-//! current defender and the suffix average of its probabilities) each get
-//! a best response and, with a [`super::Certifier`], a certified lower bound; the
-//! game upper bound is tightened against the adversary's suffix average
-//! and the best response to the current defender.
+//! The driver's checks at `(phi_def(t), phi_adv(t))` and their
+//! certification hooks (method.md sections 4 and 6). Two candidates are
+//! judged, the current defender and the suffix average of its
+//! probabilities.
+//!
+//! With a [`super::Certifier`] the everyday check is cheap: each candidate
+//! gets its certified lower bound (one MDP solve), and the game upper bound
+//! is tightened against the current adversary and the suffix average of
+//! the adversary's probabilities. The candidates' worst-case estimates are
+//! then their values against the current adversary (an upper bound on the
+//! best response). Every `best_response_every`-th check is *deep*: the
+//! current defender also gets an L-BFGS best response, warm-started from
+//! the current adversary and the last best response found, which tightens
+//! the upper bound further. Without a certifier every check is deep for
+//! both candidates, with `restarts` random starts besides the warm ones,
+//! since the worst-case estimate is then their score.
+//! When the run ends, the kept defender gets a full best response
+//! ([`Optimiser::settle`]) with `restarts` random starts besides the warm
+//! ones: its reported worst case is always a best-response value.
 
 use std::time::Instant;
 
-use super::super::best_response::best_response;
+use super::super::best_response::{BestResponse, Starts, best_response};
 use super::super::play::{Iterate, PlayState};
 use super::super::rounding::truncated;
 use super::{Bookkeeping, Incumbent, OptimiseError, Optimiser, PhaseSeconds};
 use crate::certify::{lower_value_or_trivial, upper_value_or_trivial};
 
-/// The numbers of one best-response check that the iteration record shows.
+/// The numbers of one check that the iteration record shows.
 pub(super) struct Check {
-    /// The best-response value of the current defender.
-    pub worst_case: f64,
+    /// The best-response value of the current defender (deep checks only).
+    pub worst_case: Option<f64>,
     /// The current defender's certified lower bound (with a certifier).
     pub certified_lower: Option<f64>,
     /// The argmax rounding of the current defender certifies within
@@ -26,31 +39,30 @@ pub(super) struct Check {
 }
 
 impl Optimiser<'_> {
-    /// The best-response check at iteration `t`: the current defender and
-    /// the suffix average of the defender's probabilities (as logits within
-    /// the bound `c`) each get a best response and, with a certifier, a
-    /// certified lower bound; either replaces the incumbent when its score
-    /// is higher. With a certifier the game upper bound is also taken
-    /// against the suffix average of the adversary's probabilities (where
-    /// cycling play circles a mixed saddle point, the average approaches
-    /// it) and against the best response to the current defender. Returns
-    /// the current defender's numbers.
+    /// The check at iteration `t` (deep when `deep`, or always without a
+    /// certifier; see the module's documentation): the current defender
+    /// and the suffix average of the defender's probabilities (as logits
+    /// within the bound `c`) are judged; either replaces the incumbent when
+    /// its score is higher. Returns the current defender's numbers.
     pub(super) fn check(
         &mut self,
         state: &PlayState,
         books: &mut Bookkeeping,
+        deep: bool,
     ) -> Result<Check, OptimiseError> {
         books.checks += 1;
         let iterate = &state.iterate;
         let averaged = self.averaged_defender(iterate, &books.defender_average);
-        self.certify_against_average_adversary(iterate, books)?;
+        self.certify_against_adversaries(iterate, books)?;
         let rounding_closes_gap =
             self.rounding_closes_gap(iterate, books.upper_bound, &mut books.phases)?;
+        let deep = deep || self.certifier.is_none();
         let mut current = None;
         for (i, candidate) in [iterate.defender.clone(), averaged].into_iter().enumerate() {
-            let incumbent = self.judge(candidate, i == 0, iterate, books)?;
+            let respond = deep && (i == 0 || self.certifier.is_none());
+            let incumbent = self.judge(candidate, respond, iterate, books)?;
             current.get_or_insert(Check {
-                worst_case: incumbent.worst_case,
+                worst_case: respond.then_some(incumbent.worst_case),
                 certified_lower: incumbent.certified_lower,
                 rounding_closes_gap,
             });
@@ -70,6 +82,32 @@ impl Optimiser<'_> {
         current.ok_or(OptimiseError::BestResponse("no candidate checked".into()))
     }
 
+    /// The incumbent's full best response, once the run has stopped: from
+    /// the adversary it was judged against, the last best response found
+    /// and `restarts` random starts; its worst case and adversary become
+    /// that response's, which also tightens the game upper bound.
+    pub(super) fn settle(&mut self, books: &mut Bookkeeping) -> Result<(), OptimiseError> {
+        let Some(best) = books.best.as_ref() else {
+            return Err(OptimiseError::BestResponse(
+                "no best-response check ran".into(),
+            ));
+        };
+        let mut at: Vec<&[f64]> = vec![&best.adversary];
+        at.extend(books.last_response.as_deref());
+        let starts = Starts {
+            at: &at,
+            restarts: self.settings.restarts,
+        };
+        let found = self.respond(&best.defender, starts, &mut books.phases)?;
+        self.tighten_against(&found.adversary, books)?;
+        let best = books.best.as_mut().expect("checked above");
+        if found.value <= best.worst_case {
+            best.worst_case = found.value;
+            best.adversary = found.adversary;
+        }
+        Ok(())
+    }
+
     /// The defender's logits (within the bound `c`) whose probabilities are
     /// the suffix average `average`.
     fn averaged_defender(&self, iterate: &Iterate, average: &SuffixAverage) -> Vec<f64> {
@@ -79,60 +117,90 @@ impl Optimiser<'_> {
         softmax.logits_of(&averaged, iterate.bound)
     }
 
-    /// With a certifier: tightens the game upper bound with the adversary
-    /// whose probabilities are the adversary's suffix average (as logits
-    /// within `logit_bound`).
-    fn certify_against_average_adversary(
+    /// With a certifier: tightens the game upper bound with the current
+    /// adversary and with the adversary whose probabilities are the
+    /// adversary's suffix average (as logits within `logit_bound`; where
+    /// cycling play circles a mixed saddle point, the average approaches it).
+    fn certify_against_adversaries(
         &self,
         iterate: &Iterate,
+        books: &mut Bookkeeping,
+    ) -> Result<(), OptimiseError> {
+        if self.certifier.is_none() {
+            return Ok(());
+        }
+        let softmax = self.objective.adversary();
+        let mut mu = softmax.probabilities(&iterate.adversary);
+        mu.entries.clone_from(&books.adversary_average.mean);
+        let averaged = softmax.logits_of(&mu, self.settings.logit_bound);
+        self.tighten_against(&iterate.adversary, books)?;
+        self.tighten_against(&averaged, books)
+    }
+
+    /// With a certifier: tightens the game upper bound with the adversary
+    /// of logits `adversary` (the best any defender does against it).
+    fn tighten_against(
+        &self,
+        adversary: &[f64],
         books: &mut Bookkeeping,
     ) -> Result<(), OptimiseError> {
         let Some(certifier) = self.certifier else {
             return Ok(());
         };
         let clock = Instant::now();
-        let softmax = self.objective.adversary();
-        let mut mu = softmax.probabilities(&iterate.adversary);
-        mu.entries.clone_from(&books.adversary_average.mean);
-        let logits = softmax.logits_of(&mu, self.settings.logit_bound);
-        let adversary = softmax.controller(&logits)?;
+        let adversary = self.objective.adversary().controller(adversary)?;
         let upper = upper_value_or_trivial(certifier.game, certifier.phi, &adversary)?;
         tighten(&mut books.upper_bound, upper);
         books.phases.certification += clock.elapsed().as_secs_f64();
         Ok(())
     }
 
-    /// One candidate defender of the check at iteration `t`: its best
-    /// response (from the current adversary) and, with a certifier, its
-    /// certified lower bound; for the current defender (`current`) the game
-    /// upper bound is also tightened with the best response found.
+    /// One candidate defender of the check at iteration `t`: with
+    /// `respond`, its best response warm-started from the current
+    /// adversary and the last best response found (which then tightens the
+    /// game upper bound), else its value against the current adversary;
+    /// with a certifier, its certified lower bound.
     fn judge(
         &mut self,
         candidate: Vec<f64>,
-        current: bool,
+        respond: bool,
         iterate: &Iterate,
         books: &mut Bookkeeping,
     ) -> Result<Incumbent, OptimiseError> {
-        let clock = Instant::now();
-        let found = best_response(
-            &mut self.objective,
-            &candidate,
-            &iterate.adversary,
-            &self.settings,
-            &mut self.rng,
-        )?;
-        books.phases.best_responses += clock.elapsed().as_secs_f64();
+        let found = if respond {
+            let mut at: Vec<&[f64]> = vec![&iterate.adversary];
+            at.extend(books.last_response.as_deref());
+            // Without a certifier the best-response value is the score, and
+            // near a mixed saddle the value is flat around the warm starts:
+            // the random restarts keep it honest.
+            let restarts = if self.certifier.is_none() {
+                self.settings.restarts
+            } else {
+                0
+            };
+            let starts = Starts { at: &at, restarts };
+            let found = self.respond(&candidate, starts, &mut books.phases)?;
+            self.tighten_against(&found.adversary, books)?;
+            books.last_response = Some(found.adversary.clone());
+            found
+        } else {
+            let clock = Instant::now();
+            let value = self.objective.value(&candidate, &iterate.adversary)?;
+            books.phases.optimisation += clock.elapsed().as_secs_f64();
+            BestResponse {
+                value,
+                adversary: iterate.adversary.clone(),
+            }
+        };
         let clock = Instant::now();
         let certified_lower = match self.certifier {
             Some(certifier) => {
                 let defender = self.objective.defender().controller(&candidate)?;
-                let lower = lower_value_or_trivial(certifier.game, certifier.not_phi, &defender)?;
-                if current {
-                    let adversary = self.objective.adversary().controller(&found.adversary)?;
-                    let upper = upper_value_or_trivial(certifier.game, certifier.phi, &adversary)?;
-                    tighten(&mut books.upper_bound, upper);
-                }
-                Some(lower)
+                Some(lower_value_or_trivial(
+                    certifier.game,
+                    certifier.not_phi,
+                    &defender,
+                )?)
             }
             None => None,
         };
@@ -144,6 +212,26 @@ impl Optimiser<'_> {
             certified_lower,
             iteration: iterate.iteration,
         })
+    }
+
+    /// The best response to `defender` from `starts`, timed as a
+    /// best-response phase.
+    fn respond(
+        &mut self,
+        defender: &[f64],
+        starts: Starts<'_>,
+        phases: &mut PhaseSeconds,
+    ) -> Result<BestResponse, OptimiseError> {
+        let clock = Instant::now();
+        let found = best_response(
+            &mut self.objective,
+            defender,
+            starts,
+            &self.settings,
+            &mut self.rng,
+        );
+        phases.best_responses += clock.elapsed().as_secs_f64();
+        found
     }
 
     /// Whether, with rounding on and a certifier, the argmax rounding of the

@@ -1,0 +1,115 @@
+//! Issue 25: default runs on games end by themselves and say why. The
+//! paper's 3x2 grid stops with the certified gap closed long before the
+//! iteration cap; a game whose gap cannot close (the upper bound is against
+//! a fully informed defender, who wins surely where any real controller
+//! guesses) stops on stall; a game that needs memory is certified within
+//! 1e-3 of its value derived by hand.
+
+use posg_fsc::game::Posg;
+use posg_fsc::game::file::from_json_str;
+use posg_fsc::game::grid::GridSpec;
+use posg_fsc::optimise::{Settings, Status};
+use posg_fsc::pipeline::{self, Automata, Sizes};
+
+fn game(text: &str) -> Posg {
+    from_json_str(text, "test.posg.json").unwrap()
+}
+
+fn solve(game: &Posg, formula: &str, defender: usize) -> pipeline::Outcome {
+    let automata = Automata::from_ltl(formula).unwrap();
+    let sizes = Sizes {
+        defender,
+        adversary: 1,
+    };
+    pipeline::solve(game, &automata, sizes, &Settings::default(), |_| {
+        Box::new(())
+    })
+    .unwrap()
+}
+
+#[test]
+fn the_paper_grid_stops_by_itself_with_the_gap_closed() {
+    let outcome = solve(&GridSpec::default().build().unwrap(), "!unsafe U goal", 1);
+    let report = &outcome.best().report;
+    assert_eq!(report.status, Status::GapClosed, "{report:?}");
+    assert!(
+        report.iterations < Settings::default().max_iterations / 10,
+        "{} iterations",
+        report.iterations
+    );
+    let bracket = outcome.certified.unwrap();
+    assert!(bracket.upper_bound - bracket.certified_lower <= Settings::default().gap_tolerance);
+    assert!(
+        (bracket.certified_lower - 0.699784).abs() < 1e-6,
+        "{bracket:?}"
+    );
+}
+
+/// A hidden fair coin the defender cannot observe, then one guess: every
+/// controller wins with probability 1/2, while the game upper bound (a
+/// defender that sees the state) is 1. The adversary's two actions do the
+/// same, so the game is not single-player and the max-min loop runs.
+const BLIND_GUESS: &str = r#"{"posg": 1, "states": ["heads", "tails", "goal", "trap"],
+    "initial": {"heads": 0.5, "tails": 0.5},
+    "labels": {"goal": ["goal"]},
+    "defender": {"actions": ["H", "T"], "observations": ["none"],
+                 "observe": {"heads": {"none": 1.0}, "tails": {"none": 1.0},
+                             "goal": {"none": 1.0}, "trap": {"none": 1.0}}},
+    "adversary": {"actions": ["a", "b"], "observe": "full"},
+    "transitions": [
+        {"state": "heads", "defender": "H", "adversary": "*", "next": {"goal": 1.0}},
+        {"state": "heads", "defender": "T", "adversary": "*", "next": {"trap": 1.0}},
+        {"state": "tails", "defender": "T", "adversary": "*", "next": {"goal": 1.0}},
+        {"state": "tails", "defender": "H", "adversary": "*", "next": {"trap": 1.0}},
+        {"state": "goal", "defender": "*", "adversary": "*", "next": {"goal": 1.0}},
+        {"state": "trap", "defender": "*", "adversary": "*", "next": {"trap": 1.0}}]}"#;
+
+#[test]
+fn a_gap_that_cannot_close_stops_on_stall_and_says_so() {
+    let outcome = solve(&game(BLIND_GUESS), "F goal", 1);
+    let report = &outcome.best().report;
+    assert_eq!(report.status, Status::Stalled, "{report:?}");
+    assert!(report.iterations < Settings::default().max_iterations);
+    let bracket = outcome.certified.unwrap();
+    assert!((bracket.certified_lower - 0.5).abs() < 1e-9, "{bracket:?}");
+    assert!((bracket.upper_bound - 1.0).abs() < 1e-9, "{bracket:?}");
+}
+
+/// The adversary hides a cue (A or B) that the defender sees once; then
+/// both cues look alike and the defender must answer L after A, R after B.
+/// A 2-node defender remembers the cue and wins surely (value 1); with one
+/// node it can only answer at random, and the adversary makes it lose
+/// half the time (value 1/2).
+const REMEMBER_THE_CUE: &str = r#"{"posg": 1,
+    "states": ["start", "cueA", "cueB", "askA", "askB", "goal", "trap"],
+    "initial": {"start": 1.0},
+    "labels": {"goal": ["goal"]},
+    "defender": {"actions": ["L", "R"], "observations": ["blank", "A", "B", "ask"],
+                 "observe": {"start": {"blank": 1.0}, "cueA": {"A": 1.0}, "cueB": {"B": 1.0},
+                             "askA": {"ask": 1.0}, "askB": {"ask": 1.0},
+                             "goal": {"blank": 1.0}, "trap": {"blank": 1.0}}},
+    "adversary": {"actions": ["a", "b"], "observe": "full"},
+    "transitions": [
+        {"state": "start", "defender": "*", "adversary": "a", "next": {"cueA": 1.0}},
+        {"state": "start", "defender": "*", "adversary": "b", "next": {"cueB": 1.0}},
+        {"state": "cueA", "defender": "*", "adversary": "*", "next": {"askA": 1.0}},
+        {"state": "cueB", "defender": "*", "adversary": "*", "next": {"askB": 1.0}},
+        {"state": "askA", "defender": "L", "adversary": "*", "next": {"goal": 1.0}},
+        {"state": "askA", "defender": "R", "adversary": "*", "next": {"trap": 1.0}},
+        {"state": "askB", "defender": "R", "adversary": "*", "next": {"goal": 1.0}},
+        {"state": "askB", "defender": "L", "adversary": "*", "next": {"trap": 1.0}},
+        {"state": "goal", "defender": "*", "adversary": "*", "next": {"goal": 1.0}},
+        {"state": "trap", "defender": "*", "adversary": "*", "next": {"trap": 1.0}}]}"#;
+
+#[test]
+fn a_game_that_needs_memory_is_certified_within_1e_3_of_its_value() {
+    let g = game(REMEMBER_THE_CUE);
+    for (nodes, value) in [(1, 0.5), (2, 1.0)] {
+        let outcome = solve(&g, "F goal", nodes);
+        let lower = outcome.certified.unwrap().certified_lower;
+        assert!(
+            (value - 1e-3..=value + 1e-9).contains(&lower),
+            "{nodes} nodes: certified {lower}, value {value}"
+        );
+    }
+}
