@@ -53,6 +53,7 @@ const HEADINGS: &[(&str, &[&str])] = &[
             "defender_step",
             "adversary_step",
             "defender_decay",
+            "bold_step_factor",
             "update",
             "optimism",
             "no_single_player_ascent",
@@ -63,6 +64,7 @@ const HEADINGS: &[(&str, &[&str])] = &[
         "Best-response checks",
         &[
             "check_every",
+            "best_response_every",
             "restarts",
             "best_response_iterations",
             "lbfgs_memory",
@@ -73,6 +75,7 @@ const HEADINGS: &[(&str, &[&str])] = &[
         &[
             "gap_tolerance",
             "stall_checks",
+            "stall_gain",
             "ascent_stall_iterations",
             "stall_tolerance",
         ],
