@@ -126,3 +126,55 @@ fn posg_fsc_dot_draws_a_controller_file() {
         "{dot}"
     );
 }
+
+fn dot_command(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_posg-fsc"))
+        .arg("dot")
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+#[test]
+fn posg_fsc_dot_draws_a_uniform_controller_of_a_game() {
+    let game = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/data/valid/grid-3x2.posg.json"
+    );
+    let output = dot_command(&["uniform:2", "--game", game]);
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    let dot = String::from_utf8(output.stdout).unwrap();
+    assert!(dot.contains("label=\"uniform:2: 2 nodes\";"), "{dot}");
+    for line in [
+        "  n0 [label=\"0\"];",
+        "  n1 [label=\"1\"];",
+        "  start -> n0 [label=\"1\"];",
+    ] {
+        assert!(dot.lines().any(|l| l == line), "missing `{line}` in\n{dot}");
+    }
+    // Every node pair has an edge: the uniform controller may go anywhere.
+    for edge in ["n0 -> n0", "n0 -> n1", "n1 -> n0", "n1 -> n1"] {
+        assert!(dot.contains(edge), "missing {edge} in\n{dot}");
+    }
+    let adversary = dot_command(&["uniform:1", "--game", game, "--player", "adversary"]);
+    assert!(adversary.status.success());
+    let defender = String::from_utf8(dot_command(&["uniform:1", "--game", game]).stdout).unwrap();
+    assert_ne!(String::from_utf8(adversary.stdout).unwrap(), defender);
+}
+
+#[test]
+fn posg_fsc_dot_of_a_uniform_controller_without_its_game_says_to_give_it() {
+    let output = dot_command(&["uniform:2"]);
+    assert!(!output.status.success());
+    let error = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        error.contains("uniform:2") && error.contains("--game GAME"),
+        "{error}"
+    );
+    let bad = dot_command(&["uniform:0", "--game", "x.posg.json"]);
+    assert!(!bad.status.success());
+}

@@ -98,7 +98,7 @@ fn solve_writes_a_titled_curve_with_the_certified_band_and_a_controller_picture(
     assert!(summary.contains("\"defender.dot\""));
     let stderr = String::from_utf8(output.stderr).unwrap();
     assert!(
-        stderr.contains("[full] iteration 30/30: value "),
+        stderr.contains("[full] start ") && stderr.contains(" at iteration 30: value "),
         "{stderr}"
     );
 }
@@ -169,7 +169,8 @@ fn sweep_reports_pairs_done_and_draws_a_heatmap() {
     let svg = read(dir.join("out/sweep.svg"));
     let texts = texts(&svg);
     for text in [
-        "cell: certified lower bound",
+        "cell and colour:",
+        "certified lower bound",
         "defender nodes",
         "adversary nodes",
         "1",
@@ -181,9 +182,154 @@ fn sweep_reports_pairs_done_and_draws_a_heatmap() {
             "sweep.svg lacks `{text}` in {texts:?}"
         );
     }
-    let estimates = texts
+    let estimates = texts.iter().filter(|t| t.starts_with("est. ")).count();
+    let uppers = texts.iter().filter(|t| t.starts_with("ub ")).count();
+    assert_eq!(
+        (estimates, uppers),
+        (4, 4),
+        "one labelled cell per size pair"
+    );
+    let table = read(dir.join("out/sweep.csv"));
+    let lower = table.lines().nth(1).unwrap().split(',').nth(10).unwrap();
+    let lower: f64 = lower.parse().unwrap_or_else(|_| panic!("{table}"));
+    assert!(
+        texts
+            .iter()
+            .any(|t| t == &format!("{lower:.3}") || t.starts_with(&format!("{lower:.3}"))),
+        "the first pair's certified lower bound {lower} is written in its cell: {texts:?}"
+    );
+    assert!(
+        svg.matches("<rect").count() > 100,
+        "the colour bar is a gradient"
+    );
+}
+
+/// `"key": number` of a JSON text (the first occurrence).
+fn json_number(text: &str, key: &str) -> f64 {
+    let rest = text.split(&format!("\"{key}\": ")).nth(1).unwrap();
+    let end = rest.find([',', '\n', '}']).unwrap();
+    rest[..end].trim().parse().unwrap()
+}
+
+#[test]
+fn curve_svg_draws_the_certified_bracket_solve_returns_with_distinct_tick_labels() {
+    let dir = scratch("bracket");
+    let game = grid(&dir);
+    let out = dir.join("out").display().to_string();
+    let output = posg_fsc(&[
+        "solve",
+        &game,
+        "--ltl",
+        "GF goal & G !unsafe",
+        "--def-nodes",
+        "2",
+        "--out",
+        &out,
+        "--max-iterations",
+        "200",
+    ]);
+    let summary = read(dir.join("out/summary.json"));
+    let certified = summary.split("\"certified\": ").nth(1).unwrap();
+    let (lower, upper) = (
+        json_number(certified, "certified_lower"),
+        json_number(certified, "upper_bound"),
+    );
+    let bracket = format!("[{lower:.6}, {upper:.6}]");
+    let stdout = String::from_utf8(output.stdout).unwrap();
+    assert!(
+        stdout.contains(&format!("at least {lower:.6}")),
+        "solve prints the bracket: {stdout}"
+    );
+    let svg = read(dir.join("out/curve.svg"));
+    let texts = texts(&svg);
+    assert!(
+        texts.iter().any(|t| t == &bracket),
+        "curve.svg lacks the returned bracket {bracket}: {texts:?}"
+    );
+    // The y tick labels: numbers with a decimal point, all different.
+    let ticks: Vec<&String> = texts
         .iter()
-        .filter(|t| t.starts_with("est. ") && t.contains(", ub "))
-        .count();
-    assert_eq!(estimates, 4, "one labelled cell per size pair");
+        .filter(|t| t.contains('.') && t.parse::<f64>().is_ok())
+        .collect();
+    assert!(ticks.len() >= 3, "{texts:?}");
+    let mut distinct = ticks.clone();
+    distinct.sort();
+    distinct.dedup();
+    assert_eq!(
+        distinct.len(),
+        ticks.len(),
+        "repeated tick labels: {ticks:?}"
+    );
+    let lines = String::from_utf8(output.stderr).unwrap();
+    assert!(lines.contains("Won: "), "{lines}");
+    assert!(!lines.contains("keeps 1 structures"), "{lines}");
+}
+
+#[test]
+fn solve_writes_png_plots_with_format_png() {
+    let dir = scratch("png");
+    let game = grid(&dir);
+    let out = dir.join("out").display().to_string();
+    posg_fsc(&[
+        "solve",
+        &game,
+        "--ltl",
+        "F goal",
+        "--def-nodes",
+        "1",
+        "--out",
+        &out,
+        "--max-iterations",
+        "10",
+        "--structures",
+        "full",
+        "--format",
+        "png",
+    ]);
+    let png = std::fs::read(dir.join("out/curve.png")).unwrap();
+    assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n");
+    assert!(!dir.join("out/curve.svg").exists());
+    let summary = read(dir.join("out/summary.json"));
+    assert!(summary.contains("\"curve.png\""), "{summary}");
+}
+
+#[test]
+fn solve_help_shows_the_common_options_first_and_the_others_under_headings() {
+    let output = posg_fsc(&["solve", "--help"]);
+    let help = String::from_utf8(output.stdout).unwrap();
+    // From "Options:" to the next heading (a line at the margin ending in ':').
+    let common = help.split("\nOptions:\n").nth(1).unwrap();
+    let end = common
+        .match_indices('\n')
+        .map(|(i, _)| i)
+        .find(|&i| {
+            let line = common[i + 1..].lines().next().unwrap_or("");
+            !line.starts_with(' ') && line.ends_with(':')
+        })
+        .unwrap();
+    let common = &common[..end];
+    for option in [
+        "--ltl",
+        "--def-nodes",
+        "--out",
+        "--seed",
+        "--starts",
+        "--format",
+    ] {
+        assert!(
+            common.contains(option),
+            "{option} not among the first options:\n{help}"
+        );
+    }
+    assert!(!common.contains("--lbfgs-memory"), "{help}");
+    let position = |heading: &str| {
+        help.find(&format!("\n{heading}:\n"))
+            .unwrap_or_else(|| panic!("no heading {heading}:\n{help}"))
+    };
+    assert!(position("Options") < position("Stopping"));
+    assert!(position("Stopping") < position("Linear solver"));
+    assert!(
+        !help.contains("Other options:"),
+        "every option has its heading:\n{help}"
+    );
 }

@@ -9,6 +9,7 @@ use posg_fsc::automaton::Dra;
 use posg_fsc::automaton::read_hoa_dra;
 use posg_fsc::controller::{Fsc, Role};
 use posg_fsc::game::Posg;
+use posg_fsc::output::PlotFormat;
 use posg_fsc::value::{DEFAULT_LU_LIMIT, DEFAULT_TOLERANCE, SolverMethod, SolverSettings};
 use serde::Serialize;
 
@@ -58,6 +59,19 @@ pub struct ControllerArgs {
     /// The adversary's controller, as for --defender (`uniform:1` for a POMDP).
     #[arg(long, default_value = "uniform:1")]
     pub adversary: String,
+}
+
+/// The plots' file format (`solve`, `sweep`, `sweep-merge`).
+#[derive(Debug, Clone, Args)]
+pub struct PlotArgs {
+    /// The plots' file format: `svg` (curve.svg, sweep.svg) or `png`
+    /// (curve.png, sweep.png: 900 x 520 pixels, for slides).
+    #[arg(long, default_value = "svg", value_parser = plot_format)]
+    pub format: PlotFormat,
+}
+
+fn plot_format(text: &str) -> Result<PlotFormat, String> {
+    text.parse()
 }
 
 /// How the linear systems are solved (`eval`, `solve`, `sweep`).

@@ -9,7 +9,7 @@
 //!    certifies the result (beside a hand-made controller's guarantee).
 
 use std::fmt::Write as _;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use clap::Args;
 use posg_fsc::automaton::Dra;
@@ -83,7 +83,13 @@ fn solve_with_defaults(game: &Posg, automata: &Automata, place: &Place) -> anyho
         adversary: 1,
     };
     let job = Job::full(game, automata, sizes, &settings)?;
-    solve_into(job, &place.staging, ProgressMode::Quiet, false)
+    solve_into(
+        job,
+        &place.staging,
+        ProgressMode::Quiet,
+        false,
+        posg_fsc::output::PlotFormat::Svg,
+    )
 }
 
 /// Where a solve writes (inside the demo's staging directory) and where its
@@ -193,11 +199,37 @@ fn recurrence(game: &Posg, place: &Place, out: &mut String) -> anyhow::Result<()
         out,
         "   node and push into the wall forever) is certified at {lower:.4}.\n"
     )?;
+    let program = this_program();
     writeln!(
         out,
-        "Next: `posg-fsc solve --help`, `posg-fsc support --help`,\n`posg-fsc example grid --help`."
+        "Next: `{program} solve --help`, `{program} support --help`,\n\
+         `{program} example grid --help` (`cargo install --path .` in the clone puts\n\
+         `posg-fsc` on your PATH)."
     )?;
     Ok(())
+}
+
+/// How to call this program from the current directory: `posg-fsc` when
+/// it is on the PATH (or cannot be told), else its path relative to the
+/// current directory (`target/release/posg-fsc` after `cargo run
+/// --release`), else its absolute path.
+fn this_program() -> String {
+    let Ok(exe) = std::env::current_exe() else {
+        return "posg-fsc".into();
+    };
+    let on_path = std::env::var_os("PATH").is_some_and(|paths| {
+        std::env::split_paths(&paths).any(|dir| Some(dir.as_path()) == exe.parent())
+    });
+    if on_path {
+        return "posg-fsc".into();
+    }
+    let relative = std::env::current_dir()
+        .ok()
+        .and_then(|dir| exe.strip_prefix(dir).ok().map(Path::to_path_buf));
+    match relative {
+        Some(path) => path.display().to_string(),
+        None => exe.display().to_string(),
+    }
 }
 
 /// Support synthesis (method.md section 7) for 2 defender nodes, both modes.

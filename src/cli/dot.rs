@@ -1,10 +1,11 @@
 //! `posg-fsc dot`: a Graphviz picture of a controller (docs/formats.md
 //! section 10).
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use clap::Args;
-use posg_fsc::controller::file::{read_either, read_standalone};
+use posg_fsc::controller::Role;
+use posg_fsc::controller::file::{read_either, read_standalone, resolve};
 use posg_fsc::output::dot::{DEFAULT_THRESHOLD, controller_dot};
 
 use super::common::{self, print_text};
@@ -12,12 +13,17 @@ use super::common::{self, print_text};
 /// Arguments of `dot`.
 #[derive(Debug, Args)]
 pub struct DotArgs {
-    /// The controller (`*.fsc.json`).
-    controller: PathBuf,
+    /// The controller: a `*.fsc.json` file or `uniform:K` (K nodes, uniform
+    /// over all (next node, enabled action) pairs; needs --game).
+    controller: String,
     /// The game it belongs to: checks the controller against it (needed
-    /// when the file's `default` is `uniform`).
+    /// for `uniform:K` and when the file's `default` is `uniform`).
     #[arg(long)]
     game: Option<PathBuf>,
+    /// Whose controller `uniform:K` is: `defender` or `adversary` (a file
+    /// names its player itself).
+    #[arg(long, default_value = "defender", value_parser = role)]
+    player: Role,
     /// Choices with a smaller probability are hidden (their number is shown).
     #[arg(long, default_value_t = DEFAULT_THRESHOLD, value_parser = threshold)]
     threshold: f64,
@@ -34,13 +40,26 @@ fn threshold(text: &str) -> Result<f64, String> {
     }
 }
 
+fn role(text: &str) -> Result<Role, String> {
+    match text {
+        "defender" => Ok(Role::Defender),
+        "adversary" => Ok(Role::Adversary),
+        _ => Err(format!("'{text}' is not a player: defender or adversary")),
+    }
+}
+
 /// Draws the controller.
 pub fn run(args: DotArgs) -> anyhow::Result<()> {
-    let name = args.controller.display().to_string();
+    let name = &args.controller;
+    let uniform = name.starts_with("uniform:");
     let text = match &args.game {
         Some(game_path) => {
             let game = common::read_game(game_path)?;
-            let fsc = read_either(&args.controller, &game)?;
+            let fsc = if uniform {
+                resolve(name, &game, args.player)?
+            } else {
+                read_either(Path::new(name), &game)?
+            };
             let player = fsc.role().player(&game);
             let title = format!("{name}: {} nodes", fsc.num_nodes());
             controller_dot(
@@ -51,8 +70,12 @@ pub fn run(args: DotArgs) -> anyhow::Result<()> {
                 args.threshold,
             )
         }
+        None if uniform => anyhow::bail!(
+            "{name}: a uniform controller takes its observations and actions from the game; \
+             give --game GAME"
+        ),
         None => {
-            let file = read_standalone(&args.controller)?;
+            let file = read_standalone(Path::new(name))?;
             let title = format!("{name}: {} nodes", file.fsc.num_nodes());
             controller_dot(
                 &file.fsc,

@@ -10,6 +10,7 @@ mod dot;
 mod eval;
 mod example;
 mod export_gmc;
+mod help;
 mod import_drn;
 mod progress;
 mod prune;
@@ -77,6 +78,15 @@ enum Command {
     /// Draw a controller as a Graphviz graph (nodes, and edges labelled
     /// observation / action  probability; docs/formats.md section 10).
     Dot(dot::DotArgs),
+}
+
+/// The command line as the user typed it, with `solve --help` and `sweep
+/// --help` grouped under headings ([`help`]); exits with clap's message
+/// on a usage error.
+pub fn parse() -> Cli {
+    use clap::{CommandFactory, FromArgMatches};
+    let matches = help::with_headings(Cli::command()).get_matches();
+    Cli::from_arg_matches(&matches).unwrap_or_else(|error| error.exit())
 }
 
 /// Runs the subcommand the user chose.

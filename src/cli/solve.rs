@@ -16,11 +16,11 @@ use indicatif::MultiProgress;
 use posg_fsc::controller::{self, Role};
 use posg_fsc::game::Posg;
 use posg_fsc::optimise::Settings;
-use posg_fsc::output::OutputDirectory;
+use posg_fsc::output::{OutputDirectory, PlotFormat};
 use posg_fsc::pipeline::directory::SolveDirectory;
 use posg_fsc::pipeline::{Automata, Job, Outcome, Sizes};
 
-use super::common::{ObjectiveArgs, SolverArgs, objective, print_text, read_game};
+use super::common::{ObjectiveArgs, PlotArgs, SolverArgs, objective, print_text, read_game};
 use super::progress::{OutputArgs, ProgressMode, structure_progress};
 
 /// Arguments of `solve`.
@@ -44,18 +44,21 @@ pub struct SolveArgs {
     #[arg(long)]
     force: bool,
     /// Start the defender from this `*.fsc.json` (its support and logits)
-    /// instead of the full uniform structure; use with `--initial-spread 0` to resume.
+    /// or `uniform:K` instead of the full uniform structure; use with
+    /// `--initial-spread 0` to resume.
     #[arg(long)]
-    defender: Option<PathBuf>,
-    /// Start the adversary from this `*.fsc.json` (see `--defender`).
+    defender: Option<String>,
+    /// Start the adversary from this `*.fsc.json` or `uniform:K` (see `--defender`).
     #[arg(long)]
-    adversary: Option<PathBuf>,
+    adversary: Option<String>,
     #[command(flatten)]
     settings: Settings,
     #[command(flatten)]
     solver: SolverArgs,
     #[command(flatten)]
     output: OutputArgs,
+    #[command(flatten)]
+    plot: PlotArgs,
 }
 
 /// The settings of `solve` and `sweep`: the optimiser's options, with the
@@ -99,11 +102,13 @@ pub fn solve_into(
     path: &Path,
     progress: ProgressMode,
     seconds_axis: bool,
+    plot_format: PlotFormat,
 ) -> anyhow::Result<Outcome> {
     let command_line: Vec<String> = std::env::args().collect();
     let directory = SolveDirectory {
         path,
         seconds_axis,
+        plot_format,
         command_line: &command_line,
     };
     let iterations = job.settings.max_iterations;
@@ -148,13 +153,13 @@ pub fn check_sizes(game: &Posg, def_nodes: usize, adv_nodes: usize) -> anyhow::R
 fn agree(
     option: &str,
     nodes: Option<usize>,
-    path: &Path,
+    spec: &str,
     controller: &controller::Fsc,
 ) -> anyhow::Result<()> {
     match nodes {
         Some(n) if n != controller.num_nodes() => anyhow::bail!(
-            "{option} {n} disagrees with {}, which has {} nodes; drop {option} (the file's size is used)",
-            path.display(),
+            "{option} {n} disagrees with {spec}, which has {} nodes; drop {option} (the \
+             controller's size is used)",
             controller.num_nodes()
         ),
         _ => Ok(()),
@@ -172,19 +177,20 @@ pub fn run(args: SolveArgs) -> anyhow::Result<()> {
         adversary: adv_nodes,
     };
     let mut job = Job::full(&game, &automata, sizes, &settings)?;
-    if let Some(path) = &args.defender {
-        job.start.defender = controller::file::read(path, &game, Role::Defender)?;
+    if let Some(spec) = &args.defender {
+        job.start.defender = controller::file::resolve(spec, &game, Role::Defender)?;
         job.start.name = "from-files".into();
-        agree("--def-nodes", args.def_nodes, path, &job.start.defender)?;
+        agree("--def-nodes", args.def_nodes, spec, &job.start.defender)?;
     }
-    if let Some(path) = &args.adversary {
-        job.start.adversary = controller::file::read(path, &game, Role::Adversary)?;
+    if let Some(spec) = &args.adversary {
+        job.start.adversary = controller::file::resolve(spec, &game, Role::Adversary)?;
         job.start.name = "from-files".into();
-        agree("--adv-nodes", args.adv_nodes, path, &job.start.adversary)?;
+        agree("--adv-nodes", args.adv_nodes, spec, &job.start.adversary)?;
     }
     let out = OutputDirectory::create(&args.out, args.force)?;
     let progress = ProgressMode::detect(&args.output);
-    let outcome = solve_into(job, out.path(), progress, args.output.seconds_axis)?;
+    let format = args.plot.format;
+    let outcome = solve_into(job, out.path(), progress, args.output.seconds_axis, format)?;
     out.commit()?;
     for line in &outcome.structure_choice {
         eprintln!("{line}");
@@ -212,8 +218,8 @@ pub fn run(args: SolveArgs) -> anyhow::Result<()> {
     print_text(&format!(
         "structure {}: worst-case estimate {:.6} (last iterate value {:.6}) after {} iterations \
          ({}, {}; best of {} starts; {} defender), {:.1} s; \
-         GMC {} states{bracket}\nwrote curve.csv, curve.svg, defender.fsc.json, defender.dot, adversary.fsc.json, \
-         summary.json to {}\n",
+         GMC {} states{bracket}\nwrote curve.csv, curve.{format}, defender.fsc.json, defender.dot, \
+         adversary.fsc.json, summary.json to {}\n",
         report.name,
         report.worst_case,
         report.last_value,

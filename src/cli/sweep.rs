@@ -13,13 +13,13 @@ use rayon::prelude::*;
 
 use posg_fsc::game::Posg;
 use posg_fsc::limits;
-use posg_fsc::optimise::{Settings, StructureOutcome};
+use posg_fsc::optimise::{Settings, StructureOutcome, StructureReport};
 use posg_fsc::output::shard::{self, Shard, ShardRecord, SweepPlan, SweepRow};
 use posg_fsc::output::slurm::{self, SlurmSweep};
-use posg_fsc::output::{OutputDirectory, Title, create_dir, write_file};
+use posg_fsc::output::{OutputDirectory, PlotFormat, Title, create_dir, write_file};
 use posg_fsc::pipeline::{self, Automata, Job};
 
-use super::common::{ObjectiveArgs, SolverArgs, print_text};
+use super::common::{ObjectiveArgs, PlotArgs, SolverArgs, print_text};
 use super::progress::{OutputArgs, ProgressMode, SweepProgress};
 use super::solve::{check_sizes, load, settings, solve_into};
 
@@ -70,6 +70,8 @@ pub struct SweepArgs {
     solver: SolverArgs,
     #[command(flatten)]
     output: OutputArgs,
+    #[command(flatten)]
+    plot: PlotArgs,
 }
 
 /// A list of positive sizes.
@@ -112,6 +114,8 @@ fn parse_sizes(text: &str) -> Result<Sizes, String> {
 pub struct SweepMergeArgs {
     /// The --out of the `sweep --shard K/N` runs.
     dir: PathBuf,
+    #[command(flatten)]
+    plot: PlotArgs,
 }
 
 /// The loaded inputs every chain of a sweep shares.
@@ -121,6 +125,7 @@ struct Inputs<'a> {
     settings: &'a Settings,
     defender_sizes: &'a [usize],
     seconds_axis: bool,
+    plot_format: PlotFormat,
 }
 
 /// Where a chain writes its pairs.
@@ -168,6 +173,7 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
         settings: &settings,
         defender_sizes: &defender_sizes,
         seconds_axis: args.output.seconds_axis,
+        plot_format: args.plot.format,
     };
     let adversary_sizes = distinct_in_order(&args.adv_nodes.0);
     let title = Title {
@@ -245,10 +251,11 @@ fn run_whole(
         &progress,
     )?;
     progress.finish();
-    shard::write_sweep(out.path(), &rows, title)?;
+    let format = args.plot.format;
+    shard::write_sweep(out.path(), &rows, title, format)?;
     out.commit()?;
     print_text(&format!(
-        "wrote sweep.csv and sweep.svg ({} size pairs) to {}\n{MONOTONE}\n",
+        "wrote sweep.csv and sweep.{format} ({} size pairs) to {}\n{MONOTONE}\n",
         rows.len(),
         args.out.display()
     ))
@@ -274,6 +281,26 @@ fn run_chains(
         .into_iter()
         .flatten()
         .collect())
+}
+
+/// Where a pair's reported defender came from, for the `result` column of
+/// `sweep.csv`.
+fn result_in_words(report: &StructureReport, previous: Option<&StructureOutcome>) -> String {
+    let smaller = previous.map(|p| p.defender.num_nodes());
+    match smaller {
+        Some(k) if report.name.starts_with("from-") => {
+            format!("the {k}-node result, kept: optimising found nothing better")
+        }
+        Some(k) if report.best_iteration == 0 => format!(
+            "the {k}-node result it started from, kept: optimising on {} found nothing better",
+            report.name
+        ),
+        Some(k) => format!(
+            "optimised on {}, starting from the {k}-node result",
+            report.name
+        ),
+        None => format!("optimised on {}", report.name),
+    }
 }
 
 /// One chain: adversary size `m`, the defender sizes in increasing order,
@@ -305,8 +332,14 @@ fn run_chain(
         if let Some(smaller) = &previous {
             job = job.warm_started(smaller)?;
         }
-        let outcome = solve_into(job, &out, ProgressMode::Quiet, inputs.seconds_axis)
-            .with_context(|| format!("defender {n} nodes, adversary {m} nodes"))?;
+        let outcome = solve_into(
+            job,
+            &out,
+            ProgressMode::Quiet,
+            inputs.seconds_axis,
+            inputs.plot_format,
+        )
+        .with_context(|| format!("defender {n} nodes, adversary {m} nodes"))?;
         let (best, certified) = (outcome.best(), outcome.certified);
         let report = &best.report;
         progress.finished(n, m, report.worst_case);
@@ -326,6 +359,7 @@ fn run_chain(
             iterations: report.iterations,
             seconds: report.seconds,
             warm_started: previous.is_some(),
+            result: result_in_words(report, previous.as_ref()),
         };
         if let Some(own) = own {
             let table = shard::sweep_table(std::slice::from_ref(&row))
@@ -436,6 +470,7 @@ fn write_slurm(args: &SweepArgs, plan: &SweepPlan) -> anyhow::Result<()> {
         sweep_arguments: &sweep_arguments,
         out: &out,
         shards: plan.shards,
+        plot_format: args.plot.format,
         options: &args.slurm_option,
         command_line: &command_line,
     };
@@ -453,9 +488,10 @@ fn write_slurm(args: &SweepArgs, plan: &SweepPlan) -> anyhow::Result<()> {
 
 /// Runs `sweep-merge`.
 pub fn run_merge(args: SweepMergeArgs) -> anyhow::Result<()> {
-    let merged = shard::merge(&args.dir)?;
+    let format = args.plot.format;
+    let merged = shard::merge(&args.dir, format)?;
     print_text(&format!(
-        "wrote sweep.csv and sweep.svg ({} size pairs from {} shards) to {}\n",
+        "wrote sweep.csv and sweep.{format} ({} size pairs from {} shards) to {}\n",
         merged.rows.len(),
         merged.plan.shards,
         args.dir.display()

@@ -60,8 +60,10 @@ pub(crate) use optimiser::{Certifier, Optimiser, PhaseSeconds, RunOutcome};
 pub use rounding::{TRUNCATION_THRESHOLDS, rounded_candidates, truncated};
 pub use settings::{MAX_LOGIT_BOUND, Settings, UpdateRule};
 pub use softmax::{Softmax, clip};
-pub use structures::{Candidates, SourceNote, StructureSource};
-pub(crate) use structures::{best_by_certified_lower, candidate_structures, why_others_lost};
+pub use structures::{Candidates, Duplicate, SourceNote, StructureSource};
+pub(crate) use structures::{
+    best_by_certified_lower, candidate_structures, described, why_others_lost,
+};
 pub use warm_start::{WARM_START_MIX, embed, keep_better, pad, score, warm_started};
 
 use std::sync::{Mutex, PoisonError};

@@ -62,8 +62,20 @@ pub struct SourceNote {
     pub structures: Vec<String>,
     /// What it found, proved or why it gave nothing.
     pub note: String,
+    /// The structures it found that an earlier source had found already
+    /// (optimised once, under the earlier name).
+    pub duplicates: Vec<Duplicate>,
     /// Seconds it took.
     pub seconds: f64,
+}
+
+/// A structure found twice: `structure` has the same supports as `same_as`.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+pub struct Duplicate {
+    /// The name the later source gave it.
+    pub structure: String,
+    /// The structure found first, which is optimised.
+    pub same_as: String,
 }
 
 /// The structures to optimise on and what each source said.
@@ -107,6 +119,7 @@ pub fn candidate_structures(
             source,
             structures: Vec::new(),
             note,
+            duplicates: Vec::new(),
             seconds: clock.elapsed().as_secs_f64(),
         };
         for structure in found {
@@ -115,12 +128,10 @@ pub fn candidate_structures(
                 .iter()
                 .find(|known| same_supports(known, &structure))
             {
-                Some(known) => {
-                    note.note.push_str(&format!(
-                        "; {} is identical to {}",
-                        structure.name, known.name
-                    ));
-                }
+                Some(known) => note.duplicates.push(Duplicate {
+                    structure: structure.name.clone(),
+                    same_as: known.name.clone(),
+                }),
                 None => {
                     note.structures.push(structure.name.clone());
                     candidates.structures.push(structure);
@@ -218,6 +229,7 @@ fn pruned(
     .structures;
     let note = match kept.len() {
         0 => "Algorithm 1 keeps no structure".to_string(),
+        1 => "Algorithm 1 keeps one structure".to_string(),
         k => format!("Algorithm 1 keeps {k} structures"),
     };
     let structures = kept
@@ -252,9 +264,30 @@ pub fn best_by_certified_lower(outcomes: &[StructureOutcome]) -> Option<usize> {
     })
 }
 
-/// Why each structure other than the winner lost, and what the sources
-/// without a structure said, and which structures were dropped for
-/// numerical trouble: one sentence per line.
+/// A structure's name in words: `the full support (full)`, `the SAT
+/// support, winning with positive probability (sat-positive)`, ...
+pub fn described(name: &str) -> String {
+    let words = match name {
+        "full" => "the full support".to_string(),
+        "from-files" => "the controllers given".to_string(),
+        "sat-almost-sure" => "the SAT support, winning almost surely".to_string(),
+        "sat-positive" => "the SAT support, winning with positive probability".to_string(),
+        _ => match (name.strip_prefix("pruned-"), name.strip_prefix("from-")) {
+            (Some(k), _) => format!("Algorithm 1's structure {k}"),
+            (_, Some(rest)) => match rest.strip_suffix("-nodes") {
+                Some(k) => format!("the result of the {k}-node defender, kept"),
+                None => return name.to_string(),
+            },
+            _ => return name.to_string(),
+        },
+    };
+    format!("{words} ({name})")
+}
+
+/// Why each structure other than the winner lost, which structures a
+/// source found again (optimised once), what the sources without a
+/// structure said, and which structures were dropped for numerical
+/// trouble: one plain sentence per line.
 pub fn why_others_lost(
     outcomes: &[StructureOutcome],
     best: usize,
@@ -269,33 +302,57 @@ pub fn why_others_lost(
         .filter(|&(i, _)| i != best)
         .map(|(_, o)| {
             let value = score(o);
-            let measure = if o.report.certified_lower.is_some() {
-                "certified lower bound"
+            let (what, against) = if o.report.certified_lower.is_some() {
+                ("certified", "against every adversary")
             } else {
-                "worst-case estimate"
+                ("estimated", "against the best responses found")
             };
+            let name = described(&o.report.name);
             if value <= 0.0 {
-                format!("{}: value 0 ({measure} 0)", o.report.name)
-            } else {
                 format!(
-                    "{}: {measure} {value:.6} <= {:.6} of {}",
-                    o.report.name,
-                    score(winner),
-                    winner.report.name
+                    "Lost: {name}: its best defender is {what} at 0 (some adversary always \
+                     defeats it)."
                 )
+            } else if value == score(winner) {
+                format!(
+                    "Lost: {name}: {what} at {value:.6} {against}, a tie, and ties go to the \
+                     structure tried first."
+                )
+            } else {
+                format!("Lost: {name}: {what} at only {value:.6} {against}.")
             }
         })
         .collect();
-    lines.extend(
-        notes
-            .iter()
-            .filter(|n| n.structures.is_empty())
-            .map(|n| format!("{}: no structure ({})", n.source.name(), n.note)),
-    );
-    lines.extend(
-        failed
-            .iter()
-            .map(|(name, error)| format!("{name}: dropped, numerical trouble ({error})")),
-    );
+    for note in notes {
+        for duplicate in &note.duplicates {
+            lines.push(format!(
+                "Not optimised twice: {} is the same as {}.",
+                described(&duplicate.structure),
+                described(&duplicate.same_as)
+            ));
+        }
+        if note.structures.is_empty() && note.duplicates.is_empty() {
+            lines.push(format!(
+                "No structure from {} ({}).",
+                source_in_words(note.source),
+                note.note
+            ));
+        }
+    }
+    lines.extend(failed.iter().map(|(name, error)| {
+        format!(
+            "Dropped: {}: a linear system could not be solved to the tolerance ({error}).",
+            described(name)
+        )
+    }));
     lines
+}
+
+/// A source of structures in words.
+fn source_in_words(source: StructureSource) -> &'static str {
+    match source {
+        StructureSource::Full => "the full support",
+        StructureSource::Sat => "SAT support synthesis",
+        StructureSource::Paper => "the paper's Algorithm 1",
+    }
 }

@@ -30,6 +30,14 @@ pub enum OutputError {
         /// The operating system's error.
         source: std::io::Error,
     },
+    /// A plot could not be drawn or written.
+    #[error("drawing {path}: {problem}")]
+    Plot {
+        /// The plot's file.
+        path: PathBuf,
+        /// What went wrong.
+        problem: String,
+    },
     /// The target exists and holds files, and replacing it was not allowed.
     #[error(
         "refusing to write into {path}: it is not empty (results of an earlier run?); \

@@ -2,10 +2,11 @@
 //! of finished results:
 //!
 //! * [`CurveCsv`]: `curve.csv`, one row per outer iteration;
-//! * [`CurvePlot`]: `curve.svg`, the value and the worst-case estimate over
-//!   the certified band, against the iteration;
-//! * [`plot_sweep`]: `sweep.svg`, a heatmap of the certified lower bound
-//!   over defender and adversary sizes;
+//! * [`plot_curve`]: `curve.svg` (or `.png`, [`PlotFormat`]), the value and
+//!   the worst-case estimate over the certified band, against the
+//!   iteration, with the returned defender's certified bracket;
+//! * [`plot_sweep`]: `sweep.svg` (or `.png`), a heatmap of the certified
+//!   lower bound over defender and adversary sizes;
 //! * [`dot::controller_dot`]: a Graphviz picture of a controller;
 //! * [`OutputDirectory`]: the directory a command writes its results into,
 //!   atomically, under a lock, never mixing old and new results;
@@ -21,7 +22,7 @@ pub mod shard;
 pub mod slurm;
 
 pub use directory::{OutputDirectory, OutputError, create_dir, write_file};
-pub use plot::{CurvePlot, SweepPoint, Title, plot_sweep};
+pub use plot::{CurvePlot, PlotFormat, Returned, SweepPoint, Title, plot_curve, plot_sweep};
 
 use std::fs::File;
 use std::path::Path;

@@ -28,7 +28,7 @@ use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use super::directory::{OutputError, create_dir, write_file};
-use super::plot::{SweepPoint, Title, plot_sweep};
+use super::plot::{PlotFormat, SweepPoint, Title, plot_sweep};
 
 /// The file in each pair directory holding its row of `sweep.csv`.
 pub const ROW_FILE: &str = "row.csv";
@@ -107,6 +107,11 @@ pub struct SweepRow {
     pub seconds: f64,
     /// Whether the run started from the best defender of the next smaller size.
     pub warm_started: bool,
+    /// Where the reported defender came from, in words: optimised on
+    /// `structure`, or a smaller size's result kept because optimising
+    /// found nothing better (then `last_value` is that of a run whose
+    /// result was not kept).
+    pub result: String,
 }
 
 impl SweepRow {
@@ -445,8 +450,14 @@ pub fn sweep_table(rows: &[SweepRow]) -> Result<Vec<u8>, csv::Error> {
     writer.into_inner().map_err(|e| e.into_error().into())
 }
 
-/// Writes `sweep.csv` and `sweep.svg` of `rows` into `dir` (each atomically).
-pub fn write_sweep(dir: &Path, rows: &[SweepRow], title: &Title) -> Result<(), ShardError> {
+/// Writes `sweep.csv` and `sweep.svg` (or `sweep.png`, as `format` says)
+/// of `rows` into `dir` (each atomically).
+pub fn write_sweep(
+    dir: &Path,
+    rows: &[SweepRow],
+    title: &Title,
+    format: PlotFormat,
+) -> Result<(), ShardError> {
     let table = dir.join("sweep.csv");
     let text = sweep_table(rows).map_err(|e| ShardError::Malformed {
         path: table.clone(),
@@ -462,11 +473,12 @@ pub fn write_sweep(dir: &Path, rows: &[SweepRow], title: &Title) -> Result<(), S
             bracket: r.certified_lower.zip(r.upper_bound),
         })
         .collect();
-    let plot = dir.join("sweep.svg");
-    let temporary = dir.join(format!(".sweep.svg.partial-{}", std::process::id()));
-    plot_sweep(&temporary, title, &points).map_err(|e| ShardError::Malformed {
+    let name = format!("sweep.{format}");
+    let plot = dir.join(&name);
+    let temporary = dir.join(format!(".{name}.partial-{}", std::process::id()));
+    plot_sweep(&temporary, format, title, &points).map_err(|e| ShardError::Malformed {
         path: plot.clone(),
-        problem: format!("drawing: {e}"),
+        problem: e.to_string(),
     })?;
     fs::rename(&temporary, &plot).map_err(|e| OutputError::io("renaming into", &plot, e))?;
     Ok(())
@@ -590,11 +602,11 @@ fn checked_row(pair: &Path, n: usize, m: usize, plan: &SweepPlan) -> Result<Swee
     Ok(row)
 }
 
-/// `sweep-merge`: [`collect`], then writes `sweep.csv` and `sweep.svg`
-/// into `dir`, the same as the unsharded sweep's.
-pub fn merge(dir: &Path) -> Result<Merged, ShardError> {
+/// `sweep-merge`: [`collect`], then writes `sweep.csv` and `sweep.svg` (or
+/// `sweep.png`) into `dir`, the same as the unsharded sweep's.
+pub fn merge(dir: &Path, format: PlotFormat) -> Result<Merged, ShardError> {
     let merged = collect(dir)?;
-    write_sweep(dir, &merged.rows, &merged.plan.title())?;
+    write_sweep(dir, &merged.rows, &merged.plan.title(), format)?;
     Ok(merged)
 }
 
@@ -681,6 +693,7 @@ mod tests {
             iterations: 5,
             seconds: 0.25,
             warm_started: true,
+            result: "optimised on full, starting from the 1-node result".into(),
         };
         write_file(
             &dir.join(ROW_FILE),

@@ -4,6 +4,8 @@
 
 use std::path::Path;
 
+use super::PlotFormat;
+
 /// What the scripts run and where.
 #[derive(Debug, Clone)]
 pub struct SlurmSweep<'a> {
@@ -19,6 +21,8 @@ pub struct SlurmSweep<'a> {
     pub out: &'a Path,
     /// N, the number of shards (array tasks).
     pub shards: usize,
+    /// The plots' format, passed on to `sweep-merge` (`--format png`).
+    pub plot_format: PlotFormat,
     /// Extra `#SBATCH` options, each as given (`--partition=short`).
     pub options: &'a [String],
     /// The command line that wrote the scripts, recorded in them.
@@ -108,8 +112,12 @@ pub fn array_script(sweep: &SlurmSweep) -> String {
 pub fn merge_script(sweep: &SlurmSweep) -> String {
     let mut text = header(sweep, "posg-fsc-sweep-merge", "merge-%j.out");
     text += &footer(sweep, "the merge of a sharded posg-fsc sweep");
+    let format = match sweep.plot_format {
+        PlotFormat::Svg => String::new(),
+        format => format!(" --format {format}"),
+    };
     text += &format!(
-        "exec {} sweep-merge {}\n",
+        "exec {} sweep-merge {}{format}\n",
         shell_quote(&sweep.program.display().to_string()),
         shell_quote(&sweep.out.display().to_string())
     );

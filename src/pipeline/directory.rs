@@ -1,11 +1,11 @@
 //! A `solve` directory (docs/formats.md section 9): the pipeline's
-//! [`Outcome`] as `curve.csv`, `curve.svg`, `defender.fsc.json`,
-//! `defender.dot`, `adversary.fsc.json` and `summary.json` (with several
-//! structures, each one's curve as `curve-<name>.csv`/`.svg`, the best one's
-//! copied to `curve.csv`/`curve.svg`).
+//! [`Outcome`] as `curve.csv`, `curve.svg` (or `curve.png`),
+//! `defender.fsc.json`, `defender.dot`, `adversary.fsc.json` and
+//! `summary.json` (with several structures, each one's curve as
+//! `curve-<name>.csv`/`.svg`, the best one's copied to
+//! `curve.csv`/`curve.svg`).
 
 use std::path::{Path, PathBuf};
-use std::sync::{Mutex, PoisonError};
 
 use serde::Serialize;
 
@@ -13,20 +13,30 @@ use super::{Automata, Job, Outcome, PipelineError, Slot, run};
 use crate::certify::Bracket;
 use crate::controller::{self, Fsc};
 use crate::game::Posg;
+use crate::optimise::StructureOutcome;
 use crate::optimise::{
-    IterationRecord, Observer, ObserverError, OptimiseError, Settings, SourceNote, StructureReport,
+    IterationRecord, Observer, ObserverError, Settings, SourceNote, StructureReport,
 };
-use crate::output::{CurveCsv, CurvePlot, OutputError, Title, create_dir, write_file};
+use crate::output::{
+    CurveCsv, CurvePlot, OutputError, PlotFormat, Returned, Title, create_dir, plot_curve,
+    write_file,
+};
 
-/// The files of a solve directory, as `summary.json` lists them.
-pub const FILES: [&str; 6] = [
-    "curve.csv",
-    "curve.svg",
-    "defender.fsc.json",
-    "defender.dot",
-    "adversary.fsc.json",
-    "summary.json",
-];
+/// The files of a solve directory whose plots are in `format`, as
+/// `summary.json` lists them.
+pub fn files(format: PlotFormat) -> Vec<String> {
+    let plot = format!("curve.{format}");
+    [
+        "curve.csv",
+        &plot,
+        "defender.fsc.json",
+        "defender.dot",
+        "adversary.fsc.json",
+        "summary.json",
+    ]
+    .map(String::from)
+    .to_vec()
+}
 
 /// Where and how a solve directory is written.
 #[derive(Debug, Clone, Copy)]
@@ -36,78 +46,100 @@ pub struct SolveDirectory<'a> {
     pub path: &'a Path,
     /// Whether `curve.svg` gets a top axis with the seconds elapsed.
     pub seconds_axis: bool,
+    /// The plots' file format.
+    pub plot_format: PlotFormat,
     /// The command line recorded in `summary.json`.
     pub command_line: &'a [String],
 }
 
 impl SolveDirectory<'_> {
-    /// Runs `job` ([`run`]) with the curve's CSV writer and
-    /// `observers(slot)` as each structure's observers, then draws each
-    /// structure's curve and writes the other files.
+    /// Runs `job` ([`run`]) with the curve tables and `observers(slot)` as
+    /// each structure's observers, then draws the curves and writes the
+    /// other files.
     pub fn solve<F>(&self, job: Job, observers: F) -> Result<Outcome, PipelineError>
     where
         F: Fn(Slot) -> Box<dyn Observer + Send> + Sync,
     {
         create_dir(self.path)?;
         let (game, automata, settings) = (job.game, job.automata, job.settings);
-        let plots = Mutex::new(Vec::new());
         let outcome = run(job, |slot| {
-            let stem = curve_stem(slot);
-            let title = plot_title(game, automata, slot);
-            plots.lock().unwrap_or_else(PoisonError::into_inner).push((
-                slot.index,
-                self.path.join(format!("{stem}.svg")),
-                title,
-            ));
-            let table = self.path.join(format!("{stem}.csv"));
-            let csv: Box<dyn Observer + Send> = match CurveCsv::create(&table) {
-                Ok(csv) => Box::new(Named(table, csv)),
-                Err(error) => Box::new(Failed(Some(error.into()))),
-            };
-            Box::new(vec![csv, observers(slot)]) as Box<dyn Observer + Send>
+            let mut list = self.curve_observers(slot);
+            list.push(observers(slot));
+            Box::new(list) as Box<dyn Observer + Send>
         })?;
-        let plots = plots.into_inner().unwrap_or_else(PoisonError::into_inner);
-        for (index, path, title) in plots {
-            self.draw_curve(&outcome, index, &path, title)?;
-        }
         self.write(game, automata, settings, &outcome)?;
         Ok(outcome)
     }
 
-    /// Draws the curve of structure `index` at `path`: the records of its
-    /// kept start (of start 0 for a structure dropped for numerical
-    /// trouble).
-    fn draw_curve(
-        &self,
-        outcome: &Outcome,
-        index: usize,
-        path: &Path,
-        title: Title,
-    ) -> Result<(), PipelineError> {
-        let curve = &outcome.curves[index];
-        let kept = outcome
-            .solution
-            .structures
-            .iter()
-            .find(|s| s.report.name == curve.structure)
-            .map_or(0, |s| s.report.best_start);
-        let records: Vec<IterationRecord> = curve
-            .records
-            .iter()
-            .filter(|r| r.start == kept)
-            .copied()
-            .collect();
-        CurvePlot::new(path, title)
-            .with_seconds_axis(self.seconds_axis)
-            .draw(&records)
-            .map_err(|e| {
-                OptimiseError::Observer(format!("writing {}: {e}", path.display()).into()).into()
-            })
+    /// The CSV writer of the structure in `slot`: `curve.csv` when it is
+    /// the only one, else `curve-<name>.csv`.
+    fn curve_observers(&self, slot: Slot) -> Vec<Box<dyn Observer + Send>> {
+        let table = self.path.join(format!(
+            "{}.csv",
+            curve_stem(slot.count, &slot.structure.name)
+        ));
+        let csv: Box<dyn Observer + Send> = match CurveCsv::create(&table) {
+            Ok(csv) => Box::new(Named(table, csv)),
+            Err(error) => Box::new(Failed(Some(error.into()))),
+        };
+        vec![csv]
     }
 
-    /// Copies the best structure's curve to `curve.csv`/`curve.svg` (with
-    /// several structures), writes the controllers, the defender's picture
-    /// and `summary.json`.
+    /// Draws each structure's curve with what it returned (the best one's
+    /// with the certified bracket `solve` prints): `curve.svg` with one
+    /// structure, else `curve-<name>.svg`.
+    fn draw_curves(
+        &self,
+        game: &Posg,
+        automata: &Automata,
+        outcome: &Outcome,
+    ) -> Result<(), OutputError> {
+        let count = outcome.curves.len();
+        for curve in &outcome.curves {
+            // None: dropped for numerical trouble, nothing returned.
+            let kept = (outcome.solution.structures.iter().enumerate())
+                .find(|(_, s)| s.report.name == curve.structure);
+            let returned = kept.map(|(index, structure)| {
+                let report = &structure.report;
+                let certified = if index == outcome.solution.best {
+                    outcome.certified
+                } else {
+                    report.certified_lower.zip(report.upper_bound).map(
+                        |(certified_lower, upper_bound)| Bracket {
+                            certified_lower,
+                            upper_bound,
+                        },
+                    )
+                };
+                Returned {
+                    worst_case: report.worst_case,
+                    certified,
+                }
+            });
+            // The records of the kept start (start 0's for a structure
+            // dropped for numerical trouble).
+            let start = kept.map_or(0, |(_, s)| s.report.best_start);
+            let records: Vec<IterationRecord> = (curve.records.iter())
+                .filter(|r| r.start == start)
+                .copied()
+                .collect();
+            let title = plot_title(game, automata, outcome.best(), &curve.structure);
+            let plot = CurvePlot {
+                title: &title,
+                records: &records,
+                returned,
+                seconds_axis: self.seconds_axis,
+            };
+            let stem = curve_stem(count, &curve.structure);
+            let path = self.path.join(format!("{stem}.{}", self.plot_format));
+            plot_curve(&path, self.plot_format, &plot)?;
+        }
+        Ok(())
+    }
+
+    /// Draws the curves, copies the best structure's curve to
+    /// `curve.csv`/`curve.svg` (with several structures), writes the
+    /// controllers, the defender's picture and `summary.json`.
     fn write(
         &self,
         game: &Posg,
@@ -115,10 +147,11 @@ impl SolveDirectory<'_> {
         settings: &Settings,
         outcome: &Outcome,
     ) -> Result<(), PipelineError> {
+        self.draw_curves(game, automata, outcome)?;
         let best = outcome.best();
         let best_curve = |ext: &str| self.path.join(format!("curve-{}.{ext}", best.report.name));
         if outcome.curves.len() > 1 && best_curve("csv").exists() {
-            for ext in ["csv", "svg"] {
+            for ext in ["csv", self.plot_format.extension()] {
                 let from = best_curve(ext);
                 std::fs::copy(&from, self.path.join(format!("curve.{ext}")))
                     .map_err(|e| OutputError::io("copying", &from, e))?;
@@ -156,7 +189,7 @@ impl SolveDirectory<'_> {
                 .iter()
                 .map(|s| &s.report)
                 .collect(),
-            files: FILES,
+            files: files(self.plot_format),
         };
         write_file(
             &self.path.join("summary.json"),
@@ -196,7 +229,7 @@ struct Summary<'a> {
     /// What each source of structures found, proved or why it gave none.
     sources: &'a [SourceNote],
     structures: Vec<&'a StructureReport>,
-    files: [&'static str; 6],
+    files: Vec<String>,
 }
 
 /// The Graphviz picture of the best defender (`dot -Tsvg defender.dot`).
@@ -223,19 +256,19 @@ fn write_defender_dot(
     write_file(path, &text)
 }
 
-/// The stem of a structure's curve files: `curve` when it is the only
-/// structure, else `curve-<name>`.
-fn curve_stem(slot: Slot) -> String {
-    if slot.count > 1 {
-        format!("curve-{}", slot.structure.name)
+/// The file name of a structure's curve without its extension: `curve`
+/// when it is the only structure, else `curve-<name>`.
+fn curve_stem(count: usize, name: &str) -> String {
+    if count > 1 {
+        format!("curve-{name}")
     } else {
         "curve".to_string()
     }
 }
 
-/// The title of a structure's `curve.svg`: game and objective, then sizes
-/// and structure.
-fn plot_title(game: &Posg, automata: &Automata, slot: Slot) -> Title {
+/// The title of the curve of the structure `name`: game and objective, then
+/// the sizes (those of `best`, the same for every structure) and the name.
+fn plot_title(game: &Posg, automata: &Automata, best: &StructureOutcome, name: &str) -> Title {
     let nodes = |n: usize| {
         if n == 1 {
             "1 node".to_string()
@@ -243,9 +276,8 @@ fn plot_title(game: &Posg, automata: &Automata, slot: Slot) -> Title {
             format!("{n} nodes")
         }
     };
-    let structure = slot.structure;
     let adversary = if game.has_adversary() {
-        format!(", adversary {}", nodes(structure.adversary.num_nodes()))
+        format!(", adversary {}", nodes(best.adversary.num_nodes()))
     } else {
         String::new()
     };
@@ -257,8 +289,8 @@ fn plot_title(game: &Posg, automata: &Automata, slot: Slot) -> Title {
         ),
         detail: format!(
             "defender {}{adversary}, structure {}, game of {} states",
-            nodes(structure.defender.num_nodes()),
-            structure.name,
+            nodes(best.defender.num_nodes()),
+            name,
             game.num_states()
         ),
     }

@@ -370,21 +370,44 @@ fn certify_best(
 /// lost (one sentence each).
 fn structure_choice(solution: &Solution, notes: &[SourceNote]) -> Vec<String> {
     let best = solution.best();
+    let tried: Vec<String> = solution
+        .structures
+        .iter()
+        .map(|s| optimise::described(&s.report.name))
+        .chain(
+            solution
+                .failed
+                .iter()
+                .map(|(name, _)| optimise::described(name)),
+        )
+        .collect();
     let measure = match best.report.certified_lower {
-        Some(lower) => format!("the best certified lower bound, {lower:.6}"),
+        Some(lower) => format!("certified at {lower:.6} against every adversary"),
         None => format!(
-            "the best worst-case estimate, {:.6}",
+            "estimated at {:.6} against the best responses found (no certificate: the \
+             objective came as an automaton)",
             best.report.worst_case
         ),
     };
-    std::iter::once(format!("{} won with {measure}", best.report.name))
-        .chain(optimise::why_others_lost(
-            &solution.structures,
-            solution.best,
-            notes,
-            &solution.failed,
-        ))
-        .collect()
+    let tried = match tried.len() {
+        1 => "Tried one structure".to_string(),
+        k => format!("Tried {k} structures: {}", tried.join("; ")),
+    };
+    [
+        format!("{tried}."),
+        format!(
+            "Won: {}: its best defender is {measure}.",
+            optimise::described(&best.report.name)
+        ),
+    ]
+    .into_iter()
+    .chain(optimise::why_others_lost(
+        &solution.structures,
+        solution.best,
+        notes,
+        &solution.failed,
+    ))
+    .collect()
 }
 
 /// An observer keeping every record in a shared list.
