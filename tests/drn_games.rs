@@ -31,6 +31,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use posg_fsc::certify::{lower_bound, upper_bound};
+use posg_fsc::controller::Role;
 use posg_fsc::controller::file::from_json_str as fsc_from_json;
 use posg_fsc::game::drn::turn_based::{IDLE, OPPONENT_MOVES};
 use posg_fsc::game::drn::{DrnOptions, from_drn_str_with, read, read_with};
@@ -51,7 +52,7 @@ fn pennies() -> Posg {
 /// The certified lower bound of `defender` (a controller file's JSON) for `formula`.
 fn certified(game: &Posg, formula: &str, defender: &Value) -> f64 {
     let not_phi = ltl::translate(&ltl::parse(formula).unwrap().negate()).unwrap();
-    let fsc = fsc_from_json(&defender.to_string(), "d.fsc.json", game).unwrap();
+    let fsc = fsc_from_json(&defender.to_string(), "d.fsc.json", game, Role::Defender).unwrap();
     lower_bound(game, &not_phi, &fsc).unwrap().value
 }
 
@@ -122,7 +123,7 @@ fn the_pennies_bounds_are_those_derived_on_paper() {
         "rules": [{"node": 0, "observation": "s0",
                    "choices": [{"next": 0, "action": "right", "p": 1.0}]}]
     });
-    let right = fsc_from_json(&adversary.to_string(), "a.fsc.json", &g).unwrap();
+    let right = fsc_from_json(&adversary.to_string(), "a.fsc.json", &g, Role::Adversary).unwrap();
     let upper = upper_bound(&g, &phi, &right).unwrap().value;
     assert!((upper - 0.5).abs() < 1e-12, "{upper}");
 }
@@ -261,12 +262,14 @@ fn solve_reads_the_drn_and_the_property_file_and_certifies_the_paper_values() {
     assert!((lower - 1.0 / 3.0).abs() < 1e-3, "{lower}");
     assert!(lower <= 1.0 / 3.0 + 1e-9, "{lower}");
     let upper = summary["certified"]["upper_bound"].as_f64().unwrap();
-    assert!(upper >= 1.0 / 3.0 - 1e-9 && upper <= 0.5 + 1e-9, "{upper}");
+    // The upper bound of an optimised adversary: the fully observable 1/2 at most
+    // (up to the error bound of its policy iteration).
+    assert!(upper >= 1.0 / 3.0 - 1e-9 && upper <= 0.5 + 1e-6, "{upper}");
     // `<<1>> Pmin=? [F "goal"]`: player 1 defends `G !goal`.
     let summary = solve("tests/data/drn/pennies-p1.props", &dir.join("p1"));
     assert_eq!(summary["objective"], "G !goal");
     let lower = summary["certified"]["certified_lower"].as_f64().unwrap();
-    assert!((lower - 0.5).abs() < 1e-3 && lower <= 0.5 + 1e-9, "{lower}");
+    assert!((lower - 0.5).abs() < 1e-3 && lower <= 0.5 + 1e-6, "{lower}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
@@ -439,10 +442,10 @@ fn property_files_posg_fsc_cannot_solve_are_errors_with_line_and_column() {
             "<<p1>> Pmax=? [F \"a\"]",
             "line 1, column 3: the coalition `<<p1>>`",
         ),
-        ("<<0>> Pmax=? F \"a\"", "line 1, column 13: expected `[`"),
+        ("<<0>> Pmax=? F \"a\"", "line 1, column 14: expected `[`"),
         (
             "<<0>> Pmax=? [F \"a\"",
-            "line 1, column 14: the path formula opened at column 7 has no closing `]`",
+            "line 1, column 14: this `[` has no closing `]`",
         ),
         (
             "<<0>> Pmax=? [F<=10 \"a\"]",
@@ -450,7 +453,7 @@ fn property_files_posg_fsc_cannot_solve_are_errors_with_line_and_column() {
         ),
         (
             "<<0>> Pmax=? [F \"a\"] extra",
-            "line 1, column 21: unexpected `extra` after the query",
+            "line 1, column 22: unexpected `extra` after the query",
         ),
         (
             "const int N = 3;",

@@ -168,11 +168,13 @@ def storm_full_value(directory):
     return float(result.get_value(smg.initial_states[0])), mdp.nr_states, player
 
 
-def run_posg(directory, k, limit):
+def run_posg(directory, k, limit, budget):
     out = os.path.join(directory, f"posg-fsc-{k}")
     command = [BINARY, "solve", os.path.join(directory, "sketch.templ"), "--props",
                os.path.join(directory, "sketch.props"), "--def-nodes", str(k), "--out", out,
                "--force", "--seed", "1", "--quiet"]
+    if budget:
+        command += ["--time-budget", str(budget)]
     done, wall, cpu = timed(command, limit)
     record = {"command": " ".join(["posg-fsc", *command[1:]]), "wall_seconds": wall,
               "cpu_seconds": cpu, "certified_lower": None, "worst_case": None, "status": "error"}
@@ -194,10 +196,17 @@ def run_posg(directory, k, limit):
     return record
 
 
-def cached(path, compute):
+NOT_RUN = {"status": "not run", "value": None, "certified_lower": None, "worst_case": None,
+           "cpu_seconds": 0.0, "wall_seconds": 0.0, "synthesis_seconds": None}
+
+
+def cached(path, compute, only_cached=False):
+    """The record at `path`, else `compute()` stored there (or NOT_RUN if `only_cached`)."""
     if os.path.exists(path):
         with open(path) as handle:
             return json.load(handle)
+    if only_cached:
+        return dict(NOT_RUN)
     record = compute()
     with open(path, "w") as handle:
         json.dump(record, handle, indent=1)
@@ -218,7 +227,10 @@ def main():
     parser.add_argument("--timeout", type=int, default=300, help="PAYNT's --timeout (s)")
     parser.add_argument("--posg-limit", type=int, default=600,
                         help="posg-fsc runs are killed after this many seconds")
-    parser.add_argument("--phase", choices=["paynt", "posg", "all"], default="all")
+    parser.add_argument("--time-budget", type=float, default=None,
+                        help="posg-fsc's --time-budget per structure (s; default: none)")
+    parser.add_argument("--phase", choices=["paynt", "posg", "all", "csv"], default="all",
+                        help="csv: write the CSV from the cached records only")
     parser.add_argument("--models", nargs="*", default=MODELS)
     parser.add_argument("--out", default=os.path.join(ROOT, "results", "paynt-posmg.csv"))
     args = parser.parse_args()
@@ -226,6 +238,16 @@ def main():
     prepare(models_dir, args.repo)
     if args.phase != "paynt":
         build()
+    if args.phase == "posg":
+        # k outer: every model gets its 1-node run before any 2-node run.
+        for k in NODES:
+            for name in args.models:
+                directory = os.path.join(models_dir, name)
+                posg = cached(os.path.join(directory, f"posg-{k}.json"),
+                              lambda: run_posg(directory, k, args.posg_limit, args.time_budget))
+                print(f"{name} k={k}: posg-fsc {posg['status']} {posg['certified_lower']} "
+                      f"({posg['cpu_seconds']:.1f} s CPU)", flush=True)
+        return
     rows = []
     for name in args.models:
         directory = os.path.join(models_dir, name)
@@ -237,18 +259,21 @@ def main():
             paynt = None
             if args.phase != "posg":
                 paynt = cached(os.path.join(directory, f"paynt-{k}-t{args.timeout}.json"),
-                               lambda: run_paynt(directory, k, args.timeout))
+                               lambda: run_paynt(directory, k, args.timeout), args.phase == "csv")
                 print(f"{name} k={k}: PAYNT {paynt['status']} {paynt['value']} "
                       f"({paynt['cpu_seconds']:.1f} s CPU)", flush=True)
             if args.phase == "paynt":
                 continue
             posg = cached(os.path.join(directory, f"posg-{k}.json"),
-                          lambda: run_posg(directory, k, args.posg_limit))
+                          lambda: run_posg(directory, k, args.posg_limit, args.time_budget),
+                          args.phase == "csv")
             print(f"{name} k={k}: posg-fsc {posg['status']} {posg['certified_lower']} "
                   f"({posg['cpu_seconds']:.1f} s CPU)", flush=True)
             ours = posg["certified_lower"]
             theirs = defender(paynt["value"], direction)
-            if ours is None and theirs is None:
+            if "not run" in (paynt["status"], posg["status"]):
+                winner = "not run"
+            elif ours is None and theirs is None:
                 winner = "none"
             elif theirs is None or (ours is not None and ours > theirs + TOLERANCE):
                 winner = "posg-fsc"
@@ -268,7 +293,7 @@ def main():
                 "fully_observable_defender_value": defender(full["value"], direction),
                 "winner": winner,
             })
-    if args.phase == "paynt":
+    if args.phase not in ("all", "csv"):
         return
     import paynt  # noqa: F401  (its version for the record)
     import stormpy
@@ -276,12 +301,29 @@ def main():
     with open(args.out, "w", newline="") as handle:
         handle.write(f"# {' '.join(sys.argv)}; PAYNT 0.5.0 (--timeout {args.timeout}), stormpy "
                      f"{stormpy.__version__}, {version}; models: randriu/synthesis@{COMMIT}; "
-                     f"posg-fsc: solve --props --def-nodes K --seed 1, defaults otherwise; "
+                     f"posg-fsc: solve --props --def-nodes K --seed 1"
+                     f"{f' --time-budget {args.time_budget:g}' if args.time_budget else ''}, defaults "
+                     f"otherwise, killed after {args.posg_limit} s; "
                      f"values are the defender's (1 - p for Pmin); CPU s include children\n")
         writer = csv.DictWriter(handle, fieldnames=list(rows[0]))
         writer.writeheader()
         writer.writerows(rows)
-    print(f"wrote {args.out}")
+    print(f"wrote {args.out}\n")
+    print(markdown(rows))
+
+
+def markdown(rows):
+    """The table of the README: defender's values and CPU seconds per model and k."""
+    show = lambda v: "-" if v is None else f"{v:.4f}"
+    lines = ["| model | states | k | PAYNT | PAYNT CPU s | posg-fsc certified | posg-fsc CPU s "
+             "| fully observable | winner |", "|---|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        paynt = show(r["paynt_defender_value"]) + ("" if r["paynt_status"] == "optimal" else
+                                                   f" ({r['paynt_status']})")
+        lines.append(f"| {r['model']} | {r['states']} | {r['k']} | {paynt} | {r['paynt_cpu_s']} | "
+                     f"{show(r['posg_certified_lower'])} | {r['posg_cpu_s']} | "
+                     f"{show(r['fully_observable_defender_value'])} | {r['winner']} |")
+    return "\n".join(lines)
 
 
 if __name__ == "__main__":
