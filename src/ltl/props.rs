@@ -136,7 +136,6 @@ fn query(text: &str, line: usize) -> Result<Property, PropsError> {
     skip_name(&mut cursor)?;
     let player = coalition(&mut cursor)?;
     cursor.skip_blanks();
-    let start = cursor.column();
     let maximise = if cursor.eat("Pmax=?") {
         true
     } else if cursor.eat("Pmin=?") {
@@ -144,6 +143,8 @@ fn query(text: &str, line: usize) -> Result<Property, PropsError> {
     } else {
         return Err(unsupported_query(&cursor));
     };
+    cursor.skip_blanks();
+    let open = cursor.column();
     if !cursor.eat("[") {
         return Err(cursor.error(format!(
             "expected `[` and a path formula after P{}=?, found {}",
@@ -155,10 +156,10 @@ fn query(text: &str, line: usize) -> Result<Property, PropsError> {
     let close = text
         .rfind(']')
         .filter(|&c| c >= inner_start)
-        .ok_or_else(|| {
-            cursor.error(format!(
-                "the path formula opened at column {start} has no closing `]`"
-            ))
+        .ok_or_else(|| PropsError {
+            line,
+            column: open,
+            message: "this `[` has no closing `]`".into(),
         })?;
     let path_text = &text[inner_start..close];
     let path = parse(path_text).map_err(|e| PropsError {

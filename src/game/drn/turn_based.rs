@@ -36,7 +36,11 @@ pub(super) fn player_annotation(text: &str, kind: ModelType) -> Result<(u64, &st
             format!(
                 "a state of a turn-based game ({kind}) needs its player `<p>` after the state \
                  number{}",
-                if kind == ModelType::Posmg { " and observation" } else { "" }
+                if kind == ModelType::Posmg {
+                    " and observation"
+                } else {
+                    ""
+                }
             )
         }
     })?;
