@@ -264,7 +264,7 @@ fn solve_reads_the_drn_and_the_property_file_and_certifies_the_paper_values() {
     let upper = summary["certified"]["upper_bound"].as_f64().unwrap();
     // The upper bound of an optimised adversary: the fully observable 1/2 at most
     // (up to the error bound of its policy iteration).
-    assert!(upper >= 1.0 / 3.0 - 1e-9 && upper <= 0.5 + 1e-6, "{upper}");
+    assert!((1.0 / 3.0 - 1e-9..=0.5 + 1e-6).contains(&upper), "{upper}");
     // `<<1>> Pmin=? [F "goal"]`: player 1 defends `G !goal`.
     let summary = solve("tests/data/drn/pennies-p1.props", &dir.join("p1"));
     assert_eq!(summary["objective"], "G !goal");
