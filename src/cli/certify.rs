@@ -83,7 +83,7 @@ impl From<&Bound> for BoundSummary {
 
 /// Computes and prints the bounds.
 pub fn run(args: CertifyArgs) -> anyhow::Result<()> {
-    let game = common::read_game(&args.game)?;
+    let game = common::read_game_for(&args.game, &args.objective)?;
     let (phi_dra, formula) = common::objective(&args.objective, &game)?;
     let not_phi_dra =
         common::negated_objective(&args.objective, args.negated_automaton.as_deref(), &game)?;

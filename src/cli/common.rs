@@ -9,20 +9,28 @@ use posg_fsc::automaton::Dra;
 use posg_fsc::automaton::read_hoa_dra;
 use posg_fsc::controller::{Fsc, Role};
 use posg_fsc::game::Posg;
+use posg_fsc::game::drn::DrnOptions;
 use posg_fsc::output::PlotFormat;
 use posg_fsc::value::{DEFAULT_LU_LIMIT, DEFAULT_TOLERANCE, SolverMethod, SolverSettings};
 use serde::Serialize;
 
-/// The objective: an LTL formula or a deterministic automaton in HOA.
+/// The objective: an LTL formula, a property file or a deterministic
+/// automaton in HOA.
 #[derive(Debug, Clone, Args)]
 pub struct ObjectiveArgs {
     /// The LTL formula phi, in Spot's syntax (e.g. 'GF goal & G !unsafe').
     #[arg(
         long,
-        required_unless_present = "automaton",
-        conflicts_with = "automaton"
+        required_unless_present_any = ["automaton", "props"],
+        conflicts_with_all = ["automaton", "props"]
     )]
     pub ltl: Option<String>,
+    /// A Storm/PRISM property file with one query `<<P>> Pmax=? [ PATH ]`
+    /// (phi = PATH) or `<<P>> Pmin=? [ PATH ]` (phi = !PATH, e.g. `G !goal`),
+    /// instead of --ltl; for a turn-based DRN game, player P is the defender
+    /// (docs/formats.md section 6).
+    #[arg(long, value_name = "FILE.props", conflicts_with = "automaton")]
+    pub props: Option<PathBuf>,
     /// A deterministic automaton for phi in HOA v1 or v1.1 (instead of
     /// --ltl; docs/formats.md section 4).
     #[arg(long, value_name = "FILE.hoa")]
@@ -39,6 +47,27 @@ pub struct ObjectiveArgs {
 }
 
 impl ObjectiveArgs {
+    /// The query of `--props`, if given.
+    pub fn property(&self) -> anyhow::Result<Option<posg_fsc::ltl::props::Property>> {
+        let Some(path) = &self.props else {
+            return Ok(None);
+        };
+        let text = std::fs::read_to_string(path)
+            .with_context(|| format!("cannot read {}", path.display()))?;
+        let property = posg_fsc::ltl::props::parse_props(&text)
+            .with_context(|| format!("in {}", path.display()))?;
+        Ok(Some(property))
+    }
+
+    /// The text of phi: `--ltl`, or the objective of `--props`; `None` for
+    /// `--automaton`.
+    pub fn formula_text(&self) -> anyhow::Result<Option<String>> {
+        if let Some(text) = &self.ltl {
+            return Ok(Some(text.clone()));
+        }
+        Ok(self.property()?.map(|p| p.objective.to_string()))
+    }
+
     /// The automaton of `formula` within the translation budget.
     pub fn translate(&self, formula: &posg_fsc::ltl::Formula) -> anyhow::Result<Dra> {
         let budget = posg_fsc::ltl::TranslationBudget {
@@ -116,9 +145,32 @@ pub fn positive_tolerance(text: &str) -> Result<f64, String> {
     }
 }
 
-/// Reads and validates a game file.
+/// Reads and validates a game file: JSON, binary, or a model in Storm's
+/// DRN format (imported as `import-drn` does, with player 0 the defender of
+/// a turn-based game; docs/formats.md section 6).
 pub fn read_game(path: &Path) -> anyhow::Result<Posg> {
-    Ok(posg_fsc::game::file::read(path)?)
+    read_game_as(path, &DrnOptions::default())
+}
+
+/// [`read_game`] for a command with an objective: the player `<<P>>` of a
+/// `--props` query is the defender of a turn-based DRN game.
+pub fn read_game_for(path: &Path, objective: &ObjectiveArgs) -> anyhow::Result<Posg> {
+    let defender_player = objective.property()?.and_then(|p| p.player);
+    read_game_as(path, &DrnOptions { defender_player })
+}
+
+/// Reads a game; a DRN model (recognised by its content) is imported with
+/// `options`, its warnings on stderr.
+fn read_game_as(path: &Path, options: &DrnOptions) -> anyhow::Result<Posg> {
+    let bytes = std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))?;
+    if !posg_fsc::game::drn::is_drn(&bytes) {
+        return Ok(posg_fsc::game::file::read(path)?);
+    }
+    let import = posg_fsc::game::drn::read_with(path, options)?;
+    for warning in &import.warnings {
+        eprintln!("warning: {warning}");
+    }
+    Ok(import.game)
 }
 
 /// The automaton for the objective, with a description of where it came
@@ -128,7 +180,7 @@ pub fn read_game(path: &Path) -> anyhow::Result<Posg> {
 /// unsatisfiable (every value would be 0) that is an error unless
 /// `--allow-unused-propositions`.
 pub fn objective(args: &ObjectiveArgs, game: &Posg) -> anyhow::Result<(Dra, String)> {
-    let (dra, description) = match (&args.ltl, &args.automaton) {
+    let (dra, description) = match (&args.formula_text()?, &args.automaton) {
         (Some(text), _) => {
             let formula =
                 posg_fsc::ltl::parse(text).with_context(|| format!("in the formula '{text}'"))?;
@@ -140,7 +192,7 @@ pub fn objective(args: &ObjectiveArgs, game: &Posg) -> anyhow::Result<(Dra, Stri
             let dra = read_hoa_dra(&text).with_context(|| format!("in {}", path.display()))?;
             (dra, path.display().to_string())
         }
-        (None, None) => anyhow::bail!("give --ltl or --automaton"),
+        (None, None) => anyhow::bail!("give --ltl, --props or --automaton"),
     };
     check_propositions(&dra, game, &description, args.allow_unused_propositions)?;
     Ok((dra, description))
@@ -189,7 +241,7 @@ pub fn negated_objective(
     negated_automaton: Option<&Path>,
     game: &Posg,
 ) -> anyhow::Result<Dra> {
-    if let Some(text) = &objective.ltl {
+    if let Some(text) = &objective.formula_text()? {
         let phi = posg_fsc::ltl::parse(text).with_context(|| format!("in the formula '{text}'"))?;
         return objective
             .translate(&phi.negate())

@@ -141,7 +141,7 @@ struct ClassReport {
 pub fn run(args: EvalArgs) -> anyhow::Result<()> {
     let start = Instant::now();
     let mut lap = Lap(Instant::now());
-    let game = common::read_game(&args.game)?;
+    let game = common::read_game_for(&args.game, &args.objective)?;
     let read_game = lap.seconds();
     let (dra, formula) = common::objective(&args.objective, &game)?;
     let automaton = lap.seconds();

@@ -1,9 +1,12 @@
-//! `posg-fsc import-drn`: a POMDP, MDP or DTMC in Storm's explicit DRN
-//! format as a game file (docs/formats.md section 6).
+//! `posg-fsc import-drn`: a POMDP, MDP, DTMC, or a turn-based game (SMG,
+//! POSMG), in Storm's explicit DRN format as a game file (docs/formats.md
+//! section 6).
 
 use std::path::PathBuf;
 
+use anyhow::Context;
 use clap::Args;
+use posg_fsc::game::drn::DrnOptions;
 
 use super::common::print_text;
 
@@ -11,21 +14,59 @@ use super::common::print_text;
 #[derive(Debug, Args)]
 pub struct ImportDrnArgs {
     /// The model in Storm's DRN format (`storm --prism M.prism --buildfull
-    /// --exportbuild M.drn`, or stormpy's `export_to_drn`).
+    /// --exportbuild M.drn`, stormpy's `export_to_drn`, or PRISM-games' and
+    /// PAYNT's `@type: SMG`/`POSMG` files).
     model: PathBuf,
     /// Write the game here instead of to standard output.
     #[arg(long, value_name = "GAME.posg.json")]
     out: Option<PathBuf>,
+    /// In a turn-based game (SMG, POSMG): the player `<P>` who is the
+    /// defender; the other player is the adversary [default: 0, or the
+    /// player of --props].
+    #[arg(long, value_name = "P")]
+    defender_player: Option<u64>,
+    /// A property file whose query `<<P>> Pmax=? [...]` names the defender
+    /// (the same file `solve --props` reads).
+    #[arg(long, value_name = "FILE.props")]
+    props: Option<PathBuf>,
 }
 
 /// Reads the model, prints what was dropped on stderr and writes the game.
 pub fn run(args: ImportDrnArgs) -> anyhow::Result<()> {
-    let import = posg_fsc::game::drn::read(&args.model)?;
+    let options = DrnOptions {
+        defender_player: defender_player(&args)?,
+    };
+    let import = posg_fsc::game::drn::read_with(&args.model, &options)?;
     for warning in &import.warnings {
         eprintln!("warning: {warning}");
     }
     match &args.out {
         Some(path) => Ok(posg_fsc::game::file::write(path, &import.game)?),
         None => print_text(&(posg_fsc::game::file::to_json_string(&import.game) + "\n")),
+    }
+}
+
+/// `--defender-player`, or the player of the `--props` query; the two must agree.
+fn defender_player(args: &ImportDrnArgs) -> anyhow::Result<Option<u64>> {
+    let from_props = match &args.props {
+        Some(path) => {
+            let text = std::fs::read_to_string(path)
+                .with_context(|| format!("cannot read {}", path.display()))?;
+            posg_fsc::ltl::props::parse_props(&text)
+                .with_context(|| format!("in {}", path.display()))?
+                .player
+        }
+        None => None,
+    };
+    match (args.defender_player, from_props) {
+        (Some(given), Some(named)) if given != named => anyhow::bail!(
+            "--defender-player {given} disagrees with the query of {}, which optimises for \
+             player {named}",
+            args.props
+                .as_ref()
+                .expect("a player from --props")
+                .display()
+        ),
+        (given, named) => Ok(given.or(named)),
     }
 }

@@ -40,7 +40,7 @@ enum Command {
     Example(example::ExampleArgs),
     /// Validate a game file and describe it.
     Check(check::CheckArgs),
-    /// Convert a POMDP, MDP or DTMC from Storm's DRN format into a game file
+    /// Convert a POMDP, MDP, DTMC, SMG or POSMG from Storm's DRN format into a game file
     /// (docs/formats.md section 6).
     ImportDrn(import_drn::ImportDrnArgs),
     /// The exact value of a controller pair, as JSON.

@@ -21,7 +21,7 @@ use posg_fsc::value::GmcState;
 use posg_fsc::value::SolverSettings;
 use posg_fsc::value::evaluate_controllers;
 
-use super::common::{ObjectiveArgs, Provenance, objective, read_game};
+use super::common::{ObjectiveArgs, Provenance, objective, read_game_for};
 
 /// Arguments of `prune`.
 #[derive(Debug, Args)]
@@ -59,7 +59,7 @@ pub struct PruneArgs {
 
 /// Runs Algorithm 1 and writes the structures and `structures.json`.
 pub fn run(args: PruneArgs) -> anyhow::Result<()> {
-    let game = read_game(&args.game)?;
+    let game = read_game_for(&args.game, &args.objective)?;
     let (dra, objective_text) = objective(&args.objective, &game)?;
     let defender = initial_structure(
         &game,

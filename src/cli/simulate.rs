@@ -43,7 +43,7 @@ struct Report {
 /// Runs `simulate`.
 pub fn run(args: SimulateArgs) -> anyhow::Result<()> {
     let start = Instant::now();
-    let game = common::read_game(&args.game)?;
+    let game = common::read_game_for(&args.game, &args.objective)?;
     let (dra, formula) = common::objective(&args.objective, &game)?;
     let (defender, adversary) = common::controllers(&args.controllers, &game)?;
     let (evaluator, evaluation) = evaluate_controllers(

@@ -20,13 +20,14 @@ use posg_fsc::output::{OutputDirectory, PlotFormat};
 use posg_fsc::pipeline::directory::SolveDirectory;
 use posg_fsc::pipeline::{Automata, Job, Outcome, Sizes};
 
-use super::common::{ObjectiveArgs, PlotArgs, SolverArgs, objective, print_text, read_game};
+use super::common::{ObjectiveArgs, PlotArgs, SolverArgs, objective, print_text, read_game_for};
 use super::progress::{OutputArgs, ProgressMode, structure_progress};
 
 /// Arguments of `solve`.
 #[derive(Debug, Args)]
 pub struct SolveArgs {
-    /// The game, a `*.posg.json` file (docs/formats.md section 1).
+    /// The game: a `*.posg.json` file (docs/formats.md section 1), its
+    /// binary form, or a model in Storm's DRN format (section 6).
     game: PathBuf,
     #[command(flatten)]
     objective: ObjectiveArgs,
@@ -77,9 +78,9 @@ pub fn settings(settings: &Settings, solver: &SolverArgs) -> anyhow::Result<Sett
 /// Reads the game and builds the objective's automata (for an LTL formula,
 /// its negation's too, for the certified bracket).
 pub fn load(game: &Path, args: &ObjectiveArgs) -> anyhow::Result<(Posg, Automata)> {
-    let game = read_game(game)?;
+    let game = read_game_for(game, args)?;
     let (phi, description) = objective(args, &game)?;
-    let not_phi = match &args.ltl {
+    let not_phi = match &args.formula_text()? {
         Some(text) => Some(
             args.translate(&posg_fsc::ltl::parse(text)?.negate())
                 .context("translating !phi")?,

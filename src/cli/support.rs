@@ -83,7 +83,7 @@ pub fn run(args: SupportArgs) -> anyhow::Result<()> {
         ..args.settings.clone()
     };
     settings.validate()?;
-    let game = common::read_game(&args.game)?;
+    let game = common::read_game_for(&args.game, &args.objective)?;
     let defender = game.defender();
     controller::Fsc::check_uniform_size(
         "--def-nodes",

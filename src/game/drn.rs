@@ -13,7 +13,9 @@
 //! ```
 //!
 //! [`from_drn_str`] turns a `POMDP`, `MDP` or `DTMC` into a [`Posg`] without an
-//! adversary (a POMDP game): state `k` is named `s{k}`; a POMDP's observation
+//! adversary (a POMDP game), and a turn-based game (`SMG`, `POSMG`: each state
+//! carries its player `<p>`) into a concurrent game ([`turn_based`]; the
+//! player [`DrnOptions::defender_player`] is the defender): state `k` is named `s{k}`; a POMDP's observation
 //! `k` becomes the defender's observation `o{k}` (observed with probability
 //! 1), an MDP or DTMC is fully observed; each choice label is an action, and
 //! the `enabled` actions of each observation (or, fully observed, of each
@@ -34,6 +36,17 @@ use rustc_hash::FxHashMap;
 use super::file::{is_valid_name, is_valid_proposition, read_text};
 use super::{Distribution, ModelError, Player, Posg};
 
+pub mod turn_based;
+
+/// How a DRN model becomes a game.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct DrnOptions {
+    /// In a turn-based game (`SMG`, `POSMG`), the player `<p>` who is the
+    /// defender (the other player is the adversary); `None` means player 0.
+    /// Giving it for a POMDP, MDP or DTMC is an error.
+    pub defender_player: Option<u64>,
+}
+
 /// A game imported from DRN and what was dropped on the way.
 #[derive(Debug, Clone, PartialEq)]
 pub struct DrnImport {
@@ -46,12 +59,28 @@ pub struct DrnImport {
 /// Reads the DRN file at `path` ([`from_drn_str`]); the game is named after
 /// the file's stem.
 pub fn read(path: &Path) -> Result<DrnImport, ModelError> {
+    read_with(path, &DrnOptions::default())
+}
+
+/// [`read`] with options (the defender of a turn-based game).
+pub fn read_with(path: &Path, options: &DrnOptions) -> Result<DrnImport, ModelError> {
     let file_name = path.display().to_string();
     let text = read_text(path, &file_name)?;
     let name = path
         .file_stem()
         .map(|stem| stem.to_string_lossy().into_owned());
-    from_drn_str(&text, &file_name, name)
+    from_drn_str_with(&text, &file_name, name, options)
+}
+
+/// Whether `bytes` look like a DRN file: the first line that is neither
+/// empty nor a `//` comment starts with `@type:` (a JSON game starts with
+/// `{`, a binary one with its magic).
+pub fn is_drn(bytes: &[u8]) -> bool {
+    let text = String::from_utf8_lossy(&bytes[..bytes.len().min(4096)]);
+    text.lines()
+        .map(str::trim)
+        .find(|line| !line.is_empty() && !line.starts_with("//"))
+        .is_some_and(|line| line.starts_with("@type:"))
 }
 
 /// Parses a DRN model (module documentation) into a POMDP game named
@@ -60,6 +89,16 @@ pub fn from_drn_str(
     text: &str,
     file_name: &str,
     name: Option<String>,
+) -> Result<DrnImport, ModelError> {
+    from_drn_str_with(text, file_name, name, &DrnOptions::default())
+}
+
+/// [`from_drn_str`] with options (the defender of a turn-based game).
+pub fn from_drn_str_with(
+    text: &str,
+    file_name: &str,
+    name: Option<String>,
+    options: &DrnOptions,
 ) -> Result<DrnImport, ModelError> {
     let mut lines = Lines::new(text, file_name);
     let header = Header::parse(&mut lines)?;
@@ -70,7 +109,19 @@ pub fn from_drn_str(
             "{file_name}: rewards are ignored (the game format has none)"
         ));
     }
-    let game = model.into_game(&header, name, &lines)?;
+    let game = if header.model_type.is_turn_based() {
+        model.into_turn_based_game(&header, name, &lines, options)?
+    } else if let Some(player) = options.defender_player {
+        return Err(ModelError::new(
+            file_name,
+            format!(
+                "a defender player ({player}) applies to turn-based games (SMG, POSMG) only; \
+                 this model has no players"
+            ),
+        ));
+    } else {
+        model.into_game(&header, name, &lines)?
+    };
     Ok(DrnImport { game, warnings })
 }
 
@@ -80,6 +131,33 @@ enum ModelType {
     Dtmc,
     Mdp,
     Pomdp,
+    Smg,
+    Posmg,
+}
+
+impl ModelType {
+    /// Whether each state names the player who moves there (`<p>`).
+    fn is_turn_based(self) -> bool {
+        matches!(self, ModelType::Smg | ModelType::Posmg)
+    }
+
+    /// Whether each state carries an observation (`{k}`).
+    fn is_partially_observable(self) -> bool {
+        matches!(self, ModelType::Pomdp | ModelType::Posmg)
+    }
+}
+
+impl std::fmt::Display for ModelType {
+    /// The name of the type in the file's `@type:` line.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            ModelType::Dtmc => "DTMC",
+            ModelType::Mdp => "MDP",
+            ModelType::Pomdp => "POMDP",
+            ModelType::Smg => "SMG",
+            ModelType::Posmg => "POSMG",
+        })
+    }
 }
 
 /// Numbered, comment-free lines of the file, for error messages.
@@ -215,9 +293,13 @@ fn parse_type(kind: &str, n: usize, lines: &Lines) -> Result<ModelType, ModelErr
         "DTMC" => Ok(ModelType::Dtmc),
         "MDP" => Ok(ModelType::Mdp),
         "POMDP" => Ok(ModelType::Pomdp),
+        "SMG" => Ok(ModelType::Smg),
+        "POSMG" => Ok(ModelType::Posmg),
         _ => Err(lines.error(
             n,
-            format!("model type `{kind}` cannot be imported (only DTMC, MDP and POMDP)"),
+            format!(
+                "model type `{kind}` cannot be imported (only DTMC, MDP, POMDP, SMG and POSMG)"
+            ),
         )),
     }
 }
@@ -235,6 +317,8 @@ struct Choice {
 struct State {
     line: usize,
     observation: Option<u64>,
+    /// The player who moves here (`<p>`, SMG and POSMG only).
+    player: Option<u64>,
     labels: Vec<String>,
     choices: Vec<Choice>,
 }
@@ -282,7 +366,7 @@ impl Model {
         Ok(model)
     }
 
-    /// `state ID [{OBSERVATION}] [[REWARDS]] LABELS...`.
+    /// `state ID [{OBSERVATION}] [<PLAYER>] [[REWARDS]] LABELS...`.
     fn state_line(
         &mut self,
         rest: &str,
@@ -305,22 +389,37 @@ impl Model {
             ));
         }
         let mut observation = None;
-        if header.model_type == ModelType::Pomdp {
-            let (inside, after) = bracketed(rest, '{', '}')
-                .ok_or_else(|| lines.error(n, "a POMDP state needs its observation `{k}`"))?;
+        if header.model_type.is_partially_observable() {
+            let (inside, after) = bracketed(rest, '{', '}').ok_or_else(|| {
+                lines.error(
+                    n,
+                    format!(
+                        "a {} state needs its observation `{{k}}`",
+                        header.model_type
+                    ),
+                )
+            })?;
             observation = Some(inside.trim().parse().map_err(|_| {
                 lines.error(n, format!("observation `{inside}` is not a whole number"))
             })?);
             rest = after;
         }
-        if let Some((_, after)) = bracketed(rest, '[', ']') {
-            self.rewards = true;
+        let mut player = None;
+        if header.model_type.is_turn_based() {
+            let (id, after) = turn_based::player_annotation(rest, header.model_type)
+                .map_err(|m| lines.error(n, m))?;
+            player = Some(id);
+            rest = after;
+        }
+        if let Some((inside, after)) = bracketed(rest, '[', ']') {
+            self.rewards |= !inside.trim().is_empty();
             rest = after;
         }
         let labels = parse_labels(rest).map_err(|m| lines.error(n, m))?;
         Ok(State {
             line: n,
             observation,
+            player,
             labels,
             choices: Vec::new(),
         })
@@ -329,8 +428,8 @@ impl Model {
     /// `action LABEL [[REWARDS]]`.
     fn action_line(&mut self, rest: &str, n: usize, lines: &Lines) -> Result<(), ModelError> {
         let (label, after) = split_word(rest);
-        if bracketed(after, '[', ']').is_some() {
-            self.rewards = true;
+        if let Some((inside, _)) = bracketed(after, '[', ']') {
+            self.rewards |= !inside.trim().is_empty();
         } else if !after.is_empty() {
             return Err(lines.error(n, format!("unexpected `{after}` after the action label")));
         }

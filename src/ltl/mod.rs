@@ -73,6 +73,7 @@ mod formula;
 mod lasso;
 mod nnf_size;
 mod parser;
+pub mod props;
 
 pub use formula::Formula;
 pub use lasso::{LassoError, holds_on_lasso};
