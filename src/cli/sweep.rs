@@ -307,26 +307,8 @@ fn run_chain(
         }
         let outcome = solve_into(job, &out, ProgressMode::Quiet, inputs.seconds_axis)
             .with_context(|| format!("defender {n} nodes, adversary {m} nodes"))?;
-        let (best, certified) = (outcome.best(), outcome.certified);
-        let report = &best.report;
-        progress.finished(n, m, report.worst_case);
-        let row = SweepRow {
-            defender_nodes: n,
-            adversary_nodes: m,
-            structure: report.name.clone(),
-            gmc_states: report.gmc.states,
-            gmc_transitions: report.gmc.transitions,
-            defender_parameters: report.defender_parameters,
-            adversary_parameters: report.adversary_parameters,
-            last_value: report.last_value,
-            worst_case: report.worst_case,
-            error_bound: report.error_bound,
-            certified_lower: certified.map(|b| b.certified_lower),
-            upper_bound: certified.map(|b| b.upper_bound),
-            iterations: report.iterations,
-            seconds: report.seconds,
-            warm_started: previous.is_some(),
-        };
+        let row = SweepRow::of(n, m, &outcome, previous.is_some());
+        progress.finished(n, m, row.worst_case);
         if let Some(own) = own {
             let table = shard::sweep_table(std::slice::from_ref(&row))
                 .with_context(|| format!("writing {}", out.join(shard::ROW_FILE).display()))?;
@@ -334,7 +316,7 @@ fn run_chain(
             own.commit()?;
         }
         rows.push(row);
-        previous = Some(best.clone());
+        previous = Some(outcome.best().clone());
     }
     Ok(rows)
 }
