@@ -8,7 +8,7 @@ use std::time::Duration;
 
 use posg_fsc::controller::Role;
 use posg_fsc::game::Posg;
-use posg_fsc::optimise::{IterationRecord, Observer, Settings, StructureOutcome};
+use posg_fsc::optimise::{Cancel, IterationRecord, Observer, Settings, StructureOutcome};
 use posg_fsc::output::OutputDirectory;
 use posg_fsc::pipeline::directory::SolveDirectory;
 use posg_fsc::pipeline::{self, Automata, Job, Outcome, Sizes};
@@ -92,22 +92,6 @@ struct Run {
     stop: Cancel,
 }
 
-/// Stand-in for the library's cancellation token until it lands.
-#[derive(Clone, Default)]
-struct Cancel(Arc<std::sync::atomic::AtomicBool>);
-
-impl Cancel {
-    fn new() -> Self {
-        Self::default()
-    }
-    fn cancel(&self) {
-        self.0.store(true, std::sync::atomic::Ordering::Relaxed);
-    }
-    fn is_cancelled(&self) -> bool {
-        self.0.load(std::sync::atomic::Ordering::Relaxed)
-    }
-}
-
 impl Run {
     fn stopped_by(&self) -> Option<PyErr> {
         self.error
@@ -177,7 +161,7 @@ const SIGNAL_POLL: Duration = Duration::from_millis(10);
 /// in the library becomes `posg_fsc.Error`.
 fn run_job(
     py: Python<'_>,
-    job: Job,
+    mut job: Job,
     callback: Option<Py<PyAny>>,
     out: Option<(&PathBuf, bool)>,
 ) -> PyResult<Outcome> {
@@ -186,7 +170,7 @@ fn run_job(
         error: Mutex::new(None),
         stop: Cancel::new(),
     });
-    // job.cancel = run.stop.clone(); (with the library's token)
+    job.cancel = run.stop.clone();
     let observers = |slot: pipeline::Slot| {
         Box::new(PythonObserver {
             run: Arc::clone(&run),
