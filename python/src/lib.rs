@@ -6,8 +6,10 @@
 //! gradient ([`evaluate`]), the main job and sweeps ([`solve`]), certified
 //! bounds, support synthesis and the LTL translation ([`certify`]). Every
 //! library error becomes a `posg_fsc.Error` subclass ([`errors`]); the GIL
-//! is released while Rust computes. The Python API is documented in
-//! `python/posg_fsc.pyi` (type stubs) and the README's Python section.
+//! is released while Rust computes. The compiled module is
+//! `posg_fsc._native`, re-exported by `python/posg_fsc/__init__.py`; the
+//! Python API is documented in `python/posg_fsc/__init__.pyi` (type stubs)
+//! and the README's Python section.
 
 mod certify;
 mod controller;
@@ -24,7 +26,7 @@ use pyo3::prelude::*;
 /// games under LTL objectives (exact values, adjoint gradients, max-min
 /// optimisation against a worst-case adversary, certified bounds).
 #[pymodule]
-#[pyo3(name = "posg_fsc")]
+#[pyo3(name = "_native")]
 fn posg_fsc_python(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add("__version__", env!("CARGO_PKG_VERSION"))?;
     module.add_class::<game::Game>()?;
