@@ -11,7 +11,7 @@ use pyo3::types::PyDict;
 
 use crate::controller::Controller;
 use crate::convert::{serialised, settings_from_json, size, to_json};
-use crate::errors::{Kind, convert, raise};
+use crate::errors::{Kind, compute, convert, raise};
 use crate::game::Game;
 use crate::objective::Objective;
 
@@ -52,20 +52,18 @@ pub fn certify<'py>(
         .not_phi
         .as_ref()
         .expect("the negation was asked for");
-    let (lower, upper) = py
-        .detach(|| {
-            let lower = lower_bound(posg, not_phi, &defender)?;
-            let upper = match &adversary {
-                Some(adversary) => {
-                    let upper = upper_bound(posg, &objective.phi, adversary)?;
-                    check_consistent(&lower, &upper)?;
-                    Some(upper)
-                }
-                None => None,
-            };
-            Ok((lower, upper))
-        })
-        .map_err(convert::<posg_fsc::certify::CertifyError>)?;
+    let (lower, upper) = compute(py, || {
+        let lower = lower_bound(posg, not_phi, &defender)?;
+        let upper = match &adversary {
+            Some(adversary) => {
+                let upper = upper_bound(posg, &objective.phi, adversary)?;
+                check_consistent(&lower, &upper)?;
+                Some(upper)
+            }
+            None => None,
+        };
+        Ok::<_, posg_fsc::certify::CertifyError>((lower, upper))
+    })?;
     let report = PyDict::new(py);
     report.set_item("formula", ltl)?;
     report.set_item("lower", bound(py, &lower)?)?;
@@ -131,9 +129,9 @@ pub fn support<'py>(
         .not_phi
         .as_ref()
         .expect("the negation was asked for");
-    let found = py
-        .detach(|| synthesis::synthesise(posg, &objective.phi, not_phi, nodes, &settings))
-        .map_err(convert)?;
+    let found = compute(py, || {
+        synthesis::synthesise(posg, &objective.phi, not_phi, nodes, &settings)
+    })?;
     let report = PyDict::new(py);
     report.set_item("found", found.defender.is_some())?;
     report.set_item("mode", found.mode.name())?;

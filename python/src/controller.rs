@@ -13,7 +13,7 @@ use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 
 use crate::convert::size;
-use crate::errors::{Kind, convert, raise};
+use crate::errors::{Kind, compute, convert, raise};
 use crate::game::Game;
 
 /// A finite-state controller (FSC) of one player: in node `g`, on
@@ -109,9 +109,8 @@ impl Controller {
     #[staticmethod]
     fn load(py: Python<'_>, path: PathBuf, game: &Bound<'_, Game>) -> PyResult<Self> {
         let game = &game.get().inner;
-        py.detach(|| posg_fsc::controller::file::read_either(&path, game))
+        compute(py, || posg_fsc::controller::file::read_either(&path, game))
             .map(|fsc| Self::new(fsc, game))
-            .map_err(convert)
     }
 
     /// Parses a controller of `role` (`"defender"` or `"adversary"`) in
@@ -222,8 +221,9 @@ impl Controller {
 
     /// Writes the controller file (`*.fsc.json`, docs/formats.md section 2).
     fn save(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
-        py.detach(|| posg_fsc::controller::file::write(&path, &self.fsc, &self.game))
-            .map_err(convert)
+        compute(py, || {
+            posg_fsc::controller::file::write(&path, &self.fsc, &self.game)
+        })
     }
 
     /// `"defender"` or `"adversary"`.

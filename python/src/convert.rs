@@ -127,63 +127,63 @@ pub fn settings_from_json<T: DeserializeOwned>(function: &str, json: Value) -> P
     })
 }
 
-/// A controller size: a whole number of at least 1 (a `TypeError` or a
-/// `ValueError` naming `name` otherwise; never an `OverflowError`).
-pub fn size(name: &str, value: &Bound<'_, PyAny>) -> PyResult<usize> {
-    if value.is_instance_of::<PyBool>() || value.is_instance_of::<PyFloat>() {
-        return Err(PyTypeError::new_err(format!(
-            "{name} must be a whole number, not {}",
-            value.get_type().name()?
-        )));
-    }
-    let number: i128 = value.extract().map_err(|_| {
+/// A whole number (anything with `__index__`, not a bool or a float);
+/// a `TypeError` naming `name` otherwise.
+fn whole(name: &str, value: &Bound<'_, PyAny>) -> PyResult<i128> {
+    let type_error = || {
+        let type_name = value.get_type().name().map(|n| n.to_string());
         PyTypeError::new_err(format!(
             "{name} must be a whole number, not {}",
-            value
-                .get_type()
-                .name()
-                .map(|n| n.to_string())
-                .unwrap_or_default()
+            type_name.unwrap_or_default()
         ))
-    })?;
-    if number < 1 {
+    };
+    if value.is_instance_of::<PyBool>() || value.is_instance_of::<PyFloat>() {
+        return Err(type_error());
+    }
+    value.extract().map_err(|_| type_error())
+}
+
+/// A whole number of at least `least`: a `SettingsError` (a ValueError)
+/// naming `name` below it, never an `OverflowError`.
+fn at_least(name: &str, value: &Bound<'_, PyAny>, least: i128) -> PyResult<usize> {
+    let number = whole(name, value)?;
+    if number < least {
         return Err(crate::errors::raise(
             crate::errors::Kind::Settings,
-            format!("{name} must be at least 1, got {number}"),
+            format!("{name} must be at least {least}, got {number}"),
         ));
     }
     usize::try_from(number)
         .map_err(|_| PyValueError::new_err(format!("{name} {number} is too large")))
 }
 
-/// A count: a whole number of at least 0 (errors as [`size`]).
-pub fn count_of(name: &str, value: &Bound<'_, PyAny>) -> PyResult<usize> {
-    if value.extract::<i128>().is_ok_and(|n| n == 0) && !value.is_instance_of::<PyBool>() {
-        return Ok(0);
-    }
-    size(name, value)
+/// A controller size: a whole number of at least 1.
+pub fn size(name: &str, value: &Bound<'_, PyAny>) -> PyResult<usize> {
+    at_least(name, value, 1)
 }
 
-/// A list of sizes: one size or a list of them (`name` for errors).
+/// A count: a whole number of at least 0.
+pub fn count_of(name: &str, value: &Bound<'_, PyAny>) -> PyResult<usize> {
+    at_least(name, value, 0)
+}
+
+/// A list of sizes: one size, or a list, tuple or range of them.
 pub fn sizes(name: &str, value: &Bound<'_, PyAny>) -> PyResult<Vec<usize>> {
-    if value.is_instance_of::<PyList>() || value.is_instance_of::<PyTuple>() {
-        let list = value
-            .try_iter()?
-            .enumerate()
-            .map(|(i, item)| size(&format!("{name}[{i}]"), &item?))
-            .collect::<PyResult<Vec<_>>>()?;
-        if list.is_empty() {
-            return Err(PyValueError::new_err(format!("{name} is empty")));
-        }
-        return Ok(list);
+    let listed = value.is_instance_of::<PyList>()
+        || value.is_instance_of::<PyTuple>()
+        || value.is_instance_of::<pyo3::types::PyRange>();
+    if !listed {
+        return Ok(vec![size(name, value)?]);
     }
-    if let Ok(range) = value.cast::<pyo3::types::PyRange>() {
-        return sizes(
-            name,
-            &PyList::new(value.py(), range.try_iter()?.collect::<PyResult<Vec<_>>>()?)?.into_any(),
-        );
+    let list = value
+        .try_iter()?
+        .enumerate()
+        .map(|(i, item)| size(&format!("{name}[{i}]"), &item?))
+        .collect::<PyResult<Vec<_>>>()?;
+    if list.is_empty() {
+        return Err(PyValueError::new_err(format!("{name} is empty")));
     }
-    Ok(vec![size(name, value)?])
+    Ok(list)
 }
 
 /// A role: `"defender"` or `"adversary"`.

@@ -125,6 +125,32 @@ where
     raise(kind, format!("{:#}", anyhow::Error::new(error)))
 }
 
+/// Runs `work` without the GIL; its error becomes the exception of its
+/// [`Kind`], and a panic (a bug) `posg_fsc.Error`: no panic reaches Python.
+pub fn compute<T, E>(py: Python<'_>, work: impl FnOnce() -> Result<T, E> + Send) -> PyResult<T>
+where
+    T: Send,
+    E: Classify + std::error::Error + Send + Sync + 'static,
+{
+    match py.detach(|| std::panic::catch_unwind(std::panic::AssertUnwindSafe(work))) {
+        Ok(result) => result.map_err(convert),
+        Err(panic) => Err(panicked(panic.as_ref())),
+    }
+}
+
+/// A panic's payload as `posg_fsc.Error`.
+pub fn panicked(panic: &(dyn std::any::Any + Send)) -> PyErr {
+    let what = panic
+        .downcast_ref::<&str>()
+        .map(|s| s.to_string())
+        .or_else(|| panic.downcast_ref::<String>().cloned())
+        .unwrap_or_default();
+    raise(
+        Kind::Other,
+        format!("internal error (a panic): {what}; please report it"),
+    )
+}
+
 /// A library error's exception class.
 pub trait Classify {
     /// The class.

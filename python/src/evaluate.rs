@@ -12,7 +12,7 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
 use crate::controller::Controller;
-use crate::errors::convert;
+use crate::errors::compute;
 use crate::game::Game;
 use crate::objective::Objective;
 
@@ -133,40 +133,38 @@ pub fn evaluate(
     let adversary = Controller::resolve("adversary", adversary, posg, Role::Adversary)?;
     let objective = Objective::from_ltl(py, posg, ltl, options.allow_unused_propositions, false)?;
     let gradient = options.gradient;
-    let computed = py
-        .detach(|| {
-            let mut evaluator = Evaluator::new(
-                posg,
-                &objective.phi,
-                &Support::of(&defender),
-                &Support::of(&adversary),
-                &settings,
-            )?;
-            let (def, adv) = (
-                Support::probabilities_of(&defender),
-                Support::probabilities_of(&adversary),
-            );
-            let (evaluation, gradient) = if gradient {
-                let (evaluation, gradient) = evaluator.evaluate_with_gradient(&def, &adv)?;
-                (evaluation, Some(gradient))
-            } else {
-                (evaluator.evaluate(&def, &adv)?, None)
-            };
-            let recurrence = evaluator.recurrence();
-            Ok::<_, posg_fsc::value::ValueError>(Computed {
-                evaluation,
-                gradient,
-                gmc_states: evaluator.gmc().num_states(),
-                gmc_transitions: evaluator.gmc().num_transitions(),
-                decided_states: evaluator.gmc().num_decided(),
-                bsccs: recurrence.bsccs.len(),
-                feasible_bsccs: recurrence.feasible().count(),
-                transient_states: recurrence.transient.len(),
-                solver: evaluator.solver_method().name(),
-                solver_reason: evaluator.solver_reason().to_string(),
-            })
+    let computed = compute(py, || {
+        let mut evaluator = Evaluator::new(
+            posg,
+            &objective.phi,
+            &Support::of(&defender),
+            &Support::of(&adversary),
+            &settings,
+        )?;
+        let (def, adv) = (
+            Support::probabilities_of(&defender),
+            Support::probabilities_of(&adversary),
+        );
+        let (evaluation, gradient) = if gradient {
+            let (evaluation, gradient) = evaluator.evaluate_with_gradient(&def, &adv)?;
+            (evaluation, Some(gradient))
+        } else {
+            (evaluator.evaluate(&def, &adv)?, None)
+        };
+        let recurrence = evaluator.recurrence();
+        Ok::<_, posg_fsc::value::ValueError>(Computed {
+            evaluation,
+            gradient,
+            gmc_states: evaluator.gmc().num_states(),
+            gmc_transitions: evaluator.gmc().num_transitions(),
+            decided_states: evaluator.gmc().num_decided(),
+            bsccs: recurrence.bsccs.len(),
+            feasible_bsccs: recurrence.feasible().count(),
+            transient_states: recurrence.transient.len(),
+            solver: evaluator.solver_method().name(),
+            solver_reason: evaluator.solver_reason().to_string(),
         })
-        .map_err(convert)?;
+    })?;
     let dense = |fsc, values: &[f64]| -> Py<PyArray4<f64>> {
         let array: Array4<f64> = Controller::dense(fsc, values);
         array.into_pyarray(py).unbind()

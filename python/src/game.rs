@@ -12,7 +12,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyString;
 
 use crate::convert::{count_of, size};
-use crate::errors::convert;
+use crate::errors::{compute, convert};
 
 /// A partially observable stochastic game (POSG): states labelled with
 /// atomic propositions, a defender and an adversary with their actions and
@@ -41,9 +41,7 @@ impl Game {
     /// naming the file and the JSON path of the first problem.
     #[staticmethod]
     fn load(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
-        py.detach(|| posg_fsc::game::file::read(&path))
-            .map(Self::new)
-            .map_err(convert)
+        compute(py, || posg_fsc::game::file::read(&path)).map(Self::new)
     }
 
     /// Parses a game from JSON text (docs/formats.md section 1); `name`
@@ -51,9 +49,7 @@ impl Game {
     #[staticmethod]
     #[pyo3(signature = (text, name = "<string>"))]
     fn from_json(py: Python<'_>, text: &str, name: &str) -> PyResult<Self> {
-        py.detach(|| posg_fsc::game::file::from_json_str(text, name))
-            .map(Self::new)
-            .map_err(convert)
+        compute(py, || posg_fsc::game::file::from_json_str(text, name)).map(Self::new)
     }
 
     /// Imports a POMDP, MDP or DTMC from Storm's DRN format as a game
@@ -62,9 +58,7 @@ impl Game {
     /// a Python warning.
     #[staticmethod]
     fn from_drn(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
-        let import = py
-            .detach(|| posg_fsc::game::drn::read(&path))
-            .map_err(convert)?;
+        let import = compute(py, || posg_fsc::game::drn::read(&path))?;
         for warning in &import.warnings {
             PyErr::warn(
                 py,
@@ -86,14 +80,13 @@ impl Game {
     /// `binary=True` (docs/formats.md section 11).
     #[pyo3(signature = (path, binary = false))]
     fn save(&self, py: Python<'_>, path: PathBuf, binary: bool) -> PyResult<()> {
-        py.detach(|| {
+        compute(py, || {
             if binary {
                 posg_fsc::game::binary::write(&path, &self.inner)
             } else {
                 posg_fsc::game::file::write(&path, &self.inner)
             }
         })
-        .map_err(convert)
     }
 
     /// The game's name, if it has one.

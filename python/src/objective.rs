@@ -7,7 +7,7 @@ use posg_fsc::ltl::{self, TranslationBudget};
 use posg_fsc::pipeline::Automata;
 use pyo3::prelude::*;
 
-use crate::errors::{Kind, convert, raise};
+use crate::errors::{Kind, compute, raise};
 
 /// The automata for phi (and !phi when asked for) of a formula.
 pub struct Objective {
@@ -39,16 +39,14 @@ impl Objective {
         let budget = TranslationBudget {
             seconds: ltl::DEFAULT_TRANSLATION_SECONDS,
         };
-        let (phi, not_phi) = py
-            .detach(|| {
-                let phi = ltl::translate_within(&formula, &budget)?;
-                let not_phi = match negation {
-                    true => Some(ltl::translate_within(&formula.negate(), &budget)?),
-                    false => None,
-                };
-                Ok((phi, not_phi))
-            })
-            .map_err(convert::<ltl::TranslateError>)?;
+        let (phi, not_phi) = compute(py, || {
+            let phi = ltl::translate_within(&formula, &budget)?;
+            let not_phi = match negation {
+                true => Some(ltl::translate_within(&formula.negate(), &budget)?),
+                false => None,
+            };
+            Ok::<_, ltl::TranslateError>((phi, not_phi))
+        })?;
         let check = posg_fsc::pipeline::check_propositions(&phi, game, text, allow_unused);
         for warning in &check.warnings {
             let warning = std::ffi::CString::new(warning.as_str())?;

@@ -18,7 +18,7 @@ use serde_json::{Map, Value};
 
 use crate::controller::Controller;
 use crate::convert::{serialised, settings_from_json, size, sizes, to_json};
-use crate::errors::{Kind, convert, raise};
+use crate::errors::{Kind, convert, panicked, raise};
 use crate::game::Game;
 use crate::objective::Objective;
 
@@ -26,7 +26,7 @@ use crate::objective::Objective;
 /// [`Settings`]: `tolerance` is `solver_tolerance`, and the synthesis
 /// options (`synthesis_time_budget` is the synthesis `time_budget`) sit in
 /// `synthesis`.
-fn settings_json(function: &str, kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<Value> {
+fn settings_json(kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<Value> {
     let synthesis_keys: Vec<String> =
         match serde_json::to_value(posg_fsc::synthesis::Settings::default()) {
             Ok(Value::Object(map)) => map.keys().cloned().collect(),
@@ -55,7 +55,8 @@ fn settings_json(function: &str, kwargs: Option<&Bound<'_, PyDict>>) -> PyResult
                     }
                     top.insert(key, json);
                 }
-                "time_budget" | "seed" => {
+                // The optimiser's own; the synthesis one is synthesis_time_budget.
+                "time_budget" => {
                     top.insert(key, json);
                 }
                 other if other != "mode" && synthesis_keys.iter().any(|k| k == other) => {
@@ -67,7 +68,6 @@ fn settings_json(function: &str, kwargs: Option<&Bound<'_, PyDict>>) -> PyResult
             }
         }
     }
-    let _ = function;
     if !synthesis.is_empty() {
         top.insert("synthesis".into(), Value::Object(synthesis));
     }
@@ -78,7 +78,7 @@ fn settings_json(function: &str, kwargs: Option<&Bound<'_, PyDict>>) -> PyResult
 /// defaults, each keyword (the command line's option name with `_` for
 /// `-`) replacing one; validated.
 pub fn settings(function: &str, kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<Settings> {
-    let settings: Settings = settings_from_json(function, settings_json(function, kwargs)?)?;
+    let settings: Settings = settings_from_json(function, settings_json(kwargs)?)?;
     settings.validate().map_err(convert)?;
     Ok(settings)
 }
@@ -190,17 +190,7 @@ fn run_job(
     if let Some(error) = run.stopped_by() {
         return Err(error);
     }
-    outcome.unwrap_or_else(|panic| {
-        let what = panic
-            .downcast_ref::<&str>()
-            .map(|s| s.to_string())
-            .or_else(|| panic.downcast_ref::<String>().cloned())
-            .unwrap_or_default();
-        Err(raise(
-            Kind::Other,
-            format!("internal error (a panic): {what}; please report it"),
-        ))
-    })
+    outcome.unwrap_or_else(|panic| Err(panicked(panic.as_ref())))
 }
 
 /// The pipeline, into the solve directory `out` when given.
