@@ -139,3 +139,15 @@ def test_every_public_name_has_a_docstring():
         for name, member in vars(cls).items():
             if not name.startswith("_"):
                 assert member.__doc__ and member.__doc__.strip(), f"{cls.__name__}.{name}"
+
+
+def test_a_proposition_that_labels_no_state_is_a_warning_or_an_error(cli, grid_file):
+    game = posg_fsc.Game.load(grid_file)
+    with pytest.warns(UserWarning, match="did you mean goal"):
+        value = game.evaluate("(!unsafe U goal) | F gaol").value
+    assert value == game.evaluate(FORMULA).value
+    with pytest.raises(posg_fsc.FormulaError) as raised:
+        game.evaluate("F gaol")
+    assert str(raised.value) == cli_error(cli, "eval", grid_file, "--ltl", "F gaol")
+    with pytest.warns(UserWarning):
+        assert game.evaluate("F gaol", allow_unused_propositions=True).value == 0.0
