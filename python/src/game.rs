@@ -7,7 +7,7 @@ use std::sync::Arc;
 
 use posg_fsc::game::grid::{GridSpec, ObservationModel, RandomUnsafe};
 use posg_fsc::game::{Player, Posg};
-use pyo3::exceptions::{PyTypeError, PyValueError, PyWarning};
+use pyo3::exceptions::{PyTypeError, PyUserWarning, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyString;
 
@@ -62,7 +62,7 @@ impl Game {
         for warning in &import.warnings {
             PyErr::warn(
                 py,
-                &py.get_type::<PyWarning>(),
+                &py.get_type::<PyUserWarning>(),
                 &std::ffi::CString::new(warning.as_str())?,
                 1,
             )?;

@@ -446,6 +446,7 @@ pub fn solve(
 /// The chains of the adversary sizes run one after the other here.
 #[pyfunction]
 #[pyo3(signature = (game, ltl, def_nodes = None, adv_nodes = None, *, on_iteration = None, allow_unused_propositions = false, **settings))]
+#[allow(clippy::too_many_arguments)]
 pub fn sweep(
     py: Python<'_>,
     game: &Bound<'_, Game>,

@@ -151,3 +151,14 @@ def test_a_proposition_that_labels_no_state_is_a_warning_or_an_error(cli, grid_f
     assert str(raised.value) == cli_error(cli, "eval", grid_file, "--ltl", "F gaol")
     with pytest.warns(UserWarning):
         assert game.evaluate("F gaol", allow_unused_propositions=True).value == 0.0
+
+
+def test_a_drn_model_imports_as_the_cli_imports_it(cli, tmp_path):
+    from conftest import REPOSITORY, run_cli
+
+    model = REPOSITORY / "tests" / "data" / "drn" / "dark-corridor.drn"
+    run_cli(cli, "import-drn", model, "--out", tmp_path / "corridor.posg.json")
+    with pytest.warns(UserWarning, match="rewards"):
+        game = posg_fsc.Game.from_drn(model)
+    assert game.to_json() == posg_fsc.Game.load(tmp_path / "corridor.posg.json").to_json()
+    assert not game.has_adversary and game.name == "dark-corridor"
