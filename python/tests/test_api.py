@@ -146,7 +146,7 @@ def test_a_proposition_that_labels_no_state_is_a_warning_or_an_error(cli, grid_f
     with pytest.warns(UserWarning, match="did you mean goal"):
         value = game.evaluate("(!unsafe U goal) | F gaol").value
     assert value == game.evaluate(FORMULA).value
-    with pytest.raises(posg_fsc.FormulaError) as raised:
+    with pytest.warns(UserWarning), pytest.raises(posg_fsc.FormulaError) as raised:
         game.evaluate("F gaol")
     assert str(raised.value) == cli_error(cli, "eval", grid_file, "--ltl", "F gaol")
     with pytest.warns(UserWarning):
