@@ -200,38 +200,22 @@ pub fn objective(args: &ObjectiveArgs, game: &Posg) -> anyhow::Result<(Dra, Stri
 
 /// Warns about each proposition of `dra` that labels no state of the game
 /// (with a `did you mean` hint) and refuses an objective that those
-/// propositions, false everywhere, make unsatisfiable, unless `allow`.
+/// propositions, false everywhere, make unsatisfiable, unless `allow`
+/// ([`posg_fsc::pipeline::check_propositions`]).
 pub fn check_propositions(
     dra: &Dra,
     game: &Posg,
     objective: &str,
     allow: bool,
 ) -> anyhow::Result<()> {
-    let mut unused_mask = 0;
-    let mut hints = Vec::new();
-    for (bit, name) in dra.propositions().iter().enumerate() {
-        if game.propositions().contains(name) {
-            continue;
-        }
-        unused_mask |= 1 << bit;
-        let hint = game
-            .closest_proposition(name)
-            .map(|p| format!(" (did you mean {p}?)"))
-            .unwrap_or_default();
-        eprintln!(
-            "warning: proposition '{name}' labels no state of the game; it is false everywhere{hint}"
-        );
-        hints.push(format!("'{name}'{hint}"));
+    let check = posg_fsc::pipeline::check_propositions(dra, game, objective, allow);
+    for warning in &check.warnings {
+        eprintln!("warning: {warning}");
     }
-    if unused_mask != 0 && !allow && !dra.accepts_some_word(|a| a & unused_mask == 0) {
-        anyhow::bail!(
-            "the objective {objective} can never hold: {} labels no state of the game, and false \
-             everywhere it makes every value 0. Fix the name, or pass \
-             --allow-unused-propositions to compute with it anyway",
-            hints.join(", ")
-        );
+    match check.error {
+        Some(error) => Err(anyhow::Error::msg(error)),
+        None => Ok(()),
     }
-    Ok(())
 }
 
 /// The automaton for `!phi`: translated from `--ltl`, or read from

@@ -13,7 +13,7 @@ use rayon::prelude::*;
 
 use posg_fsc::game::Posg;
 use posg_fsc::limits;
-use posg_fsc::optimise::{Settings, StructureOutcome, StructureReport};
+use posg_fsc::optimise::{Settings, StructureOutcome};
 use posg_fsc::output::shard::{self, Shard, ShardRecord, SweepPlan, SweepRow};
 use posg_fsc::output::slurm::{self, SlurmSweep};
 use posg_fsc::output::{OutputDirectory, PlotFormat, Title, create_dir, write_file};
@@ -283,26 +283,6 @@ fn run_chains(
         .collect())
 }
 
-/// Where a pair's reported defender came from, for the `result` column of
-/// `sweep.csv`.
-fn result_in_words(report: &StructureReport, previous: Option<&StructureOutcome>) -> String {
-    let smaller = previous.map(|p| p.defender.num_nodes());
-    match smaller {
-        Some(k) if report.name.starts_with("from-") => {
-            format!("the {k}-node result, kept: optimising found nothing better")
-        }
-        Some(k) if report.best_iteration == 0 => format!(
-            "the {k}-node result it started from, kept: optimising on {} found nothing better",
-            report.name
-        ),
-        Some(k) => format!(
-            "optimised on {}, starting from the {k}-node result",
-            report.name
-        ),
-        None => format!("optimised on {}", report.name),
-    }
-}
-
 /// One chain: adversary size `m`, the defender sizes in increasing order,
 /// each warm-started from the best defender of the previous size.
 fn run_chain(
@@ -340,27 +320,8 @@ fn run_chain(
             inputs.plot_format,
         )
         .with_context(|| format!("defender {n} nodes, adversary {m} nodes"))?;
-        let (best, certified) = (outcome.best(), outcome.certified);
-        let report = &best.report;
-        progress.finished(n, m, report.worst_case);
-        let row = SweepRow {
-            defender_nodes: n,
-            adversary_nodes: m,
-            structure: report.name.clone(),
-            gmc_states: report.gmc.states,
-            gmc_transitions: report.gmc.transitions,
-            defender_parameters: report.defender_parameters,
-            adversary_parameters: report.adversary_parameters,
-            last_value: report.last_value,
-            worst_case: report.worst_case,
-            error_bound: report.error_bound,
-            certified_lower: certified.map(|b| b.certified_lower),
-            upper_bound: certified.map(|b| b.upper_bound),
-            iterations: report.iterations,
-            seconds: report.seconds,
-            warm_started: previous.is_some(),
-            result: result_in_words(report, previous.as_ref()),
-        };
+        let row = SweepRow::of(n, m, &outcome, previous.as_ref());
+        progress.finished(n, m, row.worst_case);
         if let Some(own) = own {
             let table = shard::sweep_table(std::slice::from_ref(&row))
                 .with_context(|| format!("writing {}", out.join(shard::ROW_FILE).display()))?;
@@ -368,7 +329,7 @@ fn run_chain(
             own.commit()?;
         }
         rows.push(row);
-        previous = Some(best.clone());
+        previous = Some(outcome.best().clone());
     }
     Ok(rows)
 }

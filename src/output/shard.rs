@@ -115,6 +115,36 @@ pub struct SweepRow {
 }
 
 impl SweepRow {
+    /// The row of the size pair `(defender_nodes, adversary_nodes)` from the
+    /// pipeline's outcome: its best structure's numbers and certified
+    /// bracket; `warm_started` when the run started from a smaller size's
+    /// best defender.
+    pub fn of(
+        defender_nodes: usize,
+        adversary_nodes: usize,
+        outcome: &crate::pipeline::Outcome,
+        warm_started: bool,
+    ) -> Self {
+        let (report, certified) = (&outcome.best().report, outcome.certified);
+        Self {
+            defender_nodes,
+            adversary_nodes,
+            structure: report.name.clone(),
+            gmc_states: report.gmc.states,
+            gmc_transitions: report.gmc.transitions,
+            defender_parameters: report.defender_parameters,
+            adversary_parameters: report.adversary_parameters,
+            last_value: report.last_value,
+            worst_case: report.worst_case,
+            error_bound: report.error_bound,
+            certified_lower: certified.map(|b| b.certified_lower),
+            upper_bound: certified.map(|b| b.upper_bound),
+            iterations: report.iterations,
+            seconds: report.seconds,
+            warm_started,
+        }
+    }
+
     /// The row with its timing column zeroed, for comparing runs.
     pub fn without_timing(&self) -> Self {
         Self {

@@ -25,6 +25,9 @@
 //! to the observers, warnings into the outcome.
 
 pub mod directory;
+mod propositions;
+
+pub use propositions::{PropositionCheck, check_propositions};
 
 use std::sync::{Arc, Mutex, PoisonError};
 use std::time::Instant;

@@ -1,0 +1,172 @@
+//! `posg_fsc.certify`, `posg_fsc.support` and `posg_fsc.translate`: the
+//! certified bounds (docs/method.md section 6), support synthesis by SAT
+//! (section 7) and the LTL translation, as the commands of the same names.
+
+use posg_fsc::certify::{Bound as CertifiedBound, check_consistent, lower_bound, upper_bound};
+use posg_fsc::controller::Role;
+use posg_fsc::ltl;
+use posg_fsc::synthesis::{self, Mode};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+use crate::controller::Controller;
+use crate::convert::{serialised, settings_from_json, size, to_json};
+use crate::errors::{Kind, compute, convert, raise};
+use crate::game::Game;
+use crate::objective::Objective;
+
+/// A bound as `posg-fsc certify` reports it (without its strategy).
+fn bound<'py>(py: Python<'py>, bound: &CertifiedBound) -> PyResult<Bound<'py, PyDict>> {
+    let dict = PyDict::new(py);
+    dict.set_item("value", bound.value)?;
+    dict.set_item("mdp_states", bound.mdp_states)?;
+    dict.set_item("seconds", bound.seconds)?;
+    dict.set_item("residual", bound.residual)?;
+    dict.set_item("error_bound", bound.error_bound)?;
+    Ok(dict)
+}
+
+/// The certified bounds of `posg-fsc certify` (docs/method.md section 6):
+/// `lower`, the defender's guaranteed probability of the formula against
+/// every adversary (of any size, observation and memory), and, when an
+/// adversary is given, `upper`, the best probability any defender achieves
+/// against it. Each is a dict with `value`, `mdp_states`, `seconds`,
+/// `residual` and `error_bound`; `upper` is `None` without an adversary.
+/// Controllers are `Controller`s, paths or `"uniform:K"`.
+#[pyfunction]
+#[pyo3(signature = (game, ltl, defender, adversary = None))]
+pub fn certify<'py>(
+    py: Python<'py>,
+    game: &Bound<'py, Game>,
+    ltl: &str,
+    defender: &Bound<'py, PyAny>,
+    adversary: Option<&Bound<'py, PyAny>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let posg = &game.get().inner;
+    let defender = Controller::resolve("defender", Some(defender), posg, Role::Defender)?;
+    let adversary = adversary
+        .map(|a| Controller::resolve("adversary", Some(a), posg, Role::Adversary))
+        .transpose()?;
+    let objective = Objective::from_ltl(py, posg, ltl, false, true)?;
+    let not_phi = objective
+        .not_phi
+        .as_ref()
+        .expect("the negation was asked for");
+    let (lower, upper) = compute(py, || {
+        let lower = lower_bound(posg, not_phi, &defender)?;
+        let upper = match &adversary {
+            Some(adversary) => {
+                let upper = upper_bound(posg, &objective.phi, adversary)?;
+                check_consistent(&lower, &upper)?;
+                Some(upper)
+            }
+            None => None,
+        };
+        Ok::<_, posg_fsc::certify::CertifyError>((lower, upper))
+    })?;
+    let report = PyDict::new(py);
+    report.set_item("formula", ltl)?;
+    report.set_item("lower", bound(py, &lower)?)?;
+    report.set_item("upper", upper.map(|u| bound(py, &u)).transpose()?)?;
+    Ok(report)
+}
+
+/// A defender support of `def_nodes` nodes that wins with positive
+/// probability (or almost surely, `almost_sure=True`) against every
+/// adversary, found by SAT and made inclusion-maximal (docs/method.md
+/// section 7), as `posg-fsc support`. Returns the fields of `support.json`
+/// (`found`, `mode`, `certified_lower`, `support_entries`, `exact`,
+/// `reason`, `confirmation`, `sat`) and `defender`, the uniform controller
+/// on the support found (or `None`). `settings` are the synthesis options
+/// (`engine`, `rank_bound`, `clause_budget`, `synthesis_time_budget`, ...).
+#[pyfunction]
+#[pyo3(signature = (game, ltl, def_nodes = None, almost_sure = false, **settings))]
+pub fn support<'py>(
+    py: Python<'py>,
+    game: &Bound<'py, Game>,
+    ltl: &str,
+    def_nodes: Option<&Bound<'py, PyAny>>,
+    almost_sure: bool,
+    settings: Option<&Bound<'py, PyDict>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let mut json = serde_json::Map::new();
+    if let Some(settings) = settings {
+        for (key, value) in settings.iter() {
+            let key: String = key.extract()?;
+            let key = match key.as_str() {
+                "synthesis_time_budget" => "time_budget".to_string(),
+                "mode" => {
+                    return Err(pyo3::exceptions::PyTypeError::new_err(
+                        "support() got an unexpected keyword argument 'mode' (use almost_sure=True)",
+                    ));
+                }
+                _ => key,
+            };
+            let value = to_json(&key, &value)?;
+            json.insert(key, value);
+        }
+    }
+    let mut settings: synthesis::Settings =
+        settings_from_json("support", serde_json::Value::Object(json))?;
+    settings.mode = if almost_sure {
+        Mode::AlmostSure
+    } else {
+        Mode::Positive
+    };
+    settings.validate().map_err(convert)?;
+    let posg = &game.get().inner;
+    let nodes = def_nodes.map_or(Ok(1), |n| size("def_nodes", n))?;
+    let player = posg.defender();
+    posg_fsc::controller::Fsc::check_uniform_size(
+        "def_nodes",
+        nodes,
+        player.num_observations(),
+        player.num_actions(),
+    )
+    .map_err(|e| raise(Kind::Settings, e.to_string()))?;
+    let objective = Objective::from_ltl(py, posg, ltl, false, true)?;
+    let not_phi = objective
+        .not_phi
+        .as_ref()
+        .expect("the negation was asked for");
+    let found = compute(py, || {
+        synthesis::synthesise(posg, &objective.phi, not_phi, nodes, &settings)
+    })?;
+    let report = PyDict::new(py);
+    report.set_item("found", found.defender.is_some())?;
+    report.set_item("mode", found.mode.name())?;
+    report.set_item("defender_nodes", nodes)?;
+    report.set_item("certified_lower", found.certified_lower)?;
+    report.set_item("support_entries", found.support_entries())?;
+    report.set_item("exact", found.exact)?;
+    report.set_item("reason", &found.reason)?;
+    report.set_item("confirmation", serialised(py, &found.confirmation)?)?;
+    report.set_item("sat", serialised(py, &found.statistics)?)?;
+    report.set_item("settings", serialised(py, &settings)?)?;
+    report.set_item(
+        "defender",
+        found
+            .defender
+            .map(|fsc| Py::new(py, Controller::new(fsc, posg)))
+            .transpose()?,
+    )?;
+    Ok(report)
+}
+
+/// The deterministic Rabin automaton of an LTL formula (Spot's syntax) in
+/// the HOA format, as `posg-fsc translate --hoa` prints it.
+#[pyfunction]
+pub fn translate(py: Python<'_>, ltl: &str) -> PyResult<String> {
+    let formula = ltl::parse(ltl)
+        .map_err(|error| raise(Kind::Formula, format!("cannot parse the formula: {error}")))?;
+    let dra = py.detach(|| ltl::translate(&formula)).map_err(|error| {
+        raise(
+            Kind::Formula,
+            format!("cannot translate the formula: {error}"),
+        )
+    })?;
+    Ok(posg_fsc::automaton::write_hoa(
+        &dra,
+        Some(&formula.to_string()),
+    ))
+}

@@ -1,0 +1,193 @@
+//! `Game.evaluate`: the exact value of a controller pair and its adjoint
+//! gradient (docs/method.md sections 1-2), as `posg-fsc eval` computes them
+//! ([`posg_fsc::value::Evaluator`]).
+
+use std::time::Instant;
+
+use numpy::ndarray::{Array1, Array4};
+use numpy::{IntoPyArray, PyArray1, PyArray4};
+use posg_fsc::controller::{Role, Support};
+use posg_fsc::value::{Evaluator, SolverMethod, SolverSettings};
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+
+use crate::controller::Controller;
+use crate::errors::compute;
+use crate::game::Game;
+use crate::objective::Objective;
+
+/// The keyword options of `Game.evaluate`.
+pub struct Options<'a> {
+    pub gradient: bool,
+    pub solver: &'a str,
+    pub tolerance: Option<f64>,
+    pub lu_limit: Option<usize>,
+    pub allow_unused_propositions: bool,
+}
+
+/// The value of a controller pair (`Game.evaluate`), with the names of
+/// `posg-fsc eval`'s JSON report; with `gradient=True` also `dV/d mu` of
+/// both players as arrays shaped like the controllers' `probabilities`.
+#[pyclass(module = "posg_fsc", name = "Evaluation", frozen, get_all)]
+pub struct Evaluation {
+    /// `V = P(trace |= phi)`.
+    pub value: f64,
+    /// A bound on `|value - exact value|` (docs/method.md section 8).
+    pub error_bound: f64,
+    /// `max |(I - Q) x - b|` of the linear solve.
+    pub residual: f64,
+    /// The global Markov chain's explored states.
+    pub gmc_states: usize,
+    /// Its transitions.
+    pub gmc_transitions: usize,
+    /// Explored states whose automaton state decides the formula.
+    pub decided_states: usize,
+    /// Bottom strongly connected components (recurrence classes).
+    pub bsccs: usize,
+    /// The phi-feasible ones.
+    pub feasible_bsccs: usize,
+    /// Transient states (unknowns of the linear system).
+    pub transient_states: usize,
+    /// `lu` or `krylov`.
+    pub solver: String,
+    /// Why that solver was used.
+    pub solver_reason: String,
+    /// BiCGSTAB iterations (0 for LU).
+    pub solver_iterations: usize,
+    /// Wall-clock seconds (automaton, chain, analysis and solves).
+    pub seconds: f64,
+    /// `dV/d mu_def(g', u | g, o)` with axes `(node, observation,
+    /// next_node, action)` (zero outside the support), with `gradient=True`.
+    pub defender_gradient: Option<Py<PyArray4<f64>>>,
+    /// `dV/d mu_adv(h', v | h, o')`, likewise.
+    pub adversary_gradient: Option<Py<PyArray4<f64>>>,
+    /// `dV/d init_def(g)`, shape `(nodes,)`, with `gradient=True`.
+    pub defender_initial_gradient: Option<Py<PyArray1<f64>>>,
+    /// `dV/d init_adv(h)`, shape `(nodes,)`, with `gradient=True`.
+    pub adversary_initial_gradient: Option<Py<PyArray1<f64>>>,
+}
+
+#[pymethods]
+impl Evaluation {
+    fn __repr__(&self) -> String {
+        format!(
+            "Evaluation(value={}, error_bound={:e}, gmc_states={})",
+            self.value, self.error_bound, self.gmc_states
+        )
+    }
+}
+
+/// The solver settings of `solver`, `tolerance` and `lu_limit` (the
+/// command line's `--solver`, `--tolerance`, `--lu-limit`).
+pub fn solver_settings(
+    solver: &str,
+    tolerance: Option<f64>,
+    lu_limit: Option<usize>,
+) -> PyResult<SolverSettings> {
+    let defaults = SolverSettings::default();
+    let method: SolverMethod = solver
+        .parse()
+        .map_err(|e: String| PyValueError::new_err(format!("solver: {e}")))?;
+    let tolerance = tolerance.unwrap_or(defaults.tolerance);
+    if !(tolerance.is_finite() && tolerance > 0.0) {
+        return Err(crate::errors::raise(
+            crate::errors::Kind::Settings,
+            format!("tolerance must be a finite number greater than 0, got {tolerance}"),
+        ));
+    }
+    Ok(SolverSettings {
+        method,
+        tolerance,
+        lu_limit: lu_limit.unwrap_or(defaults.lu_limit),
+        ..defaults
+    })
+}
+
+/// Numbers computed without the GIL.
+struct Computed {
+    evaluation: posg_fsc::value::Evaluation,
+    gradient: Option<posg_fsc::value::Gradient>,
+    gmc_states: usize,
+    gmc_transitions: usize,
+    decided_states: usize,
+    bsccs: usize,
+    feasible_bsccs: usize,
+    transient_states: usize,
+    solver: &'static str,
+    solver_reason: String,
+}
+
+/// `Game.evaluate`.
+pub fn evaluate(
+    game: &Bound<'_, Game>,
+    ltl: &str,
+    defender: Option<&Bound<'_, PyAny>>,
+    adversary: Option<&Bound<'_, PyAny>>,
+    options: Options,
+) -> PyResult<Evaluation> {
+    let py = game.py();
+    let clock = Instant::now();
+    let posg = &game.get().inner;
+    let settings = solver_settings(options.solver, options.tolerance, options.lu_limit)?;
+    let defender = Controller::resolve("defender", defender, posg, Role::Defender)?;
+    let adversary = Controller::resolve("adversary", adversary, posg, Role::Adversary)?;
+    let objective = Objective::from_ltl(py, posg, ltl, options.allow_unused_propositions, false)?;
+    let gradient = options.gradient;
+    let computed = compute(py, || {
+        let mut evaluator = Evaluator::new(
+            posg,
+            &objective.phi,
+            &Support::of(&defender),
+            &Support::of(&adversary),
+            &settings,
+        )?;
+        let (def, adv) = (
+            Support::probabilities_of(&defender),
+            Support::probabilities_of(&adversary),
+        );
+        let (evaluation, gradient) = if gradient {
+            let (evaluation, gradient) = evaluator.evaluate_with_gradient(&def, &adv)?;
+            (evaluation, Some(gradient))
+        } else {
+            (evaluator.evaluate(&def, &adv)?, None)
+        };
+        let recurrence = evaluator.recurrence();
+        Ok::<_, posg_fsc::value::ValueError>(Computed {
+            evaluation,
+            gradient,
+            gmc_states: evaluator.gmc().num_states(),
+            gmc_transitions: evaluator.gmc().num_transitions(),
+            decided_states: evaluator.gmc().num_decided(),
+            bsccs: recurrence.bsccs.len(),
+            feasible_bsccs: recurrence.feasible().count(),
+            transient_states: recurrence.transient.len(),
+            solver: evaluator.solver_method().name(),
+            solver_reason: evaluator.solver_reason().to_string(),
+        })
+    })?;
+    let dense = |fsc, values: &[f64]| -> Py<PyArray4<f64>> {
+        let array: Array4<f64> = Controller::dense(fsc, values);
+        array.into_pyarray(py).unbind()
+    };
+    let vector = |values: &[f64]| Array1::from(values.to_vec()).into_pyarray(py).unbind();
+    let g = computed.gradient.as_ref();
+    Ok(Evaluation {
+        value: computed.evaluation.value,
+        error_bound: computed.evaluation.error_bound,
+        residual: computed.evaluation.residual,
+        gmc_states: computed.gmc_states,
+        gmc_transitions: computed.gmc_transitions,
+        decided_states: computed.decided_states,
+        bsccs: computed.bsccs,
+        feasible_bsccs: computed.feasible_bsccs,
+        transient_states: computed.transient_states,
+        solver: computed.solver.to_string(),
+        solver_reason: computed.solver_reason,
+        solver_iterations: computed.evaluation.iterations,
+        seconds: clock.elapsed().as_secs_f64(),
+        defender_gradient: g.map(|g| dense(&defender, &g.defender)),
+        adversary_gradient: g.map(|g| dense(&adversary, &g.adversary)),
+        defender_initial_gradient: g.map(|g| vector(&g.defender_initial)),
+        adversary_initial_gradient: g.map(|g| vector(&g.adversary_initial)),
+    })
+}

@@ -1,0 +1,503 @@
+//! `posg_fsc.solve` and `posg_fsc.sweep`: the library's main job
+//! ([`posg_fsc::pipeline`]) with its settings from keyword arguments, the
+//! iteration records streamed to a Python callback, and Ctrl-C.
+
+use std::path::PathBuf;
+use std::sync::{Arc, Mutex, PoisonError};
+use std::time::Duration;
+
+use posg_fsc::controller::Role;
+use posg_fsc::game::Posg;
+use posg_fsc::optimise::{Cancel, IterationRecord, Observer, Settings, StructureOutcome};
+use posg_fsc::output::OutputDirectory;
+use posg_fsc::pipeline::directory::SolveDirectory;
+use posg_fsc::pipeline::{self, Automata, Job, Outcome, Sizes};
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+use serde_json::{Map, Value};
+
+use crate::controller::Controller;
+use crate::convert::{serialised, settings_from_json, size, sizes, to_json};
+use crate::errors::{Kind, convert, panicked, raise};
+use crate::game::Game;
+use crate::objective::Objective;
+
+/// Keyword arguments with the command line's names that live elsewhere in
+/// [`Settings`]: `tolerance` is `solver_tolerance`, and the synthesis
+/// options (`synthesis_time_budget` is the synthesis `time_budget`) sit in
+/// `synthesis`.
+fn settings_json(kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<Value> {
+    let synthesis_keys: Vec<String> =
+        match serde_json::to_value(posg_fsc::synthesis::Settings::default()) {
+            Ok(Value::Object(map)) => map.keys().cloned().collect(),
+            _ => Vec::new(),
+        };
+    let mut top = Map::new();
+    let mut synthesis = Map::new();
+    if let Some(kwargs) = kwargs {
+        for (key, value) in kwargs.iter() {
+            let key: String = key.extract()?;
+            let mut json = to_json(&key, &value)?;
+            match key.as_str() {
+                "tolerance" => {
+                    top.insert("solver_tolerance".into(), json);
+                }
+                "synthesis_time_budget" => {
+                    synthesis.insert("time_budget".into(), json);
+                }
+                "structures" => {
+                    if let Value::String(list) = &json {
+                        json = Value::Array(
+                            list.split(',')
+                                .map(|s| Value::String(s.trim().into()))
+                                .collect(),
+                        );
+                    }
+                    top.insert(key, json);
+                }
+                // The optimiser's own; the synthesis one is synthesis_time_budget.
+                "time_budget" => {
+                    top.insert(key, json);
+                }
+                other if other != "mode" && synthesis_keys.iter().any(|k| k == other) => {
+                    synthesis.insert(key, json);
+                }
+                _ => {
+                    top.insert(key, json);
+                }
+            }
+        }
+    }
+    if !synthesis.is_empty() {
+        top.insert("synthesis".into(), Value::Object(synthesis));
+    }
+    Ok(Value::Object(top))
+}
+
+/// The optimiser's [`Settings`] from keyword arguments: the library's
+/// defaults, each keyword (the command line's option name with `_` for
+/// `-`) replacing one; validated.
+pub fn settings(function: &str, kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<Settings> {
+    let settings: Settings = settings_from_json(function, settings_json(kwargs)?)?;
+    settings.validate().map_err(convert)?;
+    Ok(settings)
+}
+
+/// What the observers of one run share: the Python callback, and the first
+/// exception (the callback's own, or KeyboardInterrupt) to raise after the
+/// run stopped.
+struct Run {
+    callback: Option<Py<PyAny>>,
+    error: Mutex<Option<PyErr>>,
+    stop: Cancel,
+}
+
+impl Run {
+    fn stopped_by(&self) -> Option<PyErr> {
+        self.error
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner)
+            .take()
+    }
+
+    /// Stops the run and keeps `error` to raise (the first one only).
+    fn fail(&self, error: PyErr) {
+        self.stop.cancel();
+        let mut slot = self.error.lock().unwrap_or_else(PoisonError::into_inner);
+        if slot.is_none() {
+            *slot = Some(error);
+        }
+    }
+
+    /// One record, on a worker thread: calls the callback with the record
+    /// as a dict (plus `structure`); `False` stops the run, an exception
+    /// stops it and is raised after it.
+    fn observe(&self, structure: &str, record: &IterationRecord) {
+        let Some(callback) = &self.callback else {
+            return;
+        };
+        if self.stop.is_cancelled() {
+            return;
+        }
+        Python::attach(|py| {
+            let answer = serialised(py, record).and_then(|dict| {
+                dict.set_item("structure", structure)?;
+                let answer = callback.call1(py, (dict,))?;
+                let answer = answer.bind(py);
+                Ok(answer
+                    .cast::<pyo3::types::PyBool>()
+                    .is_ok_and(|flag| !flag.is_true()))
+            });
+            match answer {
+                Ok(true) => self.stop.cancel(),
+                Ok(false) => {}
+                Err(error) => self.fail(error),
+            }
+        });
+    }
+}
+
+/// One structure's observer.
+struct PythonObserver {
+    run: Arc<Run>,
+    structure: String,
+}
+
+impl Observer for PythonObserver {
+    fn observe(&mut self, record: &IterationRecord) {
+        self.run.observe(&self.structure, record);
+    }
+}
+
+/// How often the waiting thread looks for Ctrl-C while a job runs.
+const SIGNAL_POLL: Duration = Duration::from_millis(10);
+
+/// Runs `job` on a thread of its own while this (Python's) thread waits
+/// without the GIL, checking for Ctrl-C every [`SIGNAL_POLL`] (signals are
+/// only seen on the main thread); writes the solve directory `out` as
+/// `posg-fsc solve` does when given. Ctrl-C, the callback returning
+/// `False` or raising stop the optimiser, which returns what it has; the
+/// KeyboardInterrupt or the callback's exception is then raised. A panic
+/// in the library becomes `posg_fsc.Error`.
+fn run_job(
+    py: Python<'_>,
+    mut job: Job,
+    callback: Option<Py<PyAny>>,
+    out: Option<(&PathBuf, bool)>,
+) -> PyResult<Outcome> {
+    let run = Arc::new(Run {
+        callback,
+        error: Mutex::new(None),
+        stop: Cancel::new(),
+    });
+    job.cancel = run.stop.clone();
+    let observers = |slot: pipeline::Slot| {
+        Box::new(PythonObserver {
+            run: Arc::clone(&run),
+            structure: slot.structure.name.clone(),
+        }) as Box<dyn Observer + Send>
+    };
+    let outcome = std::thread::scope(|scope| {
+        let worker = scope.spawn(|| work(job, observers, out));
+        while !worker.is_finished() {
+            py.detach(|| std::thread::sleep(SIGNAL_POLL));
+            if let Err(interrupt) = py.check_signals() {
+                run.fail(interrupt);
+            }
+        }
+        worker.join()
+    });
+    if let Some(error) = run.stopped_by() {
+        return Err(error);
+    }
+    outcome.unwrap_or_else(|panic| Err(panicked(panic.as_ref())))
+}
+
+/// The pipeline, into the solve directory `out` when given.
+fn work<F>(job: Job, observers: F, out: Option<(&PathBuf, bool)>) -> PyResult<Outcome>
+where
+    F: Fn(pipeline::Slot) -> Box<dyn Observer + Send> + Sync,
+{
+    let Some((path, force)) = out else {
+        return pipeline::run(job, observers).map_err(convert);
+    };
+    let directory = OutputDirectory::create(path, force).map_err(convert)?;
+    let command_line = vec!["python".to_string(), "posg_fsc.solve".to_string()];
+    let solve = SolveDirectory {
+        path: directory.path(),
+        seconds_axis: false,
+        command_line: &command_line,
+    };
+    let outcome = solve.solve(job, observers).map_err(convert)?;
+    directory.commit().map_err(convert)?;
+    Ok(outcome)
+}
+
+/// The result of `posg_fsc.solve`, with the names of `summary.json`
+/// (docs/formats.md section 9).
+#[pyclass(module = "posg_fsc", name = "SolveResult", frozen, get_all)]
+pub struct SolveResult {
+    /// The best defender found.
+    pub defender: Py<Controller>,
+    /// The best response found to it.
+    pub adversary: Py<Controller>,
+    /// `{"certified_lower": ..., "upper_bound": ...}`: the defender's value
+    /// against every adversary is at least `certified_lower`; no defender
+    /// of any size does better than `upper_bound` (docs/method.md section
+    /// 6). `None` when the defender could not be certified (see
+    /// `certification_error`).
+    pub certified: Option<Py<PyDict>>,
+    /// Why `certified` is `None`.
+    pub certification_error: Option<String>,
+    /// The structure whose defender was kept.
+    pub structure_used: String,
+    /// The best defender's worst-case estimate (best-response value).
+    pub worst_case: f64,
+    /// The largest error bound of the values computed on the best structure.
+    pub error_bound: f64,
+    /// The value at the best structure's last iterate.
+    pub last_value: f64,
+    /// Why the best structure won, then why each other one lost.
+    pub structure_choice: Vec<String>,
+    /// The best structure's convergence curve: one dict per iteration
+    /// (`pandas.DataFrame(result.curve)` makes a table).
+    pub curve: Py<PyList>,
+    /// Every structure's curve, by structure name.
+    pub curves: Py<PyDict>,
+    /// Every structure's report (as `structures` in `summary.json`).
+    pub structures: Py<PyList>,
+    /// What each source of structures found (as `sources` in `summary.json`).
+    pub sources: Py<PyList>,
+    /// The settings used, every field (as `settings` in `summary.json`).
+    pub settings: Py<PyDict>,
+    /// Wall-clock seconds of the whole job.
+    pub seconds: f64,
+    /// Seconds of support synthesis (the `sat` source).
+    pub synthesis_seconds: f64,
+}
+
+#[pymethods]
+impl SolveResult {
+    fn __repr__(&self) -> String {
+        format!(
+            "SolveResult(structure_used={:?}, worst_case={:.6}, seconds={:.2})",
+            self.structure_used, self.worst_case, self.seconds
+        )
+    }
+}
+
+fn result(
+    py: Python<'_>,
+    game: &Arc<Posg>,
+    settings: &Settings,
+    outcome: &Outcome,
+) -> PyResult<SolveResult> {
+    let best = outcome.best();
+    let records = |records: &[IterationRecord]| -> PyResult<Bound<'_, PyList>> {
+        let list = PyList::empty(py);
+        for record in records {
+            list.append(serialised(py, record)?)?;
+        }
+        Ok(list)
+    };
+    let curves = PyDict::new(py);
+    let mut curve = PyList::empty(py);
+    for structure_curve in &outcome.curves {
+        let list = records(&structure_curve.records)?;
+        if structure_curve.structure == best.report.name {
+            curve = list.clone();
+        }
+        curves.set_item(&structure_curve.structure, list)?;
+    }
+    let reports: Vec<_> = outcome
+        .solution
+        .structures
+        .iter()
+        .map(|s| &s.report)
+        .collect();
+    Ok(SolveResult {
+        defender: Py::new(py, Controller::new(best.defender.clone(), game))?,
+        adversary: Py::new(py, Controller::new(best.adversary.clone(), game))?,
+        certified: outcome
+            .certified
+            .map(|bracket| {
+                serialised(py, &bracket)?
+                    .cast_into::<PyDict>()
+                    .map(Bound::unbind)
+                    .map_err(PyErr::from)
+            })
+            .transpose()?,
+        certification_error: outcome.certification_error.clone(),
+        structure_used: best.report.name.clone(),
+        worst_case: best.report.worst_case,
+        error_bound: best.report.error_bound,
+        last_value: best.report.last_value,
+        structure_choice: outcome.structure_choice.clone(),
+        curve: curve.unbind(),
+        curves: curves.unbind(),
+        structures: serialised(py, &reports)?.cast_into::<PyList>()?.unbind(),
+        sources: serialised(py, &outcome.sources)?
+            .cast_into::<PyList>()?
+            .unbind(),
+        settings: serialised(py, settings)?.cast_into::<PyDict>()?.unbind(),
+        seconds: outcome.seconds,
+        synthesis_seconds: outcome.synthesis_seconds,
+    })
+}
+
+/// Checks controller sizes as `posg-fsc solve` does: within the resource
+/// budget, and one adversary node for a game without an adversary.
+fn check_sizes(game: &Posg, defender: usize, adversary: usize) -> PyResult<()> {
+    for (name, nodes, role) in [
+        ("def_nodes", defender, Role::Defender),
+        ("adv_nodes", adversary, Role::Adversary),
+    ] {
+        let player = role.player(game);
+        posg_fsc::controller::Fsc::check_uniform_size(
+            name,
+            nodes,
+            player.num_observations(),
+            player.num_actions(),
+        )
+        .map_err(|e| raise(Kind::Settings, e.to_string()))?;
+    }
+    if !game.has_adversary() && adversary != 1 {
+        return Err(raise(
+            Kind::Settings,
+            format!(
+                "adv_nodes {adversary}: the game has no adversary (it is a POMDP), whose \
+                 controller has exactly one node"
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// Tunes a defender controller against a worst-case adversary, as
+/// `posg-fsc solve` does: on every structure of `structures` (default
+/// `full`, `sat`, `paper`), alternating projected gradient ascent-descent
+/// with best-response checks, the best structure kept and certified.
+///
+/// `settings` are the command line's options with `_` for `-`
+/// (`max_iterations=200`, `starts=1`, `tolerance=1e-9`, ...), with the same
+/// defaults; an unknown keyword is a TypeError. `defender`/`adversary`
+/// (a Controller, a path or `"uniform:K"`) start the run from those
+/// controllers instead of the full uniform structure. `on_iteration(record)`
+/// is called with each iteration's record (a dict, with `structure`) from
+/// the optimiser's threads; returning `False` stops the run, which returns
+/// what it has. Ctrl-C stops it too (then KeyboardInterrupt is raised).
+/// With `out`, the solve directory (`curve.csv`, `summary.json`, ...) is
+/// written there too (`force=True` replaces a non-empty one). A proposition
+/// that labels no state of the game is a warning, and an error when it
+/// makes the formula unsatisfiable, unless `allow_unused_propositions=True`.
+#[pyfunction]
+#[pyo3(signature = (game, ltl, def_nodes = None, adv_nodes = None, *, defender = None, adversary = None, on_iteration = None, out = None, force = false, allow_unused_propositions = false, **settings))]
+#[allow(clippy::too_many_arguments)]
+pub fn solve(
+    py: Python<'_>,
+    game: &Bound<'_, Game>,
+    ltl: &str,
+    def_nodes: Option<&Bound<'_, PyAny>>,
+    adv_nodes: Option<&Bound<'_, PyAny>>,
+    defender: Option<&Bound<'_, PyAny>>,
+    adversary: Option<&Bound<'_, PyAny>>,
+    on_iteration: Option<Py<PyAny>>,
+    out: Option<PathBuf>,
+    force: bool,
+    allow_unused_propositions: bool,
+    settings: Option<&Bound<'_, PyDict>>,
+) -> PyResult<SolveResult> {
+    let settings = self::settings("solve", settings)?;
+    let posg = &game.get().inner;
+    let start_defender = defender
+        .map(|d| Controller::resolve("defender", Some(d), posg, Role::Defender))
+        .transpose()?;
+    let start_adversary = adversary
+        .map(|a| Controller::resolve("adversary", Some(a), posg, Role::Adversary))
+        .transpose()?;
+    let nodes = |name,
+                 value: Option<&Bound<'_, PyAny>>,
+                 start: &Option<posg_fsc::controller::Fsc>|
+     -> PyResult<usize> {
+        match (value, start) {
+            (Some(value), _) => size(name, value),
+            (None, Some(fsc)) => Ok(fsc.num_nodes()),
+            (None, None) => Ok(1),
+        }
+    };
+    let sizes = Sizes {
+        defender: nodes("def_nodes", def_nodes, &start_defender)?,
+        adversary: nodes("adv_nodes", adv_nodes, &start_adversary)?,
+    };
+    check_sizes(posg, sizes.defender, sizes.adversary)?;
+    let automata = Objective::from_ltl(py, posg, ltl, allow_unused_propositions, true)?.automata();
+    let mut job = Job::full(posg, &automata, sizes, &settings).map_err(convert)?;
+    for (start, fsc, name) in [
+        (&mut job.start.defender, start_defender, "def_nodes"),
+        (&mut job.start.adversary, start_adversary, "adv_nodes"),
+    ] {
+        if let Some(fsc) = fsc {
+            if fsc.num_nodes() != start.num_nodes() {
+                return Err(raise(
+                    Kind::Settings,
+                    format!(
+                        "{name} {} disagrees with the starting controller's {} nodes",
+                        start.num_nodes(),
+                        fsc.num_nodes()
+                    ),
+                ));
+            }
+            *start = fsc;
+        }
+    }
+    if defender.is_some() || adversary.is_some() {
+        job.start.name = "from-files".into();
+    }
+    let outcome = run_job(py, job, on_iteration, out.as_ref().map(|p| (p, force)))?;
+    result(py, posg, &settings, &outcome)
+}
+
+/// `posg-fsc sweep`: [`solve`] for every pair of sizes, the defender sizes
+/// in increasing order, each warm-started from the best defender of the
+/// next smaller size and kept at least as good (so results are monotone in
+/// the defender's size). `def_nodes` and `adv_nodes` are a size or a list
+/// (or range) of sizes. Returns one row per size pair: a dict with the
+/// columns of `sweep.csv` and the pair's `SolveResult` under `result`.
+/// The chains of the adversary sizes run one after the other here.
+#[pyfunction]
+#[pyo3(signature = (game, ltl, def_nodes = None, adv_nodes = None, *, on_iteration = None, allow_unused_propositions = false, **settings))]
+#[allow(clippy::too_many_arguments)]
+pub fn sweep(
+    py: Python<'_>,
+    game: &Bound<'_, Game>,
+    ltl: &str,
+    def_nodes: Option<&Bound<'_, PyAny>>,
+    adv_nodes: Option<&Bound<'_, PyAny>>,
+    on_iteration: Option<Py<PyAny>>,
+    allow_unused_propositions: bool,
+    settings: Option<&Bound<'_, PyDict>>,
+) -> PyResult<Py<PyList>> {
+    let settings = self::settings("sweep", settings)?;
+    let posg = &game.get().inner;
+    let mut defender_sizes = match def_nodes {
+        Some(value) => sizes("def_nodes", value)?,
+        None => vec![1, 2, 3],
+    };
+    defender_sizes.sort_unstable();
+    defender_sizes.dedup();
+    let mut adversary_sizes = match adv_nodes {
+        Some(value) => sizes("adv_nodes", value)?,
+        None => vec![1, 2],
+    };
+    adversary_sizes.dedup();
+    for &n in &defender_sizes {
+        for &m in &adversary_sizes {
+            check_sizes(posg, n, m)?;
+        }
+    }
+    let automata: Automata =
+        Objective::from_ltl(py, posg, ltl, allow_unused_propositions, true)?.automata();
+    let rows = PyList::empty(py);
+    let callback = on_iteration;
+    for &m in &adversary_sizes {
+        let mut previous: Option<StructureOutcome> = None;
+        for &n in &defender_sizes {
+            let sizes = Sizes {
+                defender: n,
+                adversary: m,
+            };
+            let mut job = Job::full(posg, &automata, sizes, &settings).map_err(convert)?;
+            if let Some(smaller) = &previous {
+                job = job.warm_started(smaller).map_err(convert)?;
+            }
+            let callback = callback.as_ref().map(|c| c.clone_ref(py));
+            let outcome = run_job(py, job, callback, None)?;
+            let row = posg_fsc::output::shard::SweepRow::of(n, m, &outcome, previous.is_some());
+            let row = serialised(py, &row)?.cast_into::<PyDict>()?;
+            row.set_item("result", result(py, posg, &settings, &outcome)?)?;
+            rows.append(row)?;
+            previous = Some(outcome.best().clone());
+        }
+    }
+    Ok(rows.unbind())
+}

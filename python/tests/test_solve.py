@@ -1,0 +1,148 @@
+"""solve and sweep: the CLI's controllers for the same seed, the callback
+and Ctrl-C stopping a run, the GIL released while Rust computes."""
+
+import _thread
+import json
+import threading
+import time
+
+import pytest
+
+import posg_fsc
+from conftest import FORMULA, run_cli
+
+QUICK = dict(max_iterations=40, starts=1, restarts=1, best_response_iterations=30)
+# A run that only a stop ends early: no stall or gap rule, many iterations.
+LONG = dict(max_iterations=100000, starts=1, structures=["full"], stall_checks=0, gap_tolerance=0.0)
+
+
+def test_solve_with_a_seed_gives_the_cli_controllers(cli, grid_file, tmp_path):
+    out = tmp_path / "cli"
+    run_cli(
+        cli, "solve", grid_file, "--ltl", FORMULA, "--def-nodes", "2", "--adv-nodes", "1",
+        "--seed", "7", "--max-iterations", "40", "--starts", "1", "--restarts", "1",
+        "--best-response-iterations", "30", "--out", out,
+    )
+    game = posg_fsc.Game.load(grid_file)
+    result = posg_fsc.solve(game, FORMULA, def_nodes=2, adv_nodes=1, seed=7, **QUICK)
+    summary = json.loads((out / "summary.json").read_text())
+    assert result.defender.to_json().strip() == (out / "defender.fsc.json").read_text().strip()
+    assert result.adversary.to_json().strip() == (out / "adversary.fsc.json").read_text().strip()
+    assert result.worst_case == summary["worst_case"]
+    assert result.certified == summary["certified"]
+    assert result.structure_used == summary["structure_used"]
+    assert result.settings == summary["settings"]
+    assert result.certified["certified_lower"] <= result.certified["upper_bound"]
+    # The curve is the best structure's records, one dict per iteration.
+    assert [r["iteration"] for r in result.curve] == list(range(len(result.curve)))
+    assert {"value", "worst_case", "certified_lower", "upper_bound"} <= set(result.curve[0])
+
+
+def test_a_different_seed_gives_other_controllers():
+    game = posg_fsc.example_grid()
+    settings = dict(QUICK, structures=["full"], round=False)
+    first = posg_fsc.solve(game, FORMULA, 2, 1, seed=1, **settings)
+    second = posg_fsc.solve(game, FORMULA, 2, 1, seed=2, **settings)
+    again = posg_fsc.solve(game, FORMULA, 2, 1, seed=1, **settings)
+    assert first.defender.to_json() == again.defender.to_json()
+    assert first.defender.to_json() != second.defender.to_json()
+
+
+def test_the_callback_sees_every_record_and_can_stop_the_run():
+    game = posg_fsc.example_grid()
+    seen = []
+
+    def on_iteration(record):
+        seen.append(record)
+        return len(seen) < 5
+
+    started = time.monotonic()
+    result = posg_fsc.solve(game, FORMULA, 2, 1, on_iteration=on_iteration, **LONG)
+    assert time.monotonic() - started < 60
+    assert 5 <= len(seen) < 100
+    assert result.structures[0]["iterations"] < 100
+    assert seen[0]["structure"] == "full" and seen[0]["iteration"] == 0
+    # The callback saw the records of the curve, as they happened: after it
+    # returned False it is not called again, while the run stops at its
+    # next iteration.
+    assert len(seen) == 5 and len(result.curve) <= 10
+    for record, kept in zip(seen, result.curve):
+        assert {k: v for k, v in record.items() if k != "structure"} == kept
+
+
+def test_an_exception_in_the_callback_stops_the_run_and_is_raised():
+    game = posg_fsc.example_grid()
+
+    def on_iteration(record):
+        if record["iteration"] == 3:
+            raise LookupError("stop here")
+
+    with pytest.raises(LookupError, match="stop here"):
+        posg_fsc.solve(game, FORMULA, 2, 1, on_iteration=on_iteration, **LONG)
+
+
+def test_ctrl_c_stops_a_long_solve_cleanly():
+    game = posg_fsc.example_grid()
+    seen = []
+
+    def on_iteration(record):
+        seen.append(record)
+        if len(seen) == 3:
+            _thread.interrupt_main()  # what Ctrl-C does
+
+    started = time.monotonic()
+    with pytest.raises(KeyboardInterrupt):
+        posg_fsc.solve(game, FORMULA, 2, 1, on_iteration=on_iteration, **LONG)
+    assert time.monotonic() - started < 60
+    assert len(seen) < 1000
+
+
+def test_the_gil_is_released_while_rust_computes():
+    game = posg_fsc.example_grid(width=4, height=4, unsafe=[5], goal=[15])
+    ticks = []
+    running = threading.Event()
+    running.set()
+
+    def count():
+        while running.is_set():
+            ticks.append(1)
+            time.sleep(0.001)
+
+    counter = threading.Thread(target=count)
+    counter.start()
+    started = time.monotonic()
+    posg_fsc.solve(game, FORMULA, 2, 1, max_iterations=30, starts=1, structures=["full"])
+    elapsed = time.monotonic() - started
+    running.clear()
+    counter.join()
+    # Had the GIL been held, the counter could not have run during the solve.
+    assert elapsed > 0.05
+    assert len(ticks) > 0.2 * elapsed / 0.001 * 0.1
+
+
+def test_sweep_rows_are_monotone_in_the_defender_size():
+    game = posg_fsc.example_grid()
+    rows = posg_fsc.sweep(game, FORMULA, def_nodes=[1, 2], adv_nodes=1, **QUICK)
+    assert [(r["defender_nodes"], r["adversary_nodes"]) for r in rows] == [(1, 1), (2, 1)]
+    assert [r["warm_started"] for r in rows] == [False, True]
+    assert rows[1]["certified_lower"] >= rows[0]["certified_lower"]
+    assert rows[1]["result"].defender.nodes == 2
+
+
+def test_the_example_script_writes_its_table(tmp_path):
+    import csv
+    import subprocess
+    import sys
+
+    from conftest import REPOSITORY
+
+    script = REPOSITORY / "examples" / "python" / "compare_sizes.py"
+    subprocess.run(
+        [sys.executable, str(script), "--def-nodes", "1", "2", "--max-iterations", "20",
+         "--out", str(tmp_path)],
+        check=True,
+    )
+    rows = list(csv.DictReader((tmp_path / "compare_sizes.csv").open()))
+    assert [int(r["defender_nodes"]) for r in rows] == [1, 2]
+    for row in rows:
+        assert 0 <= float(row["certified_lower"]) <= float(row["upper_bound"]) <= 1
