@@ -100,7 +100,7 @@ pub fn solve_into(
     progress: ProgressMode,
     seconds_axis: bool,
 ) -> anyhow::Result<Outcome> {
-    let command_line: Vec<String> = std::env::args().collect();
+    let command_line = super::common::command_line();
     let directory = SolveDirectory {
         path,
         seconds_axis,

@@ -29,15 +29,15 @@
 //! bring under the tolerance is an error ([`SolverError::Unbounded`]).
 
 pub mod bound;
-mod denormals;
 mod ilu;
 mod krylov;
 mod lu;
 mod multifrontal;
 mod ordering;
+#[cfg(test)]
+mod stiff_tests;
 
 use bound::ExpectedTime;
-pub use denormals::FlushDenormals;
 pub use ilu::Ilu0;
 pub use krylov::KrylovSolver;
 pub use lu::LuSolver;
@@ -84,7 +84,11 @@ pub enum SolverError {
     #[error("non-finite number in the linear system ({0})")]
     NonFinite(&'static str),
     /// The residual exceeds the tolerance.
-    #[error("residual {residual:e} exceeds the tolerance {tolerance:e}")]
+    #[error(
+        "residual {residual:e} exceeds the tolerance {tolerance:e}: the computed solution does \
+         not satisfy its equations closely enough (remedies: `--solver lu`, or a larger \
+         `--tolerance` where a looser result will do)"
+    )]
     Inaccurate {
         /// `max_i |(A x - b)_i|`.
         residual: f64,
@@ -109,9 +113,9 @@ pub enum SolverError {
     #[error(
         "the error bound {error_bound:e} exceeds the tolerance {tolerance:e}: the chain spends \
          up to {expected_time:e} expected steps in the transient states, so even a residual of \
-         rounding size allows an error that large (a slowly mixing chain); the value is not \
-         reported (a larger tolerance, `--tolerance` where a command offers it, accepts a looser \
-         bound)"
+         rounding size in double precision allows an error that large (a slowly mixing chain); \
+         the value is not reported (remedy: a larger `--tolerance`, which accepts the looser \
+         bound and reports it with the value)"
     )]
     Unbounded {
         /// The smallest bound reached.
@@ -348,22 +352,12 @@ enum Direction {
     Transposed,
 }
 
-/// Runs `forward` and `transposed` at once on two threads (rayon), each
-/// with subnormals flushed.
+/// Runs `forward` and `transposed` at once on two threads (rayon).
 fn join_directions(
     forward: impl FnOnce() -> Result<SolveReport, SolverError> + Send,
     transposed: impl FnOnce() -> Result<SolveReport, SolverError> + Send,
 ) -> SolvePair {
-    rayon::join(
-        || {
-            let _flush = FlushDenormals::on_this_thread();
-            forward()
-        },
-        || {
-            let _flush = FlushDenormals::on_this_thread();
-            transposed()
-        },
-    )
+    rayon::join(forward, transposed)
 }
 
 /// The cost of a one-shot sparse LU (symbolic analysis, numeric
@@ -425,6 +419,83 @@ fn check_values(pattern: &SparsePattern, values: &[f64]) -> Result<(), SolverErr
     Ok(())
 }
 
+/// The check of a chain's matrix given as off-diagonal `values` and row
+/// sums `exits` (method.md section 8): sizes, finite numbers, off-diagonal
+/// entries at most 0 and exits at least 0 (`Q` substochastic), which the
+/// subtraction-free elimination needs.
+fn check_chain(pattern: &SparsePattern, values: &[f64], exits: &[f64]) -> Result<(), SolverError> {
+    check_values(pattern, values)?;
+    if exits.len() != pattern.n {
+        return Err(SolverError::Malformed(
+            "exits do not match the pattern".into(),
+        ));
+    }
+    if exits.iter().any(|e| !e.is_finite()) {
+        return Err(SolverError::NonFinite("probability of leaving T"));
+    }
+    if exits.iter().any(|&e| e < 0.0) {
+        return Err(SolverError::Malformed(
+            "a negative probability of leaving T".into(),
+        ));
+    }
+    for row in 0..pattern.n {
+        let range = pattern.row_range(row);
+        let positive = pattern.columns[range.clone()]
+            .iter()
+            .zip(&values[range])
+            .any(|(&column, &a)| column != row && a > 0.0);
+        if positive {
+            return Err(SolverError::Malformed(format!(
+                "row {row} has a positive off-diagonal entry: not I - Q for a substochastic Q"
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// Sets each diagonal entry of `A` to its row's exit plus the magnitudes of
+/// its off-diagonal entries (a sum of nonnegative numbers), so that `A 1 =
+/// exits` up to one rounding per row.
+fn complete_diagonal(pattern: &SparsePattern, values: &mut [f64], exits: &[f64]) {
+    for (row, &exit) in exits.iter().enumerate() {
+        let range = pattern.row_range(row);
+        let mut diagonal = None;
+        let mut sum = exit;
+        for k in range {
+            if pattern.columns[k] == row {
+                diagonal = Some(k);
+            } else {
+                sum -= values[k];
+            }
+        }
+        if let Some(k) = diagonal {
+            values[k] = sum;
+        }
+    }
+}
+
+/// The row sums `A 1` of a matrix given with its diagonal, for callers that
+/// do not know the exits: `a_ii - sum_{j != i} |a_ij|`, summed with
+/// compensation (TwoSum) and at least 0. The diagonal's own rounding is
+/// then the caller's (method.md section 8 says why the exits should be
+/// given instead).
+fn derive_exits(pattern: &SparsePattern, values: &[f64], exits: &mut [f64]) {
+    for (row, exit) in exits.iter_mut().enumerate() {
+        let (mut sum, mut correction) = (0.0, 0.0);
+        for k in pattern.row_range(row) {
+            let term = if pattern.columns[k] == row {
+                values[k]
+            } else {
+                -values[k].abs()
+            };
+            let (next, error) = bound::two_sum(sum, term);
+            sum = next;
+            correction += error;
+        }
+        *exit = (sum + correction).max(0.0);
+    }
+}
+
 /// The residual contract: a finite solution whose residual is at most the tolerance.
 fn accept(residual: f64, x: &[f64], tolerance: f64) -> Result<f64, SolverError> {
     if x.iter().any(|v| !v.is_finite()) {
@@ -461,6 +532,10 @@ pub struct LinearSolver {
     /// factorisation (see there).
     solve_while_factorising: bool,
     tolerance: f64,
+    /// The row sums `A 1` of the last values (the probabilities of leaving
+    /// `T`): with the off-diagonal values they define `A` (method.md
+    /// section 8).
+    exits: Vec<f64>,
     expected_time: ExpectedTime,
     scratch: BoundScratch,
 }
@@ -481,9 +556,10 @@ fn certify_solved(
     time: &ExpectedTime,
     pattern: &SparsePattern,
     values: &[f64],
+    exits: &[f64],
     tolerance: f64,
 ) -> Result<f64, SolverError> {
-    time.certify(pattern, values, 1.0)
+    time.certify(pattern, values, exits, 1.0)
         .ok_or(SolverError::Unbounded {
             error_bound: f64::INFINITY,
             tolerance,
@@ -548,6 +624,7 @@ impl LinearSolver {
             solve_while_factorising: pattern_n <= SOLVE_WHILE_FACTORISING_UNKNOWNS,
             krylov_budget: krylov_settings.max_iterations,
             tolerance: settings.tolerance,
+            exits: vec![0.0; pattern_n],
             expected_time: ExpectedTime::new(),
             scratch: BoundScratch::default(),
         })
@@ -584,23 +661,45 @@ impl LinearSolver {
         }
     }
 
-    /// Takes new values of `A` (aligned with the pattern's entries) and
-    /// factorises them: the LU, or the ILU(0) preconditioner.
+    /// Takes new values of `A` (aligned with the pattern's entries, the
+    /// diagonal included) and factorises them: the LU, or the ILU(0)
+    /// preconditioner. The exits are derived from the diagonal
+    /// ([`derive_exits`]); a caller that knows them uses
+    /// [`Self::factorize_with`].
+    #[cfg(test)]
     pub fn factorize(&mut self, values: &[f64]) -> Result<(), SolverError> {
+        check_values(self.pattern(), values)?;
+        let mut exits = vec![0.0; self.pattern().n];
+        derive_exits(self.pattern(), values, &mut exits);
+        self.factorize_with(|own, own_exits| {
+            own.copy_from_slice(values);
+            own_exits.copy_from_slice(&exits);
+        })
+    }
+
+    /// Factorises `A` as `fill` writes it into the solver's own copies
+    /// (holding the previous numbers on entry), without a second copy:
+    /// the off-diagonal entries `-Q` into the values (aligned with the
+    /// pattern) and the row sums `A 1`, the probabilities of leaving `T`,
+    /// into the exits. The diagonal is their sum, never `1 - Q(m, m)`
+    /// (method.md section 8).
+    pub fn factorize_with(
+        &mut self,
+        fill: impl FnOnce(&mut [f64], &mut [f64]),
+    ) -> Result<(), SolverError> {
         match &mut self.backend {
-            Backend::Lu(lu) => lu.factorize(values),
-            Backend::Krylov(krylov) => krylov.factorize(values),
+            Backend::Lu(lu) => {
+                let factorised = lu.factorize_with(fill);
+                self.exits.copy_from_slice(lu.exits());
+                factorised
+            }
+            Backend::Krylov(krylov) => krylov.factorize_with(&mut self.exits, fill),
         }
     }
 
-    /// [`Self::factorize`] with the values that `fill` writes into the
-    /// solver's own copy of `A` (aligned with the pattern; it holds the
-    /// previous values on entry), without a second copy.
-    pub fn factorize_with(&mut self, fill: impl FnOnce(&mut [f64])) -> Result<(), SolverError> {
-        match &mut self.backend {
-            Backend::Lu(lu) => lu.factorize_with(fill),
-            Backend::Krylov(krylov) => krylov.factorize_with(fill),
-        }
+    /// The row sums `A 1` of the last values (see [`Self::factorize_with`]).
+    pub fn exits(&self) -> &[f64] {
+        &self.exits
     }
 
     /// [`Self::factorize_with`] followed by [`Self::solve`], for a system
@@ -618,7 +717,7 @@ impl LinearSolver {
     /// factorises keeping `L`, then solves.
     pub fn factorize_and_solve(
         &mut self,
-        fill: impl FnOnce(&mut [f64]),
+        fill: impl FnOnce(&mut [f64], &mut [f64]),
         b: &[f64],
         x: &mut [f64],
     ) -> Result<SolveReport, SolverError> {
@@ -629,10 +728,12 @@ impl LinearSolver {
                 return self.solve(b, x);
             }
         };
-        lu.set_values_with(fill)?;
+        let set = lu.set_values_with(fill);
+        self.exits.copy_from_slice(lu.exits());
+        set?;
         let n = lu.pattern().n;
         let time = &mut self.expected_time;
-        let reused = time.certify(lu.pattern(), lu.values(), bound::REUSE_LIMIT);
+        let reused = time.certify(lu.pattern(), lu.values(), &self.exits, bound::REUSE_LIMIT);
         let (report, largest_time) = match reused {
             Some(largest) => {
                 let [report] = lu.factorize_and_solve([b], [x], [self.tolerance])?;
@@ -649,7 +750,8 @@ impl LinearSolver {
                 let [value, solved] = solves?;
                 let report = value?;
                 solved?;
-                let certified = certify_solved(time, lu.pattern(), lu.values(), self.tolerance);
+                let certified =
+                    certify_solved(time, lu.pattern(), lu.values(), &self.exits, self.tolerance);
                 (report, certified?)
             }
         };
@@ -726,8 +828,12 @@ impl LinearSolver {
     /// `max(t)` certified by the previous estimate of `t`, if it still fits
     /// the matrix within [`bound::REUSE_LIMIT`].
     fn reused_expected_time(&self) -> Option<f64> {
-        self.expected_time
-            .certify(self.pattern(), self.values(), bound::REUSE_LIMIT)
+        self.expected_time.certify(
+            self.pattern(),
+            self.values(),
+            &self.exits,
+            bound::REUSE_LIMIT,
+        )
     }
 
     /// `max(t)` certified by an estimate of `t` just solved for.
@@ -736,6 +842,7 @@ impl LinearSolver {
             &self.expected_time,
             self.pattern(),
             self.values(),
+            &self.exits,
             self.tolerance,
         )
     }
@@ -766,6 +873,7 @@ impl LinearSolver {
         let plain = bound::residual_bound(
             self.pattern(),
             self.values(),
+            &self.exits,
             x,
             |i| b[i],
             bound::Evaluation::Plain,
@@ -815,6 +923,7 @@ impl LinearSolver {
             let bounded = bound::residual_bound(
                 self.pattern(),
                 self.values(),
+                &self.exits,
                 x,
                 |i| b[i],
                 bound::Evaluation::Compensated,
@@ -999,7 +1108,11 @@ impl LinearSolver {
             let (pattern, values) = (krylov.pattern().clone(), krylov.values().to_vec());
             // BiCGSTAB's memory is freed before the numeric LU needs its own.
             self.backend = Backend::Lu(Box::new(LuSolver::new(pattern, self.tolerance)?));
-            self.factorize(&values)?;
+            let exits = self.exits.clone();
+            self.factorize_with(|own, own_exits| {
+                own.copy_from_slice(&values);
+                own_exits.copy_from_slice(&exits);
+            })?;
         }
         Ok(())
     }
@@ -1375,7 +1488,12 @@ mod tests {
             for scale in [1.0, 1.0 - 1e-6] {
                 let scaled: Vec<f64> = values.iter().map(|v| v * scale).collect();
                 let (mut x, mut x_two_steps) = (vec![0.0; n], vec![0.0; n]);
-                let fill = |own: &mut [f64]| own.copy_from_slice(&scaled);
+                let mut row_sums = vec![0.0; n];
+                derive_exits(&pattern, &scaled, &mut row_sums);
+                let fill = |own: &mut [f64], exits: &mut [f64]| {
+                    own.copy_from_slice(&scaled);
+                    exits.copy_from_slice(&row_sums);
+                };
                 let report = at_once.factorize_and_solve(fill, &b, &mut x);
                 if let Some(corrects) = corrects {
                     assert_eq!(at_once.solve_while_factorising, !corrects);
