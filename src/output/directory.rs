@@ -26,14 +26,15 @@ use thiserror::Error;
 #[derive(Debug, Error)]
 pub enum OutputError {
     /// An I/O operation on `path` failed.
-    #[error("{action} {path}: {source}")]
+    #[error("{action} {path}: {error}")]
     Io {
         /// What was being done (`creating`, `writing`, ...).
         action: &'static str,
         /// The path it was done to.
         path: PathBuf,
-        /// The operating system's error.
-        source: std::io::Error,
+        /// The operating system's error, shown in the message (not as a
+        /// separate cause, which would print it twice).
+        error: std::io::Error,
     },
     /// The target exists and holds files, and replacing it was not allowed.
     #[error(
@@ -71,7 +72,7 @@ impl OutputError {
         Self::Io {
             action,
             path: path.to_path_buf(),
-            source,
+            error: source,
         }
     }
 }
@@ -185,7 +186,7 @@ impl OutputDirectory {
         fs::rename(&self.staging, &self.target).map_err(|e| OutputError::Io {
             action: "renaming the finished results into",
             path: self.target.clone(),
-            source: e,
+            error: e,
         })
     }
 }
@@ -310,7 +311,7 @@ fn recover_leftovers(parent: &Path, name: &str, target: &Path) -> Result<(), Out
             fs::rename(&path, target).map_err(|e| OutputError::Io {
                 action: "restoring the results that a killed run had moved aside, from",
                 path: path.clone(),
-                source: e,
+                error: e,
             })?;
         } else {
             fs::remove_dir_all(&path).map_err(|e| OutputError::io("removing", &path, e))?;
@@ -468,6 +469,20 @@ mod tests {
             OutputDirectory::create(&other, false),
             Err(OutputError::Locked { .. })
         ));
+    }
+
+    #[test]
+    fn os_errors_are_printed_once() {
+        let base = scratch("os-error-once");
+        let file = base.join("plain-file");
+        fs::write(&file, "x").unwrap();
+        let error = create_dir(&file.join("sub")).unwrap_err();
+        let chain: Vec<String> =
+            std::iter::successors(Some(&error as &dyn std::error::Error), |e| e.source())
+                .map(|e| e.to_string())
+                .collect();
+        let printed = chain.join(": ");
+        assert_eq!(printed.matches("os error").count(), 1, "{printed}");
     }
 
     #[test]

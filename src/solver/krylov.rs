@@ -157,10 +157,16 @@ impl KrylovSolver {
     /// Takes the values of `A` and computes its ILU(0) preconditioner.
     #[cfg(test)]
     pub fn factorize(&mut self, values: &[f64]) -> Result<(), SolverError> {
-        check_values(&self.system.pattern, values)?;
-        let mut exits = vec![0.0; self.system.pattern.n];
-        derive_exits(&self.system.pattern, values, &mut exits);
-        self.factorize_with(&mut exits, |own, _| own.copy_from_slice(values))
+        let system = &mut self.system;
+        system.factorised = false;
+        check_values(&system.pattern, values)?;
+        let mut exits = vec![0.0; system.pattern.n];
+        derive_exits(&system.pattern, values, &mut exits);
+        check_chain(&system.pattern, values, &exits)?;
+        system.values.copy_from_slice(values);
+        system.ilu.factorize(&system.pattern, &system.values)?;
+        system.factorised = true;
+        Ok(())
     }
 
     /// [`Self::factorize`] of `A` as `fill` writes it into the solver's

@@ -77,14 +77,20 @@ impl LuSolver {
 
     /// Numeric LU of `A` with `values` (aligned with the pattern's entries),
     /// reusing the symbolic analysis and the numeric storage. The exits are
-    /// derived from the diagonal ([`derive_exits`]): a caller that knows
-    /// them uses [`Self::factorize_with`].
+    /// derived from the diagonal ([`derive_exits`]), which is kept as given:
+    /// a caller that knows them uses [`Self::factorize_with`].
     pub fn factorize(&mut self, values: &[f64]) -> Result<(), SolverError> {
-        check_values(&self.system.pattern, values)?;
         let system = &mut self.system;
+        system.factorised = false;
+        system.values_checked = false;
+        check_values(&system.pattern, values)?;
         system.values.copy_from_slice(values);
         derive_exits(&system.pattern, values, &mut system.exits);
-        self.factorize_with(|_, _| {})
+        check_chain(&system.pattern, &system.values, &system.exits)?;
+        system.values_checked = true;
+        system.lu.factorize(&system.values, &system.exits)?;
+        system.factorised = true;
+        Ok(())
     }
 
     /// [`Self::factorize`] of `A` as `fill` writes it into the solver's own

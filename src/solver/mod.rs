@@ -669,12 +669,13 @@ impl LinearSolver {
     #[cfg(test)]
     pub fn factorize(&mut self, values: &[f64]) -> Result<(), SolverError> {
         check_values(self.pattern(), values)?;
-        let mut exits = vec![0.0; self.pattern().n];
+        let mut exits = std::mem::take(&mut self.exits);
         derive_exits(self.pattern(), values, &mut exits);
-        self.factorize_with(|own, own_exits| {
-            own.copy_from_slice(values);
-            own_exits.copy_from_slice(&exits);
-        })
+        self.exits = exits;
+        match &mut self.backend {
+            Backend::Lu(lu) => lu.factorize(values),
+            Backend::Krylov(krylov) => krylov.factorize(values),
+        }
     }
 
     /// Factorises `A` as `fill` writes it into the solver's own copies
@@ -1338,7 +1339,7 @@ mod tests {
         let hopeless = SolverSettings {
             lu_limit: 0,
             max_iterations: 1,
-            tolerance: 1e-12,
+            tolerance: 1e-11,
             ..SolverSettings::default()
         };
         for method in [SolverMethod::Auto, SolverMethod::Krylov] {
@@ -1349,7 +1350,7 @@ mod tests {
             let mut x = vec![0.0; 400];
             let result = solver.solve(&b, &mut x);
             if method == SolverMethod::Auto {
-                assert!(result.unwrap().residual <= 1e-12);
+                assert!(result.unwrap().residual <= 1e-11);
                 assert_eq!(solver.method(), SolverMethod::Lu);
             } else {
                 assert!(matches!(result, Err(SolverError::NotConverged { .. })));
@@ -1498,7 +1499,12 @@ mod tests {
                 if let Some(corrects) = corrects {
                     assert_eq!(at_once.solve_while_factorising, !corrects);
                 }
-                two_steps.factorize(&scaled).unwrap();
+                two_steps
+                    .factorize_with(|own, exits| {
+                        own.copy_from_slice(&scaled);
+                        exits.copy_from_slice(&row_sums);
+                    })
+                    .unwrap();
                 assert_eq!(report, two_steps.solve(&b, &mut x_two_steps));
                 let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
                 assert_eq!(bits(&x), bits(&x_two_steps));

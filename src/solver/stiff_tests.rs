@@ -154,7 +154,11 @@ fn solved_within_bound(chain: &Chain, method: SolverMethod) -> bool {
             }
             true
         }
-        Err(SolverError::Unbounded { .. } | SolverError::Inaccurate { .. }) => false,
+        Err(
+            SolverError::Unbounded { .. }
+            | SolverError::Inaccurate { .. }
+            | SolverError::NotConverged { .. },
+        ) => false,
         Err(other) => panic!("{method:?}: {other}"),
     }
 }
