@@ -210,6 +210,11 @@ impl ExpectedTime {
         &mut self.estimate
     }
 
+    /// `max t_hat` of the last estimate stored (not certified).
+    pub fn largest(&self) -> f64 {
+        self.largest
+    }
+
     /// Records that the estimate was replaced.
     pub fn store(&mut self) {
         self.largest = self.estimate.iter().copied().fold(0.0, f64::max);

@@ -173,9 +173,9 @@ impl LuSolver {
             .lu
             .factorize_and_solve(&system.values, &system.exits, in_place, work)?;
         system.factorised = true;
-        let (pattern, values) = (&system.pattern, &system.values[..]);
+        let chain = (&system.pattern, &system.values[..], &system.exits[..]);
         Ok(std::array::from_fn(|r| {
-            accepted(pattern, values, rhs[r], solutions[r], tolerances[r])
+            accepted(chain, rhs[r], solutions[r], tolerances[r])
         }))
     }
 
@@ -276,6 +276,7 @@ impl System {
         Ok(Factors {
             pattern: &self.pattern,
             values: &self.values,
+            exits: &self.exits,
             lu: &self.lu,
         })
     }
@@ -286,6 +287,7 @@ impl System {
 struct Factors<'a> {
     pattern: &'a SparsePattern,
     values: &'a [f64],
+    exits: &'a [f64],
     lu: &'a MultifrontalLu,
 }
 
@@ -335,8 +337,7 @@ impl Factors<'_> {
             .solve_many_in_place(in_place, &mut workspace.permuted);
         std::array::from_fn(|r| {
             accepted(
-                self.pattern,
-                self.values,
+                (self.pattern, self.values, self.exits),
                 rhs[r],
                 solutions[r],
                 tolerances[r],
@@ -346,15 +347,16 @@ impl Factors<'_> {
 }
 
 /// The report of a forward solution `solution` of `A x = rhs` (`A` of
-/// `pattern` and `values`), if its residual is within `tolerance`.
+/// `pattern`, off-diagonal `values` and row sums `exits`), if its residual,
+/// evaluated without the diagonal ([`SparsePattern::chain_residual`]), is
+/// within `tolerance`.
 fn accepted(
-    pattern: &SparsePattern,
-    values: &[f64],
+    (pattern, values, exits): (&SparsePattern, &[f64], &[f64]),
     rhs: &[f64],
     solution: &[f64],
     tolerance: f64,
 ) -> Result<SolveReport, SolverError> {
-    let residual = pattern.residual(values, solution, rhs);
+    let residual = pattern.chain_residual(values, exits, solution, rhs);
     Ok(report_of(accept(residual, solution, tolerance)?))
 }
 
