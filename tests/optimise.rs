@@ -9,7 +9,7 @@ use posg_fsc::controller::{Choice, Fsc, Role, Support};
 use posg_fsc::game::Posg;
 use posg_fsc::game::file::from_json_str;
 use posg_fsc::optimise::{
-    Objective, Settings, Softmax, Status, Structure, StructureSource, optimise_structure,
+    Cancel, Objective, Settings, Softmax, Status, Structure, StructureSource, optimise_structure,
 };
 use posg_fsc::output::CurveCsv;
 use posg_fsc::value::Evaluator;
@@ -311,7 +311,17 @@ fn same_seed_and_settings_give_the_same_curve_except_wall_clock_seconds() {
         .map(|name| {
             let path = dir.join(name);
             let mut writer = CurveCsv::create(&path).unwrap();
-            optimise_structure(&g, &dra, None, &structure, &settings, 0, &mut writer).unwrap();
+            optimise_structure(
+                &g,
+                &dra,
+                None,
+                &structure,
+                &settings,
+                0,
+                &mut writer,
+                &Cancel::new(),
+            )
+            .unwrap();
             curve_without_seconds(&path)
         })
         .collect();
@@ -374,7 +384,8 @@ fn a_run_resumes_from_the_logits_it_wrote() {
         restarts: 0,
         ..Settings::default()
     };
-    let again = optimise_structure(&g, &dra, None, &resumed, &still, 0, &mut ()).unwrap();
+    let again =
+        optimise_structure(&g, &dra, None, &resumed, &still, 0, &mut (), &Cancel::new()).unwrap();
     let heads = |f: &Fsc| {
         f.choices(0, 0)
             .iter()

@@ -14,7 +14,7 @@ use posg_fsc::controller::{Choice, Fsc, Role, Support};
 use posg_fsc::game::Posg;
 use posg_fsc::game::file::from_json_str;
 use posg_fsc::optimise::{
-    Method, Settings, Status, Structure, embed, keep_better, optimise_structure, pad,
+    Cancel, Method, Settings, Status, Structure, embed, keep_better, optimise_structure, pad,
     rounded_candidates, score, truncated, warm_started,
 };
 use posg_fsc::value::SolverSettings;
@@ -155,7 +155,7 @@ proptest! {
         let (phi, not_phi) = automata("!unsafe U goal");
         let settings = Settings { seed, max_iterations: 30, restarts: 1, starts: 1, ..Settings::default() };
         let structure = Structure::full(&g, 1 + (seed % 2) as usize, 1, false);
-        let outcome = optimise_structure(&g, &phi, Some(&not_phi), &structure, &settings, 0, &mut ()).unwrap();
+        let outcome = optimise_structure(&g, &phi, Some(&not_phi), &structure, &settings, 0, &mut (), &Cancel::new()).unwrap();
         let report = &outcome.report;
         prop_assert_eq!(&report.candidates[0].name, "unrounded");
         let unrounded = report.candidates[0].score;
@@ -195,8 +195,17 @@ fn the_support_never_changes_and_the_solves_stay_accurate() {
             single_player_ascent: method == Method::Ascent,
             ..Settings::default()
         };
-        let outcome =
-            optimise_structure(&g, &phi, None, &structure, &settings, 0, &mut ()).unwrap();
+        let outcome = optimise_structure(
+            &g,
+            &phi,
+            None,
+            &structure,
+            &settings,
+            0,
+            &mut (),
+            &Cancel::new(),
+        )
+        .unwrap();
         assert_eq!(outcome.report.method, method);
         assert_eq!(
             Support::of(&outcome.defender),
@@ -238,7 +247,17 @@ fn the_logit_bound_widens_when_progress_stalls_on_it() {
         ..Settings::default()
     };
     let structure = Structure::full(&g, 1, 1, false);
-    let outcome = optimise_structure(&g, &phi, None, &structure, &settings, 0, &mut ()).unwrap();
+    let outcome = optimise_structure(
+        &g,
+        &phi,
+        None,
+        &structure,
+        &settings,
+        0,
+        &mut (),
+        &Cancel::new(),
+    )
+    .unwrap();
     assert_eq!(outcome.report.logit_bound, 8.0, "{:?}", outcome.report);
     assert_eq!(outcome.report.status, Status::Stalled);
     // At c = 1 `go` has probability at most e^2 / (1 + e^2) = 0.88.
@@ -302,6 +321,7 @@ fn a_warm_started_sweep_is_monotone_in_the_defenders_size() {
             &[start],
             &settings,
             |_, _| Box::new(()),
+            &posg_fsc::optimise::Cancel::new(),
         )
         .unwrap();
         if let Some(smaller) = &previous {

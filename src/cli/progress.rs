@@ -11,73 +11,115 @@ use clap::Args;
 use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
 use posg_fsc::optimise::{IterationRecord, Observer, ObserverError};
 
-/// Seconds between two progress lines when stderr is not a terminal.
-const LINE_INTERVAL: Duration = Duration::from_secs(5);
-
 /// Output options shared by `solve` and `sweep`.
 #[derive(Debug, Clone, Args)]
 pub struct OutputArgs {
     /// No progress on stderr (by default: bars on a terminal, otherwise a
-    /// line every 5 seconds with iteration, estimate, bounds and elapsed time).
+    /// line every `--progress-every` seconds with the start, iteration,
+    /// estimate, best certified bracket and elapsed time).
     #[arg(long)]
     pub quiet: bool,
+    /// Seconds between two progress lines when stderr is not a terminal
+    /// (logs, pipes, cluster jobs).
+    #[arg(long, default_value_t = 5.0, value_parser = positive_seconds)]
+    pub progress_every: f64,
     /// Label the top of curve.svg with the seconds elapsed.
     #[arg(long)]
     pub seconds_axis: bool,
 }
 
+/// A positive, finite number of seconds.
+fn positive_seconds(text: &str) -> Result<f64, String> {
+    match text.parse::<f64>() {
+        Ok(seconds) if seconds.is_finite() && seconds > 0.0 => Ok(seconds),
+        Ok(_) => Err("must be a positive number of seconds".into()),
+        Err(error) => Err(error.to_string()),
+    }
+}
+
 /// How progress is shown.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub enum ProgressMode {
     /// indicatif bars (stderr is a terminal).
     Bars,
-    /// A line every [`LINE_INTERVAL`] (stderr is a file or a pipe).
-    Lines,
+    /// A line every so often (stderr is a file or a pipe).
+    Lines(Duration),
     /// Nothing.
     Quiet,
 }
 
 impl ProgressMode {
-    /// Bars on a terminal, lines elsewhere, nothing with `--quiet`.
-    pub fn detect(quiet: bool) -> Self {
-        if quiet {
+    /// Bars on a terminal, lines (every `args.progress_every` seconds)
+    /// elsewhere, nothing with `--quiet`.
+    pub fn detect(args: &OutputArgs) -> Self {
+        if args.quiet {
             Self::Quiet
         } else if std::io::stderr().is_terminal() {
             Self::Bars
         } else {
-            Self::Lines
+            Self::Lines(Duration::from_secs_f64(args.progress_every))
         }
     }
 }
 
-/// The numbers a progress report shows, updated from the records.
+/// The numbers a progress report shows, updated from the records of every
+/// start as they arrive: the latest record's start, iteration, value and
+/// worst case, the furthest iteration of any start, and the best bracket
+/// certified so far (the highest lower bound and lowest upper bound of any
+/// start).
 #[derive(Debug, Clone, Copy, Default)]
 struct Latest {
+    start: usize,
     iteration: usize,
+    furthest: usize,
     value: f64,
     worst_case: Option<f64>,
-    bracket: Option<(f64, f64)>,
+    lower: Option<f64>,
+    upper: Option<f64>,
     seconds: f64,
 }
 
 impl Latest {
     fn update(&mut self, record: &IterationRecord) {
+        self.start = record.start;
         self.iteration = record.iteration;
+        self.furthest = self.furthest.max(record.iteration + 1);
         self.value = record.value;
-        self.seconds = record.seconds;
+        self.seconds = self.seconds.max(record.seconds);
         self.worst_case = record.worst_case.or(self.worst_case);
-        if let (Some(lower), Some(upper)) = (record.certified_lower, record.upper_bound) {
-            self.bracket = Some((lower, upper));
-        }
+        self.lower = max_of(self.lower, record.certified_lower);
+        self.upper = min_of(self.upper, record.upper_bound);
     }
 
-    /// `value 0.61, worst case 0.58, certified [0.57, 0.70]`.
+    /// `start 2 at iteration 140: value 0.61, worst case 0.58; best certified [0.57, 0.70]`.
     fn describe(&self) -> String {
         let worst = self.worst_case.map_or("-".into(), |w| format!("{w:.6}"));
-        let bracket = self.bracket.map_or(String::new(), |(l, u)| {
-            format!(", certified [{l:.6}, {u:.6}]")
-        });
-        format!("value {:.6}, worst case {worst}{bracket}", self.value)
+        let bracket = match (self.lower, self.upper) {
+            (Some(l), Some(u)) => format!("; best certified [{l:.6}, {u:.6}]"),
+            _ => String::new(),
+        };
+        format!(
+            "start {} at iteration {}: value {:.6}, worst case {worst}{bracket}",
+            self.start,
+            self.iteration + 1,
+            self.value
+        )
+    }
+}
+
+/// The larger of two optional numbers (either when the other is `None`).
+fn max_of(a: Option<f64>, b: Option<f64>) -> Option<f64> {
+    match (a, b) {
+        (Some(a), Some(b)) => Some(a.max(b)),
+        (a, b) => a.or(b),
+    }
+}
+
+/// The smaller of two optional numbers (either when the other is `None`).
+fn min_of(a: Option<f64>, b: Option<f64>) -> Option<f64> {
+    match (a, b) {
+        (Some(a), Some(b)) => Some(a.min(b)),
+        (a, b) => a.or(b),
     }
 }
 
@@ -92,7 +134,9 @@ pub fn structure_progress(
         (ProgressMode::Bars, Some(bars)) => {
             Some(Box::new(BarProgress::new(bars, label, iterations)))
         }
-        (ProgressMode::Lines, _) => Some(Box::new(LineProgress::new(label, iterations))),
+        (ProgressMode::Lines(interval), _) => {
+            Some(Box::new(LineProgress::new(label, iterations, interval)))
+        }
         _ => None,
     }
 }
@@ -122,7 +166,7 @@ impl BarProgress {
 impl Observer for BarProgress {
     fn observe(&mut self, record: &IterationRecord) {
         self.latest.update(record);
-        self.bar.set_position(record.iteration as u64 + 1);
+        self.bar.set_position(self.latest.furthest as u64);
         self.bar.set_message(self.latest.describe());
     }
 
@@ -132,19 +176,21 @@ impl Observer for BarProgress {
     }
 }
 
-/// A line on stderr every [`LINE_INTERVAL`] and at the end.
+/// A line on stderr every `interval` and at the end.
 struct LineProgress {
     label: String,
     iterations: usize,
+    interval: Duration,
     last_line: Instant,
     latest: Latest,
 }
 
 impl LineProgress {
-    fn new(label: &str, iterations: usize) -> Self {
+    fn new(label: &str, iterations: usize, interval: Duration) -> Self {
         Self {
             label: label.to_string(),
             iterations,
+            interval,
             last_line: Instant::now(),
             latest: Latest::default(),
         }
@@ -152,11 +198,10 @@ impl LineProgress {
 
     fn print(&self) {
         eprintln!(
-            "[{}] iteration {}/{}: {}; {:.1} s",
+            "[{}] {} (at most {} iterations); {:.1} s",
             self.label,
-            self.latest.iteration + 1,
-            self.iterations,
             self.latest.describe(),
+            self.iterations,
             self.latest.seconds
         );
     }
@@ -165,7 +210,7 @@ impl LineProgress {
 impl Observer for LineProgress {
     fn observe(&mut self, record: &IterationRecord) {
         self.latest.update(record);
-        if self.last_line.elapsed() >= LINE_INTERVAL {
+        if self.last_line.elapsed() >= self.interval {
             self.print();
             self.last_line = Instant::now();
         }
@@ -224,7 +269,7 @@ impl SweepProgress {
                 bar.inc(1);
                 bar.set_message(summary);
             }
-            (None, ProgressMode::Lines) => {
+            (None, ProgressMode::Lines(_)) => {
                 let elapsed = self.start.elapsed().as_secs_f64();
                 let eta = elapsed / done as f64 * (self.total - done) as f64;
                 eprintln!(

@@ -183,7 +183,7 @@ pub fn run(args: SolveArgs) -> anyhow::Result<()> {
         agree("--adv-nodes", args.adv_nodes, path, &job.start.adversary)?;
     }
     let out = OutputDirectory::create(&args.out, args.force)?;
-    let progress = ProgressMode::detect(args.output.quiet);
+    let progress = ProgressMode::detect(&args.output);
     let outcome = solve_into(job, out.path(), progress, args.output.seconds_axis)?;
     out.commit()?;
     for line in &outcome.structure_choice {

@@ -235,7 +235,7 @@ fn run_whole(
 ) -> anyhow::Result<()> {
     let out = OutputDirectory::create(&args.out, args.force)?;
     let progress = SweepProgress::new(
-        ProgressMode::detect(args.output.quiet),
+        ProgressMode::detect(&args.output),
         inputs.defender_sizes.len() * adversary_sizes.len(),
     );
     let rows = run_chains(
@@ -372,7 +372,7 @@ fn run_shard(
         .iter()
         .partition(|&&m| !args.force && chain_complete(&args.out, plan, m));
     let progress = SweepProgress::new(
-        ProgressMode::detect(args.output.quiet),
+        ProgressMode::detect(&args.output),
         inputs.defender_sizes.len() * todo.len(),
     );
     let rows = run_chains(inputs, &todo, PairPlace::Own(&args.out), &progress)?;

@@ -20,7 +20,7 @@ use std::time::Instant;
 use super::objective::Objective;
 use super::observer::{IterationRecord, Observer};
 use super::optimiser::{Incumbent, PhaseSeconds, RunOutcome, gained_little, norm};
-use super::{OptimiseError, Settings, Status};
+use super::{Cancel, OptimiseError, Settings, Status};
 use crate::value::ValueError;
 
 /// The largest change of any `z` coordinate in one trial step.
@@ -36,14 +36,15 @@ const HALVINGS: usize = 30;
 /// (where `tanh` still has slope `1 - START_CLAMP^2`).
 const START_CLAMP: f64 = 0.99;
 
-/// Maximises `V` (as `ln V`) over the defender's logits from `start` (adversary fixed at
-/// `adversary`), reporting one record per iteration to `observer`.
+/// Maximises `V` (as `ln V`) over the defender's logits from `start`
+/// (adversary fixed at `adversary`), reporting one record per iteration to
+/// `observer`, stopping early once `cancel` is set.
 pub fn ascend(
     objective: &mut Objective,
-    start: &[f64],
-    adversary: &[f64],
+    (start, adversary): (&[f64], &[f64]),
     settings: &Settings,
     observer: &mut dyn Observer,
+    cancel: &Cancel,
 ) -> Result<RunOutcome, OptimiseError> {
     let clock = Instant::now();
     let c = settings.logit_bound;
@@ -60,7 +61,9 @@ pub fn ascend(
     let mut t = 0;
     let status = loop {
         let seconds = clock.elapsed().as_secs_f64();
-        let mut status = if t + 1 >= settings.max_iterations {
+        let mut status = if cancel.is_cancelled() {
+            Some(Status::Cancelled)
+        } else if t + 1 >= settings.max_iterations {
             Some(Status::MaxIterations)
         } else if settings.time_budget > 0.0 && seconds >= settings.time_budget {
             Some(Status::TimeBudget)
@@ -91,6 +94,7 @@ pub fn ascend(
         }
         history.push(here.value);
         observer.observe(&IterationRecord {
+            start: 0,
             iteration: t,
             seconds,
             value: here.value,

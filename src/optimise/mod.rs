@@ -40,6 +40,7 @@
 
 mod ascent;
 mod best_response;
+mod cancel;
 mod objective;
 mod observer;
 mod optimiser;
@@ -52,6 +53,7 @@ mod warm_start;
 
 pub(crate) use ascent::ascend;
 pub(crate) use best_response::best_response;
+pub use cancel::Cancel;
 pub use objective::{GmcSize, Objective, Point};
 pub use observer::{IterationRecord, Observer, ObserverError};
 pub(crate) use optimiser::{Certifier, Optimiser, PhaseSeconds, RunOutcome};
@@ -62,6 +64,7 @@ pub use structures::{Candidates, SourceNote, StructureSource};
 pub(crate) use structures::{best_by_certified_lower, candidate_structures, why_others_lost};
 pub use warm_start::{WARM_START_MIX, embed, keep_better, pad, score, warm_started};
 
+use std::sync::{Mutex, PoisonError};
 use std::time::Instant;
 
 use play::perturbed;
@@ -171,6 +174,8 @@ pub enum Status {
     GapClosed,
     /// The single-player ascent found no ascent step (a stationary point).
     Converged,
+    /// A [`Cancel`] flag asked the run to stop.
+    Cancelled,
 }
 
 /// How a structure was optimised.
@@ -351,7 +356,7 @@ impl Solution {
 /// be solved to the tolerance is dropped and named in
 /// [`Solution::failed`] (an error only if every structure fails). With an
 /// automaton `negated` for !phi, every best-response check also certifies
-/// (see `Certifier`).
+/// (see `Certifier`). Every run stops early once `cancel` is set.
 pub fn optimise_structures<F>(
     game: &Posg,
     dra: &Dra,
@@ -359,6 +364,7 @@ pub fn optimise_structures<F>(
     structures: &[Structure],
     settings: &Settings,
     observer: F,
+    cancel: &Cancel,
 ) -> Result<Solution, OptimiseError>
 where
     F: Fn(usize, &Structure) -> Box<dyn Observer + Send> + Sync,
@@ -377,6 +383,7 @@ where
                 settings,
                 index as u64,
                 watcher.as_mut(),
+                cancel,
             )
         })
         .collect::<Vec<_>>();
@@ -402,12 +409,16 @@ where
 /// adversary has one action and `settings.single_player_ascent`, the
 /// single-player L-BFGS ascent (`ascend`). The start with the best score
 /// (certified lower bound with an automaton `negated` for !phi, else
-/// worst-case estimate; the first of equals) is kept and its iteration
-/// records are replayed to `observer`; then its rounded candidates
+/// worst-case estimate; the first of equals) is kept; then its rounded candidates
 /// ([`rounded_candidates`]) are scored alike and the best of the unrounded
 /// defender and its roundings is returned. A start that runs into a linear
 /// system it cannot solve to the tolerance is dropped
-/// ([`StructureReport::failed_starts`]).
+/// ([`StructureReport::failed_starts`]). Every start streams its records
+/// to `observer` as they happen ([`IterationRecord::start`] tells them
+/// apart), so the observer sees the starts' records interleaved; its
+/// `finish` runs once, after the last start. The starts stop early once
+/// `cancel` is set.
+#[allow(clippy::too_many_arguments)]
 pub fn optimise_structure(
     game: &Posg,
     dra: &Dra,
@@ -415,7 +426,8 @@ pub fn optimise_structure(
     structure: &Structure,
     settings: &Settings,
     stream: u64,
-    observer: &mut dyn Observer,
+    observer: &mut (dyn Observer + Send),
+    cancel: &Cancel,
 ) -> Result<StructureOutcome, OptimiseError> {
     settings.validate()?;
     let clock = Instant::now();
@@ -429,10 +441,15 @@ pub fn optimise_structure(
         phi: dra,
         not_phi,
     });
+    let shared = Mutex::new(observer);
     let runs = (0..settings.starts)
         .into_par_iter()
         .map(|start| {
             let start_stream = stream + ((start as u64) << 32);
+            let mut live = Live {
+                start,
+                shared: &shared,
+            };
             run_start(
                 game,
                 dra,
@@ -441,9 +458,11 @@ pub fn optimise_structure(
                 settings,
                 start_stream,
                 method,
+                (&mut live, cancel),
             )
         })
         .collect::<Vec<_>>();
+    let observer = shared.into_inner().unwrap_or_else(PoisonError::into_inner);
     let (runs, failed_starts) = keep_solved(runs)?;
     let (indices, mut runs): (Vec<usize>, Vec<StartRun>) = runs.into_iter().unzip();
     let starts: Vec<StartReport> = runs
@@ -481,9 +500,6 @@ pub fn optimise_structure(
         .filter_map(|r| r.outcome.upper_bound)
         .reduce(f64::min);
     let mut run = runs.swap_remove(best_start);
-    for record in &run.records {
-        observer.observe(record);
-    }
     observer.finish().map_err(OptimiseError::Observer)?;
     let chosen = finalise(
         game,
@@ -532,25 +548,36 @@ pub fn optimise_structure(
     })
 }
 
-/// One start's run, its records and the objective it ran on.
+/// One start's run and the objective it ran on.
 struct StartRun {
     outcome: RunOutcome,
-    records: Vec<IterationRecord>,
     objective: Objective,
     rng: ChaCha8Rng,
 }
 
-/// Keeps every record, to replay the chosen start's.
-#[derive(Default)]
-struct Recorder(Vec<IterationRecord>);
+/// One start's view of the structure's observer: each record, marked with
+/// the start's index, goes to the shared observer as it happens.
+struct Live<'a, 'o> {
+    start: usize,
+    shared: &'a Mutex<&'o mut (dyn Observer + Send)>,
+}
 
-impl Observer for Recorder {
+impl Observer for Live<'_, '_> {
     fn observe(&mut self, record: &IterationRecord) {
-        self.0.push(*record);
+        let record = IterationRecord {
+            start: self.start,
+            ..*record
+        };
+        self.shared
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner)
+            .observe(&record);
     }
 }
 
-/// One start on its own objective and random stream.
+/// One start on its own objective and random stream, reporting to
+/// `watch.0` and stopping early once `watch.1` is set.
+#[allow(clippy::too_many_arguments)]
 fn run_start(
     game: &Posg,
     dra: &Dra,
@@ -559,20 +586,20 @@ fn run_start(
     settings: &Settings,
     stream: u64,
     method: Method,
+    (observer, cancel): (&mut dyn Observer, &Cancel),
 ) -> Result<StartRun, OptimiseError> {
     let defender = Softmax::new(&structure.defender, settings.optimise_initial);
     let adversary = Softmax::new(&structure.adversary, settings.optimise_initial);
     let objective = Objective::new(game, dra, defender, adversary, &settings.solver_settings())?;
     let mut rng = ChaCha8Rng::seed_from_u64(settings.seed);
     rng.set_stream(stream);
-    let mut recorder = Recorder::default();
     let (outcome, objective, rng) = match method {
         Method::MaxMin => {
-            let mut optimiser = Optimiser::new(objective, settings, rng);
+            let mut optimiser = Optimiser::new(objective, settings, rng).with_cancel(cancel);
             if let Some(certifier) = certifier {
                 optimiser = optimiser.with_certifier(certifier);
             }
-            let outcome = optimiser.run(&mut recorder)?;
+            let outcome = optimiser.run(observer)?;
             let (objective, rng) = optimiser.into_parts();
             (outcome, objective, rng)
         }
@@ -586,13 +613,18 @@ fn run_start(
                 &mut rng,
             );
             let adversary = objective.adversary().logits_of_template(bound);
-            let outcome = ascend(&mut objective, &start, &adversary, settings, &mut recorder)?;
+            let outcome = ascend(
+                &mut objective,
+                (&start, &adversary),
+                settings,
+                observer,
+                cancel,
+            )?;
             (outcome, objective, rng)
         }
     };
     Ok(StartRun {
         outcome,
-        records: recorder.0,
         objective,
         rng,
     })

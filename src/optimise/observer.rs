@@ -9,6 +9,10 @@ use serde::Serialize;
 /// adversary fields are 0 and `worst_case` is the exact value).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct IterationRecord {
+    /// The start (of a structure's parallel starts) the record is from:
+    /// records of a structure's starts reach its observer interleaved, as
+    /// they happen.
+    pub start: usize,
     /// The outer iteration `t`, from 0.
     pub iteration: usize,
     /// Wall-clock seconds since the structure's optimisation started.
@@ -39,7 +43,8 @@ pub struct IterationRecord {
 /// An observer's failure (an output file could not be written, say).
 pub type ObserverError = Box<dyn std::error::Error + Send + Sync>;
 
-/// Receives the optimiser's records in iteration order.
+/// Receives the optimiser's records as they happen: each start's in
+/// iteration order, the starts of a structure interleaved.
 pub trait Observer {
     /// Called once per outer iteration.
     fn observe(&mut self, record: &IterationRecord);

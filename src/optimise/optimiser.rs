@@ -48,7 +48,7 @@ use serde::Serialize;
 use super::objective::Objective;
 use super::observer::{IterationRecord, Observer};
 use super::play::{GradientPlay, Iterate, PlayState, perturbed};
-use super::{OptimiseError, Settings, Status};
+use super::{Cancel, OptimiseError, Settings, Status};
 use crate::automaton::Dra;
 use crate::game::Posg;
 use check::{Check, SuffixAverage};
@@ -59,6 +59,7 @@ use check::{Check, SuffixAverage};
 pub struct Optimiser<'a> {
     objective: Objective,
     certifier: Option<Certifier<'a>>,
+    cancel: Cancel,
     settings: Settings,
     rng: ChaCha8Rng,
     defender: Vec<f64>,
@@ -212,6 +213,7 @@ impl<'a> Optimiser<'a> {
         Self {
             objective,
             certifier: None,
+            cancel: Cancel::new(),
             settings: settings.clone(),
             rng,
             defender,
@@ -224,6 +226,13 @@ impl<'a> Optimiser<'a> {
     /// certified gap.
     pub fn with_certifier(mut self, certifier: Certifier<'a>) -> Self {
         self.certifier = Some(certifier);
+        self
+    }
+
+    /// Makes the run stop ([`Status::Cancelled`]) at the first iteration
+    /// after `cancel` is set.
+    pub fn with_cancel(mut self, cancel: &Cancel) -> Self {
+        self.cancel = cancel.clone();
         self
     }
 
@@ -303,11 +312,14 @@ impl<'a> Optimiser<'a> {
         Ok(status)
     }
 
+    /// [`Status::Cancelled`] once the cancel flag is set,
     /// [`Status::MaxIterations`] after iteration `max_iterations - 1`,
     /// [`Status::TimeBudget`] once `seconds` reach a positive time budget.
     fn budget_spent(&self, t: usize, seconds: f64) -> Option<Status> {
         let s = &self.settings;
-        if t + 1 >= s.max_iterations {
+        if self.cancel.is_cancelled() {
+            Some(Status::Cancelled)
+        } else if t + 1 >= s.max_iterations {
             Some(Status::MaxIterations)
         } else if s.time_budget > 0.0 && seconds >= s.time_budget {
             Some(Status::TimeBudget)
@@ -418,6 +430,7 @@ fn record(
 ) -> IterationRecord {
     let t = state.iterate.iteration;
     IterationRecord {
+        start: 0,
         iteration: t,
         seconds,
         value: state.point.value,

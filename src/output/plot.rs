@@ -11,7 +11,7 @@ use plotters::coord::ranged1d::{DefaultFormatting, KeyPointHint, Ranged};
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
-use crate::optimise::{IterationRecord, Observer, ObserverError};
+use crate::optimise::{IterationRecord, ObserverError};
 
 /// Width and height of every plot, in pixels.
 const SIZE: (u32, u32) = (900, 520);
@@ -41,7 +41,7 @@ pub struct Title {
     pub detail: String,
 }
 
-/// Collects the records and, at the end, draws `curve.svg`: the shaded band
+/// Draws `curve.svg` from one start's records: the shaded band
 /// `[certified lower bound, game upper bound]` at the best-response checks
 /// (where computed), its two edges, and over it the value
 /// `V(phi_def(t), phi_adv)` and the worst-case estimate, against the
@@ -51,7 +51,6 @@ pub struct CurvePlot {
     path: PathBuf,
     title: Title,
     seconds_axis: bool,
-    records: Vec<IterationRecord>,
 }
 
 impl CurvePlot {
@@ -61,7 +60,6 @@ impl CurvePlot {
             path: path.to_path_buf(),
             title,
             seconds_axis: false,
-            records: Vec::new(),
         }
     }
 
@@ -72,13 +70,10 @@ impl CurvePlot {
     }
 }
 
-impl Observer for CurvePlot {
-    fn observe(&mut self, record: &IterationRecord) {
-        self.records.push(*record);
-    }
-
-    fn finish(&mut self) -> Result<(), ObserverError> {
-        draw_curve(&self.path, &self.title, &self.records, self.seconds_axis)
+impl CurvePlot {
+    /// Draws `records` (one start's, in iteration order) to the plot's file.
+    pub fn draw(&self, records: &[IterationRecord]) -> Result<(), ObserverError> {
+        draw_curve(&self.path, &self.title, records, self.seconds_axis)
     }
 }
 
@@ -481,6 +476,7 @@ mod tests {
 
     fn record(iteration: usize, seconds: f64) -> IterationRecord {
         IterationRecord {
+            start: 0,
             iteration,
             seconds,
             value: 0.5,

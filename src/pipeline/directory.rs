@@ -5,6 +5,7 @@
 //! copied to `curve.csv`/`curve.svg`).
 
 use std::path::{Path, PathBuf};
+use std::sync::{Mutex, PoisonError};
 
 use serde::Serialize;
 
@@ -13,7 +14,7 @@ use crate::certify::Bracket;
 use crate::controller::{self, Fsc};
 use crate::game::Posg;
 use crate::optimise::{
-    IterationRecord, Observer, ObserverError, Settings, SourceNote, StructureReport,
+    IterationRecord, Observer, ObserverError, OptimiseError, Settings, SourceNote, StructureReport,
 };
 use crate::output::{CurveCsv, CurvePlot, OutputError, Title, create_dir, write_file};
 
@@ -40,49 +41,68 @@ pub struct SolveDirectory<'a> {
 }
 
 impl SolveDirectory<'_> {
-    /// Runs `job` ([`run`]) with the curve writers and `observers(slot)` as
-    /// each structure's observers, then writes the other files.
+    /// Runs `job` ([`run`]) with the curve's CSV writer and
+    /// `observers(slot)` as each structure's observers, then draws each
+    /// structure's curve and writes the other files.
     pub fn solve<F>(&self, job: Job, observers: F) -> Result<Outcome, PipelineError>
     where
         F: Fn(Slot) -> Box<dyn Observer + Send> + Sync,
     {
         create_dir(self.path)?;
         let (game, automata, settings) = (job.game, job.automata, job.settings);
+        let plots = Mutex::new(Vec::new());
         let outcome = run(job, |slot| {
-            let mut list = self.curve_observers(game, automata, slot);
-            list.push(observers(slot));
-            Box::new(list) as Box<dyn Observer + Send>
+            let stem = curve_stem(slot);
+            let title = plot_title(game, automata, slot);
+            plots.lock().unwrap_or_else(PoisonError::into_inner).push((
+                slot.index,
+                self.path.join(format!("{stem}.svg")),
+                title,
+            ));
+            let table = self.path.join(format!("{stem}.csv"));
+            let csv: Box<dyn Observer + Send> = match CurveCsv::create(&table) {
+                Ok(csv) => Box::new(Named(table, csv)),
+                Err(error) => Box::new(Failed(Some(error.into()))),
+            };
+            Box::new(vec![csv, observers(slot)]) as Box<dyn Observer + Send>
         })?;
+        let plots = plots.into_inner().unwrap_or_else(PoisonError::into_inner);
+        for (index, path, title) in plots {
+            self.draw_curve(&outcome, index, &path, title)?;
+        }
         self.write(game, automata, settings, &outcome)?;
         Ok(outcome)
     }
 
-    /// The CSV writer and the plot of the structure in `slot`: `curve.csv`
-    /// and `curve.svg` when it is the only one, else `curve-<name>.*`.
-    fn curve_observers(
+    /// Draws the curve of structure `index` at `path`: the records of its
+    /// kept start (of start 0 for a structure dropped for numerical
+    /// trouble).
+    fn draw_curve(
         &self,
-        game: &Posg,
-        automata: &Automata,
-        slot: Slot,
-    ) -> Vec<Box<dyn Observer + Send>> {
-        let stem = if slot.count > 1 {
-            format!("curve-{}", slot.structure.name)
-        } else {
-            "curve".to_string()
-        };
-        let mut list: Vec<Box<dyn Observer + Send>> = Vec::new();
-        let (table, plot) = (
-            self.path.join(format!("{stem}.csv")),
-            self.path.join(format!("{stem}.svg")),
-        );
-        match CurveCsv::create(&table) {
-            Ok(csv) => list.push(Box::new(Named(table, csv))),
-            Err(error) => list.push(Box::new(Failed(Some(error.into())))),
-        }
-        let title = plot_title(game, automata, slot);
-        let curve = CurvePlot::new(&plot, title).with_seconds_axis(self.seconds_axis);
-        list.push(Box::new(Named(plot, curve)));
-        list
+        outcome: &Outcome,
+        index: usize,
+        path: &Path,
+        title: Title,
+    ) -> Result<(), PipelineError> {
+        let curve = &outcome.curves[index];
+        let kept = outcome
+            .solution
+            .structures
+            .iter()
+            .find(|s| s.report.name == curve.structure)
+            .map_or(0, |s| s.report.best_start);
+        let records: Vec<IterationRecord> = curve
+            .records
+            .iter()
+            .filter(|r| r.start == kept)
+            .copied()
+            .collect();
+        CurvePlot::new(path, title)
+            .with_seconds_axis(self.seconds_axis)
+            .draw(&records)
+            .map_err(|e| {
+                OptimiseError::Observer(format!("writing {}: {e}", path.display()).into()).into()
+            })
     }
 
     /// Copies the best structure's curve to `curve.csv`/`curve.svg` (with
@@ -201,6 +221,16 @@ fn write_defender_dot(
         crate::output::dot::DEFAULT_THRESHOLD,
     );
     write_file(path, &text)
+}
+
+/// The stem of a structure's curve files: `curve` when it is the only
+/// structure, else `curve-<name>`.
+fn curve_stem(slot: Slot) -> String {
+    if slot.count > 1 {
+        format!("curve-{}", slot.structure.name)
+    } else {
+        "curve".to_string()
+    }
 }
 
 /// The title of a structure's `curve.svg`: game and objective, then sizes

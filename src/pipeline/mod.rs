@@ -36,8 +36,8 @@ use crate::certify::{self, Bracket, CertifyError};
 use crate::game::{ModelError, Posg};
 use crate::ltl::{self, TranslateError};
 use crate::optimise::{
-    self, IterationRecord, Observer, OptimiseError, Settings, Solution, SourceNote, Structure,
-    StructureOutcome, StructureSource,
+    self, Cancel, IterationRecord, Observer, OptimiseError, Settings, Solution, SourceNote,
+    Structure, StructureOutcome, StructureSource,
 };
 use crate::output::OutputError;
 
@@ -92,6 +92,9 @@ pub struct Job<'a> {
     pub floor: Option<&'a StructureOutcome>,
     /// The optimiser's settings.
     pub settings: &'a Settings,
+    /// Stops the optimisation early when set (by a clone held elsewhere):
+    /// the job then certifies and returns the best defender seen so far.
+    pub cancel: Cancel,
 }
 
 impl<'a> Job<'a> {
@@ -122,6 +125,7 @@ impl<'a> Job<'a> {
             ),
             floor: None,
             settings,
+            cancel: Cancel::new(),
         })
     }
 
@@ -152,13 +156,13 @@ pub struct Slot<'a> {
     pub structure: &'a Structure,
 }
 
-/// One structure's curve: the records its observers received (those of its
-/// kept start), in iteration order.
+/// One structure's curve: the records its observers received, every
+/// start's, in the order they arrived.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Curve {
     /// The structure's name.
     pub structure: String,
-    /// One record per outer iteration.
+    /// One record per outer iteration of each start.
     pub records: Vec<IterationRecord>,
 }
 
@@ -270,6 +274,7 @@ where
         start,
         floor,
         settings,
+        cancel,
     } = job;
     let (phi, not_phi) = (&automata.phi, automata.not_phi.as_ref());
     let candidates = optimise::candidate_structures(game, phi, not_phi, start, settings)?;
@@ -291,6 +296,7 @@ where
             let recorder = Recorder(Arc::clone(&records[index]));
             Box::new(vec![given, Box::new(recorder)]) as Box<dyn Observer + Send>
         },
+        &cancel,
     )?;
     if let Some(floor) = floor {
         let nodes = solution.best().defender.num_nodes();
