@@ -78,6 +78,7 @@ fn exact(value: f64) -> BigRational {
 /// The exact solution of the chain's system, in rationals (dense
 /// Gaussian elimination; the diagonal is the exit plus the off-diagonal
 /// magnitudes, exactly).
+#[allow(clippy::needless_range_loop)] // rows k and i of one matrix at once
 fn exact_solution(chain: &Chain) -> Vec<BigRational> {
     let n = chain.pattern.n;
     let mut a = vec![vec![BigRational::zero(); n + 1]; n];
