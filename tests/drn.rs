@@ -199,7 +199,7 @@ fn constructs_the_game_format_cannot_say_are_errors_naming_the_line() {
         ),
         (
             corridor_with("@nr_choices\n7", "@nr_choices\n8"),
-            "m.drn: @nr_choices declares 8 choices, the model has 7",
+            "m.drn: line 16: @nr_choices declares 8 choices, the model has 7",
         ),
         (
             corridor_with("@nr_states\n5", "@nr_states\n6"),
