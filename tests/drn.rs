@@ -203,7 +203,7 @@ fn constructs_the_game_format_cannot_say_are_errors_naming_the_line() {
         ),
         (
             corridor_with("@nr_states\n5", "@nr_states\n6"),
-            "m.drn: @nr_states declares 6 states, the model has 5",
+            "m.drn: line 14: @nr_states declares 6 states, the model has 5",
         ),
         (
             corridor_with(
