@@ -59,7 +59,7 @@ use crate::mdp::{
     AcceptingComponent, Mdp, MdpBuilder, QualitativeReachability, Reachability, max_rabin_analysis,
     max_rabin_qualitative,
 };
-use crate::solver::SolverError;
+use crate::solver::{SolverError, SolverSettings};
 
 pub use crate::mdp::MdpError;
 pub mod strategy;
@@ -294,7 +294,18 @@ pub fn check_consistent(lower: &Bound, upper: &Bound) -> Result<(), CertifyError
 /// `defender`, against every adversary: `1 - max P(!phi)` on the product
 /// with `dra_not_phi`, an automaton for `!phi` (module documentation).
 pub fn lower_bound(game: &Posg, dra_not_phi: &Dra, defender: &Fsc) -> Result<Bound, CertifyError> {
-    let mut bound = best_response(game, dra_not_phi, defender, Role::Defender)?;
+    lower_bound_within(game, dra_not_phi, defender, &SolverSettings::default())
+}
+
+/// [`lower_bound`] with its policy evaluations solved by `settings` (the
+/// tolerance of their error bounds, method.md section 8).
+pub fn lower_bound_within(
+    game: &Posg,
+    dra_not_phi: &Dra,
+    defender: &Fsc,
+    settings: &SolverSettings,
+) -> Result<Bound, CertifyError> {
+    let mut bound = best_response(game, dra_not_phi, defender, Role::Defender, settings)?;
     bound.value = (1.0 - bound.value).clamp(0.0, 1.0);
     bound.qualitative = bound.qualitative.complement();
     Ok(bound)
@@ -304,7 +315,17 @@ pub fn lower_bound(game: &Posg, dra_not_phi: &Dra, defender: &Fsc) -> Result<Bou
 /// `max P(phi)` on the product with `dra_phi`, an automaton for `phi`
 /// (module documentation).
 pub fn upper_bound(game: &Posg, dra_phi: &Dra, adversary: &Fsc) -> Result<Bound, CertifyError> {
-    best_response(game, dra_phi, adversary, Role::Adversary)
+    upper_bound_within(game, dra_phi, adversary, &SolverSettings::default())
+}
+
+/// [`upper_bound`] with its policy evaluations solved by `settings`.
+pub fn upper_bound_within(
+    game: &Posg,
+    dra_phi: &Dra,
+    adversary: &Fsc,
+    settings: &SolverSettings,
+) -> Result<Bound, CertifyError> {
+    best_response(game, dra_phi, adversary, Role::Adversary, settings)
 }
 
 /// The free player's maximum probability of the automaton's language, with
@@ -314,9 +335,10 @@ fn best_response(
     dra: &Dra,
     controller: &Fsc,
     fixed: Role,
+    settings: &SolverSettings,
 ) -> Result<Bound, CertifyError> {
     let start = Instant::now();
-    let analysis = analyse(game, dra, controller, fixed)?;
+    let analysis = analyse(game, dra, controller, fixed, settings)?;
     let result = &analysis.result;
     let value: f64 = analysis
         .initial
@@ -413,8 +435,11 @@ pub(crate) fn analyse(
     dra: &Dra,
     controller: &Fsc,
     fixed: Role,
+    settings: &SolverSettings,
 ) -> Result<Analysis, CertifyError> {
-    analyse_with(game, dra, controller, fixed, max_rabin_analysis)
+    analyse_with(game, dra, controller, fixed, |mdp, pairs| {
+        max_rabin_analysis(mdp, pairs, settings)
+    })
 }
 
 /// The product with `controller` playing for `fixed`, analysed by `solve`

@@ -26,6 +26,13 @@ pub const MAX_AUTOMATON_EDGES: u128 = 1 << 24;
 /// product MDP's state-action distributions).
 pub const MAX_CHAIN_TRANSITIONS: u128 = 1_000_000_000;
 
+/// The most transitions of the global Markov chain that `eval`, the
+/// optimiser and the other evaluations build: each costs about 16 bytes
+/// in the chain and 20 more in its linear system (before the LU's fill),
+/// so this budget keeps the chain and its system within about 4 GB. It is
+/// checked row by row as the chain is explored, before each row is stored.
+pub const MAX_GMC_TRANSITIONS: u128 = 100_000_000;
+
 /// The most `(defender size, adversary size)` pairs one `sweep` may run.
 pub const MAX_SWEEP_PAIRS: u128 = 10_000;
 

@@ -27,7 +27,6 @@ use crate::automaton::{Dra, Letter};
 use crate::controller::{Mixture, Probabilities, Support};
 use crate::game::{AdversaryAction, DefenderAction, Player, Posg};
 use crate::graph::CsrGraph;
-use crate::solver::FlushDenormals;
 
 /// A state `(s, q, g, h)` of the GMC: game state, automaton state, defender
 /// node, adversary node.
@@ -245,9 +244,9 @@ impl Gmc {
         if let Some(message) = crate::limits::exceeded(
             "one row (successor states x defender nodes x adversary nodes)",
             cells,
-            crate::limits::MAX_CHAIN_TRANSITIONS,
+            crate::limits::MAX_GMC_TRANSITIONS,
             "transitions",
-            "MAX_CHAIN_TRANSITIONS",
+            "MAX_GMC_TRANSITIONS",
         ) {
             return Err(ProductError::Budget(message));
         }
@@ -329,11 +328,17 @@ impl Gmc {
             }
             row.sort_unstable();
             if let Some(message) = crate::limits::exceeded(
-                "the reachable transitions",
+                &format!(
+                    "the global Markov chain (already {} states reached, with {} x {} \
+                     controller nodes)",
+                    self.states.len(),
+                    self.defender.num_nodes(),
+                    self.adversary.num_nodes()
+                ),
                 (self.columns.len() + row.len()) as u128,
-                crate::limits::MAX_CHAIN_TRANSITIONS,
+                crate::limits::MAX_GMC_TRANSITIONS,
                 "transitions or more",
-                "MAX_CHAIN_TRANSITIONS",
+                "MAX_GMC_TRANSITIONS",
             ) {
                 return Err(ProductError::Budget(message));
             }
@@ -460,7 +465,6 @@ impl Gmc {
     /// Writes the probabilities of `rows` into `values`, the slice of the
     /// value array that starts at the first entry of `rows`.
     fn refill_rows(&self, rows: std::ops::Range<usize>, values: &mut [f64]) {
-        let _flush = FlushDenormals::on_this_thread();
         let mut scratch = vec![0.0; self.max_cells];
         let base = self.row_offsets[rows.start];
         let (defender_mixture, adversary_mixture) =

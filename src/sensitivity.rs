@@ -23,7 +23,7 @@
 //! they are not repeated here.
 
 use crate::controller::Probabilities;
-use crate::solver::{FlushDenormals, LuSolver, SolveReport, SolverError};
+use crate::solver::{LuSolver, SolveReport, SolverError};
 use crate::value::{Evaluator, RowWorkspace, row_derivatives};
 
 /// The right-hand sides `r_k` on `T` for every support entry of both
@@ -62,12 +62,14 @@ impl ForwardSensitivities {
         adversary: &Probabilities,
         tolerance: f64,
     ) -> Result<Self, SolverError> {
-        let _flush = FlushDenormals::on_this_thread();
         let (pattern, values) = evaluator.system();
         let mut solver = LuSolver::new(pattern.clone(), tolerance)?;
         let n = pattern.n;
         if n > 0 {
-            solver.factorize(values)?;
+            solver.factorize_with(|own, exits| {
+                own.copy_from_slice(values);
+                exits.copy_from_slice(evaluator.exits());
+            })?;
         }
         let gmc = evaluator.gmc();
         let recurrence = evaluator.recurrence();
@@ -137,7 +139,6 @@ impl ForwardSensitivities {
             };
             return Ok((0.0, report));
         }
-        let _flush = FlushDenormals::on_this_thread();
         self.b.fill(0.0);
         for &(i, r) in entries {
             self.b[i as usize] += r;

@@ -27,7 +27,7 @@ use thiserror::Error;
 use crate::automaton::Dra;
 use crate::controller::{Fsc, Probabilities, Support};
 use crate::game::Posg;
-use crate::solver::{FlushDenormals, LinearSolver};
+use crate::solver::LinearSolver;
 
 pub use crate::analysis::{Bscc, Recurrence, StateClass};
 pub use crate::product::{Exploration, Gmc, GmcState, ProductError};
@@ -47,7 +47,9 @@ pub enum ValueError {
     #[error(transparent)]
     Product(#[from] ProductError),
     /// The linear system could not be solved accurately.
-    #[error(transparent)]
+    #[error(
+        "solving the linear system of the value, (I - Q) x = b on the transient states (or its adjoint for the gradient): {0}"
+    )]
     Solver(#[from] SolverError),
 }
 
@@ -91,9 +93,12 @@ pub struct Gradient {
 struct TransientSystem {
     solver: LinearSolver,
     sources: Vec<u32>,
-    diagonal: Vec<Diagonal>,
     target_offsets: Vec<usize>,
     target_sources: Vec<u32>,
+    /// Per row, the GMC entries that leave `T` (to `B` or `Z`): their sum
+    /// is the row's exit, `(I - Q) 1`.
+    exit_offsets: Vec<usize>,
+    exit_sources: Vec<u32>,
     b: Vec<f64>,
     x: Vec<f64>,
     p0: Vec<f64>,
@@ -101,14 +106,6 @@ struct TransientSystem {
 }
 
 const NO_SOURCE: u32 = u32::MAX;
-
-/// Where row `i`'s diagonal entry of `I - Q` lies and which GMC state `m`
-/// the row belongs to: the entry is the sum of the probabilities that leave
-/// `m` (method.md section 8), never `1 - P(m | m)`.
-struct Diagonal {
-    entry: usize,
-    state: u32,
-}
 
 impl TransientSystem {
     fn build(
@@ -126,10 +123,12 @@ impl TransientSystem {
         row_offsets.push(0);
         let mut columns = Vec::with_capacity(most_entries);
         let mut sources = Vec::with_capacity(most_entries);
-        let mut diagonal = Vec::with_capacity(n);
         let mut target_offsets = Vec::with_capacity(n + 1);
         target_offsets.push(0);
         let mut target_sources = Vec::new();
+        let mut exit_offsets = Vec::with_capacity(n + 1);
+        exit_offsets.push(0);
+        let mut exit_sources = Vec::new();
         for (i, &m) in recurrence.transient.iter().enumerate() {
             let row_start = columns.len();
             let (row_columns, _) = gmc.row(m);
@@ -139,8 +138,11 @@ impl TransientSystem {
                         columns.push(recurrence.transient_index[c as usize] as usize);
                         sources.push(k as u32);
                     }
-                    StateClass::Target | StateClass::Sure => target_sources.push(k as u32),
-                    StateClass::Zero => {}
+                    StateClass::Target | StateClass::Sure => {
+                        target_sources.push(k as u32);
+                        exit_sources.push(k as u32);
+                    }
+                    StateClass::Zero => exit_sources.push(k as u32),
                 }
             }
             let entry = row_start + columns[row_start..].partition_point(|&c| c < i);
@@ -148,12 +150,9 @@ impl TransientSystem {
                 columns.insert(entry, i);
                 sources.insert(entry, NO_SOURCE);
             }
-            diagonal.push(Diagonal {
-                entry,
-                state: m as u32,
-            });
             row_offsets.push(columns.len());
             target_offsets.push(target_sources.len());
+            exit_offsets.push(exit_sources.len());
         }
         let solver = LinearSolver::new(
             SparsePattern {
@@ -166,9 +165,10 @@ impl TransientSystem {
         Ok(Self {
             solver,
             sources,
-            diagonal,
             target_offsets,
             target_sources,
+            exit_offsets,
+            exit_sources,
             b: vec![0.0; n],
             x: vec![0.0; n],
             p0: vec![0.0; n],
@@ -180,16 +180,21 @@ impl TransientSystem {
         self.b.len()
     }
 
-    /// Writes `I - Q` and `b` from the GMC's numbers and factorises. The
-    /// diagonal entry of row `m` is `sum_{m' != m} P(m' | m)`, the
-    /// probability of leaving `m` (to `T`, `B` or `Z`): it keeps every digit
-    /// when `P(m | m)` is within rounding of 1, where `1 - P(m | m)` keeps
-    /// none (method.md section 8).
+    /// Writes `I - Q` and `b` from the GMC's numbers and factorises. `I - Q`
+    /// is given by its off-diagonal entries and its row sums, the
+    /// probabilities of leaving `T` (to `B` or `Z`): these keep every digit
+    /// when the chain leaves a block of states with probability `1e-13`,
+    /// where any diagonal entry, `1 - P(m | m)` or a sum, keeps none of
+    /// them (method.md section 8).
     fn factorize(&mut self, gmc: &Gmc) -> Result<(), SolverError> {
         self.write_b(gmc);
-        let (sources, diagonal) = (&self.sources, &self.diagonal);
+        let matrix = MatrixSources {
+            sources: &self.sources,
+            exit_offsets: &self.exit_offsets,
+            exit_sources: &self.exit_sources,
+        };
         self.solver
-            .factorize_with(|matrix_values| write_matrix(matrix_values, sources, diagonal, gmc))
+            .factorize_with(|values, exits| matrix.write(values, exits, gmc))
     }
 
     /// [`Self::factorize`] and the solve of `(I - Q) x = b` (from the
@@ -202,9 +207,13 @@ impl TransientSystem {
             return Ok(NO_SOLVE);
         }
         self.write_b(gmc);
-        let (sources, diagonal) = (&self.sources, &self.diagonal);
+        let matrix = MatrixSources {
+            sources: &self.sources,
+            exit_offsets: &self.exit_offsets,
+            exit_sources: &self.exit_sources,
+        };
         self.solver.factorize_and_solve(
-            |matrix_values| write_matrix(matrix_values, sources, diagonal, gmc),
+            |values, exits| matrix.write(values, exits, gmc),
             &self.b,
             &mut self.x,
         )
@@ -244,25 +253,33 @@ const NO_SOLVE: SolveReport = SolveReport {
     error_bound: Some(0.0),
 };
 
-/// Writes `I - Q` on `T` from the GMC's numbers into `matrix_values`:
-/// `-P(c | m)` at each entry's `source` in the GMC, and on the diagonal the
-/// probability of leaving `m` (see [`TransientSystem::factorize`]).
-fn write_matrix(matrix_values: &mut [f64], sources: &[u32], diagonal: &[Diagonal], gmc: &Gmc) {
-    let p = gmc.values();
-    for (value, &source) in matrix_values.iter_mut().zip(sources) {
-        *value = if source == NO_SOURCE {
-            0.0
-        } else {
-            -p[source as usize]
-        };
-    }
-    for diagonal in diagonal {
-        let stay = sources[diagonal.entry] as usize;
-        matrix_values[diagonal.entry] = gmc
-            .row_range(diagonal.state as usize)
-            .filter(|&k| k != stay)
-            .map(|k| p[k])
-            .sum();
+/// Where the numbers of `I - Q` on `T` come from in the GMC.
+struct MatrixSources<'a> {
+    sources: &'a [u32],
+    exit_offsets: &'a [usize],
+    exit_sources: &'a [u32],
+}
+
+impl MatrixSources<'_> {
+    /// Writes `I - Q` on `T` from the GMC's numbers: `-P(c | m)` at each
+    /// off-diagonal entry's `source`, and per row the probability of
+    /// leaving `T`, `sum_{m' in B or Z} P(m' | m)`, from which the solver
+    /// forms the diagonal (method.md section 8).
+    fn write(&self, values: &mut [f64], exits: &mut [f64], gmc: &Gmc) {
+        let p = gmc.values();
+        for (value, &source) in values.iter_mut().zip(self.sources) {
+            *value = if source == NO_SOURCE {
+                0.0
+            } else {
+                -p[source as usize]
+            };
+        }
+        for (exit, w) in exits.iter_mut().zip(self.exit_offsets.windows(2)) {
+            *exit = self.exit_sources[w[0]..w[1]]
+                .iter()
+                .map(|&k| p[k as usize])
+                .sum();
+        }
     }
 }
 
@@ -373,6 +390,13 @@ impl Evaluator {
         (self.system.solver.pattern(), self.system.solver.values())
     }
 
+    /// The row sums `(I - Q) 1` on `T` as of the last evaluation: the
+    /// probabilities of leaving `T`, which define the diagonal of
+    /// [`Self::system`] (method.md section 8).
+    pub fn exits(&self) -> &[f64] {
+        self.system.solver.exits()
+    }
+
     /// `x(m)`, the probability of phi from each GMC state, as of the last evaluation.
     pub fn state_values(&self) -> &[f64] {
         &self.values
@@ -386,7 +410,6 @@ impl Evaluator {
         defender: &Probabilities,
         adversary: &Probabilities,
     ) -> Result<Evaluation, ValueError> {
-        let _flush = FlushDenormals::on_this_thread();
         self.gmc.refill(defender, adversary);
         let report = self.system.factorize_and_solve_value(&self.gmc)?;
         Ok(self.store_values(report))
@@ -434,7 +457,6 @@ impl Evaluator {
         defender: &Probabilities,
         adversary: &Probabilities,
     ) -> Result<(Evaluation, Gradient), ValueError> {
-        let _flush = FlushDenormals::on_this_thread();
         self.refill_and_factorize(defender, adversary)?;
         self.system.p0.fill(0.0);
         for (m, p) in self.gmc.initial() {

@@ -199,11 +199,11 @@ fn constructs_the_game_format_cannot_say_are_errors_naming_the_line() {
         ),
         (
             corridor_with("@nr_choices\n7", "@nr_choices\n8"),
-            "m.drn: @nr_choices declares 8 choices, the model has 7",
+            "m.drn: line 16: @nr_choices declares 8 choices, the model has 7",
         ),
         (
             corridor_with("@nr_states\n5", "@nr_states\n6"),
-            "m.drn: @nr_states declares 6 states, the model has 5",
+            "m.drn: line 14: @nr_states declares 6 states, the model has 5",
         ),
         (
             corridor_with(

@@ -178,3 +178,20 @@ fn deep_nesting_is_an_error_not_a_crash() {
             .contains("nested deeper")
     );
 }
+
+#[test]
+fn the_nesting_limit_counts_the_parentheses_it_names() {
+    // Fuzzing found "nested deeper than 1000" at 333 parentheses: each
+    // parenthesis counted three levels of the parser.
+    let nested = |depth: usize| format!("{}a{}", "(".repeat(depth), ")".repeat(depth));
+    std::thread::Builder::new()
+        .stack_size(64 << 20)
+        .spawn(move || {
+            assert!(ltl::parse(&nested(999)).is_ok());
+            let error = ltl::parse(&nested(1001)).unwrap_err();
+            assert!(error.message.contains("nested deeper than 1000"), "{error}");
+        })
+        .unwrap()
+        .join()
+        .unwrap();
+}

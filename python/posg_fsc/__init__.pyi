@@ -300,7 +300,7 @@ def sweep(
     """solve() for every size pair, as `posg-fsc sweep` (defaults 1..3 and
     1..2): defender sizes increasing, each warm-started from the next smaller
     one and kept at least as good. One dict per pair with the columns of
-    sweep.csv and the pair's SolveResult under "result"."""
+    sweep.csv (with `result`, the row in words) and the pair's SolveResult under "solved"."""
 
 def certify(
     game: Game,

@@ -9,7 +9,7 @@ use std::time::Duration;
 use posg_fsc::controller::Role;
 use posg_fsc::game::Posg;
 use posg_fsc::optimise::{Cancel, IterationRecord, Observer, Settings, StructureOutcome};
-use posg_fsc::output::OutputDirectory;
+use posg_fsc::output::{OutputDirectory, PlotFormat};
 use posg_fsc::pipeline::directory::SolveDirectory;
 use posg_fsc::pipeline::{self, Automata, Job, Outcome, Sizes};
 use pyo3::prelude::*;
@@ -207,6 +207,7 @@ where
         path: directory.path(),
         seconds_axis: false,
         command_line: &command_line,
+        plot_format: PlotFormat::default(),
     };
     let outcome = solve.solve(job, observers).map_err(convert)?;
     directory.commit().map_err(convert)?;
@@ -442,7 +443,7 @@ pub fn solve(
 /// next smaller size and kept at least as good (so results are monotone in
 /// the defender's size). `def_nodes` and `adv_nodes` are a size or a list
 /// (or range) of sizes. Returns one row per size pair: a dict with the
-/// columns of `sweep.csv` and the pair's `SolveResult` under `result`.
+/// columns of `sweep.csv` (`result` is the row in words) and the pair's `SolveResult` under `solved`.
 /// The chains of the adversary sizes run one after the other here.
 #[pyfunction]
 #[pyo3(signature = (game, ltl, def_nodes = None, adv_nodes = None, *, on_iteration = None, allow_unused_propositions = false, **settings))]
@@ -492,9 +493,9 @@ pub fn sweep(
             }
             let callback = callback.as_ref().map(|c| c.clone_ref(py));
             let outcome = run_job(py, job, callback, None)?;
-            let row = posg_fsc::output::shard::SweepRow::of(n, m, &outcome, previous.is_some());
+            let row = posg_fsc::output::shard::SweepRow::of(n, m, &outcome, previous.as_ref());
             let row = serialised(py, &row)?.cast_into::<PyDict>()?;
-            row.set_item("result", result(py, posg, &settings, &outcome)?)?;
+            row.set_item("solved", result(py, posg, &settings, &outcome)?)?;
             rows.append(row)?;
             previous = Some(outcome.best().clone());
         }

@@ -126,7 +126,7 @@ def test_sweep_rows_are_monotone_in_the_defender_size():
     assert [(r["defender_nodes"], r["adversary_nodes"]) for r in rows] == [(1, 1), (2, 1)]
     assert [r["warm_started"] for r in rows] == [False, True]
     assert rows[1]["certified_lower"] >= rows[0]["certified_lower"]
-    assert rows[1]["result"].defender.nodes == 2
+    assert rows[1]["solved"].defender.nodes == 2
 
 
 def test_the_example_script_writes_its_table(tmp_path):

@@ -13,7 +13,7 @@ use std::path::{Path, PathBuf};
 use clap::Args;
 use posg_fsc::automaton::Dra;
 use posg_fsc::certify::strategy::StrategyFile;
-use posg_fsc::certify::{Bound, check_consistent, lower_bound, upper_bound};
+use posg_fsc::certify::{Bound, check_consistent, lower_bound_within, upper_bound_within};
 use posg_fsc::controller::Role;
 use posg_fsc::controller::file::resolve;
 use posg_fsc::game::Posg;
@@ -28,6 +28,8 @@ pub struct CertifyArgs {
     game: PathBuf,
     #[command(flatten)]
     objective: ObjectiveArgs,
+    #[command(flatten)]
+    solver: common::SolverArgs,
     /// With --automaton: a deterministic automaton for !phi (HOA), needed for
     /// the lower bound (with --ltl, !phi is translated).
     #[arg(long, value_name = "FILE.hoa", requires = "automaton")]
@@ -88,7 +90,8 @@ pub fn run(args: CertifyArgs) -> anyhow::Result<()> {
     let not_phi_dra =
         common::negated_objective(&args.objective, args.negated_automaton.as_deref(), &game)?;
     let defender = resolve(&args.defender, &game, Role::Defender)?;
-    let lower = lower_bound(&game, &not_phi_dra, &defender)?;
+    let settings = args.solver.settings();
+    let lower = lower_bound_within(&game, &not_phi_dra, &defender, &settings)?;
     let strategy = |path: Option<&Path>, dra: &Dra, bound: &Bound, nodes: usize| {
         write_strategy(path, &game, dra, bound, nodes, &formula)
     };
@@ -101,7 +104,7 @@ pub fn run(args: CertifyArgs) -> anyhow::Result<()> {
     let upper = match &args.adversary {
         Some(spec) => {
             let adversary = resolve(spec, &game, Role::Adversary)?;
-            let upper = upper_bound(&game, &phi_dra, &adversary)?;
+            let upper = upper_bound_within(&game, &phi_dra, &adversary, &settings)?;
             check_consistent(&lower, &upper)?;
             strategy(
                 args.response.as_deref(),

@@ -267,11 +267,20 @@ pub struct Provenance {
     pub version: &'static str,
 }
 
+/// The current process's command line for the record, an argument that is
+/// not UTF-8 (a path is any bytes on Unix) with its bad bytes shown as
+/// U+FFFD (`std::env::args` would panic on it).
+pub fn command_line() -> Vec<String> {
+    std::env::args_os()
+        .map(|argument| argument.to_string_lossy().into_owned())
+        .collect()
+}
+
 impl Provenance {
     /// The current process's command line and the crate version.
     pub fn current() -> Self {
         Self {
-            command: std::env::args().collect(),
+            command: command_line(),
             version: env!("CARGO_PKG_VERSION"),
         }
     }

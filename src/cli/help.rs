@@ -10,6 +10,7 @@ use clap::Command;
 const COMMON: &[&str] = &[
     "ltl",
     "automaton",
+    "props",
     "def_nodes",
     "adv_nodes",
     "out",

@@ -105,7 +105,7 @@ pub fn solve_into(
     seconds_axis: bool,
     plot_format: PlotFormat,
 ) -> anyhow::Result<Outcome> {
-    let command_line: Vec<String> = std::env::args().collect();
+    let command_line = super::common::command_line();
     let directory = SolveDirectory {
         path,
         seconds_axis,

@@ -19,7 +19,7 @@ use posg_fsc::output::slurm::{self, SlurmSweep};
 use posg_fsc::output::{OutputDirectory, PlotFormat, Title, create_dir, write_file};
 use posg_fsc::pipeline::{self, Automata, Job};
 
-use super::common::{ObjectiveArgs, PlotArgs, SolverArgs, print_text};
+use super::common::{self, ObjectiveArgs, PlotArgs, SolverArgs, print_text};
 use super::progress::{OutputArgs, ProgressMode, SweepProgress};
 use super::solve::{check_sizes, load, settings, solve_into};
 
@@ -354,7 +354,7 @@ fn run_shard(
 ) -> anyhow::Result<()> {
     let record = ShardRecord {
         written_by: format!("shard {shard}"),
-        command_line: std::env::args().collect(),
+        command_line: common::command_line(),
         plan: plan.clone(),
     };
     shard::begin(
@@ -389,10 +389,22 @@ fn run_shard(
     ))
 }
 
-/// The arguments of this run without the options of `--slurm` itself.
-fn arguments_for_shards() -> Vec<String> {
+/// The arguments of this run without the options of `--slurm` itself; an
+/// error if one is not UTF-8 (it could not be written into the job script).
+fn arguments_for_shards() -> anyhow::Result<Vec<String>> {
     let mut kept = Vec::new();
-    let mut arguments = std::env::args().skip(1);
+    let arguments: Vec<String> = std::env::args_os()
+        .skip(1)
+        .map(|argument| {
+            argument.into_string().map_err(|argument| {
+                anyhow::anyhow!(
+                    "the argument {argument:?} is not UTF-8, so it cannot be written into \
+                     sweep.sbatch; rename the file or directory it names"
+                )
+            })
+        })
+        .collect::<anyhow::Result<_>>()?;
+    let mut arguments = arguments.into_iter();
     while let Some(argument) = arguments.next() {
         match argument.as_str() {
             "--slurm" => {}
@@ -403,7 +415,7 @@ fn arguments_for_shards() -> Vec<String> {
             _ => kept.push(argument),
         }
     }
-    kept
+    Ok(kept)
 }
 
 /// `--slurm`: records the plan and writes `sweep.sbatch` and
@@ -412,7 +424,7 @@ fn write_slurm(args: &SweepArgs, plan: &SweepPlan) -> anyhow::Result<()> {
     for option in &args.slurm_option {
         slurm::check_option(option).map_err(anyhow::Error::msg)?;
     }
-    let command_line: Vec<String> = std::env::args().collect();
+    let command_line = common::command_line();
     let record = ShardRecord {
         written_by: "--slurm".into(),
         command_line: command_line.clone(),
@@ -424,7 +436,7 @@ fn write_slurm(args: &SweepArgs, plan: &SweepPlan) -> anyhow::Result<()> {
     let out = std::path::absolute(&args.out)
         .with_context(|| format!("the absolute path of {}", args.out.display()))?;
     let program = std::env::current_exe().context("the path of posg-fsc itself")?;
-    let sweep_arguments = arguments_for_shards();
+    let sweep_arguments = arguments_for_shards()?;
     let job = SlurmSweep {
         program: &program,
         working_directory: &working_directory,

@@ -196,12 +196,18 @@ impl<'a> Lines<'a> {
     }
 }
 
+/// The most states reserved before they are read (`@nr_states` may claim
+/// any number).
+const MAX_RESERVED_STATES: usize = 1 << 16;
+
 /// The header: everything before `@model`.
 #[derive(Debug)]
 struct Header {
     model_type: ModelType,
     states: usize,
     choices: Option<usize>,
+    /// The lines of the `@nr_states` and `@nr_choices` values (0 if absent).
+    count_lines: (usize, usize),
     reward_models: bool,
 }
 
@@ -210,6 +216,7 @@ impl Header {
         let mut model_type = None;
         let mut states = None;
         let mut choices = None;
+        let mut count_lines = (0, 0);
         let mut reward_models = false;
         while let Some((n, line)) = lines.next_content() {
             match line {
@@ -222,6 +229,7 @@ impl Header {
                         model_type,
                         states,
                         choices,
+                        count_lines,
                         reward_models,
                     });
                 }
@@ -241,8 +249,14 @@ impl Header {
                     let (_, value) = value_line(lines, n, line)?;
                     reward_models |= !value.is_empty();
                 }
-                "@nr_states" => states = Some(count_line(lines, n, line)?),
-                "@nr_choices" => choices = Some(count_line(lines, n, line)?),
+                "@nr_states" => {
+                    states = Some(count_line(lines, n, line)?);
+                    count_lines.0 = n + 1;
+                }
+                "@nr_choices" => {
+                    choices = Some(count_line(lines, n, line)?);
+                    count_lines.1 = n + 1;
+                }
                 _ => {
                     if let Some(kind) = line.strip_prefix("@type:") {
                         model_type = Some(parse_type(kind.trim(), n, lines)?);
@@ -332,8 +346,10 @@ struct Model {
 
 impl Model {
     fn parse(lines: &mut Lines, header: &Header) -> Result<Self, ModelError> {
+        // The declared count is only a hint: room grows with the states
+        // actually read, so a huge `@nr_states` allocates nothing.
         let mut model = Self {
-            states: Vec::with_capacity(header.states),
+            states: Vec::with_capacity(header.states.min(MAX_RESERVED_STATES)),
             rewards: false,
         };
         while let Some((n, line)) = lines.next_content() {
@@ -347,8 +363,8 @@ impl Model {
             }
         }
         if model.states.len() != header.states {
-            return Err(ModelError::new(
-                lines.file_name,
+            return Err(lines.error(
+                header.count_lines.0,
                 format!(
                     "@nr_states declares {} states, the model has {}",
                     header.states,
@@ -358,8 +374,8 @@ impl Model {
         }
         let choices: usize = model.states.iter().map(|s| s.choices.len()).sum();
         if let Some(declared) = header.choices.filter(|&c| c != choices) {
-            return Err(ModelError::new(
-                lines.file_name,
+            return Err(lines.error(
+                header.count_lines.1,
                 format!("@nr_choices declares {declared} choices, the model has {choices}"),
             ));
         }
@@ -672,7 +688,9 @@ impl Model {
         for (k, state) in self.states.iter().enumerate() {
             for label in &state.labels {
                 match label.as_str() {
-                    "init" => initial_states.push(k),
+                    // `init init` labels a state once.
+                    "init" if initial_states.last() != Some(&k) => initial_states.push(k),
+                    "init" => {}
                     "deadlock" => {}
                     _ if !is_valid_proposition(label) => {
                         return Err(lines.error(

@@ -165,8 +165,11 @@ struct Parser {
     position: usize,
 }
 
-/// The deepest nesting accepted, so that parsing cannot overflow the stack.
-const MAX_DEPTH: usize = 1000;
+/// The deepest nesting accepted (parentheses, unary operators and the
+/// right operands of `->`, `<->`, `U`, `R`, `W`, `M` each count one), so
+/// that parsing and every later walk of the formula cannot overflow the
+/// stack.
+pub const MAX_DEPTH: usize = 1000;
 
 /// `xor` chains with more operands than this become balanced trees.
 const BALANCED_XOR: usize = 3;
@@ -209,7 +212,8 @@ impl Parser {
             Err(ParseError {
                 column: self.column(),
                 message: format!(
-                    "formula nested deeper than {MAX_DEPTH}: expected a flatter formula"
+                    "formula nested deeper than {MAX_DEPTH} levels (parentheses and operators): \
+                     expected a flatter formula"
                 ),
             })
         } else {
@@ -220,7 +224,7 @@ impl Parser {
     /// `implication := disjunction ((-> | <->) implication)?`
     fn implication(&mut self, depth: usize) -> Result<Formula, ParseError> {
         self.check_depth(depth)?;
-        let left = self.disjunction(depth + 1)?;
+        let left = self.disjunction(depth)?;
         let op = self.peek().clone();
         if !matches!(op, Token::Implies | Token::Equiv) {
             return Ok(left);
@@ -285,7 +289,7 @@ impl Parser {
     /// `temporal := unary ((U | W | R | M) temporal)?`
     fn temporal(&mut self, depth: usize) -> Result<Formula, ParseError> {
         self.check_depth(depth)?;
-        let left = Box::new(self.unary(depth + 1)?);
+        let left = Box::new(self.unary(depth)?);
         let Token::Binary(op) = *self.peek() else {
             return Ok(*left);
         };

@@ -42,7 +42,7 @@ pub enum MdpError {
     #[error("malformed MDP: {0}")]
     Malformed(String),
     /// A policy evaluation could not be solved accurately.
-    #[error(transparent)]
+    #[error("solving a policy evaluation of the best response (method.md section 6): {0}")]
     Solver(#[from] SolverError),
     /// Policy iteration kept improving for too long (a numerical problem).
     #[error("policy iteration did not stabilise within {0} iterations")]

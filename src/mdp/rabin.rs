@@ -29,6 +29,7 @@ use crate::automaton::RabinPair;
 
 use super::reachability::{QualitativeReachability, qualitative_reachability};
 use super::{EndComponent, Mdp, MdpError, Reachability, max_reachability, maximal_end_components};
+use crate::solver::SolverSettings;
 
 /// A maximal end component that is accepting for one Rabin pair.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -69,13 +70,15 @@ pub fn accepting_end_components(
 /// deterministic strategy (see the module documentation), together with the
 /// accepting end components ([`accepting_end_components`]) whose union is the
 /// reachability target. The values and residual are those of the
-/// reachability problem for that union.
+/// reachability problem for that union, its linear systems solved by
+/// `settings`.
 pub fn max_rabin_analysis(
     mdp: &Mdp,
     pairs: &[RabinPair],
+    settings: &SolverSettings,
 ) -> Result<(Reachability, Vec<AcceptingComponent>), MdpError> {
     let accepting = accepting_end_components(mdp, pairs)?;
-    let mut result = max_reachability(mdp, &accepting_union(mdp, &accepting))?;
+    let mut result = max_reachability(mdp, &accepting_union(mdp, &accepting), settings)?;
     stay_in_accepting(mdp, pairs, &accepting, &mut result.strategy);
     Ok((result, accepting))
 }
@@ -213,7 +216,9 @@ mod tests {
             .map(|c| c.component.states.clone())
             .collect();
         assert_eq!(states, vec![vec![1, 2]]);
-        let result = max_rabin_analysis(&cycle_or_trap(), &pairs).unwrap().0;
+        let result = max_rabin_analysis(&cycle_or_trap(), &pairs, &SolverSettings::default())
+            .unwrap()
+            .0;
         assert_eq!(result.values, vec![0.5, 1.0, 1.0, 0.0, 0.0]);
         assert_eq!(result.strategy[1], 0, "1 must move on to 2, not idle");
     }
@@ -221,7 +226,9 @@ mod tests {
     #[test]
     fn a_second_pair_opens_another_component() {
         let pairs = [pair(&[4], &[2, 4], 5), pair(&[], &[3], 5)];
-        let result = max_rabin_analysis(&cycle_or_trap(), &pairs).unwrap().0;
+        let result = max_rabin_analysis(&cycle_or_trap(), &pairs, &SolverSettings::default())
+            .unwrap()
+            .0;
         assert_eq!(result.values, vec![1.0, 1.0, 1.0, 1.0, 0.0]);
         assert_eq!(result.strategy[3], 0, "3 must stay in K");
     }

@@ -92,7 +92,12 @@ pub struct Reachability {
 
 /// `sup_sigma P^sigma(reach target)` from every state of `mdp`, with an
 /// optimal memoryless deterministic strategy (see the module documentation).
-pub fn max_reachability(mdp: &Mdp, target: &[bool]) -> Result<Reachability, MdpError> {
+/// Its policy evaluations are solved by `settings` (method.md section 8).
+pub fn max_reachability(
+    mdp: &Mdp,
+    target: &[bool],
+    settings: &SolverSettings,
+) -> Result<Reachability, MdpError> {
     let n = mdp.num_states();
     let QualitativeReachability {
         possible: positive,
@@ -102,7 +107,7 @@ pub fn max_reachability(mdp: &Mdp, target: &[bool]) -> Result<Reachability, MdpE
     let maybe: Vec<usize> = (0..n).filter(|&s| positive[s] && !almost_sure[s]).collect();
     let mut previous: Vec<f64> = almost_sure.iter().map(|&t| f64::from(t)).collect();
     for iterations in 1..=MAX_ITERATIONS {
-        let (values, report) = evaluate(mdp, &almost_sure, &maybe, &strategy, &previous)?;
+        let (values, report) = evaluate(mdp, &almost_sure, &maybe, &strategy, &previous, settings)?;
         let threshold = IMPROVEMENT_THRESHOLD.max(4.0 * report.error_bound);
         let (switched, gap) = improve(mdp, &values, &maybe, &mut strategy, threshold);
         if !switched {
@@ -227,14 +232,15 @@ struct EvaluationReport {
 /// The reachability probabilities of the policy: 1 on `target`, the solution
 /// of `(I - Q) x = b` on `maybe` (diagonal: the probability of leaving the
 /// state), 0 elsewhere; and the solve's residual and error bound. The
-/// linear solver is chosen by size ([`SolverSettings::default`]); an
-/// iterative one starts from `start` (the previous policy's values).
+/// linear solver is chosen by `settings`; an iterative one starts from
+/// `start` (the previous policy's values).
 fn evaluate(
     mdp: &Mdp,
     target: &[bool],
     maybe: &[usize],
     strategy: &[usize],
     start: &[f64],
+    settings: &SolverSettings,
 ) -> Result<(Vec<f64>, EvaluationReport), MdpError> {
     let n = mdp.num_states();
     let mut values: Vec<f64> = target.iter().map(|&t| f64::from(t)).collect();
@@ -253,21 +259,25 @@ fn evaluate(
     let mut columns = Vec::new();
     let mut coefficients = Vec::new();
     let mut rhs = vec![0.0; maybe.len()];
+    let mut exits = vec![0.0; maybe.len()];
     let mut row = Vec::new();
     for (i, &s) in maybe.iter().enumerate() {
         row.clear();
-        let distribution = mdp.distribution(s, strategy[s]);
-        let leaving: f64 = distribution
+        // The diagonal is formed by the solver from the exits (method.md
+        // section 8); 0 holds its place.
+        row.push((i, 0.0));
+        for &(t, p) in mdp
+            .distribution(s, strategy[s])
             .iter()
             .filter(|&&(t, _)| t != s)
-            .map(|&(_, p)| p)
-            .sum();
-        row.push((i, leaving));
-        for &(t, p) in distribution.iter().filter(|&&(t, _)| t != s) {
+        {
             if index[t] != usize::MAX {
                 row.push((index[t], -p));
-            } else if target[t] {
-                rhs[i] += p;
+            } else {
+                exits[i] += p;
+                if target[t] {
+                    rhs[i] += p;
+                }
             }
         }
         row.sort_by_key(|&(j, _)| j);
@@ -286,8 +296,11 @@ fn evaluate(
         row_offsets,
         columns,
     };
-    let mut solver = LinearSolver::new(pattern, &SolverSettings::default())?;
-    solver.factorize(&coefficients)?;
+    let mut solver = LinearSolver::new(pattern, settings)?;
+    solver.factorize_with(|own, own_exits| {
+        own.copy_from_slice(&coefficients);
+        own_exits.copy_from_slice(&exits);
+    })?;
     let mut solution: Vec<f64> = maybe.iter().map(|&s| start[s]).collect();
     let report = solver.solve(&rhs, &mut solution)?;
     for (&s, &x) in maybe.iter().zip(&solution) {
@@ -372,7 +385,7 @@ mod tests {
     #[test]
     fn values_derived_on_paper_with_end_components_in_the_maybe_states() {
         let target = [false, false, false, true, false];
-        let result = max_reachability(&gamble(), &target).unwrap();
+        let result = max_reachability(&gamble(), &target, &SolverSettings::default()).unwrap();
         let expected = [0.3, 0.6, 0.6, 1.0, 0.0];
         for (x, e) in result.values.iter().zip(expected) {
             assert!((x - e).abs() < 1e-14, "{:?}", result.values);
@@ -391,14 +404,15 @@ mod tests {
             &[&[(1, 1.0)]],
             &[&[(2, 1.0)]],
         ]);
-        let result = max_reachability(&m, &[false, true, false]).unwrap();
+        let result =
+            max_reachability(&m, &[false, true, false], &SolverSettings::default()).unwrap();
         assert_eq!(result.values, vec![1.0, 1.0, 0.0]);
         assert_eq!(result.strategy[0], 0);
     }
 
     #[test]
     fn unreachable_target_gives_zero_without_a_solve() {
-        let result = max_reachability(&gamble(), &[false; 5]).unwrap();
+        let result = max_reachability(&gamble(), &[false; 5], &SolverSettings::default()).unwrap();
         assert_eq!(result.values, vec![0.0; 5]);
         assert_eq!(result.iterations, 1);
     }
@@ -406,7 +420,7 @@ mod tests {
     #[test]
     fn a_target_set_of_the_wrong_size_is_an_error() {
         assert!(matches!(
-            max_reachability(&gamble(), &[true]),
+            max_reachability(&gamble(), &[true], &SolverSettings::default()),
             Err(MdpError::Malformed(_))
         ));
     }

@@ -9,7 +9,12 @@
 //! it is replaced whole. A lock file beside the target (`.NAME.lock`,
 //! created exclusively, holding the owner's process id) keeps two runs from
 //! sharing one target; a lock whose process no longer exists (a killed run)
-//! is taken over. Every error names the path it concerns.
+//! is taken over, and so is an empty or unreadable lock file older than
+//! [`UNREADABLE_LOCK_SECONDS`]. What a killed run left beside the target
+//! is cleaned up by the next run, under the lock: its staging directory is
+//! removed, and old results it had moved aside (`.NAME.old-PID`, between
+//! the two renames of a commit) are put back if the target is missing.
+//! Every error names the path it concerns.
 
 use std::fs::{self, OpenOptions};
 use std::io::Write;
@@ -21,14 +26,15 @@ use thiserror::Error;
 #[derive(Debug, Error)]
 pub enum OutputError {
     /// An I/O operation on `path` failed.
-    #[error("{action} {path}: {source}")]
+    #[error("{action} {path}: {error}")]
     Io {
         /// What was being done (`creating`, `writing`, ...).
         action: &'static str,
         /// The path it was done to.
         path: PathBuf,
-        /// The operating system's error.
-        source: std::io::Error,
+        /// The operating system's error, shown in the message (not as a
+        /// separate cause, which would print it twice).
+        error: std::io::Error,
     },
     /// A plot could not be drawn or written.
     #[error("drawing {path}: {problem}")]
@@ -74,7 +80,7 @@ impl OutputError {
         Self::Io {
             action,
             path: path.to_path_buf(),
-            source,
+            error: source,
         }
     }
 }
@@ -97,6 +103,8 @@ pub fn create_dir(path: &Path) -> Result<(), OutputError> {
 pub struct OutputDirectory {
     target: PathBuf,
     staging: PathBuf,
+    /// Where an old target is moved during [`Self::commit`].
+    old: PathBuf,
     lock: PathBuf,
     replace: bool,
     committed: bool,
@@ -123,10 +131,13 @@ impl OutputDirectory {
         check_target(target, replace)?;
         let lock = parent.join(format!(".{name}.lock"));
         take_lock(target, &lock)?;
+        recover_leftovers(&parent, &name, target)?;
         let staging = parent.join(format!(".{name}.partial-{}", std::process::id()));
+        let old = parent.join(format!(".{name}.old-{}", std::process::id()));
         let directory = Self {
             target: target.to_path_buf(),
             staging,
+            old,
             lock,
             replace,
             committed: false,
@@ -164,11 +175,14 @@ impl OutputDirectory {
                 .map_err(|e| OutputError::io("replacing", &self.target, e))?;
         }
         if self.target.exists() {
-            let old = self.staging.with_extension("old");
-            fs::rename(&self.target, &old)
+            let old = &self.old;
+            if old.exists() {
+                fs::remove_dir_all(old).map_err(|e| OutputError::io("removing", old, e))?;
+            }
+            fs::rename(&self.target, old)
                 .map_err(|e| OutputError::io("moving aside", &self.target, e))?;
             self.rename_staging()?;
-            fs::remove_dir_all(&old).map_err(|e| OutputError::io("removing", &old, e))?;
+            fs::remove_dir_all(old).map_err(|e| OutputError::io("removing", old, e))?;
         } else {
             self.rename_staging()?;
         }
@@ -180,7 +194,7 @@ impl OutputDirectory {
         fs::rename(&self.staging, &self.target).map_err(|e| OutputError::Io {
             action: "renaming the finished results into",
             path: self.target.clone(),
-            source: e,
+            error: e,
         })
     }
 }
@@ -225,7 +239,7 @@ fn take_lock(target: &Path, lock: &Path) -> Result<(), OutputError> {
             }
             Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
                 let owner = fs::read_to_string(lock).unwrap_or_default();
-                if attempt == 0 && is_stale(owner.trim()) {
+                if attempt == 0 && is_stale(owner.trim(), lock) {
                     let _ = fs::remove_file(lock);
                     continue;
                 }
@@ -245,14 +259,73 @@ fn take_lock(target: &Path, lock: &Path) -> Result<(), OutputError> {
     })
 }
 
+/// How old an empty or unreadable lock file must be to be taken over (a
+/// run writes its process id right after creating the file).
+pub const UNREADABLE_LOCK_SECONDS: u64 = 10;
+
 /// Whether the lock's owner is known not to run: a process id with no
-/// `/proc` entry where `/proc` exists (Linux). Unknown owners are not stale.
-fn is_stale(owner: &str) -> bool {
-    let proc = Path::new("/proc");
+/// `/proc` entry where `/proc` exists (Linux), or no process id at all in
+/// a lock file older than [`UNREADABLE_LOCK_SECONDS`] (its run was killed
+/// between creating it and writing its id).
+fn is_stale(owner: &str, lock: &Path) -> bool {
     match owner.parse::<u32>() {
-        Ok(pid) => proc.join("self").exists() && !proc.join(pid.to_string()).exists(),
-        Err(_) => false,
+        Ok(pid) => !process_runs(pid).unwrap_or(true),
+        Err(_) => fs::metadata(lock)
+            .and_then(|meta| meta.modified())
+            .ok()
+            .and_then(|modified| modified.elapsed().ok())
+            .is_some_and(|age| age.as_secs() >= UNREADABLE_LOCK_SECONDS),
     }
+}
+
+/// Whether process `pid` runs, where `/proc` can tell (Linux).
+fn process_runs(pid: u32) -> Option<bool> {
+    let proc = Path::new("/proc");
+    proc.join("self")
+        .exists()
+        .then(|| proc.join(pid.to_string()).exists())
+}
+
+/// Cleans up after killed runs of `target` (in `parent`, named `name`),
+/// with the lock held: removes their staging directories
+/// (`.NAME.partial-PID`) and old results they moved aside
+/// (`.NAME.old-PID`), except that old results are renamed back to the
+/// target when it is missing (the run was killed between the two renames
+/// of its commit). Directories of runs that may still run are left alone.
+fn recover_leftovers(parent: &Path, name: &str, target: &Path) -> Result<(), OutputError> {
+    let Ok(entries) = fs::read_dir(parent) else {
+        return Ok(());
+    };
+    let (partial, old) = (format!(".{name}.partial-"), format!(".{name}.old-"));
+    let mut leftovers: Vec<(PathBuf, bool)> = Vec::new();
+    for entry in entries.flatten() {
+        let file = entry.file_name().to_string_lossy().into_owned();
+        let (pid, is_old) = match (file.strip_prefix(&old), file.strip_prefix(&partial)) {
+            (Some(pid), _) => (pid.to_string(), true),
+            (None, Some(pid)) => (pid.to_string(), false),
+            (None, None) => continue,
+        };
+        let dead = pid
+            .parse::<u32>()
+            .ok()
+            .and_then(process_runs)
+            .is_some_and(|runs| !runs);
+        if dead {
+            leftovers.push((entry.path(), is_old));
+        }
+    }
+    for (path, is_old) in leftovers {
+        if is_old && fs::symlink_metadata(target).is_err() {
+            fs::rename(&path, target).map_err(|e| OutputError::Io {
+                action: "restoring the results that a killed run had moved aside, from",
+                path: path.clone(),
+                error: e,
+            })?;
+        } else {
+            fs::remove_dir_all(&path).map_err(|e| OutputError::io("removing", &path, e))?;
+        }
+    }
+    Ok(())
 }
 
 #[cfg(test)]
@@ -337,6 +410,87 @@ mod tests {
         let target = base.join("out");
         fs::write(base.join(".out.lock"), u32::MAX.to_string()).unwrap();
         OutputDirectory::create(&target, false).unwrap();
+    }
+
+    #[test]
+    fn a_kill_between_the_two_renames_is_recovered_by_the_next_force_run() {
+        if !Path::new("/proc/self").exists() {
+            return;
+        }
+        let base = scratch("kill-between-renames");
+        let target = base.join("out");
+        // A killed run (no such process) had moved the old results aside
+        // and not yet renamed its staging directory.
+        let dead = u32::MAX;
+        fs::create_dir_all(base.join(format!(".out.old-{dead}"))).unwrap();
+        fs::write(base.join(format!(".out.old-{dead}/a.txt")), "old").unwrap();
+        fs::create_dir_all(base.join(format!(".out.partial-{dead}"))).unwrap();
+        fs::write(base.join(format!(".out.partial-{dead}/a.txt")), "half").unwrap();
+        // An earlier version's fixed name for the moved-aside results.
+        fs::create_dir_all(base.join(".out.old")).unwrap();
+        fs::write(base.join(".out.old/a.txt"), "older").unwrap();
+        let out = OutputDirectory::create(&target, true).unwrap();
+        assert_eq!(
+            fs::read_to_string(target.join("a.txt")).unwrap(),
+            "old",
+            "the moved-aside results are back"
+        );
+        assert!(!base.join(format!(".out.partial-{dead}")).exists());
+        write_file(&out.join("a.txt"), "new").unwrap();
+        out.commit().unwrap();
+        assert_eq!(fs::read_to_string(target.join("a.txt")).unwrap(), "new");
+    }
+
+    #[test]
+    fn staging_directories_of_killed_runs_are_cleaned_up() {
+        if !Path::new("/proc/self").exists() {
+            return;
+        }
+        let base = scratch("killed-staging");
+        let target = base.join("out");
+        fs::create_dir_all(base.join(format!(".out.partial-{}", u32::MAX))).unwrap();
+        let out = OutputDirectory::create(&target, false).unwrap();
+        out.commit().unwrap();
+        let names: Vec<String> = fs::read_dir(&base)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        assert_eq!(names, ["out"]);
+    }
+
+    #[test]
+    fn an_empty_lock_file_of_a_killed_run_is_taken_over() {
+        let base = scratch("empty-lock");
+        let target = base.join("out");
+        let lock = base.join(".out.lock");
+        let file = fs::File::create(&lock).unwrap();
+        let long_ago = std::time::SystemTime::now()
+            - std::time::Duration::from_secs(UNREADABLE_LOCK_SECONDS + 5);
+        file.set_modified(long_ago).unwrap();
+        drop(file);
+        OutputDirectory::create(&target, false).unwrap();
+        // A fresh empty lock (a run between creating it and writing its
+        // id) is respected.
+        let other = base.join("other");
+        fs::File::create(base.join(".other.lock")).unwrap();
+        assert!(matches!(
+            OutputDirectory::create(&other, false),
+            Err(OutputError::Locked { .. })
+        ));
+    }
+
+    #[test]
+    fn os_errors_are_printed_once() {
+        let base = scratch("os-error-once");
+        let file = base.join("plain-file");
+        fs::write(&file, "x").unwrap();
+        let error = create_dir(&file.join("sub")).unwrap_err();
+        let chain: Vec<String> =
+            std::iter::successors(Some(&error as &dyn std::error::Error), |e| e.source())
+                .map(|e| e.to_string())
+                .collect();
+        let printed = chain.join(": ");
+        assert_eq!(printed.matches("os error").count(), 1, "{printed}");
     }
 
     #[test]

@@ -117,13 +117,13 @@ pub struct SweepRow {
 impl SweepRow {
     /// The row of the size pair `(defender_nodes, adversary_nodes)` from the
     /// pipeline's outcome: its best structure's numbers and certified
-    /// bracket; `warm_started` when the run started from a smaller size's
-    /// best defender.
+    /// bracket; `previous` is the smaller size's best outcome the run was
+    /// warm-started from, if any.
     pub fn of(
         defender_nodes: usize,
         adversary_nodes: usize,
         outcome: &crate::pipeline::Outcome,
-        warm_started: bool,
+        previous: Option<&crate::optimise::StructureOutcome>,
     ) -> Self {
         let (report, certified) = (&outcome.best().report, outcome.certified);
         Self {
@@ -141,7 +141,8 @@ impl SweepRow {
             upper_bound: certified.map(|b| b.upper_bound),
             iterations: report.iterations,
             seconds: report.seconds,
-            warm_started,
+            warm_started: previous.is_some(),
+            result: result_in_words(report, previous),
         }
     }
 
@@ -151,6 +152,29 @@ impl SweepRow {
             seconds: 0.0,
             ..self.clone()
         }
+    }
+}
+
+/// Where a pair's reported defender came from, for the `result` column of
+/// `sweep.csv`.
+fn result_in_words(
+    report: &crate::optimise::StructureReport,
+    previous: Option<&crate::optimise::StructureOutcome>,
+) -> String {
+    let smaller = previous.map(|p| p.defender.num_nodes());
+    match smaller {
+        Some(k) if report.name.starts_with("from-") => {
+            format!("the {k}-node result, kept: optimising found nothing better")
+        }
+        Some(k) if report.best_iteration == 0 => format!(
+            "the {k}-node result it started from, kept: optimising on {} found nothing better",
+            report.name
+        ),
+        Some(k) => format!(
+            "optimised on {}, starting from the {k}-node result",
+            report.name
+        ),
+        None => format!("optimised on {}", report.name),
     }
 }
 

@@ -28,9 +28,8 @@
 //!   steps) one matrix-vector product re-certifies it, and only when
 //!   `sigma` exceeds [`REUSE_LIMIT`] is `A t = 1` solved again.
 //!
-//! Subnormal numbers may be flushed to zero while the solvers run
-//! ([`super::FlushDenormals`]); each flushed operation changes a result by
-//! less than the smallest normal number, which the bounds add per term.
+//! The floating-point environment is Rust's default (round to nearest,
+//! subnormals kept), which these error bounds assume.
 
 use super::SparsePattern;
 
@@ -68,7 +67,7 @@ pub enum Evaluation {
 
 /// `(s, e)` with `s = fl(a + b)` and `a + b = s + e` exactly (Knuth's TwoSum).
 #[inline]
-fn two_sum(a: f64, b: f64) -> (f64, f64) {
+pub(super) fn two_sum(a: f64, b: f64) -> (f64, f64) {
     let s = a + b;
     let z = s - a;
     (s, (a - (s - z)) + (b - z))
@@ -94,12 +93,25 @@ fn two_product(a: f64, b: f64) -> (f64, f64) {
 }
 
 /// A bound on `max_i |(A x - rhs)_i|` (the true residual, not its rounded
-/// value) for the matrix with `pattern` and `values`; `rhs(i)` gives the
+/// value) for the matrix with `pattern`, off-diagonal `values` and row sums
+/// `exits` (its diagonal entries are not read); `rhs(i)` gives the
 /// right-hand side. When `rounded` is given, it receives the computed
 /// residual `fl((A x - rhs)_i)`. NaN if any number is not finite.
+///
+/// Each row is evaluated in the form of Grassmann, Taksar and Heyman,
+///
+/// ```text
+/// (A x - rhs)_i = sum_{j != i} |a_ij| (x_i - x_j) + exit_i x_i - rhs_i,
+/// ```
+///
+/// never through the diagonal: on a block of states that the chain leaves
+/// with probability `1e-13`, `a_ii x_i` and `sum_j a_ij x_j` agree to 13
+/// digits and their rounding would swamp the residual, while here every
+/// term is as small as the residual's true size.
 pub fn residual_bound(
     pattern: &SparsePattern,
     values: &[f64],
+    exits: &[f64],
     x: &[f64],
     rhs: impl Fn(usize) -> f64,
     evaluation: Evaluation,
@@ -108,27 +120,43 @@ pub fn residual_bound(
     let mut worst: f64 = 0.0;
     for row in 0..pattern.n {
         let range = pattern.row_range(row);
-        let terms = range.len() + 1;
+        let xi = x[row];
         let b = rhs(row);
-        let mut magnitude = b.abs();
+        let (exit_term, exit_error) = two_product(exits[row], xi);
+        let mut magnitude = b.abs() + exit_term.abs();
+        let mut terms = 2;
         let residual = match evaluation {
             Evaluation::Plain => {
-                let mut sum = -b;
+                // Each product of a rounded difference: two roundings.
+                let mut sum = exit_term - b;
                 for k in range {
-                    let product = values[k] * x[pattern.columns[k]];
-                    magnitude += product.abs();
-                    sum += product;
+                    let column = pattern.columns[k];
+                    if column != row {
+                        let product = -values[k] * (xi - x[column]);
+                        magnitude += product.abs();
+                        sum += product;
+                        terms += 2;
+                    }
                 }
                 sum
             }
             Evaluation::Compensated => {
-                let (mut sum, mut correction) = (-b, 0.0);
+                // Dot2 on the exact expansion: x_i - x_j = d + d_low (TwoSum).
+                let (mut sum, mut correction) = two_sum(exit_term, -b);
+                correction += exit_error;
                 for k in range {
-                    let (product, product_error) = two_product(values[k], x[pattern.columns[k]]);
-                    let (next, sum_error) = two_sum(sum, product);
-                    sum = next;
-                    correction += product_error + sum_error;
-                    magnitude += product.abs();
+                    let column = pattern.columns[k];
+                    if column != row {
+                        let weight = -values[k];
+                        let (difference, difference_low) = two_sum(xi, -x[column]);
+                        let (product, product_error) = two_product(weight, difference);
+                        let (next, sum_error) = two_sum(sum, product);
+                        let low = weight * difference_low;
+                        sum = next;
+                        correction += product_error + sum_error + low;
+                        magnitude += product.abs() + low.abs();
+                        terms += 2;
+                    }
                 }
                 sum + correction
             }
@@ -137,16 +165,17 @@ pub fn residual_bound(
             out[row] = residual;
         }
         let rounding = match evaluation {
-            Evaluation::Plain => gamma(terms + 1) * magnitude,
+            Evaluation::Plain => gamma(terms + 2) * magnitude,
             Evaluation::Compensated => {
-                2.0 * UNIT_ROUNDOFF * residual.abs() + 2.0 * gamma(terms + 1).powi(2) * magnitude
+                2.0 * UNIT_ROUNDOFF * residual.abs() + 2.0 * gamma(terms + 2).powi(2) * magnitude
             }
         };
-        // The magnitude itself is rounded (relative gamma_k), and each
-        // product or sum may have lost a flushed subnormal.
-        let flushed = 4.0 * terms as f64 * f64::MIN_POSITIVE;
-        let bound = (residual.abs() + rounding * (1.0 + gamma(terms + 1))) * (1.0 + UNIT_ROUNDOFF)
-            + flushed;
+        // The magnitude itself is rounded (relative gamma_k); underflow in
+        // a product or in TwoProduct's splitting errs by less than the
+        // smallest normal number per operation.
+        let underflow = 4.0 * terms as f64 * f64::MIN_POSITIVE;
+        let bound = (residual.abs() + rounding * (1.0 + gamma(terms + 2))) * (1.0 + UNIT_ROUNDOFF)
+            + underflow;
         if bound.is_nan() {
             return f64::NAN;
         }
@@ -181,6 +210,11 @@ impl ExpectedTime {
         &mut self.estimate
     }
 
+    /// `max t_hat` of the last estimate stored (not certified).
+    pub fn largest(&self) -> f64 {
+        self.largest
+    }
+
     /// Records that the estimate was replaced.
     pub fn store(&mut self) {
         self.largest = self.estimate.iter().copied().fold(0.0, f64::max);
@@ -189,13 +223,20 @@ impl ExpectedTime {
     /// `max t <= max t_hat / (1 - sigma)` for the matrix `values` when the
     /// estimate's residual bound `sigma` is below `limit`; `None` when there
     /// is no estimate of the right size or it does not certify.
-    pub fn certify(&self, pattern: &SparsePattern, values: &[f64], limit: f64) -> Option<f64> {
+    pub fn certify(
+        &self,
+        pattern: &SparsePattern,
+        values: &[f64],
+        exits: &[f64],
+        limit: f64,
+    ) -> Option<f64> {
         if self.estimate.len() != pattern.n || pattern.n == 0 {
             return None;
         }
         let sigma = residual_bound(
             pattern,
             values,
+            exits,
             &self.estimate,
             |_| 1.0,
             Evaluation::Plain,
@@ -209,6 +250,7 @@ impl ExpectedTime {
             let sigma = residual_bound(
                 pattern,
                 values,
+                exits,
                 &self.estimate,
                 |_| 1.0,
                 Evaluation::Compensated,
@@ -223,6 +265,12 @@ impl ExpectedTime {
 mod tests {
     use super::super::test_systems::tridiagonal;
     use super::*;
+
+    fn row_sums(pattern: &SparsePattern, values: &[f64]) -> Vec<f64> {
+        let mut exits = vec![0.0; pattern.n];
+        super::super::derive_exits(pattern, values, &mut exits);
+        exits
+    }
 
     #[test]
     fn exact_products_and_sums_recover_what_rounding_loses() {
@@ -247,7 +295,7 @@ mod tests {
         let x = [1.0 / 3.0];
         let b = 1e-13 / 3.0;
         for evaluation in [Evaluation::Plain, Evaluation::Compensated] {
-            let bound = residual_bound(&pattern, &values, &x, |_| b, evaluation, None);
+            let bound = residual_bound(&pattern, &values, &[1e-13], &x, |_| b, evaluation, None);
             assert!(bound > 0.0 && bound < 1e-28, "{evaluation:?}: {bound:e}");
         }
     }
@@ -256,7 +304,17 @@ mod tests {
     fn a_nan_makes_the_bound_nan() {
         let (pattern, values) = tridiagonal(3, 0.4);
         let x = [0.0, f64::NAN, 0.0];
-        assert!(residual_bound(&pattern, &values, &x, |_| 1.0, Evaluation::Plain, None).is_nan());
+        let exits = row_sums(&pattern, &values);
+        let bound = residual_bound(
+            &pattern,
+            &values,
+            &exits,
+            &x,
+            |_| 1.0,
+            Evaluation::Plain,
+            None,
+        );
+        assert!(bound.is_nan());
     }
 
     #[test]
@@ -269,7 +327,9 @@ mod tests {
         lu.solve(&vec![1.0; 30], time.estimate_mut(30)).unwrap();
         time.store();
         let exact_max = time.estimate().iter().copied().fold(0.0, f64::max);
-        let bound = time.certify(&pattern, &values, REUSE_LIMIT).unwrap();
+        let bound = time
+            .certify(&pattern, &values, &row_sums(&pattern, &values), REUSE_LIMIT)
+            .unwrap();
         assert!(bound >= exact_max && bound < exact_max * (1.0 + 1e-12));
         let nearby: Vec<f64> = values
             .iter()
@@ -280,12 +340,17 @@ mod tests {
         let mut exact = vec![0.0; 30];
         lu_nearby.solve(&vec![1.0; 30], &mut exact).unwrap();
         let true_max = exact.iter().copied().fold(0.0, f64::max);
-        let reused = time.certify(&pattern, &nearby, REUSE_LIMIT).unwrap();
+        let reused = time
+            .certify(&pattern, &nearby, &row_sums(&pattern, &nearby), REUSE_LIMIT)
+            .unwrap();
         assert!(reused >= true_max, "{reused} < {true_max}");
         let far: Vec<f64> = values
             .iter()
             .map(|&v| if v < 0.0 { v * 1.24 } else { v })
             .collect();
-        assert_eq!(time.certify(&pattern, &far, REUSE_LIMIT), None);
+        assert_eq!(
+            time.certify(&pattern, &far, &row_sums(&pattern, &far), REUSE_LIMIT),
+            None
+        );
     }
 }

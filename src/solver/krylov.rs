@@ -34,8 +34,10 @@ use faer::{MatMut, MatRef, Par};
 use super::ilu::{IluPreconditioner, MatrixOperator};
 use super::{
     Direction, Ilu0, SolvePair, SolveReport, SolverError, SolverSettings, SparsePattern, accept,
-    check_solve_inputs, check_values, join_directions,
+    check_chain, check_solve_inputs, complete_diagonal, join_directions,
 };
+#[cfg(test)]
+use super::{check_values, derive_exits};
 
 /// BiCGSTAB aims at this fraction of the tolerance.
 pub const ACCURACY_MARGIN: f64 = 1e-4;
@@ -153,19 +155,35 @@ impl KrylovSolver {
     }
 
     /// Takes the values of `A` and computes its ILU(0) preconditioner.
+    #[cfg(test)]
     pub fn factorize(&mut self, values: &[f64]) -> Result<(), SolverError> {
-        check_values(&self.system.pattern, values)?;
-        self.factorize_with(|own| own.copy_from_slice(values))
-    }
-
-    /// [`Self::factorize`] with the values that `fill` writes into the
-    /// solver's own copy of `A` (aligned with the pattern; it holds the
-    /// previous values on entry), without a second copy.
-    pub fn factorize_with(&mut self, fill: impl FnOnce(&mut [f64])) -> Result<(), SolverError> {
         let system = &mut self.system;
         system.factorised = false;
-        fill(&mut system.values);
-        check_values(&system.pattern, &system.values)?;
+        check_values(&system.pattern, values)?;
+        let mut exits = vec![0.0; system.pattern.n];
+        derive_exits(&system.pattern, values, &mut exits);
+        check_chain(&system.pattern, values, &exits)?;
+        system.values.copy_from_slice(values);
+        system.ilu.factorize(&system.pattern, &system.values)?;
+        system.factorised = true;
+        Ok(())
+    }
+
+    /// [`Self::factorize`] of `A` as `fill` writes it into the solver's
+    /// own copy of the values (aligned with the pattern; it holds the
+    /// previous values on entry) and into `exits`, as
+    /// [`super::LuSolver::factorize_with`]: off-diagonal entries and row
+    /// sums, the diagonal then being their sum.
+    pub fn factorize_with(
+        &mut self,
+        exits: &mut [f64],
+        fill: impl FnOnce(&mut [f64], &mut [f64]),
+    ) -> Result<(), SolverError> {
+        let system = &mut self.system;
+        system.factorised = false;
+        fill(&mut system.values, exits);
+        check_chain(&system.pattern, &system.values, exits)?;
+        complete_diagonal(&system.pattern, &mut system.values, exits);
         system.ilu.factorize(&system.pattern, &system.values)?;
         system.factorised = true;
         Ok(())

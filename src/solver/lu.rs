@@ -4,8 +4,8 @@
 
 use super::multifrontal::MultifrontalLu;
 use super::{
-    Direction, SolvePair, SolveReport, SolverError, SparsePattern, accept, check_solve_inputs,
-    check_values, join_directions,
+    Direction, SolvePair, SolveReport, SolverError, SparsePattern, accept, check_chain,
+    check_solve_inputs, check_values, complete_diagonal, derive_exits, join_directions,
 };
 
 /// Sparse LU of `A` with a fixed pattern: analyse once, factorise per values,
@@ -21,7 +21,10 @@ struct System {
     pattern: SparsePattern,
     lu: MultifrontalLu,
     values: Vec<f64>,
-    /// Whether `values` passed [`check_values`] when they were last set.
+    /// The row sums `A 1`: the probabilities of leaving `T` (method.md
+    /// section 8); with the off-diagonal `values` they define `A`.
+    exits: Vec<f64>,
+    /// Whether `values` passed [`check_chain`] when they were last set.
     values_checked: bool,
     factorised: bool,
     tolerance: f64,
@@ -51,6 +54,7 @@ impl LuSolver {
         pattern.check()?;
         let lu = MultifrontalLu::new(&pattern)?;
         let values = vec![0.0; pattern.nnz()];
+        let n = pattern.n;
         Ok(Self {
             forward: Workspace::new(pattern.n),
             transposed: Workspace::new(pattern.n),
@@ -58,6 +62,7 @@ impl LuSolver {
                 pattern,
                 lu,
                 values,
+                exits: vec![0.0; n],
                 values_checked: false,
                 factorised: false,
                 tolerance,
@@ -71,34 +76,60 @@ impl LuSolver {
     }
 
     /// Numeric LU of `A` with `values` (aligned with the pattern's entries),
-    /// reusing the symbolic analysis and the numeric storage.
+    /// reusing the symbolic analysis and the numeric storage. The exits are
+    /// derived from the diagonal ([`derive_exits`]), which is kept as given:
+    /// a caller that knows them uses [`Self::factorize_with`].
     pub fn factorize(&mut self, values: &[f64]) -> Result<(), SolverError> {
-        check_values(&self.system.pattern, values)?;
-        self.factorize_with(|own| own.copy_from_slice(values))
-    }
-
-    /// [`Self::factorize`] with the values that `fill` writes into the
-    /// solver's own copy of `A` (aligned with the pattern; it holds the
-    /// previous values on entry), without a second copy.
-    pub fn factorize_with(&mut self, fill: impl FnOnce(&mut [f64])) -> Result<(), SolverError> {
-        self.set_values_with(fill)?;
         let system = &mut self.system;
-        system.lu.factorize(&system.values)?;
+        system.factorised = false;
+        system.values_checked = false;
+        check_values(&system.pattern, values)?;
+        system.values.copy_from_slice(values);
+        derive_exits(&system.pattern, values, &mut system.exits);
+        check_chain(&system.pattern, &system.values, &system.exits)?;
+        system.values_checked = true;
+        system.lu.factorize(&system.values, &system.exits)?;
         system.factorised = true;
         Ok(())
     }
 
-    /// Takes the values that `fill` writes into the solver's own copy of
-    /// `A` (as [`Self::factorize_with`]) without factorising them: for
-    /// [`Self::factorize_and_solve`], after the caller has looked at them
-    /// ([`Self::values`]).
-    pub fn set_values_with(&mut self, fill: impl FnOnce(&mut [f64])) -> Result<(), SolverError> {
+    /// [`Self::factorize`] of `A` as `fill` writes it into the solver's own
+    /// copies (holding the previous numbers on entry): the off-diagonal
+    /// entries into the values (aligned with the pattern) and the row sums
+    /// `A 1` (the probabilities of leaving `T`) into the exits. The
+    /// diagonal is then set to their sum (method.md section 8).
+    pub fn factorize_with(
+        &mut self,
+        fill: impl FnOnce(&mut [f64], &mut [f64]),
+    ) -> Result<(), SolverError> {
+        self.set_values_with(fill)?;
+        let system = &mut self.system;
+        system.lu.factorize(&system.values, &system.exits)?;
+        system.factorised = true;
+        Ok(())
+    }
+
+    /// Takes `A` as `fill` writes it (as [`Self::factorize_with`]) without
+    /// factorising it: for [`Self::factorize_and_solve`], after the caller
+    /// has looked at it ([`Self::values`]).
+    pub fn set_values_with(
+        &mut self,
+        fill: impl FnOnce(&mut [f64], &mut [f64]),
+    ) -> Result<(), SolverError> {
         let system = &mut self.system;
         system.factorised = false;
-        fill(&mut system.values);
-        let checked = check_values(&system.pattern, &system.values);
+        fill(&mut system.values, &mut system.exits);
+        let checked = check_chain(&system.pattern, &system.values, &system.exits);
+        if checked.is_ok() {
+            complete_diagonal(&system.pattern, &mut system.values, &system.exits);
+        }
         system.values_checked = checked.is_ok();
         checked
+    }
+
+    /// The row sums `A 1` of the last values set.
+    pub fn exits(&self) -> &[f64] {
+        &self.system.exits
     }
 
     /// Factorises the values of the last [`Self::set_values_with`] and
@@ -129,7 +160,7 @@ impl LuSolver {
             .map(|r| check_solve_inputs(n, rhs[r], solutions[r]))
             .collect();
         if let Err(error) = inputs {
-            system.lu.factorize(&system.values)?;
+            system.lu.factorize(&system.values, &system.exits)?;
             system.factorised = true;
             return Err(error);
         }
@@ -140,11 +171,11 @@ impl LuSolver {
         let work = &mut self.forward.permuted;
         system
             .lu
-            .factorize_and_solve(&system.values, in_place, work)?;
+            .factorize_and_solve(&system.values, &system.exits, in_place, work)?;
         system.factorised = true;
-        let (pattern, values) = (&system.pattern, &system.values[..]);
+        let chain = (&system.pattern, &system.values[..], &system.exits[..]);
         Ok(std::array::from_fn(|r| {
-            accepted(pattern, values, rhs[r], solutions[r], tolerances[r])
+            accepted(chain, rhs[r], solutions[r], tolerances[r])
         }))
     }
 
@@ -239,12 +270,13 @@ impl System {
         }
         if !self.lu.lower_kept() {
             self.factorised = false;
-            self.lu.factorize(&self.values)?;
+            self.lu.factorize(&self.values, &self.exits)?;
             self.factorised = true;
         }
         Ok(Factors {
             pattern: &self.pattern,
             values: &self.values,
+            exits: &self.exits,
             lu: &self.lu,
         })
     }
@@ -255,6 +287,7 @@ impl System {
 struct Factors<'a> {
     pattern: &'a SparsePattern,
     values: &'a [f64],
+    exits: &'a [f64],
     lu: &'a MultifrontalLu,
 }
 
@@ -304,8 +337,7 @@ impl Factors<'_> {
             .solve_many_in_place(in_place, &mut workspace.permuted);
         std::array::from_fn(|r| {
             accepted(
-                self.pattern,
-                self.values,
+                (self.pattern, self.values, self.exits),
                 rhs[r],
                 solutions[r],
                 tolerances[r],
@@ -315,15 +347,16 @@ impl Factors<'_> {
 }
 
 /// The report of a forward solution `solution` of `A x = rhs` (`A` of
-/// `pattern` and `values`), if its residual is within `tolerance`.
+/// `pattern`, off-diagonal `values` and row sums `exits`), if its residual,
+/// evaluated without the diagonal ([`SparsePattern::chain_residual`]), is
+/// within `tolerance`.
 fn accepted(
-    pattern: &SparsePattern,
-    values: &[f64],
+    (pattern, values, exits): (&SparsePattern, &[f64], &[f64]),
     rhs: &[f64],
     solution: &[f64],
     tolerance: f64,
 ) -> Result<SolveReport, SolverError> {
-    let residual = pattern.residual(values, solution, rhs);
+    let residual = pattern.chain_residual(values, exits, solution, rhs);
     Ok(report_of(accept(residual, solution, tolerance)?))
 }
 
@@ -405,7 +438,10 @@ mod tests {
                 .is_err()
         );
         solver
-            .set_values_with(|own| own.copy_from_slice(&singular))
+            .set_values_with(|own, exits| {
+                own.copy_from_slice(&singular);
+                exits.fill(0.0);
+            })
             .unwrap();
         let outcome = solver.factorize_and_solve([&[0.0, 1.0]], [&mut x], [1e-9]);
         assert!(
@@ -414,13 +450,18 @@ mod tests {
         );
         assert!(solver.solve(&[0.0, 1.0], &mut x).is_err());
         solver
-            .set_values_with(|own| own.copy_from_slice(&[1.0, -0.5, -0.5, 1.0]))
+            .set_values_with(|own, exits| {
+                own.copy_from_slice(&[1.0, -0.5, -0.5, 1.0]);
+                exits.fill(0.5);
+            })
             .unwrap();
         let [report] = solver
             .factorize_and_solve([&[0.5, 0.5]], [&mut x], [1e-12])
             .unwrap();
         assert!(report.unwrap().residual <= 1e-12 && (x[0] - 1.0).abs() < 1e-12);
 
+        let mut row_sums = vec![0.0; 30];
+        super::super::derive_exits(&pattern, &values, &mut row_sums);
         let (mut at_once, mut two_steps) = (
             LuSolver::new(pattern.clone(), DEFAULT_TOLERANCE).unwrap(),
             LuSolver::new(pattern, DEFAULT_TOLERANCE).unwrap(),
@@ -429,7 +470,10 @@ mod tests {
         not_finite[7] = f64::NAN;
         let mut y = vec![0.0; 30];
         at_once
-            .set_values_with(|own| own.copy_from_slice(&values))
+            .set_values_with(|own, exits| {
+                own.copy_from_slice(&values);
+                exits.copy_from_slice(&row_sums);
+            })
             .unwrap();
         let outcome = at_once.factorize_and_solve([&not_finite], [&mut y], [1e-9]);
         assert!(

@@ -135,6 +135,13 @@ pub(crate) struct MultifrontalLu {
     /// The update matrices waiting for their parents, column-major, in
     /// postorder.
     stack: Vec<f64>,
+    /// The exits `e = L^{-1} (A 1)` of the Schur complement so far, in the
+    /// elimination order: row `i` of the current Schur complement sums to
+    /// `exits[i]` (the probability of leaving the states not yet eliminated).
+    exits: Vec<f64>,
+    /// For the front being factorised: per pivot row, its exit plus what it
+    /// sends to the rows below the pivot block (see [`lu_gth`]).
+    beyond: Vec<f64>,
 }
 
 impl MultifrontalLu {
@@ -150,6 +157,8 @@ impl MultifrontalLu {
             left: Vec::new(),
             front: vec![0.0; structure.largest_right],
             stack: Vec::with_capacity(structure.stack_len),
+            exits: Vec::with_capacity(structure.n),
+            beyond: Vec::new(),
             structure,
         })
     }
@@ -166,10 +175,13 @@ impl MultifrontalLu {
         self.lower_kept
     }
 
-    /// Numeric factorisation with `values` aligned with the pattern's
-    /// entries, keeping `L` and `U`.
-    pub(crate) fn factorize(&mut self, values: &[f64]) -> Result<(), SolverError> {
-        self.factorize_fronts::<1>(values, None)
+    /// Numeric factorisation of the matrix with the off-diagonal `values`
+    /// (aligned with the pattern's entries; diagonal entries are ignored) and
+    /// row sums `exits` (`A 1`, the probabilities of leaving `T`), keeping
+    /// `L` and `U`. Each pivot is the sum of what its row still sends to the
+    /// states not yet eliminated and of its exit (see [`lu_gth`]).
+    pub(crate) fn factorize(&mut self, values: &[f64], exits: &[f64]) -> Result<(), SolverError> {
+        self.factorize_fronts::<1>(values, exits, None)
     }
 
     /// Numeric factorisation with `values` that solves `A x_r = b_r` for
@@ -179,11 +191,12 @@ impl MultifrontalLu {
     pub(crate) fn factorize_and_solve<const K: usize>(
         &mut self,
         values: &[f64],
+        exits: &[f64],
         mut xs: [&mut [f64]; K],
         work: &mut Vec<f64>,
     ) -> Result<(), SolverError> {
         self.permute_many_in(&xs, work);
-        self.factorize_fronts::<K>(values, Some(work))?;
+        self.factorize_fronts::<K>(values, exits, Some(work))?;
         self.upper_solve::<K>(work);
         self.permute_many_out(work, &mut xs);
         Ok(())
@@ -196,6 +209,7 @@ impl MultifrontalLu {
     fn factorize_fronts<const K: usize>(
         &mut self,
         values: &[f64],
+        exits: &[f64],
         mut forward: Option<&mut [f64]>,
     ) -> Result<(), SolverError> {
         let keep_lower = forward.is_none();
@@ -212,9 +226,13 @@ impl MultifrontalLu {
             left,
             front,
             stack,
+            exits: eliminated_exits,
+            beyond,
         } = self;
         *lower_kept = false;
         stack.clear();
+        eliminated_exits.clear();
+        eliminated_exits.extend(structure.permutation.iter().map(|&old| exits[old]));
         for &s in &structure.postorder {
             let node = &structure.supernodes[s];
             let (columns, below) = (node.columns(), node.rows.len());
@@ -230,7 +248,8 @@ impl MultifrontalLu {
                 right: &mut front[..rows * below],
             };
             structure.assemble(node, &mut front, values, stack);
-            front.factor().map_err(|column| {
+            front.beyond_pivot_block(&eliminated_exits[node.begin..node.end], beyond);
+            front.factor(beyond).map_err(|column| {
                 SolverError::Singular(format!(
                     "zero or non-finite pivot at position {} of the elimination order",
                     node.begin + column
@@ -240,6 +259,8 @@ impl MultifrontalLu {
             if !node.relative.is_empty() {
                 front.push_update(stack);
             }
+            let below = &structure.rows[node.rows.clone()];
+            forward_through::<1>(node, below, front.left, eliminated_exits);
             if let Some(x) = forward.as_deref_mut() {
                 let below = &structure.rows[node.rows.clone()];
                 forward_through::<K>(node, below, front.left, x);
@@ -468,10 +489,25 @@ impl Front<'_> {
         }
     }
 
+    /// `beyond[k] = exits[k] - sum_{r in R} F_kr` for the pivot rows `k`
+    /// of an assembled front: what row `k` of the Schur complement sends
+    /// out of `T` or to the rows `R` below the pivot block (a sum of
+    /// nonnegative terms: `F_kr <= 0`).
+    fn beyond_pivot_block(&self, exits: &[f64], beyond: &mut Vec<f64>) {
+        beyond.clear();
+        beyond.extend_from_slice(exits);
+        for column in self.right.chunks_exact(self.rows) {
+            for (sum, &entry) in beyond.iter_mut().zip(column) {
+                *sum -= entry;
+            }
+        }
+    }
+
     /// `F_JJ = L U` in place, `F_RJ <- F_RJ U^{-1}`, `F_JR <- L^{-1} F_JR`,
-    /// `F_RR <- F_RR - F_RJ F_JR`. Errors with the pivot's column when a
-    /// pivot is zero or not finite.
-    fn factor(&mut self) -> Result<(), usize> {
+    /// `F_RR <- F_RR - F_RJ F_JR`, the pivots by [`lu_gth`] from `beyond`
+    /// ([`Self::beyond_pivot_block`]). Errors with the pivot's column when
+    /// a pivot is zero or not finite.
+    fn factor(&mut self, beyond: &mut [f64]) -> Result<(), usize> {
         let (rows, columns) = (self.rows, self.columns());
         let par = if rows >= PARALLEL_FRONT_ROWS {
             Par::rayon(0)
@@ -480,7 +516,7 @@ impl Front<'_> {
         };
         let left = MatMut::from_column_major_slice_mut(self.left, rows, columns);
         let (mut jj, mut rj) = left.split_at_row_mut(columns);
-        lu_without_pivoting(jj.rb_mut(), par)?;
+        lu_gth(jj.rb_mut(), beyond, par)?;
         if rows > columns {
             let right = MatMut::from_column_major_slice_mut(self.right, rows, rows - columns);
             let (mut jr, rr) = right.split_at_row_mut(columns);
@@ -525,30 +561,60 @@ fn copy_leading_rows(source: &[f64], stride: usize, count: usize, target: &mut [
 }
 
 /// Dense LU without pivoting in place (unit lower `L` below the diagonal,
-/// `U` on and above it), recursively by halves. Errors with the column of a
-/// zero or non-finite pivot.
-fn lu_without_pivoting(mut a: MatMut<'_, f64>, par: Par) -> Result<(), usize> {
+/// `U` on and above it), recursively by halves, with the pivots of Grassmann,
+/// Taksar and Heyman: `a` is a block of `I - Q` (or of a Schur complement)
+/// whose off-diagonal entries are at most 0, and `beyond[k]` is what row `k`
+/// sends out of the block's columns (to the columns right of it, or out of
+/// `T`), at least 0. Each pivot is then formed as `beyond[k] - sum_{j > k}
+/// a_kj`, a sum of nonnegative numbers, never as a difference: the diagonal
+/// that elimination would compute by subtraction (and which loses every
+/// digit in a block that the chain leaves with probability `1e-13`) is not
+/// used. Every other operation of elimination adds numbers of one sign, so
+/// the factors are accurate entry by entry (O'Cinneide 1993; method.md
+/// section 8). `beyond` is consumed. Errors with the column of a zero or
+/// non-finite pivot.
+fn lu_gth(mut a: MatMut<'_, f64>, beyond: &mut [f64], par: Par) -> Result<(), usize> {
     let n = a.nrows();
     if n <= UNBLOCKED_COLUMNS {
-        return lu_unblocked(a);
+        return gth_unblocked(a, beyond);
     }
     let half = n / 2;
     let (mut a11, mut a12, mut a21, a22) = a.rb_mut().split_at_mut(half, half);
-    lu_without_pivoting(a11.rb_mut(), par)?;
+    let (beyond1, beyond2) = beyond.split_at_mut(half);
+    let mut beyond11 = beyond1.to_vec();
+    for column in 0..a12.ncols() {
+        for (sum, row) in beyond11.iter_mut().zip(0..half) {
+            *sum -= a12[(row, column)];
+        }
+    }
+    lu_gth(a11.rb_mut(), &mut beyond11, par)?;
     solve_unit_lower_triangular_in_place(a11.rb(), a12.rb_mut(), par);
     solve_lower_triangular_in_place(a11.rb().transpose(), a21.rb_mut().transpose_mut(), par);
     let mut a22 = a22;
     matmul(a22.rb_mut(), Accum::Add, a21.rb(), a12.rb(), -1.0, par);
-    lu_without_pivoting(a22, par).map_err(|column| column + half)
+    // beyond1 <- L11^{-1} beyond1, then beyond2 <- beyond2 - L21 beyond1:
+    // the rows of a22 after the first half's eliminations.
+    for k in 0..half {
+        let carried = beyond1[k];
+        for i in k + 1..half {
+            beyond1[i] -= a11[(i, k)] * carried;
+        }
+        for (i, sum) in beyond2.iter_mut().enumerate() {
+            *sum -= a21[(i, k)] * carried;
+        }
+    }
+    lu_gth(a22, beyond2, par).map_err(|column| column + half)
 }
 
-fn lu_unblocked(mut a: MatMut<'_, f64>) -> Result<(), usize> {
+/// [`lu_gth`] for a small block: one pivot at a time.
+fn gth_unblocked(mut a: MatMut<'_, f64>, beyond: &mut [f64]) -> Result<(), usize> {
     let n = a.nrows();
     for k in 0..n {
-        let pivot = a[(k, k)];
-        if pivot == 0.0 || !pivot.is_finite() {
+        let pivot = (k + 1..n).fold(beyond[k], |sum, j| sum - a[(k, j)]);
+        if !(pivot > 0.0 && pivot.is_finite()) {
             return Err(k);
         }
+        a[(k, k)] = pivot;
         for i in k + 1..n {
             a[(i, k)] /= pivot;
         }
@@ -560,6 +626,9 @@ fn lu_unblocked(mut a: MatMut<'_, f64>) -> Result<(), usize> {
                     a[(i, j)] -= l * akj;
                 }
             }
+        }
+        for i in k + 1..n {
+            beyond[i] -= a[(i, k)] * beyond[k];
         }
     }
     Ok(())
@@ -881,11 +950,18 @@ mod tests {
     use super::super::test_systems::{grid_walk, random_chain, tridiagonal};
     use super::*;
 
+    /// The row sums of a matrix given with its diagonal.
+    fn exits(pattern: &SparsePattern, values: &[f64]) -> Vec<f64> {
+        let mut exits = vec![0.0; pattern.n];
+        super::super::derive_exits(pattern, values, &mut exits);
+        exits
+    }
+
     /// `max_i |(A x - b)_i| / max(1, |x|_inf)` and the same for `A^T y = c`
     /// after both solves (`|A|_inf <= 2`: a relative residual).
     fn residuals(pattern: &SparsePattern, values: &[f64]) -> (f64, f64) {
         let mut lu = MultifrontalLu::new(pattern).unwrap();
-        lu.factorize(values).unwrap();
+        lu.factorize(values, &exits(pattern, values)).unwrap();
         let n = pattern.n;
         let b: Vec<f64> = (0..n).map(|i| 1.0 + (i % 5) as f64).collect();
         let mut work = Vec::new();
@@ -910,7 +986,7 @@ mod tests {
         };
         let values = [1.0, -0.5, 1.0, -0.25, 1.0];
         let mut lu = MultifrontalLu::new(&pattern).unwrap();
-        lu.factorize(&values).unwrap();
+        lu.factorize(&values, &exits(&pattern, &values)).unwrap();
         let mut work = Vec::new();
         let mut x = vec![0.0, 0.0, 1.0];
         lu.solve_many_in_place([&mut x], &mut work);
@@ -936,7 +1012,7 @@ mod tests {
     fn solving_two_right_hand_sides_at_once_gives_each_solve_bit_for_bit() {
         for (pattern, values) in [random_chain(2000, 4, 0.05, 6), grid_walk(40)] {
             let mut lu = MultifrontalLu::new(&pattern).unwrap();
-            lu.factorize(&values).unwrap();
+            lu.factorize(&values, &exits(&pattern, &values)).unwrap();
             let n = pattern.n;
             let b: Vec<f64> = (0..n).map(|i| ((i * 7919) % 101) as f64 / 101.0).collect();
             let ones = vec![1.0; n];
@@ -976,19 +1052,29 @@ mod tests {
             let b: Vec<f64> = (0..n).map(|i| ((i * 7919) % 101) as f64 / 101.0).collect();
             let mut work = Vec::new();
             let mut lu = MultifrontalLu::new(&pattern).unwrap();
-            lu.factorize(&values).unwrap();
+            lu.factorize(&values, &exits(&pattern, &values)).unwrap();
             let (mut x_after, mut t_after) = (b.clone(), vec![1.0; n]);
             lu.solve_many_in_place([&mut x_after, &mut t_after], &mut work);
             let (mut x, mut t) = (b.clone(), vec![1.0; n]);
-            lu.factorize_and_solve(&values, [&mut x, &mut t], &mut work)
-                .unwrap();
+            lu.factorize_and_solve(
+                &values,
+                &exits(&pattern, &values),
+                [&mut x, &mut t],
+                &mut work,
+            )
+            .unwrap();
             assert!(!lu.lower_kept());
             let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
             assert_eq!(bits(&x), bits(&x_after));
             assert_eq!(bits(&t), bits(&t_after));
             let mut x_alone = b;
-            lu.factorize_and_solve(&values, [&mut x_alone], &mut work)
-                .unwrap();
+            lu.factorize_and_solve(
+                &values,
+                &exits(&pattern, &values),
+                [&mut x_alone],
+                &mut work,
+            )
+            .unwrap();
             assert_eq!(bits(&x_alone), bits(&x_after));
             let postorder = &lu.structure.postorder;
             postorder_differs |= postorder.iter().enumerate().any(|(i, &s)| i != s);
@@ -1025,15 +1111,19 @@ mod tests {
     fn refactorisation_matches_a_fresh_factorisation() {
         let (pattern, mut values) = tridiagonal(300, 0.4);
         let mut reused = MultifrontalLu::new(&pattern).unwrap();
-        reused.factorize(&values).unwrap();
+        reused
+            .factorize(&values, &exits(&pattern, &values))
+            .unwrap();
         for (k, v) in values.iter_mut().enumerate() {
             if *v != 1.0 {
                 *v = -0.3 - 1e-3 * (k % 7) as f64;
             }
         }
-        reused.factorize(&values).unwrap();
+        reused
+            .factorize(&values, &exits(&pattern, &values))
+            .unwrap();
         let mut fresh = MultifrontalLu::new(&pattern).unwrap();
-        fresh.factorize(&values).unwrap();
+        fresh.factorize(&values, &exits(&pattern, &values)).unwrap();
         assert_eq!(reused.lower, fresh.lower);
         assert_eq!(reused.upper, fresh.upper);
     }
@@ -1046,7 +1136,9 @@ mod tests {
             columns: vec![0, 1, 0, 1],
         };
         let mut lu = MultifrontalLu::new(&pattern).unwrap();
-        let error = lu.factorize(&[1.0, -1.0, -1.0, 1.0]).unwrap_err();
+        let error = lu
+            .factorize(&[1.0, -1.0, -1.0, 1.0], &[0.0, 0.0])
+            .unwrap_err();
         assert!(matches!(error, SolverError::Singular(_)), "{error}");
     }
 }

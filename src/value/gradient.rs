@@ -14,7 +14,6 @@ use rayon::prelude::*;
 
 use crate::controller::Probabilities;
 use crate::product::Gmc;
-use crate::solver::FlushDenormals;
 
 /// The fewest rows with nonzero adjoint weight for which
 /// [`GradientPass::add_adjoint_gradient`] runs in parallel.
@@ -143,7 +142,6 @@ impl GradientPass {
             .par_iter_mut()
             .enumerate()
             .for_each(|(c, chunk)| {
-                let _flush = FlushDenormals::on_this_thread();
                 chunk.defender.clear();
                 chunk.defender.resize(num_def, 0.0);
                 chunk.adversary.clear();
