@@ -98,7 +98,7 @@ def test_ctrl_c_stops_a_long_solve_cleanly():
 
 
 def test_the_gil_is_released_while_rust_computes():
-    game = posg_fsc.example_grid(width=4, height=4, unsafe=[5], goal=[15])
+    game = posg_fsc.example_grid(width=6, height=6, unsafe=[5], goal=[35])
     ticks = []
     running = threading.Event()
     running.set()
@@ -111,7 +111,8 @@ def test_the_gil_is_released_while_rust_computes():
     counter = threading.Thread(target=count)
     counter.start()
     started = time.monotonic()
-    posg_fsc.solve(game, FORMULA, 2, 1, max_iterations=30, starts=1, structures=["full"])
+    # Long enough to measure (about 0.2 s here): no gap or stall rule ends it.
+    posg_fsc.solve(game, FORMULA, 2, 1, **dict(LONG, max_iterations=200))
     elapsed = time.monotonic() - started
     running.clear()
     counter.join()
