@@ -90,3 +90,113 @@ fn fuzz_certify_honours_tolerance() {
         "{stderr}"
     );
 }
+
+/// A sharded sweep of one tiny size pair in a fresh directory, and the path
+/// of that pair's `row.csv`.
+fn one_pair_sharded_sweep(name: &str) -> (std::path::PathBuf, std::path::PathBuf) {
+    let dir = std::env::temp_dir().join(format!("posg-fsc-fuzz-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let game = dir.join("grid.posg.json");
+    let out = dir.join("sharded");
+    let example = posg_fsc()
+        .args(["example", "grid", "--out"])
+        .arg(&game)
+        .output()
+        .unwrap();
+    assert!(example.status.success(), "{example:?}");
+    let sweep = posg_fsc()
+        .arg("sweep")
+        .arg(&game)
+        .args(["--ltl", "F goal & G !unsafe", "--def-nodes", "1"])
+        .args(["--adv-nodes", "1", "--max-iterations", "2", "--starts", "1"])
+        .args(["--quiet", "--shard", "1/1", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(sweep.status.success(), "{sweep:?}");
+    let row = out.join("def1-adv1").join("row.csv");
+    (out, row)
+}
+
+/// `sweep-merge DIR`: its stderr, after asserting that it failed.
+fn merge_fails(out: &std::path::Path) -> String {
+    let merge = posg_fsc().arg("sweep-merge").arg(out).output().unwrap();
+    let stderr = String::from_utf8_lossy(&merge.stderr).into_owned();
+    assert!(!merge.status.success(), "merged: {stderr}");
+    assert!(!out.join("sweep.csv").exists());
+    stderr
+}
+
+/// `row.csv` with the field of `column` replaced by `value`.
+fn with_field(text: &str, column: &str, value: &str) -> String {
+    let mut reader = csv::Reader::from_reader(text.as_bytes());
+    let header = reader.headers().unwrap().clone();
+    let i = header.iter().position(|c| c == column).unwrap();
+    let record = reader.records().next().unwrap().unwrap();
+    let fields = record
+        .iter()
+        .enumerate()
+        .map(|(j, f)| if j == i { value } else { f });
+    let mut writer = csv::Writer::from_writer(Vec::new());
+    writer.write_record(&header).unwrap();
+    writer.write_record(fields).unwrap();
+    String::from_utf8(writer.into_inner().unwrap()).unwrap()
+}
+
+#[test]
+fn fuzz_sweep_merge_refuses_rows_with_impossible_probabilities() {
+    let (out, row) = one_pair_sharded_sweep("row-values");
+    let good = std::fs::read_to_string(&row).unwrap();
+    let merge = posg_fsc().arg("sweep-merge").arg(&out).output().unwrap();
+    assert!(merge.status.success(), "{merge:?}");
+    std::fs::remove_file(out.join("sweep.csv")).unwrap();
+    let bad = [
+        ("worst_case", "1.5"),
+        ("certified_lower", "-1"),
+        ("last_value", "NaN"),
+        ("upper_bound", "inf"),
+        ("error_bound", "NaN"),
+    ];
+    for (column, value) in bad {
+        std::fs::write(&row, with_field(&good, column, value)).unwrap();
+        let error = merge_fails(&out);
+        assert!(
+            error.contains("def1-adv1/row.csv: line 2: column `")
+                && error.contains(&format!("`{column}`: {value} is not")),
+            "{column} = {value}: {error}"
+        );
+    }
+    let crossed = with_field(
+        &with_field(&good, "certified_lower", "0.6"),
+        "upper_bound",
+        "0.5",
+    );
+    std::fs::write(&row, crossed).unwrap();
+    let error = merge_fails(&out);
+    assert!(
+        error.contains("line 2: column `certified_lower`: 0.6 is above `upper_bound` 0.5"),
+        "{error}"
+    );
+}
+
+#[test]
+fn fuzz_sweep_merge_refuses_a_renamed_column() {
+    let (out, row) = one_pair_sharded_sweep("row-columns");
+    let good = std::fs::read_to_string(&row).unwrap();
+    std::fs::write(&row, good.replacen("certified_lower", "certified_low", 1)).unwrap();
+    let error = merge_fails(&out);
+    assert!(
+        error.contains(
+            "def1-adv1/row.csv: line 1: column 11 is `certified_low`, expected `certified_lower`"
+        ),
+        "{error}"
+    );
+    let (header, rest) = good.split_once('\n').unwrap();
+    std::fs::write(&row, format!("{header},extra\n{},1\n", rest.trim_end())).unwrap();
+    let error = merge_fails(&out);
+    assert!(
+        error.contains("line 1: column 17 `extra` is not a column of row.csv"),
+        "{error}"
+    );
+}

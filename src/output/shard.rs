@@ -73,6 +73,27 @@ impl fmt::Display for Shard {
     }
 }
 
+/// The columns of `sweep.csv` and of each pair's [`ROW_FILE`], in order
+/// (the fields of [`SweepRow`]; docs/formats.md section 9).
+pub const SWEEP_COLUMNS: [&str; 16] = [
+    "defender_nodes",
+    "adversary_nodes",
+    "structure",
+    "gmc_states",
+    "gmc_transitions",
+    "defender_parameters",
+    "adversary_parameters",
+    "last_value",
+    "worst_case",
+    "error_bound",
+    "certified_lower",
+    "upper_bound",
+    "iterations",
+    "seconds",
+    "warm_started",
+    "result",
+];
+
 /// One row of `sweep.csv`: the best structure's numbers for one size pair.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SweepRow {
@@ -115,6 +136,40 @@ pub struct SweepRow {
 }
 
 impl SweepRow {
+    /// `Err(problem)`, naming the column, unless every probability
+    /// (`last_value`, `worst_case`, `certified_lower`, `upper_bound`) is a
+    /// finite number in [0, 1], `certified_lower <= upper_bound` where both
+    /// are present, and `error_bound` and `seconds` are finite and
+    /// non-negative: what `sweep-merge` requires of each shard's row.
+    pub fn check(&self) -> Result<(), String> {
+        let probabilities = [
+            ("last_value", Some(self.last_value)),
+            ("worst_case", Some(self.worst_case)),
+            ("certified_lower", self.certified_lower),
+            ("upper_bound", self.upper_bound),
+        ];
+        for (column, value) in probabilities {
+            if let Some(p) = value.filter(|p| !(0.0..=1.0).contains(p)) {
+                return Err(format!(
+                    "column `{column}`: {p} is not a probability (a finite number in [0, 1])"
+                ));
+            }
+        }
+        for (column, value) in [("error_bound", self.error_bound), ("seconds", self.seconds)] {
+            if !(value.is_finite() && value >= 0.0) {
+                return Err(format!(
+                    "column `{column}`: {value} is not a finite non-negative number"
+                ));
+            }
+        }
+        match (self.certified_lower, self.upper_bound) {
+            (Some(lower), Some(upper)) if lower > upper => Err(format!(
+                "column `certified_lower`: {lower} is above `upper_bound` {upper}"
+            )),
+            _ => Ok(()),
+        }
+    }
+
     /// The row of the size pair `(defender_nodes, adversary_nodes)` from the
     /// pipeline's outcome: its best structure's numbers and certified
     /// bracket; `previous` is the smaller size's best outcome the run was
@@ -538,7 +593,9 @@ pub fn write_sweep(
     Ok(())
 }
 
-/// Reads the row of `sweep.csv` of one pair directory ([`ROW_FILE`]).
+/// Reads the row of `sweep.csv` of one pair directory ([`ROW_FILE`]),
+/// checked: the header is exactly [`SWEEP_COLUMNS`] and the row passes
+/// [`SweepRow::check`]; an error names the file, the line and the column.
 pub fn read_row(pair: &Path) -> Result<SweepRow, ShardError> {
     let path = pair.join(ROW_FILE);
     let malformed = |problem: String| ShardError::Malformed {
@@ -546,13 +603,59 @@ pub fn read_row(pair: &Path) -> Result<SweepRow, ShardError> {
         problem,
     };
     let mut reader = csv::Reader::from_path(&path).map_err(|e| malformed(e.to_string()))?;
-    let rows: Vec<SweepRow> = reader
-        .deserialize()
-        .collect::<Result<_, _>>()
-        .map_err(|e| malformed(e.to_string()))?;
+    let header = reader
+        .headers()
+        .map_err(|e| malformed(e.to_string()))?
+        .clone();
+    check_header(&header).map_err(|problem| malformed(format!("line 1: {problem}")))?;
+    let mut rows = Vec::new();
+    for record in reader.records() {
+        let record = record.map_err(|e| malformed(e.to_string()))?;
+        let line = record.position().map_or(0, csv::Position::line);
+        let row: SweepRow = record
+            .deserialize(Some(&header))
+            .map_err(|e| malformed(format!("line {line}: {e}")))?;
+        row.check()
+            .map_err(|problem| malformed(format!("line {line}: {problem}")))?;
+        rows.push(row);
+    }
     match <[SweepRow; 1]>::try_from(rows) {
         Ok([row]) => Ok(row),
         Err(rows) => Err(malformed(format!("{} rows, expected 1", rows.len()))),
+    }
+}
+
+/// `Err(problem)` unless `header` is exactly [`SWEEP_COLUMNS`], naming the
+/// first column that differs.
+fn check_header(header: &csv::StringRecord) -> Result<(), String> {
+    let expected = || format!("the columns are {}", SWEEP_COLUMNS.join(","));
+    for (i, &column) in SWEEP_COLUMNS.iter().enumerate() {
+        match header.get(i) {
+            Some(found) if found == column => {}
+            Some(found) => {
+                return Err(format!(
+                    "column {} is `{found}`, expected `{column}` ({})",
+                    i + 1,
+                    expected()
+                ));
+            }
+            None => {
+                return Err(format!(
+                    "column `{column}` is missing: {} columns, expected {} ({})",
+                    header.len(),
+                    SWEEP_COLUMNS.len(),
+                    expected()
+                ));
+            }
+        }
+    }
+    match header.get(SWEEP_COLUMNS.len()) {
+        Some(extra) => Err(format!(
+            "column {} `{extra}` is not a column of row.csv ({})",
+            SWEEP_COLUMNS.len() + 1,
+            expected()
+        )),
+        None => Ok(()),
     }
 }
 
@@ -755,6 +858,8 @@ mod tests {
         )
         .unwrap();
         assert_eq!(read_row(&dir).unwrap(), row);
+        let text = String::from_utf8(sweep_table(std::slice::from_ref(&row)).unwrap()).unwrap();
+        assert_eq!(text.lines().next(), Some(SWEEP_COLUMNS.join(",").as_str()));
         fs::remove_dir_all(&dir).unwrap();
     }
 }
