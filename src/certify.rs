@@ -108,7 +108,9 @@ impl CertifyError {
         matches!(
             self,
             Self::Mdp(MdpError::Solver(
-                SolverError::Unbounded { .. } | SolverError::Inaccurate { .. }
+                SolverError::Unbounded { .. }
+                    | SolverError::TooLargeForExact { .. }
+                    | SolverError::Inaccurate { .. }
             ))
         )
     }

@@ -35,7 +35,7 @@ pub use crate::sensitivity::{ForwardGradient, ForwardSensitivities};
 pub use crate::simulate::{Estimate, STEP_LIMIT, SimulationError, SimulationSettings, simulate};
 pub use crate::solver::{
     DEFAULT_LU_LIMIT, DEFAULT_TOLERANCE, LuSolver, SolveReport, SolverError, SolverMethod,
-    SolverSettings, SparsePattern,
+    SolverSettings, SparsePattern, exact,
 };
 pub use gradient::{GradientPass, PARALLEL_GRADIENT_ROWS};
 pub(crate) use gradient::{RowWorkspace, row_derivatives};

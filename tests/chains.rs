@@ -141,7 +141,10 @@ fn a_walk_too_slow_to_certify_is_an_error_or_right_never_wrong() {
                 "{method:?}: {}",
                 evaluation.value
             ),
-            Err(ValueError::Solver(SolverError::Unbounded { expected_time, .. })) => {
+            Err(ValueError::Solver(
+                SolverError::Unbounded { expected_time, .. }
+                | SolverError::TooLargeForExact { expected_time, .. },
+            )) => {
                 assert!(expected_time > 1e17, "{method:?}: {expected_time:e}")
             }
             Err(other) => panic!("{method:?}: {other}"),
@@ -168,6 +171,7 @@ fn a_walk_too_slow_to_certify_is_an_error_or_right_never_wrong() {
                         Ok(_)
                             | Err(CertifyError::Mdp(MdpError::Solver(
                                 SolverError::Unbounded { .. }
+                                    | SolverError::TooLargeForExact { .. }
                             )))
                     ),
                     "{result:?}"

@@ -194,12 +194,18 @@ fn eval_with_memory_gives_values_on_paper_within_the_printed_bound() {
                             "{context}"
                         );
                     }
-                    Err(ValueError::Solver(SolverError::Unbounded { expected_time, .. })) => {
+                    Err(ValueError::Solver(SolverError::TooLargeForExact {
+                        expected_time,
+                        unknowns,
+                        exact_limit,
+                        ..
+                    })) => {
                         // Double precision cannot certify 1e-9 when memory
                         // splits states the chain stays in for 1e15 steps
-                        // and more (method.md section 8).
+                        // and more (method.md section 8), and the system is
+                        // too large for the exact fallback.
                         assert!(
-                            expected_time >= 1e15,
+                            expected_time >= 1e15 && unknowns > exact_limit,
                             "{label}, uniform:{nodes}: refused at expected time {expected_time:e}"
                         );
                         eprintln!(
@@ -251,4 +257,68 @@ fn certify_with_memory_brackets_the_values_on_paper() {
             assert!((upper.value - exact).abs() < 1e-8, "{context}");
         }
     }
+}
+
+#[test]
+fn where_double_precision_cannot_prove_the_bound_small_chains_are_solved_exactly() {
+    let dra = formula("F goal");
+    let (game, exact) = (fixture("slow-path-10.posg.json"), (1.0f64 / 1.1).powi(10));
+    let defender = uniform(&game, Role::Defender, 3);
+    let adversary = uniform(&game, Role::Adversary, 1);
+    let without = SolverSettings {
+        exact_limit: 0,
+        ..SolverSettings::default()
+    };
+    let refused = evaluate_controllers(&game, &dra, &defender, &adversary, &without);
+    assert!(
+        matches!(
+            refused,
+            Err(ValueError::Solver(SolverError::TooLargeForExact { expected_time, .. }))
+                if expected_time > 1e15
+        ),
+        "double precision alone proves no bound here"
+    );
+    let (evaluator, evaluation) = evaluate_controllers(
+        &game,
+        &dra,
+        &defender,
+        &adversary,
+        &SolverSettings::default(),
+    )
+    .unwrap();
+    assert!(evaluator.solver_reason().contains("exact rational solve"));
+    let error = (evaluation.value - exact).abs();
+    assert!(
+        evaluation.error_bound <= 1e-15,
+        "{:e}",
+        evaluation.error_bound
+    );
+    assert!(error <= evaluation.error_bound + 1e-15);
+    // The exact value of the chain the doubles describe; the paper's value
+    // differs by the rounding of the transition probabilities only.
+    assert!(error < 1e-14, "{} vs {exact}", evaluation.value);
+}
+
+#[test]
+fn chains_too_large_for_the_exact_solve_are_refused_saying_so() {
+    let dra = formula("F goal");
+    let (game, _) = lazy_walk(2_001, 1e-12);
+    let defender = uniform(&game, Role::Defender, 3);
+    let adversary = uniform(&game, Role::Adversary, 1);
+    let error = evaluate_controllers(
+        &game,
+        &dra,
+        &defender,
+        &adversary,
+        &SolverSettings::default(),
+    )
+    .err()
+    .expect("refused")
+    .to_string();
+    assert!(
+        error.contains("exact rational solve")
+            && error.contains("this one has 5997")
+            && error.contains("--tolerance"),
+        "{error}"
+    );
 }

@@ -25,10 +25,15 @@
 //! [`LinearSolver::solve`] also bounds it, `|x - A^{-1} b| <= max(t) ||r||_inf`
 //! with `t = A^{-1} 1` the expected time in `T` ([`bound`]), refines `x`
 //! with the same factors while that bound exceeds the tolerance, and
-//! reports the bound as [`SolveReport::error_bound`]; a bound it cannot
-//! bring under the tolerance is an error ([`SolverError::Unbounded`]).
+//! reports the bound as [`SolveReport::error_bound`]. Where double
+//! precision cannot prove the bound (or the residual), a system of at most
+//! [`SolverSettings::exact_limit`] unknowns is solved again exactly in
+//! rationals ([`exact`]) and its value reported to the last bit; on a
+//! larger system the bound that cannot be proved is an error
+//! ([`SolverError::Unbounded`], [`SolverError::TooLargeForExact`]).
 
 pub mod bound;
+pub mod exact;
 mod ilu;
 mod krylov;
 mod lu;
@@ -125,6 +130,31 @@ pub enum SolverError {
         /// The bound on `max(t)`, infinite when none could be certified.
         expected_time: f64,
     },
+    /// Double precision could not prove the bound, and the system is too
+    /// large for the exact rational solve ([`exact`]).
+    #[error(
+        "the error bound {error_bound:e} exceeds the tolerance {tolerance:e}: the chain spends \
+         up to {expected_time:e} expected steps in the transient states, too many for double \
+         precision to prove the value within the tolerance, and the exact rational solve that \
+         proves such values runs only on systems of at most {exact_limit} unknowns ({fill}); \
+         this one has {unknowns}; the value is not reported (remedies: a larger `--tolerance`, \
+         which accepts the looser bound and reports it with the value, or smaller controllers \
+         or a smaller game)"
+    )]
+    TooLargeForExact {
+        /// The smallest bound reached in double precision.
+        error_bound: f64,
+        /// The tolerance asked for.
+        tolerance: f64,
+        /// The bound on `max(t)`, infinite when none could be certified.
+        expected_time: f64,
+        /// The unknowns of the system.
+        unknowns: usize,
+        /// [`SolverSettings::exact_limit`].
+        exact_limit: usize,
+        /// Whether the size or the fill of the elimination stopped it, in words.
+        fill: String,
+    },
     /// The tolerance is not a finite positive number.
     #[error("the tolerance must be finite and positive, not {0}")]
     InvalidTolerance(f64),
@@ -186,6 +216,9 @@ pub struct SolverSettings {
     pub lu_switch_limit: usize,
     /// The most BiCGSTAB iterations per solve.
     pub max_iterations: usize,
+    /// The most unknowns of a system solved exactly in rationals
+    /// ([`exact`]) when double precision cannot prove its bound (0: never).
+    pub exact_limit: usize,
 }
 
 impl Default for SolverSettings {
@@ -196,6 +229,7 @@ impl Default for SolverSettings {
             lu_limit: DEFAULT_LU_LIMIT,
             lu_switch_limit: DEFAULT_LU_SWITCH_LIMIT,
             max_iterations: DEFAULT_MAX_ITERATIONS,
+            exact_limit: exact::DEFAULT_EXACT_LIMIT,
         }
     }
 }
@@ -552,6 +586,8 @@ pub struct LinearSolver {
     /// factorisation (see there).
     solve_while_factorising: bool,
     tolerance: f64,
+    /// [`SolverSettings::exact_limit`].
+    exact_limit: usize,
     /// The row sums `A 1` of the last values (the probabilities of leaving
     /// `T`): with the off-diagonal values they define `A` (method.md
     /// section 8).
@@ -607,6 +643,10 @@ fn unprovable(
         other => other,
     }
 }
+
+/// What [`LinearSolver::reason`] adds once a solve was exact.
+const EXACT_REASON: &str =
+    "; exact rational solve where double precision could not prove the bound";
 
 /// The most unknowns of a system that [`LinearSolver::factorize_and_solve`]
 /// solves during the factorisation before any solve has shown whether it
@@ -670,6 +710,7 @@ impl LinearSolver {
             solve_while_factorising: pattern_n <= SOLVE_WHILE_FACTORISING_UNKNOWNS,
             krylov_budget: krylov_settings.max_iterations,
             tolerance: settings.tolerance,
+            exact_limit: settings.exact_limit,
             exits: vec![0.0; pattern_n],
             expected_time: ExpectedTime::new(),
             scratch: BoundScratch::default(),
@@ -762,7 +803,21 @@ impl LinearSolver {
     /// starts that way only on systems of at most
     /// [`SOLVE_WHILE_FACTORISING_UNKNOWNS`] unknowns; otherwise it
     /// factorises keeping `L`, then solves.
+    ///
+    /// Where double precision cannot prove the bound, the exact fallback
+    /// of [`Self::solve`] applies.
     pub fn factorize_and_solve(
+        &mut self,
+        fill: impl FnOnce(&mut [f64], &mut [f64]),
+        b: &[f64],
+        x: &mut [f64],
+    ) -> Result<SolveReport, SolverError> {
+        let solved = self.factorize_and_solve_in_double(fill, b, x);
+        self.exactly_if_unprovable(solved, b, x)
+    }
+
+    /// [`Self::factorize_and_solve`] in double precision only.
+    fn factorize_and_solve_in_double(
         &mut self,
         fill: impl FnOnce(&mut [f64], &mut [f64]),
         b: &[f64],
@@ -814,7 +869,75 @@ impl LinearSolver {
     /// the tolerance; a bound that stays above it is an error. On entry `x`
     /// is the starting point of an iterative solve (ignored by LU); on
     /// return it is the solution.
+    ///
+    /// Where double precision cannot prove the bound (or the residual),
+    /// a system of at most [`SolverSettings::exact_limit`] unknowns is
+    /// solved exactly ([`exact`]): `x` is then the exact solution rounded
+    /// to the nearest doubles and the bound that rounding (method.md
+    /// section 8).
     pub fn solve(&mut self, b: &[f64], x: &mut [f64]) -> Result<SolveReport, SolverError> {
+        let solved = self.solve_in_double(b, x);
+        self.exactly_if_unprovable(solved, b, x)
+    }
+
+    /// The exact fallback of [`Self::solve`]: `solved` unless it is an
+    /// error of a bound or residual that double precision cannot prove;
+    /// then the exact solution, or [`SolverError::TooLargeForExact`].
+    fn exactly_if_unprovable(
+        &mut self,
+        solved: Result<SolveReport, SolverError>,
+        b: &[f64],
+        x: &mut [f64],
+    ) -> Result<SolveReport, SolverError> {
+        let (error_bound, expected_time) = match &solved {
+            Err(SolverError::Unbounded {
+                error_bound,
+                expected_time,
+                ..
+            }) => (*error_bound, *expected_time),
+            Err(SolverError::Inaccurate { .. }) => (f64::INFINITY, self.expected_time.largest()),
+            _ => return solved,
+        };
+        let n = self.pattern().n;
+        let too_large = |fill: String| SolverError::TooLargeForExact {
+            error_bound,
+            tolerance: self.tolerance,
+            expected_time,
+            unknowns: n,
+            exact_limit: self.exact_limit,
+            fill,
+        };
+        let entry_limit = exact::EXACT_ENTRIES_PER_UNKNOWN * self.exact_limit;
+        if n > self.exact_limit {
+            return Err(too_large(format!(
+                "and whose elimination holds at most {entry_limit} entries"
+            )));
+        }
+        let exact =
+            exact::solve_exactly(self.pattern(), self.values(), &self.exits, b, entry_limit);
+        match exact {
+            Ok(solution) => {
+                x.copy_from_slice(&solution.x);
+                if !self.reason.contains(EXACT_REASON) {
+                    self.reason.push_str(EXACT_REASON);
+                }
+                Ok(SolveReport {
+                    residual: self
+                        .pattern()
+                        .chain_residual(self.values(), &self.exits, x, b),
+                    iterations: 0,
+                    error_bound: Some(solution.error_bound),
+                })
+            }
+            Err(exact::ExactRefusal::TooMuchFill { limit }) => Err(too_large(format!(
+                "whose elimination holds at most {limit} entries: this one needs more"
+            ))),
+            Err(exact::ExactRefusal::Solver(error)) => Err(error),
+        }
+    }
+
+    /// [`Self::solve`] in double precision only.
+    fn solve_in_double(&mut self, b: &[f64], x: &mut [f64]) -> Result<SolveReport, SolverError> {
         let probe_iterations = self.choose_by_trial(b, x, 1)?;
         let (mut report, largest_time) = self.solve_with_expected_time(b, x)?;
         report.iterations += probe_iterations;

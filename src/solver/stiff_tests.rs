@@ -124,15 +124,23 @@ fn distance(x: f64, exact_value: &BigRational) -> f64 {
     difference.to_f64().expect("finite") * (1.0 + 2f64.powi(-50))
 }
 
-/// Solves the chain with `method` and checks every entry against the
-/// exact solution: within the reported bound, or an error saying the
-/// bound could not be proved. Returns whether it was solved.
+/// Solves the chain with `method` in double precision (no exact
+/// fallback) and checks every entry against the exact solution: within the
+/// reported bound, or an error saying the bound could not be proved.
+/// Returns whether it was solved.
 fn solved_within_bound(chain: &Chain, method: SolverMethod) -> bool {
     let settings = SolverSettings {
         method,
+        exact_limit: 0,
         ..SolverSettings::default()
     };
-    let mut solver = LinearSolver::new(chain.pattern.clone(), &settings).unwrap();
+    solved_within_bound_by(chain, &settings)
+}
+
+/// [`solved_within_bound`] with `settings`.
+fn solved_within_bound_by(chain: &Chain, settings: &SolverSettings) -> bool {
+    let method = settings.method;
+    let mut solver = LinearSolver::new(chain.pattern.clone(), settings).unwrap();
     solver
         .factorize_with(|values, exits| {
             values.copy_from_slice(&chain.values);
@@ -157,6 +165,7 @@ fn solved_within_bound(chain: &Chain, method: SolverMethod) -> bool {
         }
         Err(
             SolverError::Unbounded { .. }
+            | SolverError::TooLargeForExact { .. }
             | SolverError::Inaccurate { .. }
             | SolverError::NotConverged { .. },
         ) => false,
@@ -262,6 +271,33 @@ proptest! {
         let chain = with_memory(&moves, &goal, &fail, nodes);
         for method in [SolverMethod::Lu, SolverMethod::Krylov] {
             solved_within_bound(&chain, method);
+        }
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(100))]
+    #[test]
+    fn random_stiff_chains_are_solved_exactly_where_double_precision_cannot_prove_them(
+        (moves, goal, fail, nodes) in stiff_chain()
+    ) {
+        prop_assume!(transient(&moves, &goal, &fail));
+        let chain = with_memory(&moves, &goal, &fail, nodes);
+        let reference = exact_solution(&chain);
+        let exact = super::exact::solve_exactly(
+            &chain.pattern, &chain.values, &chain.exits, &chain.b, usize::MAX,
+        )
+        .unwrap();
+        for (i, exact_value) in reference.iter().enumerate() {
+            prop_assert_eq!(exact.x[i], exact_value.to_f64().unwrap(), "x[{}]", i);
+            prop_assert!(distance(exact.x[i], exact_value) <= exact.error_bound);
+        }
+        prop_assert!(exact.error_bound <= 1e-16);
+        // With the fallback (the default settings), nothing is refused
+        // (BiCGSTAB as set may still stop before converging).
+        for method in [SolverMethod::Lu, SolverMethod::Auto] {
+            let settings = SolverSettings { method, ..SolverSettings::default() };
+            prop_assert!(solved_within_bound_by(&chain, &settings), "{:?} refused", method);
         }
     }
 }
