@@ -8,7 +8,11 @@
 /// The most choices a controller may hold: `nodes * observations * nodes *
 /// actions` for a uniform (full-support) controller (`uniform:K`, the
 /// optimiser's starting structures, a file with `"default": "uniform"`).
-pub const MAX_CONTROLLER_CHOICES: u128 = 50_000_000;
+/// The optimiser holds a few hundred bytes per choice over its parallel
+/// starts and structures (`solve --def-nodes 5` on a game of 10^6
+/// observations and 2 actions, 5e7 choices, passed 20 GB), so this keeps
+/// it within about 2 GB.
+pub const MAX_CONTROLLER_CHOICES: u128 = 5_000_000;
 
 /// The most `(state, defender action, adversary action)` triples a game may
 /// have (the transition table has one entry per triple).
@@ -32,6 +36,21 @@ pub const MAX_CHAIN_TRANSITIONS: u128 = 1_000_000_000;
 /// so this budget keeps the chain and its system within about 4 GB. It is
 /// checked row by row as the chain is explored, before each row is stored.
 pub const MAX_GMC_TRANSITIONS: u128 = 100_000_000;
+
+/// The most states of the global Markov chain that `eval`, the optimiser
+/// and the other evaluations build: each costs about 100 bytes while the
+/// chain is explored (its key, its index entry, its row), so this keeps the
+/// exploration within about 2 GB; the largest GMC measured (the 288 x 288
+/// grid with 2-node controllers) has about 10^6. It is checked as each new
+/// state is reached, before it is stored.
+pub const MAX_GMC_STATES: u128 = 20_000_000;
+
+/// The most terms `O(o | s) mu(g', u | g, o)` of one player's action
+/// mixture over all `(s, g)` (about game states x nodes^2 x actions for a
+/// full-support controller), from which the GMC's rows are built: each
+/// costs about 20 bytes, so this keeps a mixture within about 1 GB. It is
+/// checked before the mixture is allocated.
+pub const MAX_MIXTURE_TERMS: u128 = 50_000_000;
 
 /// The most `(defender size, adversary size)` pairs one `sweep` may run.
 pub const MAX_SWEEP_PAIRS: u128 = 10_000;

@@ -230,6 +230,8 @@ impl Gmc {
     ) -> Result<Self, ProductError> {
         check_support("defender", game.defender(), defender)?;
         check_support("adversary", game.adversary(), adversary)?;
+        check_mixture_size("defender", game.defender(), defender, game.num_states())?;
+        check_mixture_size("adversary", game.adversary(), adversary, game.num_states())?;
         let tables = GameTables::build(game, dra);
         let defender_mixture = Mixture::build(game.defender(), defender, game.num_states());
         let adversary_mixture = Mixture::build(game.adversary(), adversary, game.num_states());
@@ -241,12 +243,13 @@ impl Gmc {
         let cells = [max_successors, num_g, num_h]
             .into_iter()
             .fold(1u128, |product, n| product.saturating_mul(n as u128));
+        // The cells of one row are distinct GMC states.
         if let Some(message) = crate::limits::exceeded(
             "one row (successor states x defender nodes x adversary nodes)",
             cells,
-            crate::limits::MAX_GMC_TRANSITIONS,
-            "transitions",
-            "MAX_GMC_TRANSITIONS",
+            crate::limits::MAX_GMC_STATES,
+            "distinct successor states",
+            "MAX_GMC_STATES",
         ) {
             return Err(ProductError::Budget(message));
         }
@@ -632,6 +635,33 @@ const NO_INDEX: u32 = u32::MAX;
 
 /// The largest block `|Q| |G| |H|` of the dense state map (16 KiB): a game
 /// state met costs at most this many slots even if few of its GMC states
+
+/// Refuses, before allocation, an action mixture of `role` with more terms
+/// than [`crate::limits::MAX_MIXTURE_TERMS`] (about game states x
+/// controller nodes^2 x actions: the GMC's rows are built from it).
+fn check_mixture_size(
+    role: &str,
+    player: &Player,
+    support: &Support,
+    num_states: usize,
+) -> Result<(), ProductError> {
+    let terms = Mixture::count_terms(player, support, num_states) as u128;
+    match crate::limits::exceeded(
+        &format!(
+            "the {role}'s action mixture ({num_states} game states x {} controller nodes \
+             x their successor nodes and actions)",
+            support.num_nodes()
+        ),
+        terms,
+        crate::limits::MAX_MIXTURE_TERMS,
+        "terms",
+        "MAX_MIXTURE_TERMS",
+    ) {
+        Some(message) => Err(ProductError::Budget(message)),
+        None => Ok(()),
+    }
+}
+
 /// are reachable.
 const MAX_BLOCK_SLOTS: usize = 4096;
 
@@ -668,6 +698,15 @@ impl StateIndex {
             StateLookup::Hashed(map) => map.entry(state).or_insert(NO_INDEX),
         };
         if *slot == NO_INDEX {
+            if let Some(message) = crate::limits::exceeded(
+                "the global Markov chain",
+                next as u128 + 1,
+                crate::limits::MAX_GMC_STATES,
+                "states or more",
+                "MAX_GMC_STATES",
+            ) {
+                return Err(ProductError::Budget(message));
+            }
             *slot = u32::try_from(next)
                 .ok()
                 .filter(|&m| m != NO_INDEX)

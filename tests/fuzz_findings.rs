@@ -200,3 +200,137 @@ fn fuzz_sweep_merge_refuses_a_renamed_column() {
         "{error}"
     );
 }
+
+/// A scratch directory of this test process.
+fn scratch(name: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("posg-fsc-fuzz-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// `states` states that each move to every state uniformly, seen by both
+/// players as one observation, with one action each.
+fn dense_game(dir: &std::path::Path, states: usize) -> std::path::PathBuf {
+    let names: Vec<String> = (0..states).map(|i| format!("\"s{i}\"")).collect();
+    let observe: Vec<String> = (0..states)
+        .map(|i| format!("\"s{i}\": {{\"o\": 1}}"))
+        .collect();
+    let next: Vec<String> = (0..states)
+        .map(|i| format!("\"s{i}\": {:e}", 1.0 / states as f64))
+        .collect();
+    let player = |action: &str| {
+        format!(
+            r#"{{"actions": ["{action}"], "observations": ["o"], "observe": {{{}}}}}"#,
+            observe.join(", ")
+        )
+    };
+    let next = next.join(", ");
+    let transitions: Vec<String> = (0..states)
+        .map(|i| {
+            format!(r#"{{"state": "s{i}", "defender": "*", "adversary": "*", "next": {{{next}}}}}"#)
+        })
+        .collect();
+    let json = format!(
+        r#"{{"posg": 1, "states": [{}], "initial": {{"s0": 1}}, "labels": {{"s1": ["goal"]}},
+           "defender": {}, "adversary": {}, "transitions": [{}]}}"#,
+        names.join(", "),
+        player("a"),
+        player("b"),
+        transitions.join(",\n")
+    );
+    let path = dir.join("dense.posg.json");
+    std::fs::write(&path, json).unwrap();
+    path
+}
+
+/// A path of `states` states, each seen as itself, with two defender actions.
+fn long_path_game(dir: &std::path::Path, states: usize) -> std::path::PathBuf {
+    let names: Vec<String> = (0..states).map(|i| format!("\"s{i}\"")).collect();
+    let transitions: Vec<String> = (0..states)
+        .map(|i| {
+            format!(
+                r#"{{"state": "s{i}", "defender": "*", "next": {{"s{}": 1}}}}"#,
+                (i + 1).min(states - 1)
+            )
+        })
+        .collect();
+    let json = format!(
+        r#"{{"posg": 1, "states": [{}], "initial": {{"s0": 1}}, "labels": {{"s{}": ["goal"]}},
+           "defender": {{"actions": ["go", "stay"], "observe": "full"}},
+           "transitions": [{}]}}"#,
+        names.join(", "),
+        states - 1,
+        transitions.join(",\n")
+    );
+    let path = dir.join("path.posg.json");
+    std::fs::write(&path, json).unwrap();
+    path
+}
+
+/// Runs posg-fsc with `args`, asserts that it failed cleanly, returns stderr.
+fn refused(args: &[&std::ffi::OsStr]) -> String {
+    let output = posg_fsc().args(args).output().unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr).into_owned();
+    assert_eq!(output.status.code(), Some(2), "{stderr}");
+    stderr
+}
+
+#[test]
+fn fuzz_eval_with_huge_uniform_controllers_is_refused_by_the_gmc_budget() {
+    // 200 successors x 1000 x 1000 nodes: the action mixtures alone would
+    // need 2e8 terms (4 GB), the GMC 2e8 states.
+    let dir = scratch("gmc-budget");
+    let game = dense_game(&dir, 200);
+    let eval = |nodes: &str| {
+        refused(&[
+            "eval".as_ref(),
+            game.as_os_str(),
+            "--ltl".as_ref(),
+            "F goal".as_ref(),
+            "--defender".as_ref(),
+            nodes.as_ref(),
+            "--adversary".as_ref(),
+            nodes.as_ref(),
+        ])
+    };
+    let error = eval("uniform:1000");
+    assert!(
+        error.contains("the defender's action mixture (200 game states x 1000 controller nodes")
+            && error.contains("200000000 terms")
+            && error.contains("posg_fsc::limits::MAX_MIXTURE_TERMS"),
+        "{error}"
+    );
+    // 200 x 500 x 500 = 5e7 successors of the first row alone.
+    let error = eval("uniform:500");
+    assert!(
+        error.contains("one row (successor states x defender nodes x adversary nodes)")
+            && error.contains("posg_fsc::limits::MAX_GMC_STATES"),
+        "{error}"
+    );
+}
+
+#[test]
+fn fuzz_solve_with_many_defender_nodes_is_refused_before_allocation() {
+    // 2e5 observations x 2 actions x 6^2 nodes = 1.44e7 choices: the
+    // optimiser's starts would need several GB.
+    let dir = scratch("solve-budget");
+    let game = long_path_game(&dir, 200_000);
+    let out = dir.join("out");
+    let error = refused(&[
+        "solve".as_ref(),
+        game.as_os_str(),
+        "--ltl".as_ref(),
+        "F goal".as_ref(),
+        "--def-nodes".as_ref(),
+        "6".as_ref(),
+        "--out".as_ref(),
+        out.as_os_str(),
+    ]);
+    assert!(
+        error.contains("--def-nodes: a full-support controller of 6 nodes (200000 observations, 2 actions) would need 14400000 choices")
+            && error.contains("posg_fsc::limits::MAX_CONTROLLER_CHOICES"),
+        "{error}"
+    );
+    assert!(!out.exists(), "nothing is written");
+}

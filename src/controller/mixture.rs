@@ -105,8 +105,9 @@ impl Mixture {
     }
 
     /// The number of terms `(k, O(o | s))` over all `(s, g)`: the length of
-    /// the term list, and a bound on the number of entries.
-    fn count_terms(player: &Player, support: &Support, num_states: usize) -> usize {
+    /// the term list, and a bound on the number of entries (checked against
+    /// [`crate::limits::MAX_MIXTURE_TERMS`] before [`Mixture::build`]).
+    pub(crate) fn count_terms(player: &Player, support: &Support, num_states: usize) -> usize {
         let per_observation: Vec<usize> = (0..support.num_observations())
             .map(|o| {
                 (0..support.num_nodes())

@@ -916,6 +916,11 @@ impl LinearSolver {
         let exact =
             exact::solve_exactly(self.pattern(), self.values(), &self.exits, b, entry_limit);
         match exact {
+            Ok(solution) if solution.error_bound > self.tolerance => Err(SolverError::Unbounded {
+                error_bound: solution.error_bound,
+                tolerance: self.tolerance,
+                expected_time,
+            }),
             Ok(solution) => {
                 x.copy_from_slice(&solution.x);
                 if !self.reason.contains(EXACT_REASON) {

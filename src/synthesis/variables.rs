@@ -38,6 +38,29 @@ impl SupportVariables {
     ) -> Result<Self, SynthesisError> {
         let player = game.defender();
         let (no, nu) = (player.num_observations(), player.num_actions());
+        let product = |factors: &[usize]| {
+            factors
+                .iter()
+                .fold(1u128, |p, &f| p.saturating_mul(f as u128))
+        };
+        let sizes = [
+            (
+                "support variables (nodes x observations x nodes x actions)",
+                product(&[nodes, no, nodes, nu]),
+            ),
+            (
+                "edge slots (game moves x nodes x nodes)",
+                product(&[moves.len(), nodes, nodes]),
+            ),
+        ];
+        for (what, size) in sizes {
+            if size > cnf.clause_budget() as u128 {
+                return Err(SynthesisError::TooLarge {
+                    what: format!("{what}: {nodes} nodes need {size}"),
+                    budget: cnf.clause_budget(),
+                });
+            }
+        }
         let support: Vec<Lit> = (0..nodes * no * nodes * nu)
             .map(|i| {
                 let (o, u) = ((i / (nodes * nu)) % no, i % nu);
