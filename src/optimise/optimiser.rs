@@ -51,6 +51,7 @@ use super::observer::{IterationRecord, Observer};
 use super::play::{GradientPlay, Iterate, PlayState, perturbed};
 use super::{Cancel, OptimiseError, Settings, Status};
 use crate::automaton::Dra;
+use crate::controller::Fsc;
 use crate::game::Posg;
 use check::{Check, SuffixAverage};
 
@@ -170,12 +171,18 @@ struct Bookkeeping {
     adversary_average: SuffixAverage,
     /// The adversary of the last L-BFGS best response (a warm start).
     last_response: Option<Vec<f64>>,
+    /// When the checks tighten the game upper bound against the adversaries.
+    upper_schedule: check::Backoff,
+    /// The last argmax rounding certified, and its certified lower bound.
+    last_rounding: Option<(Fsc, f64)>,
     checks: usize,
     phases: PhaseSeconds,
 }
 
 impl Bookkeeping {
-    fn new(defender_parameters: usize, adversary_parameters: usize) -> Self {
+    /// Empty books for logits of these sizes; the upper bound's schedule
+    /// backs off to at most `upper_interval` checks.
+    fn new(defender_parameters: usize, adversary_parameters: usize, upper_interval: usize) -> Self {
         Self {
             best: None,
             upper_bound: None,
@@ -184,6 +191,8 @@ impl Bookkeeping {
             defender_average: SuffixAverage::new(defender_parameters),
             adversary_average: SuffixAverage::new(adversary_parameters),
             last_response: None,
+            upper_schedule: check::Backoff::new(upper_interval),
+            last_rounding: None,
             checks: 0,
             phases: PhaseSeconds::default(),
         }
@@ -256,7 +265,11 @@ impl<'a> Optimiser<'a> {
         let clock = Instant::now();
         let mut solver =
             GradientPlay::new(&self.settings, self.defender.len(), self.adversary.len());
-        let mut books = Bookkeeping::new(self.defender.len(), self.adversary.len());
+        let mut books = Bookkeeping::new(
+            self.defender.len(),
+            self.adversary.len(),
+            self.settings.best_response_every,
+        );
         let start = Iterate {
             iteration: 0,
             defender: self.defender.clone(),

@@ -17,6 +17,19 @@
 //! When the run ends, the kept defender gets a full best response
 //! ([`Optimiser::settle`]) with `restarts` random starts besides the warm
 //! ones: its reported worst case is always a best-response value.
+//!
+//! Certification is the costly part of a check (a product MDP built and
+//! solved per bound), so a check certifies only what can change the run:
+//! - a candidate whose value against an adversary (the current one, or
+//!   the best response found) is at most the best certified lower bound is
+//!   not certified: its certified lower bound is at most its worst case,
+//!   which is at most that value, so it cannot replace the incumbent;
+//! - the argmax rounding's lower bound is computed again only when the
+//!   rounded controller changed;
+//! - the game upper bound is tightened against the adversaries at every
+//!   check while that tightens it, otherwise at intervals that double up
+//!   to `best_response_every` checks ([`Backoff`]); deep checks and the
+//!   end tighten it against the best responses found as before.
 
 use std::time::Instant;
 
@@ -30,7 +43,8 @@ use crate::certify::{lower_value_or_trivial, upper_value_or_trivial};
 pub(super) struct Check {
     /// The best-response value of the current defender (deep checks only).
     pub worst_case: Option<f64>,
-    /// The current defender's certified lower bound (with a certifier).
+    /// The current defender's certified lower bound (with a certifier,
+    /// unless its value showed it cannot beat the incumbent).
     pub certified_lower: Option<f64>,
     /// The argmax rounding of the current defender certifies within
     /// `gap_tolerance` of the upper bound (it is then the incumbent, and
@@ -53,27 +67,28 @@ impl Optimiser<'_> {
         books.checks += 1;
         let iterate = &state.iterate;
         let averaged = self.averaged_defender(iterate, &books.defender_average);
-        self.certify_against_adversaries(iterate, books)?;
-        let rounding_closes_gap =
-            self.rounding_closes_gap(iterate, books.upper_bound, &mut books.phases)?;
+        let upper_tightened = self.certify_against_adversaries(iterate, books)?;
+        let rounding_closes_gap = self.rounding_closes_gap(iterate, books, upper_tightened)?;
         let deep = deep || self.certifier.is_none();
         let mut current = None;
         for (i, candidate) in [iterate.defender.clone(), averaged].into_iter().enumerate() {
             let respond = deep && (i == 0 || self.certifier.is_none());
-            let incumbent = self.judge(candidate, respond, iterate, books)?;
+            let current_closes = i == 0 && rounding_closes_gap;
+            let judged = self.judge(candidate, respond, !current_closes, iterate, books)?;
             current.get_or_insert(Check {
-                worst_case: respond.then_some(incumbent.worst_case),
-                certified_lower: incumbent.certified_lower,
+                worst_case: respond.then_some(judged.worst_case),
+                certified_lower: judged.incumbent.as_ref().and_then(|c| c.certified_lower),
                 rounding_closes_gap,
             });
-            let current_closes = i == 0 && rounding_closes_gap;
-            if current_closes
-                || books
-                    .best
-                    .as_ref()
-                    .is_none_or(|b| incumbent.score() > b.score())
-            {
-                books.best = Some(incumbent);
+            if let Some(incumbent) = judged.incumbent {
+                if current_closes
+                    || books
+                        .best
+                        .as_ref()
+                        .is_none_or(|b| incumbent.score() > b.score())
+                {
+                    books.best = Some(incumbent);
+                }
             }
             if current_closes {
                 break;
@@ -117,24 +132,30 @@ impl Optimiser<'_> {
         softmax.logits_of(&averaged, iterate.bound)
     }
 
-    /// With a certifier: tightens the game upper bound with the current
-    /// adversary and with the adversary whose probabilities are the
-    /// adversary's suffix average (as logits within `logit_bound`; where
-    /// cycling play circles a mixed saddle point, the average approaches it).
+    /// With a certifier, when the upper bound's [`Backoff`] schedule says
+    /// so: tightens the game upper bound with the current adversary and
+    /// with the adversary whose probabilities are the adversary's suffix
+    /// average (as logits within `logit_bound`; where cycling play circles
+    /// a mixed saddle point, the average approaches it). Returns whether
+    /// the upper bound went down.
     fn certify_against_adversaries(
         &self,
         iterate: &Iterate,
         books: &mut Bookkeeping,
-    ) -> Result<(), OptimiseError> {
-        if self.certifier.is_none() {
-            return Ok(());
+    ) -> Result<bool, OptimiseError> {
+        if self.certifier.is_none() || !books.upper_schedule.due(books.checks) {
+            return Ok(false);
         }
+        let before = books.upper_bound;
         let softmax = self.objective.adversary();
         let mut mu = softmax.probabilities(&iterate.adversary);
         mu.entries.clone_from(&books.adversary_average.mean);
         let averaged = softmax.logits_of(&mu, self.settings.logit_bound);
         self.tighten_against(&iterate.adversary, books)?;
-        self.tighten_against(&averaged, books)
+        self.tighten_against(&averaged, books)?;
+        let tightened = books.upper_bound < before || before.is_none();
+        books.upper_schedule.after(books.checks, tightened);
+        Ok(tightened)
     }
 
     /// With a certifier: tightens the game upper bound with the adversary
@@ -159,14 +180,16 @@ impl Optimiser<'_> {
     /// `respond`, its best response warm-started from the current
     /// adversary and the last best response found (which then tightens the
     /// game upper bound), else its value against the current adversary;
-    /// with a certifier, its certified lower bound.
+    /// with a certifier, its certified lower bound, unless `may_skip` and
+    /// that value shows it cannot beat the incumbent (module documentation).
     fn judge(
         &mut self,
         candidate: Vec<f64>,
         respond: bool,
+        may_skip: bool,
         iterate: &Iterate,
         books: &mut Bookkeeping,
-    ) -> Result<Incumbent, OptimiseError> {
+    ) -> Result<Judged, OptimiseError> {
         let found = if respond {
             let mut at: Vec<&[f64]> = vec![&iterate.adversary];
             at.extend(books.last_response.as_deref());
@@ -192,6 +215,18 @@ impl Optimiser<'_> {
                 adversary: iterate.adversary.clone(),
             }
         };
+        let cannot_beat = self.certifier.is_some()
+            && may_skip
+            && books
+                .best
+                .as_ref()
+                .is_some_and(|best| found.value <= best.score());
+        if cannot_beat {
+            return Ok(Judged {
+                worst_case: found.value,
+                incumbent: None,
+            });
+        }
         let clock = Instant::now();
         let certified_lower = match self.certifier {
             Some(certifier) => {
@@ -205,12 +240,15 @@ impl Optimiser<'_> {
             None => None,
         };
         books.phases.certification += clock.elapsed().as_secs_f64();
-        Ok(Incumbent {
-            defender: candidate,
-            adversary: found.adversary,
+        Ok(Judged {
             worst_case: found.value,
-            certified_lower,
-            iteration: iterate.iteration,
+            incumbent: Some(Incumbent {
+                defender: candidate,
+                adversary: found.adversary,
+                worst_case: found.value,
+                certified_lower,
+                iteration: iterate.iteration,
+            }),
         })
     }
 
@@ -235,26 +273,86 @@ impl Optimiser<'_> {
     }
 
     /// Whether, with rounding on and a certifier, the argmax rounding of the
-    /// current defender certifies within `gap_tolerance` of `upper_bound`: a
-    /// deterministic optimum is then found, though the softmax iterates
-    /// would approach it only slowly.
+    /// current defender certifies within `gap_tolerance` of the upper
+    /// bound: a deterministic optimum is then found, though the softmax
+    /// iterates would approach it only slowly. The rounding's lower bound
+    /// is computed again only when the rounded controller changed; with
+    /// neither it nor the upper bound (`upper_tightened`) changed, the
+    /// answer is the last one.
     fn rounding_closes_gap(
         &self,
         iterate: &Iterate,
-        upper_bound: Option<f64>,
-        phases: &mut PhaseSeconds,
+        books: &mut Bookkeeping,
+        upper_tightened: bool,
     ) -> Result<bool, OptimiseError> {
         let (Some(certifier), Some(upper), true) =
-            (&self.certifier, upper_bound, self.settings.round)
+            (&self.certifier, books.upper_bound, self.settings.round)
         else {
             return Ok(false);
         };
         let clock = Instant::now();
         let defender = self.objective.defender().controller(&iterate.defender)?;
         let rounded = truncated(&defender, f64::INFINITY)?;
-        let lower = lower_value_or_trivial(certifier.game, certifier.not_phi, &rounded)?;
-        phases.certification += clock.elapsed().as_secs_f64();
+        let lower = match &books.last_rounding {
+            Some((last, lower)) if *last == rounded => {
+                if !upper_tightened {
+                    return Ok(false);
+                }
+                *lower
+            }
+            _ => {
+                let lower = lower_value_or_trivial(certifier.game, certifier.not_phi, &rounded)?;
+                books.last_rounding = Some((rounded, lower));
+                lower
+            }
+        };
+        books.phases.certification += clock.elapsed().as_secs_f64();
         Ok(upper - lower <= self.settings.gap_tolerance)
+    }
+}
+
+/// A candidate after [`Optimiser::judge`]: its value against the adversary
+/// it was judged against (a best response when one was computed), and
+/// itself as a possible incumbent, `None` when it cannot beat the current
+/// one (and was therefore not certified).
+struct Judged {
+    worst_case: f64,
+    incumbent: Option<Incumbent>,
+}
+
+/// The schedule of an optional certification (the game upper bound's):
+/// due at every check while it pays, otherwise at intervals (in checks)
+/// that double, up to `cap`, after each check where it did not.
+pub(super) struct Backoff {
+    interval: usize,
+    next: usize,
+    cap: usize,
+}
+
+impl Backoff {
+    /// Due at every check until one does not pay; intervals at most `cap`.
+    pub fn new(cap: usize) -> Self {
+        Self {
+            interval: 1,
+            next: 0,
+            cap: cap.max(1),
+        }
+    }
+
+    /// Whether the certification is due at check number `check`.
+    pub fn due(&self, check: usize) -> bool {
+        check >= self.next
+    }
+
+    /// After the certification ran at check number `check`: due again at
+    /// the next check when it `paid`, else after twice the last interval.
+    pub fn after(&mut self, check: usize, paid: bool) {
+        self.interval = if paid {
+            1
+        } else {
+            (2 * self.interval).min(self.cap)
+        };
+        self.next = check + self.interval;
     }
 }
 
@@ -304,6 +402,34 @@ mod tests {
         assert_eq!(average.mean, [3.0], "the mean over iterations 2..=3");
         average.add(4, &[7.0]);
         assert_eq!(average.mean, [7.0], "restarted at 4");
+    }
+
+    #[test]
+    fn the_backoff_doubles_its_interval_until_the_certification_pays() {
+        let mut schedule = Backoff::new(4);
+        let due: Vec<usize> = (0..20)
+            .filter(|&check| {
+                let due = schedule.due(check);
+                if due {
+                    schedule.after(check, false);
+                }
+                due
+            })
+            .collect();
+        // Never paying: intervals 2, then 4 (the cap).
+        assert_eq!(due, [0, 2, 6, 10, 14, 18]);
+        let mut schedule = Backoff::new(4);
+        let due: Vec<usize> = (0..12)
+            .filter(|&check| {
+                let due = schedule.due(check);
+                if due {
+                    schedule.after(check, check == 2);
+                }
+                due
+            })
+            .collect();
+        // Paying at check 2: due at the next check, then intervals 2, 4.
+        assert_eq!(due, [0, 2, 3, 5, 9]);
     }
 
     #[test]
