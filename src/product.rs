@@ -635,33 +635,6 @@ const NO_INDEX: u32 = u32::MAX;
 
 /// The largest block `|Q| |G| |H|` of the dense state map (16 KiB): a game
 /// state met costs at most this many slots even if few of its GMC states
-
-/// Refuses, before allocation, an action mixture of `role` with more terms
-/// than [`crate::limits::MAX_MIXTURE_TERMS`] (about game states x
-/// controller nodes^2 x actions: the GMC's rows are built from it).
-fn check_mixture_size(
-    role: &str,
-    player: &Player,
-    support: &Support,
-    num_states: usize,
-) -> Result<(), ProductError> {
-    let terms = Mixture::count_terms(player, support, num_states) as u128;
-    match crate::limits::exceeded(
-        &format!(
-            "the {role}'s action mixture ({num_states} game states x {} controller nodes \
-             x their successor nodes and actions)",
-            support.num_nodes()
-        ),
-        terms,
-        crate::limits::MAX_MIXTURE_TERMS,
-        "terms",
-        "MAX_MIXTURE_TERMS",
-    ) {
-        Some(message) => Err(ProductError::Budget(message)),
-        None => Ok(()),
-    }
-}
-
 /// are reachable.
 const MAX_BLOCK_SLOTS: usize = 4096;
 
@@ -760,6 +733,32 @@ impl BlockLookup {
         }
         let slot = self.slots[start as usize + self.offset(state)];
         (slot != NO_INDEX).then_some(slot)
+    }
+}
+
+/// Refuses, before allocation, an action mixture of `role` with more terms
+/// than [`crate::limits::MAX_MIXTURE_TERMS`] (about game states x
+/// controller nodes^2 x actions: the GMC's rows are built from it).
+fn check_mixture_size(
+    role: &str,
+    player: &Player,
+    support: &Support,
+    num_states: usize,
+) -> Result<(), ProductError> {
+    let terms = Mixture::count_terms(player, support, num_states) as u128;
+    match crate::limits::exceeded(
+        &format!(
+            "the {role}'s action mixture ({num_states} game states x {} controller nodes \
+             x their successor nodes and actions)",
+            support.num_nodes()
+        ),
+        terms,
+        crate::limits::MAX_MIXTURE_TERMS,
+        "terms",
+        "MAX_MIXTURE_TERMS",
+    ) {
+        Some(message) => Err(ProductError::Budget(message)),
+        None => Ok(()),
     }
 }
 
