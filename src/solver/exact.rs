@@ -1,6 +1,6 @@
 //! The exact rational solve of the transient system `A x = b`, `A = I - Q`
 //! (method.md section 8, "When double precision cannot prove the bound"):
-//! the fallback of [`super::LinearSolver`] when a solve in double precision
+//! the fallback of the linear solver (`LinearSolver`) when a solve in double precision
 //! cannot prove its error bound ([`super::SolverError::Unbounded`]) or its
 //! residual ([`super::SolverError::Inaccurate`]), on systems small enough
 //! for rational arithmetic to be cheap ([`DEFAULT_EXACT_LIMIT`]).

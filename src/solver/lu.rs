@@ -77,7 +77,7 @@ impl LuSolver {
 
     /// Numeric LU of `A` with `values` (aligned with the pattern's entries),
     /// reusing the symbolic analysis and the numeric storage. The exits are
-    /// derived from the diagonal ([`derive_exits`]), which is kept as given:
+    /// derived from the diagonal (`derive_exits`), which is kept as given:
     /// a caller that knows them uses [`Self::factorize_with`].
     pub fn factorize(&mut self, values: &[f64]) -> Result<(), SolverError> {
         let system = &mut self.system;
