@@ -52,6 +52,11 @@ pub const MAX_GMC_STATES: u128 = 20_000_000;
 /// checked before the mixture is allocated.
 pub const MAX_MIXTURE_TERMS: u128 = 50_000_000;
 
+/// The most support variables (`nodes * observations * nodes * actions`)
+/// and edge slots (`game moves * nodes^2`) the SAT encoding of support
+/// synthesis may allocate, each a few bytes: checked before allocation.
+pub const MAX_SAT_SLOTS: u128 = 100_000_000;
+
 /// The most `(defender size, adversary size)` pairs one `sweep` may run.
 pub const MAX_SWEEP_PAIRS: u128 = 10_000;
 

@@ -50,12 +50,6 @@ impl Cnf {
         cnf
     }
 
-    /// The clause budget: also the most support variables and edge slots
-    /// an encoding may allocate ([`super::variables::SupportVariables::new`]).
-    pub fn clause_budget(&self) -> usize {
-        self.clause_budget
-    }
-
     /// A new variable.
     pub fn fresh(&mut self) -> Lit {
         self.num_vars += 1;

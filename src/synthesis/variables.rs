@@ -53,11 +53,14 @@ impl SupportVariables {
                 product(&[moves.len(), nodes, nodes]),
             ),
         ];
+        let budget = crate::limits::MAX_SAT_SLOTS;
         for (what, size) in sizes {
-            if size > cnf.clause_budget() as u128 {
+            if size > budget {
                 return Err(SynthesisError::TooLarge {
-                    what: format!("{what}: {nodes} nodes need {size}"),
-                    budget: cnf.clause_budget(),
+                    what: format!(
+                        "{what} (posg_fsc::limits::MAX_SAT_SLOTS): {nodes} nodes need {size}"
+                    ),
+                    budget: budget as usize,
                 });
             }
         }
