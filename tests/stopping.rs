@@ -3,7 +3,8 @@
 //! iteration cap; a game whose gap cannot close (the upper bound is against
 //! a fully informed defender, who wins surely where any real controller
 //! guesses) stops on stall; a game that needs memory is certified within
-//! 1e-3 of its value derived by hand.
+//! 1e-3 of its value derived by hand; starts outpaced by another stop
+//! early, reproducibly.
 
 use posg_fsc::game::Posg;
 use posg_fsc::game::file::from_json_str;
@@ -112,4 +113,54 @@ fn a_game_that_needs_memory_is_certified_within_1e_3_of_its_value() {
             "{nodes} nodes: certified {lower}, value {value}"
         );
     }
+}
+
+#[test]
+fn outpaced_starts_stop_early_and_the_race_is_reproducible() {
+    // A 6x6 grid: the bold starts climb fast, the cautious ones creep; a
+    // creeping start whose gain over a round cannot make up its distance to
+    // the leader stops as outpaced. The rounds make the run the same on
+    // every repetition, whatever the threads' timing.
+    let grid = GridSpec {
+        width: 6,
+        height: 6,
+        unsafe_cells: vec![8, 15, 20],
+        goal_cells: vec![35],
+        ..GridSpec::default()
+    }
+    .build()
+    .unwrap();
+    let runs: Vec<_> = (0..2)
+        .map(|_| {
+            let outcome = solve(&grid, "!unsafe U goal", 2);
+            let report = outcome.best().report.clone();
+            let starts: Vec<(usize, Status)> = report
+                .starts
+                .iter()
+                .map(|s| (s.iterations, s.status))
+                .collect();
+            (
+                starts,
+                report.status,
+                outcome.certified.unwrap().certified_lower,
+            )
+        })
+        .collect();
+    assert_eq!(runs[0], runs[1]);
+    let (starts, kept_status, _) = &runs[0];
+    assert!(
+        starts.iter().any(|&(_, status)| status == Status::Outpaced),
+        "{starts:?}"
+    );
+    let longest = starts
+        .iter()
+        .map(|&(iterations, _)| iterations)
+        .max()
+        .unwrap();
+    for &(iterations, status) in starts {
+        if status == Status::Outpaced {
+            assert!(iterations < longest, "{starts:?}");
+        }
+    }
+    assert_ne!(*kept_status, Status::Outpaced);
 }

@@ -45,6 +45,7 @@ mod objective;
 mod observer;
 mod optimiser;
 mod play;
+mod race;
 mod rounding;
 mod settings;
 mod softmax;
@@ -70,6 +71,7 @@ use std::sync::{Mutex, PoisonError};
 use std::time::Instant;
 
 use play::perturbed;
+use race::{Racer, race};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
@@ -178,6 +180,9 @@ pub enum Status {
     Converged,
     /// A [`Cancel`] flag asked the run to stop.
     Cancelled,
+    /// Another start of the portfolio was ahead by more than this one
+    /// gained over the second half of its run (`race.rs`).
+    Outpaced,
 }
 
 /// How a structure was optimised.
@@ -407,9 +412,10 @@ where
 
 /// Optimises on one structure: `settings.starts` independent starts in
 /// parallel (rayon), start `i` with random stream `stream + (i << 32)` of
-/// `settings.seed`; each runs the max-min loop (`Optimiser`) or, when the
-/// adversary has one action and `settings.single_player_ascent`, the
-/// single-player L-BFGS ascent (`ascend`). The start with the best score
+/// `settings.seed`; each runs the max-min loop (`Optimiser`; the starts
+/// race in lockstep rounds and an outpaced start stops, `race.rs`) or,
+/// when the adversary has one action and `settings.single_player_ascent`,
+/// the single-player L-BFGS ascent (`ascend`). The start with the best score
 /// (certified lower bound with an automaton `negated` for !phi, else
 /// worst-case estimate; the first of equals) is kept; then its rounded candidates
 /// ([`rounded_candidates`]) are scored alike and the best of the unrounded
@@ -444,26 +450,41 @@ pub fn optimise_structure(
         not_phi,
     });
     let shared = Mutex::new(observer);
-    let runs = (0..settings.starts)
-        .into_par_iter()
-        .map(|start| {
-            let start_stream = stream + ((start as u64) << 32);
-            let mut live = Live {
-                start,
-                shared: &shared,
-            };
-            run_start(
-                game,
-                dra,
-                certifier,
-                structure,
-                &settings.for_start(start),
-                start_stream,
-                method,
-                (&mut live, cancel),
-            )
-        })
-        .collect::<Vec<_>>();
+    let live = |start| Live {
+        start,
+        shared: &shared,
+    };
+    let start = |start: usize| Start {
+        settings: settings.for_start(start),
+        stream: stream + ((start as u64) << 32),
+    };
+    let runs = match method {
+        Method::MaxMin => {
+            let racers = (0..settings.starts)
+                .into_par_iter()
+                .map(|i| {
+                    let optimiser = max_min_start(game, dra, certifier, structure, &start(i))?;
+                    Racer::new(optimiser.with_cancel(cancel), live(i))
+                })
+                .collect();
+            race(racers, settings)
+                .into_iter()
+                .map(|result| {
+                    let (optimiser, outcome) = result?;
+                    let (objective, rng) = optimiser.into_parts();
+                    Ok(StartRun {
+                        outcome,
+                        objective,
+                        rng,
+                    })
+                })
+                .collect::<Vec<_>>()
+        }
+        Method::Ascent => (0..settings.starts)
+            .into_par_iter()
+            .map(|i| ascent_start(game, dra, structure, &start(i), (&mut live(i), cancel)))
+            .collect::<Vec<_>>(),
+    };
     let observer = shared.into_inner().unwrap_or_else(PoisonError::into_inner);
     let (runs, failed_starts) = keep_solved(runs)?;
     let (indices, mut runs): (Vec<usize>, Vec<StartRun>) = runs.into_iter().unzip();
@@ -577,54 +598,71 @@ impl Observer for Live<'_, '_> {
     }
 }
 
-/// One start on its own objective and random stream, reporting to
-/// `watch.0` and stopping early once `watch.1` is set.
-#[allow(clippy::too_many_arguments)]
-fn run_start(
+/// One start's settings ([`Settings::for_start`]) and random stream.
+struct Start {
+    settings: Settings,
+    stream: u64,
+}
+
+/// A start's objective on `structure` and its seeded random stream.
+fn start_objective(
     game: &Posg,
     dra: &Dra,
-    certifier: Option<Certifier<'_>>,
     structure: &Structure,
-    settings: &Settings,
-    stream: u64,
-    method: Method,
-    (observer, cancel): (&mut dyn Observer, &Cancel),
-) -> Result<StartRun, OptimiseError> {
+    start: &Start,
+) -> Result<(Objective, ChaCha8Rng), OptimiseError> {
+    let settings = &start.settings;
     let defender = Softmax::new(&structure.defender, settings.optimise_initial);
     let adversary = Softmax::new(&structure.adversary, settings.optimise_initial);
     let objective = Objective::new(game, dra, defender, adversary, &settings.solver_settings())?;
     let mut rng = ChaCha8Rng::seed_from_u64(settings.seed);
-    rng.set_stream(stream);
-    let (outcome, objective, rng) = match method {
-        Method::MaxMin => {
-            let mut optimiser = Optimiser::new(objective, settings, rng).with_cancel(cancel);
-            if let Some(certifier) = certifier {
-                optimiser = optimiser.with_certifier(certifier);
-            }
-            let outcome = optimiser.run(observer)?;
-            let (objective, rng) = optimiser.into_parts();
-            (outcome, objective, rng)
-        }
-        Method::Ascent => {
-            let mut objective = objective;
-            let bound = settings.logit_bound;
-            let start = perturbed(
-                objective.defender().logits_of_template(bound),
-                settings.initial_spread,
-                bound,
-                &mut rng,
-            );
-            let adversary = objective.adversary().logits_of_template(bound);
-            let outcome = ascend(
-                &mut objective,
-                (&start, &adversary),
-                settings,
-                observer,
-                cancel,
-            )?;
-            (outcome, objective, rng)
-        }
-    };
+    rng.set_stream(start.stream);
+    Ok((objective, rng))
+}
+
+/// One max-min start, ready to race: its optimiser on its own objective
+/// and random stream, certifying with `certifier` when given.
+fn max_min_start<'a>(
+    game: &Posg,
+    dra: &Dra,
+    certifier: Option<Certifier<'a>>,
+    structure: &Structure,
+    start: &Start,
+) -> Result<Optimiser<'a>, OptimiseError> {
+    let (objective, rng) = start_objective(game, dra, structure, start)?;
+    let optimiser = Optimiser::new(objective, &start.settings, rng);
+    Ok(match certifier {
+        Some(certifier) => optimiser.with_certifier(certifier),
+        None => optimiser,
+    })
+}
+
+/// One start of the single-player ascent on its own objective and random
+/// stream, reporting to `watch.0` and stopping early once `watch.1` is set.
+fn ascent_start(
+    game: &Posg,
+    dra: &Dra,
+    structure: &Structure,
+    start: &Start,
+    (observer, cancel): (&mut dyn Observer, &Cancel),
+) -> Result<StartRun, OptimiseError> {
+    let (mut objective, mut rng) = start_objective(game, dra, structure, start)?;
+    let settings = &start.settings;
+    let bound = settings.logit_bound;
+    let logits = perturbed(
+        objective.defender().logits_of_template(bound),
+        settings.initial_spread,
+        bound,
+        &mut rng,
+    );
+    let adversary = objective.adversary().logits_of_template(bound);
+    let outcome = ascend(
+        &mut objective,
+        (&logits, &adversary),
+        settings,
+        observer,
+        cancel,
+    )?;
     Ok(StartRun {
         outcome,
         objective,

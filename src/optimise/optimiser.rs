@@ -153,6 +153,32 @@ pub struct Certifier<'a> {
     pub not_phi: &'a Dra,
 }
 
+/// A max-min run in progress ([`Optimiser::begin`]), between the solver's
+/// iterations: the solver, the books and the current state.
+pub struct Run {
+    solver: GradientPlay,
+    books: Bookkeeping,
+    /// `None` only after an iteration failed.
+    state: Option<PlayState>,
+    /// Whether the current state was checked and reported.
+    judged: bool,
+    clock: Instant,
+}
+
+impl Run {
+    /// The best score so far (the best certified lower bound, or the best
+    /// worst-case estimate without a certifier); `None` before the first
+    /// check.
+    pub fn best_score(&self) -> Option<f64> {
+        self.books.best.as_ref().map(Incumbent::score)
+    }
+
+    /// The number of checks since the logit bound last widened.
+    pub fn checks_since_widening(&self) -> usize {
+        self.books.history.len()
+    }
+}
+
 /// A logit `phi` presses on the bound `c` when `|phi| >= NEAR_BOUND * c`.
 pub const NEAR_BOUND: f64 = 0.95;
 
@@ -258,11 +284,12 @@ impl<'a> Optimiser<'a> {
         (self.objective, self.rng)
     }
 
-    /// Runs until the certified gap closes, progress stalls at the widest
-    /// logit bound, `max_iterations` or the time budget, reporting every
-    /// outer iteration to `observer`.
-    pub fn run(&mut self, observer: &mut dyn Observer) -> Result<RunOutcome, OptimiseError> {
-        let clock = Instant::now();
+    /// The run at iteration 0 (the adversary has responded to the starting
+    /// defender), not yet checked or reported: [`Self::advance`] goes on
+    /// until the certified gap closes, progress stalls at the widest logit
+    /// bound, `max_iterations` or the time budget, reporting every outer
+    /// iteration to its observer; [`Self::finish`] ends it.
+    pub fn begin(&mut self) -> Result<Run, OptimiseError> {
         let mut solver =
             GradientPlay::new(&self.settings, self.defender.len(), self.adversary.len());
         let mut books = Bookkeeping::new(
@@ -277,16 +304,73 @@ impl<'a> Optimiser<'a> {
             bound: self.settings.initial_logit_bound,
             max_residual: 0.0,
         };
-        let mut state = self.timed(&mut books, |objective| solver.init(objective, start))?;
+        let clock = Instant::now();
+        let state = self.timed(&mut books, |objective| solver.init(objective, start))?;
+        Ok(Run {
+            solver,
+            books,
+            state: Some(state),
+            judged: false,
+            clock,
+        })
+    }
+
+    /// Continues `run` through iteration `last` (its checks and records
+    /// included) unless it stops first; returns why it stopped, if it did
+    /// (then [`Self::finish`] ends it).
+    pub fn advance(
+        &mut self,
+        run: &mut Run,
+        last: usize,
+        observer: &mut dyn Observer,
+    ) -> Result<Option<Status>, OptimiseError> {
         loop {
-            let seconds = clock.elapsed().as_secs_f64();
-            if let Some(status) =
-                self.between_iterations(&solver, &mut state, &mut books, seconds, observer)?
-            {
-                return self.outcome(state, books, status, clock);
+            let Some(state) = run.state.take() else {
+                return Err(OptimiseError::BestResponse(
+                    "the run was advanced after it failed".into(),
+                ));
+            };
+            let mut state = if run.judged {
+                if state.iterate.iteration >= last {
+                    run.state = Some(state);
+                    return Ok(None);
+                }
+                let solver = &mut run.solver;
+                self.timed(&mut run.books, |objective| {
+                    solver.next_iter(objective, state)
+                })?
+            } else {
+                state
+            };
+            let seconds = run.clock.elapsed().as_secs_f64();
+            let status = self.between_iterations(
+                &run.solver,
+                &mut state,
+                &mut run.books,
+                seconds,
+                observer,
+            )?;
+            run.state = Some(state);
+            run.judged = true;
+            if status.is_some() {
+                return Ok(status);
             }
-            state = self.timed(&mut books, |objective| solver.next_iter(objective, state))?;
         }
+    }
+
+    /// The outcome of `run`, stopped for `status`; the optimiser keeps the
+    /// last iterate.
+    pub fn finish(&mut self, run: Run, status: Status) -> Result<RunOutcome, OptimiseError> {
+        let Run {
+            books,
+            state,
+            clock,
+            ..
+        } = run;
+        let state = state.ok_or(OptimiseError::BestResponse(
+            "the run was finished after it failed".into(),
+        ))?;
+        self.outcome(state, books, status, clock)
     }
 
     /// One of the solver's iterations, `iteration`, timed as optimisation,

@@ -1,0 +1,155 @@
+//! The portfolio of max-min starts on one structure, run as a race
+//! (method.md section 4). The starts advance in parallel in lockstep
+//! rounds that end where the suffix-averaging windows end (iterations
+//! `2^k - 1`, where every start checks). After each round a start that
+//! has run `stall_checks` checks since its logit bound last widened is
+//! stopped as [`Status::Outpaced`] when another start's best score exceeds
+//! its own best plus what it gained over the round (the second half of its
+//! run): repeating that progress, which would take as many iterations as
+//! it has run so far, would still leave it behind. Decisions are taken
+//! between rounds on numbers at the same iteration of every start, so
+//! they, and every start's iterations, do not depend on thread timing: a
+//! seeded run is reproducible.
+
+use rayon::prelude::*;
+
+use super::optimiser::{Optimiser, Run, RunOutcome};
+use super::{Observer, OptimiseError, Settings, Status};
+
+/// One start in the race: its optimiser, its run in progress, the
+/// observer its records go to, why it stopped (once it has), and its best
+/// score at the end of the last round.
+pub(super) struct Racer<'a, O> {
+    optimiser: Optimiser<'a>,
+    run: Run,
+    observer: O,
+    stopped: Option<Status>,
+    round_best: Option<f64>,
+}
+
+impl<'a, O: Observer + Send> Racer<'a, O> {
+    /// The start of `optimiser`, reporting to `observer`.
+    pub fn new(mut optimiser: Optimiser<'a>, observer: O) -> Result<Self, OptimiseError> {
+        let run = optimiser.begin()?;
+        Ok(Self {
+            optimiser,
+            run,
+            observer,
+            stopped: None,
+            round_best: None,
+        })
+    }
+
+    /// Continues through iteration `last` unless the run stops first.
+    fn advance(&mut self, last: usize) -> Result<(), OptimiseError> {
+        self.stopped = self
+            .optimiser
+            .advance(&mut self.run, last, &mut self.observer)?;
+        Ok(())
+    }
+
+    /// The run's outcome, and the optimiser (with its objective and random
+    /// stream where the run left them).
+    fn finish(mut self) -> Result<(Optimiser<'a>, RunOutcome), OptimiseError> {
+        let status = self.stopped.unwrap_or(Status::MaxIterations);
+        let outcome = self.optimiser.finish(self.run, status)?;
+        Ok((self.optimiser, outcome))
+    }
+
+    /// Whether the start still runs.
+    fn running(&self) -> bool {
+        self.stopped.is_none()
+    }
+}
+
+/// Runs every start (an error in place of a start that failed to begin
+/// or failed later) until each stops; returns each start's optimiser and
+/// outcome, or its error.
+pub(super) fn race<'a, O: Observer + Send>(
+    mut racers: Vec<Result<Racer<'a, O>, OptimiseError>>,
+    settings: &Settings,
+) -> Vec<Result<(Optimiser<'a>, RunOutcome), OptimiseError>> {
+    let mut last = 0usize;
+    while racers
+        .iter()
+        .any(|entry| entry.as_ref().is_ok_and(Racer::running))
+    {
+        racers.par_iter_mut().for_each(|entry| {
+            let failed = match entry {
+                Ok(racer) if racer.running() => racer.advance(last).err(),
+                _ => None,
+            };
+            if let Some(error) = failed {
+                *entry = Err(error);
+            }
+        });
+        stop_the_outpaced(&mut racers, settings);
+        last = last.saturating_mul(2).saturating_add(1);
+    }
+    racers
+        .into_par_iter()
+        .map(|entry| entry.and_then(Racer::finish))
+        .collect()
+}
+
+/// After a round: stops each running start outpaced by the best score of
+/// any start (module documentation), and records each start's best score.
+fn stop_the_outpaced<O>(racers: &mut [Result<Racer<'_, O>, OptimiseError>], settings: &Settings) {
+    let leader = racers
+        .iter()
+        .filter_map(|entry| entry.as_ref().ok()?.run.best_score())
+        .reduce(f64::max);
+    for racer in racers.iter_mut().filter_map(|entry| entry.as_mut().ok()) {
+        let best = racer.run.best_score();
+        if let (Some(best), Some(before), Some(leader), None) =
+            (best, racer.round_best, leader, racer.stopped)
+        {
+            if outpaced(
+                best,
+                best - before,
+                leader,
+                racer.run.checks_since_widening(),
+                settings,
+            ) {
+                racer.stopped = Some(Status::Outpaced);
+            }
+        }
+        racer.round_best = best;
+    }
+}
+
+/// Whether a start whose best score is `best`, after gaining `gain` over
+/// the last round with `checks` checks since its logit bound last widened,
+/// is outpaced by the best score `leader` of any start.
+fn outpaced(best: f64, gain: f64, leader: f64, checks: usize, settings: &Settings) -> bool {
+    settings.stall_checks > 0 && checks >= settings.stall_checks && best + gain < leader
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_start_is_outpaced_only_when_repeating_its_last_gain_leaves_it_behind() {
+        let settings = Settings::default();
+        let enough = settings.stall_checks;
+        assert!(outpaced(0.60, 0.01, 0.65, enough, &settings));
+        assert!(
+            !outpaced(0.60, 0.05, 0.65, enough, &settings),
+            "it may catch up"
+        );
+        assert!(
+            !outpaced(0.65, 0.0, 0.65, enough, &settings),
+            "the leader itself"
+        );
+        assert!(
+            !outpaced(0.60, 0.0, 0.65, enough - 1, &settings),
+            "too soon after widening"
+        );
+        let never = Settings {
+            stall_checks: 0,
+            ..Settings::default()
+        };
+        assert!(!outpaced(0.0, 0.0, 1.0, enough, &never), "stall rule off");
+    }
+}
