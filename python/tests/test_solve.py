@@ -3,6 +3,7 @@ and Ctrl-C stopping a run, the GIL released while Rust computes."""
 
 import _thread
 import json
+import signal
 import threading
 import time
 
@@ -82,6 +83,10 @@ def test_an_exception_in_the_callback_stops_the_run_and_is_raised():
 
 
 def test_ctrl_c_stops_a_long_solve_cleanly():
+    # A runner started in the background (`cmd &`) inherits SIGINT ignored,
+    # and Python then installs no handler, so that interrupt_main() is a
+    # no-op: install Python's own, as an interactive session has it.
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
     game = posg_fsc.example_grid()
     seen = []
 
@@ -91,8 +96,11 @@ def test_ctrl_c_stops_a_long_solve_cleanly():
             _thread.interrupt_main()  # what Ctrl-C does
 
     started = time.monotonic()
-    with pytest.raises(KeyboardInterrupt):
-        posg_fsc.solve(game, FORMULA, 2, 1, on_iteration=on_iteration, **LONG)
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            posg_fsc.solve(game, FORMULA, 2, 1, on_iteration=on_iteration, **LONG)
+    finally:
+        signal.signal(signal.SIGINT, previous)
     assert time.monotonic() - started < 60
     assert len(seen) < 1000
 
