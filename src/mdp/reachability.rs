@@ -24,6 +24,12 @@
 //!    sparse LU or, above [`crate::solver::DEFAULT_LU_LIMIT`] unknowns,
 //!    BiCGSTAB warm-started from the previous policy's values
 //!    ([`crate::solver::LinearSolver`]: residual checked, error bounded).
+//!    The policies passed through are evaluated in double precision and
+//!    their bound may exceed the tolerance (it raises the improvement
+//!    threshold of step 4); the policy whose values are returned must meet
+//!    it, in rationals where double precision cannot prove it
+//!    ([`crate::solver::exact`]), so a trial evaluation that would end the
+//!    loop unproved is repeated with proof before the loop ends.
 //!    The diagonal of `I - Q_sigma` is the probability of leaving `s`,
 //!    `sum_{t != s} P_sigma(t | s)`, never `1 - P_sigma(s | s)` (method.md
 //!    section 8): a lazy action keeps every digit.
@@ -106,11 +112,30 @@ pub fn max_reachability(
     } = qualitative_reachability(mdp, target)?;
     let maybe: Vec<usize> = (0..n).filter(|&s| positive[s] && !almost_sure[s]).collect();
     let mut previous: Vec<f64> = almost_sure.iter().map(|&t| f64::from(t)).collect();
+    let mut proof = Proof::Trial;
     for iterations in 1..=MAX_ITERATIONS {
-        let (values, report) = evaluate(mdp, &almost_sure, &maybe, &strategy, &previous, settings)?;
-        let threshold = IMPROVEMENT_THRESHOLD.max(4.0 * report.error_bound);
+        let (values, report) = evaluate(
+            mdp,
+            &almost_sure,
+            &maybe,
+            &strategy,
+            &previous,
+            proof,
+            settings,
+        )?;
+        let proved = report.error_bound <= settings.tolerance;
+        let threshold = if proved {
+            IMPROVEMENT_THRESHOLD.max(4.0 * report.error_bound)
+        } else {
+            IMPROVEMENT_THRESHOLD
+        };
         let (switched, gap) = improve(mdp, &values, &maybe, &mut strategy, threshold);
-        if !switched {
+        proof = if switched || proved {
+            Proof::Trial
+        } else {
+            Proof::Required
+        };
+        if !switched && proved {
             return Ok(Reachability {
                 values,
                 strategy,
@@ -124,6 +149,18 @@ pub fn max_reachability(
         previous = values;
     }
     Err(MdpError::NotConverged(MAX_ITERATIONS))
+}
+
+/// How a policy evaluation's error bound is treated (module documentation,
+/// step 3).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Proof {
+    /// A policy passed through: double precision only, and a bound above
+    /// the tolerance is accepted (it only raises the improvement threshold).
+    Trial,
+    /// The policy whose values are returned: the bound must meet the
+    /// tolerance, in rationals if double precision cannot prove it.
+    Required,
 }
 
 /// The qualitative step alone (module documentation, steps 1 and 2): which
@@ -240,6 +277,7 @@ fn evaluate(
     maybe: &[usize],
     strategy: &[usize],
     start: &[f64],
+    proof: Proof,
     settings: &SolverSettings,
 ) -> Result<(Vec<f64>, EvaluationReport), MdpError> {
     let n = mdp.num_states();
@@ -302,7 +340,10 @@ fn evaluate(
         own_exits.copy_from_slice(&exits);
     })?;
     let mut solution: Vec<f64> = maybe.iter().map(|&s| start[s]).collect();
-    let report = solver.solve(&rhs, &mut solution)?;
+    let report = match proof {
+        Proof::Trial => solver.solve_trial(&rhs, &mut solution)?,
+        Proof::Required => solver.solve(&rhs, &mut solution)?,
+    };
     for (&s, &x) in maybe.iter().zip(&solution) {
         values[s] = x;
     }
@@ -380,6 +421,40 @@ mod tests {
             &[&[(3, 1.0)]],
             &[&[(4, 1.0)]],
         ])
+    }
+
+    #[test]
+    fn a_policy_too_stiff_to_prove_is_passed_through_without_proof() {
+        // Target 2, sink 3. States 0 and 1 swap with probability 0.3 and
+        // leave rarely (0 to the target with 1e-25, 1 to the sink with
+        // 2e-25): under that policy, which the proper start picks, x is
+        // near 1/3 and the chain spends ~1e25 steps in the maybe states,
+        // beyond what any double-precision bound proves (and the exact
+        // fallback is off). State 0's second action wins 0.6 at once; under
+        // it the chain mixes fast: x0 = 0.6, x1 = 0.3 x0 / (0.3 + 2e-25).
+        let m = mdp(&[
+            &[&[(1, 0.3), (2, 1e-25), (0, 0.7)], &[(2, 0.6), (3, 0.4)]],
+            &[&[(0, 0.3), (3, 2e-25), (1, 0.7)]],
+            &[&[(2, 1.0)]],
+            &[&[(3, 1.0)]],
+        ]);
+        let settings = SolverSettings {
+            exact_limit: 0,
+            ..SolverSettings::default()
+        };
+        let result = max_reachability(&m, &[false, false, true, false], &settings).unwrap();
+        assert_eq!(result.strategy[0], 1);
+        assert!(
+            (result.values[0] - 0.6).abs() < 1e-15,
+            "{:?}",
+            result.values
+        );
+        assert!(
+            (result.values[1] - 0.6).abs() < 1e-15,
+            "{:?}",
+            result.values
+        );
+        assert!(result.error_bound <= settings.tolerance);
     }
 
     #[test]

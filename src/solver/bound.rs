@@ -45,6 +45,11 @@ pub const REUSE_LIMIT: f64 = 0.5;
 /// bound under the tolerance.
 pub const MAX_REFINEMENTS: usize = 4;
 
+/// The most rounds of iterative refinement in extended precision (the
+/// solution carried as a double-double, [`residual_bound_of_sum`]) after
+/// refinement in double precision stalled above the tolerance.
+pub const MAX_EXTENDED_REFINEMENTS: usize = 8;
+
 /// `gamma_k = k u / (1 - k u)`, the bound on the relative rounding error of
 /// `k` floating-point operations (Higham, Lemma 3.1); infinite when `k u >= 1`.
 fn gamma(k: usize) -> f64 {
@@ -115,61 +120,63 @@ pub fn residual_bound(
     x: &[f64],
     rhs: impl Fn(usize) -> f64,
     evaluation: Evaluation,
+    rounded: Option<&mut [f64]>,
+) -> f64 {
+    worst_row_bound(pattern, rounded, |row| {
+        let b = rhs(row);
+        match evaluation {
+            Evaluation::Plain => plain_row(pattern, values, exits, x, row, b),
+            Evaluation::Compensated => compensated_row(pattern, values, exits, x, None, row, b),
+        }
+    })
+}
+
+/// [`residual_bound`] (compensated) for the solution `high + low`, held
+/// as the unevaluated sum of two vectors (a double-double solution of
+/// iterative refinement in extended precision): every difference
+/// `x_i - x_j` and the exit term see both parts.
+pub fn residual_bound_of_sum(
+    pattern: &SparsePattern,
+    values: &[f64],
+    exits: &[f64],
+    high: &[f64],
+    low: &[f64],
+    rhs: impl Fn(usize) -> f64,
+    rounded: Option<&mut [f64]>,
+) -> f64 {
+    worst_row_bound(pattern, rounded, |row| {
+        compensated_row(pattern, values, exits, high, Some(low), row, rhs(row))
+    })
+}
+
+/// One row's computed residual and what bounds its rounding.
+struct RowResidual {
+    /// `fl((A x - rhs)_i)`.
+    residual: f64,
+    /// The rounding of the computation, before its own rounding is added.
+    rounding: f64,
+    /// The floating-point operations of the row (for `gamma`).
+    terms: usize,
+}
+
+/// The largest row bound `(|r_i| + rounding (1 + gamma)) (1 + u)` plus the
+/// underflow allowance; the computed residuals go to `rounded`. NaN if any
+/// row's is.
+fn worst_row_bound(
+    pattern: &SparsePattern,
     mut rounded: Option<&mut [f64]>,
+    row_residual: impl Fn(usize) -> RowResidual,
 ) -> f64 {
     let mut worst: f64 = 0.0;
     for row in 0..pattern.n {
-        let range = pattern.row_range(row);
-        let xi = x[row];
-        let b = rhs(row);
-        let (exit_term, exit_error) = two_product(exits[row], xi);
-        let mut magnitude = b.abs() + exit_term.abs();
-        let mut terms = 2;
-        let residual = match evaluation {
-            Evaluation::Plain => {
-                // Each product of a rounded difference: two roundings.
-                let mut sum = exit_term - b;
-                for k in range {
-                    let column = pattern.columns[k];
-                    if column != row {
-                        let product = -values[k] * (xi - x[column]);
-                        magnitude += product.abs();
-                        sum += product;
-                        terms += 2;
-                    }
-                }
-                sum
-            }
-            Evaluation::Compensated => {
-                // Dot2 on the exact expansion: x_i - x_j = d + d_low (TwoSum).
-                let (mut sum, mut correction) = two_sum(exit_term, -b);
-                correction += exit_error;
-                for k in range {
-                    let column = pattern.columns[k];
-                    if column != row {
-                        let weight = -values[k];
-                        let (difference, difference_low) = two_sum(xi, -x[column]);
-                        let (product, product_error) = two_product(weight, difference);
-                        let (next, sum_error) = two_sum(sum, product);
-                        let low = weight * difference_low;
-                        sum = next;
-                        correction += product_error + sum_error + low;
-                        magnitude += product.abs() + low.abs();
-                        terms += 2;
-                    }
-                }
-                sum + correction
-            }
-        };
+        let RowResidual {
+            residual,
+            rounding,
+            terms,
+        } = row_residual(row);
         if let Some(out) = rounded.as_deref_mut() {
             out[row] = residual;
         }
-        let rounding = match evaluation {
-            Evaluation::Plain => gamma(terms + 2) * magnitude,
-            Evaluation::Compensated => {
-                2.0 * UNIT_ROUNDOFF * residual.abs() + 2.0 * gamma(terms + 2).powi(2) * magnitude
-            }
-        };
         // The magnitude itself is rounded (relative gamma_k); underflow in
         // a product or in TwoProduct's splitting errs by less than the
         // smallest normal number per operation.
@@ -182,6 +189,99 @@ pub fn residual_bound(
         worst = worst.max(bound);
     }
     worst
+}
+
+/// Row `row` of the residual in plain floating point: each product of a
+/// rounded difference costs two roundings, `gamma_{k+1} (|A||x| + |b|)`.
+fn plain_row(
+    pattern: &SparsePattern,
+    values: &[f64],
+    exits: &[f64],
+    x: &[f64],
+    row: usize,
+    b: f64,
+) -> RowResidual {
+    let xi = x[row];
+    let exit_term = exits[row] * xi;
+    let mut magnitude = b.abs() + exit_term.abs();
+    let mut terms = 2;
+    let mut sum = exit_term - b;
+    for k in pattern.row_range(row) {
+        let column = pattern.columns[k];
+        if column != row {
+            let product = -values[k] * (xi - x[column]);
+            magnitude += product.abs();
+            sum += product;
+            terms += 2;
+        }
+    }
+    RowResidual {
+        residual: sum,
+        rounding: gamma(terms + 2) * magnitude,
+        terms,
+    }
+}
+
+/// Row `row` of the residual by Dot2 on the exact expansion
+/// `x_i - x_j = d + d_low` (TwoSum): rounding at most
+/// `2 u |r_i| + 2 gamma^2 (|A||x| + |b|)`. With `low`, the solution is
+/// `x + low`: the low parts join `d_low` and the exit term, and their own
+/// roundings (a relative `3 u` of each such product, bounded term by term)
+/// are added to the rounding.
+fn compensated_row(
+    pattern: &SparsePattern,
+    values: &[f64],
+    exits: &[f64],
+    x: &[f64],
+    low: Option<&[f64]>,
+    row: usize,
+    b: f64,
+) -> RowResidual {
+    let xi = x[row];
+    let low_i = low.map_or(0.0, |low| low[row]);
+    let (exit_term, exit_error) = two_product(exits[row], xi);
+    let mut magnitude = b.abs() + exit_term.abs();
+    let mut terms = 2;
+    let (mut sum, mut correction) = two_sum(exit_term, -b);
+    correction += exit_error;
+    // Products of low parts, each rounded once and summed once.
+    let mut low_rounding = 0.0;
+    if low.is_some() {
+        let exit_low = exits[row] * low_i;
+        correction += exit_low;
+        magnitude += exit_low.abs();
+        low_rounding += 3.0 * UNIT_ROUNDOFF * exit_low.abs();
+    }
+    for k in pattern.row_range(row) {
+        let column = pattern.columns[k];
+        if column != row {
+            let weight = -values[k];
+            let (difference, mut difference_low) = two_sum(xi, -x[column]);
+            if let Some(low) = low {
+                let low_difference = low_i - low[column];
+                difference_low += low_difference;
+                low_rounding += 3.0
+                    * UNIT_ROUNDOFF
+                    * weight.abs()
+                    * (difference_low.abs() + low_i.abs() + low[column].abs());
+            }
+            let (product, product_error) = two_product(weight, difference);
+            let (next, sum_error) = two_sum(sum, product);
+            let low_product = weight * difference_low;
+            sum = next;
+            correction += product_error + sum_error + low_product;
+            magnitude += product.abs() + low_product.abs();
+            terms += 2;
+        }
+    }
+    let residual = sum + correction;
+    RowResidual {
+        residual,
+        rounding: 2.0 * UNIT_ROUNDOFF * residual.abs()
+            + 2.0 * gamma(terms + 2).powi(2) * magnitude
+            + low_rounding * (1.0 + gamma(terms + 2)),
+        terms,
+    }
 }
 
 /// An estimate `t_hat` of the expected times `t = A^{-1} 1` and what it

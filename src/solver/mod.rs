@@ -880,6 +880,27 @@ impl LinearSolver {
         self.exactly_if_unprovable(solved, b, x)
     }
 
+    /// [`Self::solve`] for a trial solution, one whose bound need not meet
+    /// the tolerance (the policies that policy iteration passes through):
+    /// double precision only, never the exact fallback. A bound above the
+    /// tolerance is reported in [`SolveReport::error_bound`] instead of
+    /// refused, infinite where even the residual is above the tolerance.
+    /// The caller must not report such an `x` as a value.
+    pub fn solve_trial(&mut self, b: &[f64], x: &mut [f64]) -> Result<SolveReport, SolverError> {
+        let error_bound = match self.solve_in_double(b, x) {
+            Err(SolverError::Unbounded { error_bound, .. }) => error_bound,
+            Err(SolverError::Inaccurate { .. }) => f64::INFINITY,
+            solved => return solved,
+        };
+        Ok(SolveReport {
+            residual: self
+                .pattern()
+                .chain_residual(self.values(), &self.exits, x, b),
+            iterations: 0,
+            error_bound: Some(error_bound),
+        })
+    }
+
     /// The exact fallback of [`Self::solve`]: `solved` unless it is an
     /// error of a bound or residual that double precision cannot prove;
     /// then the exact solution, or [`SolverError::TooLargeForExact`].
@@ -1063,7 +1084,11 @@ impl LinearSolver {
         let mut correction = std::mem::take(&mut self.scratch.correction);
         residual.resize(n, 0.0);
         correction.resize(n, 0.0);
-        let outcome = self.refine(b, x, scale, &mut residual, &mut correction, &mut report);
+        let mut outcome = self.refine(b, x, scale, &mut residual, &mut correction, &mut report);
+        if matches!(outcome, Ok(bound) if bound > self.tolerance) {
+            outcome =
+                self.refine_extended(b, x, scale, &mut residual, &mut correction, &mut report);
+        }
         self.scratch.residual = residual;
         self.scratch.correction = correction;
         error_bound = outcome?;
@@ -1122,6 +1147,70 @@ impl LinearSolver {
                 .iterations;
             for (xi, di) in x.iter_mut().zip(correction.iter()) {
                 *xi -= size * di;
+            }
+        }
+        Ok(previous)
+    }
+
+    /// Iterative refinement in extended precision, for when refinement in
+    /// double precision stalls above the tolerance because `x` itself,
+    /// rounded to doubles, has a residual of rounding size that the
+    /// expected time `scale` magnifies. The solution is carried as the
+    /// double-double `y = x + low`; each round computes `y`'s residual
+    /// by Dot2 ([`bound::residual_bound_of_sum`]) and subtracts the
+    /// correction solved with the same factors, at most
+    /// [`bound::MAX_EXTENDED_REFINEMENTS`] rounds while the bound halves.
+    /// On return `x = fl(y)`, whose error is at most
+    /// `scale * ||A y - b|| + max |y - x|` (the returned bound, rounded up).
+    fn refine_extended(
+        &mut self,
+        b: &[f64],
+        x: &mut [f64],
+        scale: f64,
+        residual: &mut [f64],
+        correction: &mut [f64],
+        report: &mut SolveReport,
+    ) -> Result<f64, SolverError> {
+        let mut low = vec![0.0; x.len()];
+        let mut previous = f64::INFINITY;
+        for round in 0..=bound::MAX_EXTENDED_REFINEMENTS {
+            let bounded = bound::residual_bound_of_sum(
+                self.pattern(),
+                self.values(),
+                &self.exits,
+                x,
+                &low,
+                |i| b[i],
+                Some(residual),
+            );
+            let rounding = low.iter().fold(0.0, |m: f64, l| m.max(l.abs()));
+            let error_bound = (scale * bounded + rounding) * (1.0 + 4.0 * f64::EPSILON);
+            let stalled = error_bound.is_nan() || error_bound >= 0.5 * previous;
+            let size = residual.iter().fold(0.0, |m: f64, r| m.max(r.abs()));
+            let done = error_bound <= self.tolerance || stalled || size == 0.0;
+            if done || round == bound::MAX_EXTENDED_REFINEMENTS || !size.is_finite() {
+                report.residual = bound::residual_bound(
+                    self.pattern(),
+                    self.values(),
+                    &self.exits,
+                    x,
+                    |i| b[i],
+                    bound::Evaluation::Compensated,
+                    None,
+                );
+                return Ok(error_bound);
+            }
+            previous = error_bound;
+            residual.iter_mut().for_each(|r| *r /= size);
+            correction.fill(0.0);
+            report.iterations += self
+                .solve_in(Direction::Forward, residual, correction, None)?
+                .iterations;
+            for ((xi, li), di) in x.iter_mut().zip(low.iter_mut()).zip(correction.iter()) {
+                let (sum, error) = bound::two_sum(*xi, -size * di);
+                let (high, rest) = bound::two_sum(sum, *li + error);
+                *xi = high;
+                *li = rest;
             }
         }
         Ok(previous)

@@ -197,6 +197,32 @@ fn a_lazy_state_split_by_memory_keeps_its_escape() {
     }
 }
 
+#[test]
+fn a_slowly_mixing_pair_is_proved_by_refinement_in_extended_precision() {
+    // Two states swapping with probability 0.3, one leaving to the target
+    // and one to the zero set with 1e-10 each: x is near 1/2 and the chain
+    // spends ~5e9 steps in T, so even the exact solution rounded to
+    // doubles has a residual (~1e-17) that the bound magnifies above the
+    // tolerance; carrying x as a double-double proves it in double
+    // arithmetic, without the exact fallback.
+    for nodes in 1..=2 {
+        let chain = with_memory(
+            &[vec![(1, 0.3)], vec![(0, 0.3)]],
+            &[1e-10, 0.0],
+            &[0.0, 1e-10],
+            nodes,
+        );
+        let expected_time = 1.0 / 1e-10;
+        assert!(expected_time * f64::EPSILON / 2.0 > SolverSettings::default().tolerance);
+        for method in [SolverMethod::Lu, SolverMethod::Auto] {
+            assert!(
+                solved_within_bound(&chain, method),
+                "{nodes} nodes, {method:?}: refused"
+            );
+        }
+    }
+}
+
 /// A lazy chain before memory: each state's moves `(to, probability)`, its
 /// probabilities of reaching the target and the zero set, and the number
 /// of memory nodes that split it.
