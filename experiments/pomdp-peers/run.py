@@ -47,6 +47,7 @@ Usage:
 """
 import argparse
 import csv
+import hashlib
 import json
 import os
 import re
@@ -293,7 +294,10 @@ def cached(path, compute):
 def versions():
     import stormpy
     posg = subprocess.run([BINARY, "--version"], capture_output=True, text=True).stdout.strip()
-    return {"posg-fsc": posg, "stormpy": stormpy.__version__, "paynt": "0.5.0",
+    with open(BINARY, "rb") as handle:
+        digest = hashlib.sha256(handle.read()).hexdigest()[:16]
+    return {"posg-fsc": f"{posg} ({BINARY}, sha256 {digest}...)",
+            "stormpy": stormpy.__version__, "paynt": "0.5.0",
             "models": f"randriu/synthesis@{COMMIT}"}
 
 
