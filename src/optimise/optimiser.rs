@@ -498,7 +498,10 @@ impl<'a> Optimiser<'a> {
         if bound < s.logit_bound && (on_bound(&iterate.defender) || on_bound(&iterate.adversary)) {
             iterate.bound = (2.0 * bound).min(s.logit_bound);
             books.history.clear();
-            books.window_ends.clear();
+            // The score at the widening is the next window's baseline, so
+            // the next window end judges the widened bound (not the one
+            // after it, twice as far).
+            books.window_ends.drain(..books.window_ends.len().saturating_sub(1));
             None
         } else {
             Some(Status::Stalled)
