@@ -27,9 +27,13 @@ For each model and k, one tool at a time:
   The bound is the better of posg-fsc's and PAYNT's values on the case,
   `P>=best`: "does GD reach the best of the other two?". Its instantiation
   is re-evaluated by Storm on the instantiated DTMC (exact arithmetic).
-  If GD stops (converges) without meeting the bound its value is only
-  known to be below it (status `below-bound`); Storm prints its current
-  value every 15 s, and the last such line is kept as `value` then.
+  If GD stops (converges, status `below-bound`) or is stopped (`timeout`)
+  without meeting the bound, its value is only known to be below it: the
+  binding returns no point, and Storm's "Currently at" progress lines do
+  not reach stdout from stormpy 2.0, not even at log level INFO. Then a
+  second run towards `best - 1e-2` (`storm-gd>=best-0.01`) asks whether GD
+  comes close; where the first run met its bound, a second run towards
+  `best + 1e-4` (`storm-gd>best`, --beat-timeout) asks whether GD beats both.
 
 Properties: probabilities only (posg-fsc computes probabilities); the
 models' formulas name labels that are added to the PRISM text where the
@@ -43,7 +47,7 @@ are cached in --work, so an interrupted run resumes.
 
 Usage:
   POSG_FSC=path/to/posg-fsc /work/venv-paynt/bin/python experiments/pomdp-peers/run.py \\
-      --repo /path/to/synthesis.git [--timeout 120]
+      --repo /path/to/synthesis.git --timeout 60   (as in results/pomdp-peers.csv)
 """
 import argparse
 import csv
@@ -221,7 +225,6 @@ def run_gd(directory, k, bound, limit):
         record["status"] = "timeout (killed)"
         return record
     result = re.search(r"^RESULT (.*)$", log, re.M)
-    progress = re.findall(r"Currently at (\S+)", log)
     if result is None:
         # Storm aborts 30 s after the SIGINT when the descent has not reached
         # a point where it checks for it (model construction, a long solve).
@@ -234,7 +237,6 @@ def run_gd(directory, k, bound, limit):
         record["value"] = record["exact_value"]
         record["status"] = "reached-bound"
     else:
-        record["value"] = complement(float(progress[-1]), prop_of(directory)) if progress else None
         record["status"] = "timeout" if record["interrupted"] else "below-bound"
     return record
 
@@ -359,8 +361,7 @@ def main():
 
 
 def best_tools(case):
-    """The tools within TOLERANCE of the best value (GD's `below-bound` value
-    is not a witness and counts only when it beats the others)."""
+    """The tools within TOLERANCE of the best value found in the case."""
     values = {tool: r["value"] for tool, r in case.items() if r["value"] is not None}
     if not values:
         return "none"
