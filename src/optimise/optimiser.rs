@@ -501,7 +501,9 @@ impl<'a> Optimiser<'a> {
             // The score at the widening is the next window's baseline, so
             // the next window end judges the widened bound (not the one
             // after it, twice as far).
-            books.window_ends.drain(..books.window_ends.len().saturating_sub(1));
+            books
+                .window_ends
+                .drain(..books.window_ends.len().saturating_sub(1));
             None
         } else {
             Some(Status::Stalled)
