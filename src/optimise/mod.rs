@@ -46,6 +46,7 @@ mod observer;
 mod optimiser;
 mod play;
 mod race;
+mod reparam;
 mod rounding;
 mod settings;
 mod softmax;
