@@ -182,6 +182,12 @@ impl Run {
 /// A logit `phi` presses on the bound `c` when `|phi| >= NEAR_BOUND * c`.
 pub const NEAR_BOUND: f64 = 0.95;
 
+/// The stall rule measures a window's gain relative to the best score's
+/// magnitude, but never relative to less than this: a probability creeping
+/// from `1e-8` to `1e-7` has stalled (it gained under `stall_gain` times
+/// this), however large its relative climb.
+pub const STALL_MAGNITUDE_FLOOR: f64 = 1e-3;
+
 /// What the driver keeps between iterations: the best defender seen, the
 /// smallest game upper bound, the best score after each check since the
 /// logit bound last widened, the suffix averages the checks rank, and the
@@ -492,7 +498,10 @@ impl<'a> Optimiser<'a> {
         if bound < s.logit_bound && (on_bound(&iterate.defender) || on_bound(&iterate.adversary)) {
             iterate.bound = (2.0 * bound).min(s.logit_bound);
             books.history.clear();
-            books.window_ends.clear();
+            // The score at the widening is the next window's baseline, so
+            // the next window end judges the widened bound (not the one
+            // after it, twice as far).
+            books.window_ends.drain(..books.window_ends.len().saturating_sub(1));
             None
         } else {
             Some(Status::Stalled)
@@ -566,17 +575,22 @@ fn window_ends(t: usize) -> bool {
 /// The max-min loop's stall rule, judged where a suffix-averaging window
 /// ends: with at least `stall_checks` checks in `history` since the logit
 /// bound last widened, whether the best score gained at most `stall_gain`
-/// times its magnitude (relative, so that a climb from a tiny value is not
-/// taken for a stall) over the last window, from the previous entry of
+/// times its magnitude (relative, so that a climb from a small value is
+/// not taken for a stall, down to [`STALL_MAGNITUDE_FLOOR`]: gains of a
+/// probability below `stall_gain * STALL_MAGNITUDE_FLOOR` do not pay)
+/// over the last window, from the previous entry of
 /// `window_ends` (the best score at each window's end) to the last. The
 /// window is the second half of the run so far, so a run that creeps stops
 /// within about twice the iterations of its last real progress; and it
 /// counts iterations, not seconds, so a seeded run stops at the same
 /// iteration on every machine.
 pub(super) fn stalled(history: &[f64], window_ends: &[f64], s: &Settings) -> bool {
+    let n = window_ends.len();
     s.stall_checks > 0
         && history.len() >= s.stall_checks
-        && gained_little(window_ends, 1, s.stall_gain)
+        && n > 1
+        && window_ends[n - 1] - window_ends[n - 2]
+            <= s.stall_gain * window_ends[n - 1].abs().max(STALL_MAGNITUDE_FLOOR)
 }
 
 /// Whether the last entry of `history` exceeds the one `window` entries
@@ -590,4 +604,25 @@ pub(super) fn gained_little(history: &[f64], window: usize, tolerance: f64) -> b
 /// The Euclidean norm `|v|_2`.
 pub(super) fn norm(v: &[f64]) -> f64 {
     v.iter().map(|x| x * x).sum::<f64>().sqrt()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_window_stalls_on_a_small_relative_gain_or_a_negligible_absolute_one() {
+        let s = Settings::default();
+        let history = vec![0.0; s.stall_checks];
+        // 0.5 -> 0.5004: a relative gain of 8e-4 < stall_gain.
+        assert!(stalled(&history, &[0.5, 0.5004], &s));
+        assert!(!stalled(&history, &[0.5, 0.501], &s));
+        // A small probability climbing by 10%: progress.
+        assert!(!stalled(&history, &[0.0150, 0.0165], &s));
+        // 1e-8 -> 1e-7 climbs tenfold but gains 9e-8 < 1e-3 * 1e-3.
+        assert!(stalled(&history, &[1e-8, 1e-7], &s));
+        // Too few checks since the last widening, or a single window: no.
+        assert!(!stalled(&history[1..], &[1e-8, 1e-7], &s));
+        assert!(!stalled(&history, &[1e-7], &s));
+    }
 }

@@ -115,7 +115,8 @@ pub struct Settings {
     /// since the logit bound last widened (0: never): it stops (or widens
     /// the bound) when the best score (certified lower bound, or worst-case
     /// estimate without an automaton for !phi) gained at most `stall_gain`
-    /// times its magnitude over the second half of those checks.
+    /// times its magnitude (at least 1e-3) over the second half of those
+    /// checks.
     #[arg(long, default_value_t = Settings::default().stall_checks)]
     pub stall_checks: usize,
     /// The relative gain below which the max-min loop counts as stalled

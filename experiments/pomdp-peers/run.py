@@ -1,0 +1,434 @@
+#!/usr/bin/env python3
+"""posg-fsc against PAYNT and Storm's gradient descent on PRISM POMDPs.
+
+Question: on the PRISM POMDP benchmarks of PAYNT's repository, does
+`posg-fsc solve` with its default settings and k = 1, 2, 3 controller
+nodes reach the value of PAYNT's FSC synthesis and of Storm's gradient
+descent for randomised FSCs (Heck et al., VMCAI 2022), and with how much
+CPU?
+
+For each model and k, one tool at a time:
+
+* posg-fsc: `posg-fsc solve model.drn --props model.props --def-nodes K
+  --out DIR --quiet` (the DRN exported by stormpy, read directly,
+  docs/formats.md section 6); its value is the certified lower bound of
+  the controller it returns (summary.json), the best exact value of the
+  single-player ascent when nothing was certified;
+* PAYNT 0.5.0: `python -m paynt DIR --sketch sketch.templ --props
+  sketch.props --fsc-memory-size K --timeout T`; its value is the optimum
+  it reports (the best found when the timeout stops it);
+* Storm GD: the POMDP made canonic, a full k-state memory unfolded
+  (`create_memory(FULL, k)`, `unfold_memory`, `make_simple`), the unknown
+  FSC applied (`apply_unknown_fsc(SIMPLE_LINEAR)`) giving a parametric
+  DTMC, then `stormpy.pars.check_feasibility(..., method=GD)` (stormpy 2.0
+  exposes Storm's GradientDescentInstantiationSearcher only as a
+  feasibility check: it descends until the value meets a bound or stops
+  changing, and returns the instantiation only when the bound is met).
+  The bound is the better of posg-fsc's and PAYNT's values on the case,
+  `P>=best`: "does GD reach the best of the other two?". Its instantiation
+  is re-evaluated by Storm on the instantiated DTMC (exact arithmetic).
+  If GD stops (converges, status `below-bound`) or is stopped (`timeout`)
+  without meeting the bound, its value is only known to be below it: the
+  binding returns no point, and Storm's "Currently at" progress lines do
+  not reach stdout from stormpy 2.0, not even at log level INFO. Then a
+  second run towards `best - 1e-2` (`storm-gd>=best-0.01`) asks whether GD
+  comes close; where the first run met its bound, a second run towards
+  `best + 1e-4` (`storm-gd>best`, --beat-timeout) asks whether GD beats both.
+
+Properties: probabilities only (posg-fsc computes probabilities); the
+models' formulas name labels that are added to the PRISM text where the
+original uses a formula or an expression (see MODELS). For a `Pmin`
+query all values are the probability of the complement (1 - p), which
+posg-fsc maximises as `G !target`.
+
+Writes results/pomdp-peers.csv (first line: command, settings, versions)
+and a sidecar results/pomdp-peers.json with the per-run records. Runs
+are cached in --work, so an interrupted run resumes.
+
+Usage:
+  POSG_FSC=path/to/posg-fsc /work/venv-paynt/bin/python experiments/pomdp-peers/run.py \\
+      --repo /path/to/synthesis.git --timeout 60   (as in results/pomdp-peers.csv)
+"""
+import argparse
+import csv
+import hashlib
+import json
+import os
+import re
+import resource
+import signal
+import subprocess
+import sys
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.join(os.path.dirname(HERE), "common"))
+from games import BINARY, ROOT, build  # noqa: E402
+
+COMMIT = "8eb05ea143c3d9feb5f2ab219187fcc6c7195dd1"
+# name -> (path in randriu/synthesis, property used by all three tools,
+#          PRISM lines appended to the model (labels for formulas)).
+MODELS = {
+    "grid-avoid-4-0": ("models/archive/uai22-pomdp/grid-avoid-4-0",
+                       'Pmax=? [!"bad" U "goal"]', ""),
+    "grid-avoid-4-0.1": ("models/archive/uai22-pomdp/grid-avoid-4-0.1",
+                         'Pmax=? [!"bad" U "goal"]', ""),
+    "grid-simple-4x4": ("models/pomdp/grid/simple/4x4", 'Pmax=? [F "goal"]',
+                        'label "goal" = goal;'),
+    "grid-simple-2x2": ("models/pomdp/grid/simple/2x2", 'Pmin=? [F "trap"]',
+                        'label "trap" = trap;'),
+    "nrp-8": ("models/archive/uai22-pomdp/nrp-8", 'Pmax=? [F "unfair"]', ""),
+    "refuel-06": ("models/archive/uai22-pomdp/refuel-06", 'Pmax=? ["notbad" U "goal"]', ""),
+    "crypt-4": ("models/archive/uai22-pomdp/crypt-4", 'Pmax=? [F "goal"]', ""),
+    "drone-4-1": ("models/archive/uai22-pomdp/drone-4-1", 'Pmax=? ["notbad" U "goal"]', ""),
+}
+NODES = [1, 2, 3]
+TOLERANCE = 1e-4
+# Where GD does not come within TOLERANCE of the best, a second run asks
+# whether it comes within NEAR (its value is otherwise unknown).
+NEAR = 1e-2
+GD_REGION_BOUND = 1e-6
+
+
+def git_show(repo, path):
+    return subprocess.run(["git", "--git-dir", repo, "show", f"{COMMIT}:{path}"], check=True,
+                          capture_output=True, text=True).stdout
+
+
+def prepare(models_dir, repo):
+    """Writes each model as DIR/NAME/sketch.templ (PRISM), sketch.props and
+    model.drn (stormpy's export, choice labels kept); returns the state counts."""
+    import stormpy
+    states = {}
+    for name, (path, prop, extra) in MODELS.items():
+        directory = os.path.join(models_dir, name)
+        os.makedirs(directory, exist_ok=True)
+        prism = git_show(repo, f"{path}/sketch.templ")
+        if extra:
+            prism += f"\n// added by experiments/pomdp-peers/run.py\n{extra}\n"
+        with open(os.path.join(directory, "sketch.templ"), "w") as handle:
+            handle.write(prism)
+        with open(os.path.join(directory, "sketch.props"), "w") as handle:
+            handle.write(prop + "\n")
+        model = build_pomdp(directory)
+        states[name] = model.nr_states
+        drn = os.path.join(directory, "model.drn")
+        if not os.path.exists(drn):
+            stormpy.io.export_to_drn(model, drn)
+    return states
+
+
+def build_pomdp(directory):
+    import stormpy
+    program = stormpy.parse_prism_program(os.path.join(directory, "sketch.templ"))
+    options = stormpy.BuilderOptions(build_full=True)
+    options.set_build_choice_labels(True)
+    options.set_build_all_labels()
+    return stormpy.build_model(program, options=options)
+
+
+def prop_of(directory):
+    return open(os.path.join(directory, "sketch.props")).read().strip()
+
+
+def complement(value, prop):
+    """The value as posg-fsc's objective: 1 - p for a Pmin query."""
+    if value is None:
+        return None
+    return 1.0 - value if prop.startswith("Pmin") else value
+
+
+def timed(command, limit, interrupt_after=None, **kwargs):
+    """Runs `command`; returns (stdout+stderr or None when killed at `limit`,
+    return code, wall seconds, CPU seconds (user+sys) of the child and its children).
+    With `interrupt_after`, the child gets SIGINT after that many seconds."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    start = time.perf_counter()
+    process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                               text=True, **kwargs)
+    try:
+        out, _ = process.communicate(timeout=interrupt_after or limit)
+    except subprocess.TimeoutExpired:
+        out = None
+        if interrupt_after:
+            process.send_signal(signal.SIGINT)
+            try:
+                out, _ = process.communicate(timeout=limit - interrupt_after)
+            except subprocess.TimeoutExpired:
+                out = None
+        if out is None:
+            process.kill()
+            process.communicate()
+    wall = time.perf_counter() - start
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    return out, process.returncode, wall, cpu
+
+
+def run_posg(directory, k, limit):
+    out = os.path.join(directory, f"posg-fsc-{k}")
+    command = [BINARY, "solve", os.path.join(directory, "model.drn"), "--props",
+               os.path.join(directory, "sketch.props"), "--def-nodes", str(k), "--out", out,
+               "--force", "--quiet"]
+    log, code, wall, cpu = timed(command, limit)
+    record = {"command": " ".join(["posg-fsc", *command[1:]]), "wall_seconds": wall,
+              "cpu_seconds": cpu, "value": None}
+    if log is None:
+        record["status"] = "timeout"
+        return record
+    if code != 0:
+        record["status"] = "error: " + log.strip()[-500:]
+        return record
+    with open(os.path.join(out, "summary.json")) as handle:
+        summary = json.load(handle)
+    certified = (summary.get("certified") or {}).get("certified_lower")
+    record.update({
+        "certified_lower": certified,
+        "upper_bound": (summary.get("certified") or {}).get("upper_bound"),
+        "worst_case": summary.get("worst_case"),
+        "stop_reason": summary.get("stop_reason"),
+        "solve_seconds": summary.get("seconds"),
+        "value": certified if certified is not None else summary.get("worst_case"),
+        "status": "ok" if certified is not None else "uncertified",
+    })
+    return record
+
+
+def run_paynt(directory, k, timeout):
+    prop = prop_of(directory)
+    command = [sys.executable, "-m", "paynt", directory, "--sketch", "sketch.templ", "--props",
+               "sketch.props", "--fsc-memory-size", str(k), "--timeout", str(timeout)]
+    log, code, wall, cpu = timed(command, timeout + 120)
+    log = log or ""
+    optimum = re.search(r"^optimum: (\S+)", log, re.M)
+    explored = re.search(r"^explored: (\d+) %", log, re.M)
+    finished = explored is not None and explored.group(1) == "100"
+    value = float(optimum.group(1)) if optimum else None
+    status = ("optimal" if finished and optimum else
+              "timeout" if "time limit reached" in log or code is None else
+              "infeasible" if finished else "error")
+    return {"command": " ".join(["python", "-m", "paynt", *command[3:]]),
+            "optimum": value, "value": complement(value, prop),
+            "status": status, "explored_percent": int(explored.group(1)) if explored else None,
+            "wall_seconds": wall, "cpu_seconds": cpu, "log_tail": log[-1500:]}
+
+
+def run_gd(directory, k, bound, limit):
+    """Storm's gradient descent in a child process (this script with --gd-worker),
+    interrupted by SIGINT after `limit` seconds (Storm then stops the descent)."""
+    command = [sys.executable, os.path.abspath(__file__), "--gd-worker", directory, str(k),
+               repr(bound)]
+    log, code, wall, cpu = timed(command, limit + 60, interrupt_after=limit)
+    record = {"command": f"stormpy GD, bound P>={bound!r}, k={k}", "bound": bound,
+              "wall_seconds": wall, "cpu_seconds": cpu, "value": None}
+    if log is None:
+        record["status"] = "timeout (killed)"
+        return record
+    result = re.search(r"^RESULT (.*)$", log, re.M)
+    if result is None:
+        # Storm aborts 30 s after the SIGINT when the descent has not reached
+        # a point where it checks for it (model construction, a long solve).
+        aborted = "received signal" in log
+        record.update(status="timeout (aborted)" if aborted else "error", log_tail=log[-1500:])
+        return record
+    record.update(json.loads(result.group(1)))
+    record["interrupted"] = wall >= limit
+    if record["witness_value"] is not None:
+        record["value"] = record["exact_value"]
+        record["status"] = "reached-bound"
+    else:
+        record["status"] = "timeout" if record["interrupted"] else "below-bound"
+    return record
+
+
+def gd_worker(directory, k, bound):
+    """Builds the parametric DTMC of an unknown k-state FSC and runs Storm's GD
+    towards `P>=bound`; prints one line `RESULT {json}`."""
+    import stormpy
+    import stormpy.developer
+    import stormpy.pars
+    import stormpy.pomdp
+    stormpy.developer.install_signal_handler(30)
+    prop = prop_of(directory)
+    pomdp = stormpy.pomdp.make_canonic(build_pomdp(directory))
+    memory = stormpy.pomdp.create_memory(stormpy.pomdp.PomdpMemoryPattern.FULL, k)
+    product = stormpy.pomdp.unfold_memory(pomdp, memory, add_memory_labels=False,
+                                          keep_state_valuations=False)
+    product = stormpy.pomdp.make_simple(product, keep_state_valuations=False)
+    pmc = stormpy.pomdp.apply_unknown_fsc(product, stormpy.pomdp.PomdpFscApplicationMode.SIMPLE_LINEAR)
+    # GD maximises towards P>=b; for Pmin it minimises towards P<=1-b.
+    if prop.startswith("Pmin"):
+        bounded = prop.replace("Pmin=?", f"P<={1.0 - bound!r}", 1)
+    else:
+        bounded = prop.replace("Pmax=?", f"P>={bound!r}", 1)
+    formula = stormpy.parse_properties(bounded)[0]
+    start = time.process_time()
+    result = stormpy.pars.check_feasibility(pmc, formula, region_bound=GD_REGION_BOUND,
+                                            method=stormpy.pars.FeasibilityMethod.GD)
+    gd_cpu = time.process_time() - start
+    record = {"pmc_states": pmc.nr_states, "parameters": len(pmc.collect_all_parameters()),
+              "gd_status": str(result.status), "gd_cpu_seconds": gd_cpu, "witness_value": None,
+              "exact_value": None, "bounded_property": bounded}
+    if result.witness is not None:
+        valuation = {p: stormpy.RationalFunctionCoefficient(v) if not isinstance(
+            v, stormpy.RationalFunctionCoefficient) else v
+            for p, v in result.witness.valuation.items()}
+        dtmc = stormpy.pars.ModelInstantiator(pmc).instantiate(valuation)
+        exact = stormpy.Environment()
+        exact.solver().force_exact = True
+        check = stormpy.parse_properties(prop.replace("Pmin=?", "P=?").replace("Pmax=?", "P=?"))[0]
+        value = stormpy.model_checking(dtmc, check, environment=exact).get_value(dtmc.initial_states[0])
+        record["witness_value"] = complement(float(result.witness.value), prop)
+        record["exact_value"] = complement(float(value), prop)
+    print("RESULT " + json.dumps(record), flush=True)
+
+
+def cached(path, compute):
+    if os.path.exists(path):
+        with open(path) as handle:
+            return json.load(handle)
+    record = compute()
+    with open(path, "w") as handle:
+        json.dump(record, handle, indent=1)
+    return record
+
+
+def versions():
+    import stormpy
+    posg = subprocess.run([BINARY, "--version"], capture_output=True, text=True).stdout.strip()
+    with open(BINARY, "rb") as handle:
+        digest = hashlib.sha256(handle.read()).hexdigest()[:16]
+    return {"posg-fsc": f"{posg} ({BINARY}, sha256 {digest}...)",
+            "stormpy": stormpy.__version__, "paynt": "0.5.0",
+            "models": f"randriu/synthesis@{COMMIT}"}
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--repo", required=True, help="git directory of randriu/synthesis")
+    parser.add_argument("--work", default=os.path.join(ROOT, "target", "pomdp-peers"))
+    parser.add_argument("--timeout", type=int, default=120,
+                        help="per-run limit (s): PAYNT's --timeout, GD's interrupt, posg-fsc's kill")
+    parser.add_argument("--posg-timeout", type=int, default=120,
+                        help="posg-fsc runs are killed after this many seconds")
+    parser.add_argument("--beat-timeout", type=int, default=30,
+                        help="limit (s) of the second GD run, towards P>=best+1e-4")
+    parser.add_argument("--models", nargs="*", default=list(MODELS))
+    parser.add_argument("--out", default=os.path.join(ROOT, "results", "pomdp-peers.csv"))
+    args = parser.parse_args()
+    build()
+    models_dir = os.path.join(args.work, "models")
+    states = prepare(models_dir, args.repo)
+    records, rows = [], []
+    for name in args.models:
+        directory = os.path.join(models_dir, name)
+        for k in NODES:
+            posg = cached(os.path.join(directory, f"posg-{k}.json"),
+                          lambda: run_posg(directory, k, args.posg_timeout))
+            paynt = cached(os.path.join(directory, f"paynt-{k}-t{args.timeout}.json"),
+                           lambda: run_paynt(directory, k, args.timeout))
+            peers = [v for v in (posg["value"], paynt["value"]) if v is not None]
+            bound = max(max(peers) - TOLERANCE, 0.0) if peers else 0.0
+            gd = cached(os.path.join(directory, f"gd-{k}-t{args.timeout}.json"),
+                        lambda: run_gd(directory, k, bound, args.timeout))
+            case = {"posg-fsc": posg, "paynt": paynt, "storm-gd": gd}
+            if gd["status"] != "reached-bound" and max(peers) > NEAR:
+                # GD did not come within TOLERANCE: does it come within NEAR?
+                case["storm-gd>=best-0.01"] = cached(
+                    os.path.join(directory, f"gd-near-{k}-t{args.timeout}.json"),
+                    lambda: run_gd(directory, k, max(peers) - NEAR, args.timeout))
+            if gd["status"] == "reached-bound" and max(peers) + TOLERANCE <= 1.0:
+                # GD matched the best within TOLERANCE; can it beat it by more?
+                case["storm-gd>best"] = cached(
+                    os.path.join(directory, f"gd-beat-{k}-t{args.beat_timeout}.json"),
+                    lambda: run_gd(directory, k, max(peers) + TOLERANCE, args.beat_timeout))
+            for tool, record in case.items():
+                print(f"{name} k={k} {tool}: {record['status']} {record['value']} "
+                      f"({record['cpu_seconds']:.1f} s CPU)", flush=True)
+                records.append({"model": name, "k": k, "tool": tool, **record})
+            best = best_tools(case)
+            ratio = (posg["cpu_seconds"] / gd["cpu_seconds"]) if gd["cpu_seconds"] > 0 else None
+            for tool, record in case.items():
+                rows.append({
+                    "model": name, "states": states[name], "k": k, "tool": tool,
+                    "value": None if record["value"] is None else round(record["value"], 6),
+                    "cpu_seconds": round(record["cpu_seconds"], 2),
+                    "wall_seconds": round(record["wall_seconds"], 2),
+                    "status": record["status"], "best": best,
+                    "posg_cpu_over_gd_cpu": None if ratio is None else round(ratio, 4),
+                })
+    write(args, rows, records)
+
+
+def best_tools(case):
+    """The tools within TOLERANCE of the best value found in the case."""
+    values = {tool: r["value"] for tool, r in case.items() if r["value"] is not None}
+    if not values:
+        return "none"
+    top = max(values.values())
+    return "+".join(tool for tool, v in values.items() if v >= top - TOLERANCE)
+
+
+def write(args, rows, records):
+    settings = {
+        "command": " ".join(sys.argv), "timeout_seconds": args.timeout, "posg_timeout_seconds": args.posg_timeout, "nodes": NODES,
+        "posg-fsc": "solve model.drn --props sketch.props --def-nodes K --quiet (defaults)",
+        "paynt": "python -m paynt DIR --sketch sketch.templ --props sketch.props "
+                 f"--fsc-memory-size K --timeout {args.timeout}",
+        "storm-gd": "make_canonic, create_memory(FULL, K), unfold_memory, make_simple, "
+                    "apply_unknown_fsc(SIMPLE_LINEAR), check_feasibility(method=GD, "
+                    f"region_bound={GD_REGION_BOUND}) towards P>=max(posg-fsc, PAYNT)-{TOLERANCE}, "
+                    f"SIGINT after {args.timeout} s",
+        "storm-gd>=best-0.01": "the same GD towards P>=max(posg-fsc, PAYNT)-"
+                               f"{NEAR}, run only where the first GD run did not meet its "
+                               f"bound, SIGINT after {args.timeout} s",
+        "storm-gd>best": "the same GD towards P>=max(posg-fsc, PAYNT)+"
+                         f"{TOLERANCE}, run only where the first GD run met its bound, "
+                         f"SIGINT after {args.beat_timeout} s",
+        "versions": versions(),
+        "values": "probability of the property's path formula (1 - p for Pmin)",
+        "cpu_seconds": "user+sys of the child process and its children (getrusage deltas)",
+    }
+    with open(args.out, "w", newline="") as handle:
+        handle.write("# " + json.dumps(settings) + "\n")
+        writer = csv.DictWriter(handle, fieldnames=list(rows[0]))
+        writer.writeheader()
+        writer.writerows(rows)
+    with open(os.path.splitext(args.out)[0] + ".json", "w") as handle:
+        json.dump({"settings": settings, "runs": records}, handle, indent=1)
+    print(f"wrote {args.out}\n")
+    print(markdown(rows))
+
+
+def markdown(rows):
+    """The README's table: one line per model and k."""
+    show = lambda r: "-" if r is None or r["value"] is None else f"{r['value']:.4f}"
+    lines = ["| model | states | k | posg-fsc | CPU s | PAYNT | CPU s | Storm GD | CPU s "
+             "| GD > best + 1e-4? | best | posg-fsc CPU / GD CPU |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    cases = {}
+    for r in rows:
+        cases.setdefault((r["model"], r["states"], r["k"]), {})[r["tool"]] = r
+    for (model, states, k), c in cases.items():
+        posg, paynt, gd = c["posg-fsc"], c["paynt"], c["storm-gd"]
+        beat = c.get("storm-gd>best")
+        near = c.get("storm-gd>=best-0.01")
+        paynt_text = show(paynt) + ("" if paynt["status"] == "optimal" else f" ({paynt['status']})")
+        gd_text = show(gd) if gd["status"] == "reached-bound" else f"{gd['status']}"
+        if near is not None:
+            gd_text += (f"; within 1e-2: {show(near)}" if near["status"] == "reached-bound" else
+                        f"; not within 1e-2 ({near['status']})")
+        beat_text = ("-" if beat is None else
+                     f"yes: {show(beat)}" if beat["status"] == "reached-bound" else
+                     f"no ({beat['status']})")
+        lines.append(f"| {model} | {states} | {k} | {show(posg)} | {posg['cpu_seconds']} | "
+                     f"{paynt_text} | {paynt['cpu_seconds']} | {gd_text} | {gd['cpu_seconds']} | "
+                     f"{beat_text} | {posg['best']} | {posg['posg_cpu_over_gd_cpu']} |")
+    return "\n".join(lines)
+
+
+if __name__ == "__main__":
+    if len(sys.argv) == 5 and sys.argv[1] == "--gd-worker":
+        gd_worker(sys.argv[2], int(sys.argv[3]), float(sys.argv[4]))
+    else:
+        main()
