@@ -3,11 +3,10 @@
 //! reduces to max and no best-response check is needed.
 //!
 //! L-BFGS (two-loop recursion, memory `lbfgs_memory`) with a backtracking
-//! Armijo line search, in the unconstrained coordinates `z` of the smooth
-//! reparametrisation `phi = c tanh(z)` with `c = logit_bound`
-//! (method.md section 3: every supported choice keeps probability at least
-//! `exp(-2c) / |block|`, so the support never changes). The chain rule is
-//! `dV/dz = c (1 - tanh(z)^2) dV/dphi`. Each trial step moves no
+//! Armijo line search, in the unconstrained coordinates `z` of
+//! `phi = c tanh(z)` with `c = logit_bound` ([`Reparametrisation`],
+//! method.md section 3: every supported choice keeps probability at least
+//! `exp(-2c) / |block|`, so the support never changes). Each trial step moves no
 //! coordinate of `z` by more than [`MAX_STEP`].
 //!
 //! Requirements on the problem: `V` smooth in `phi` on the fixed support
@@ -20,6 +19,7 @@ use std::time::Instant;
 use super::objective::Objective;
 use super::observer::{IterationRecord, Observer};
 use super::optimiser::{Incumbent, PhaseSeconds, RunOutcome, gained_little, norm};
+use super::reparam::Reparametrisation;
 use super::{Cancel, OptimiseError, Settings, Status};
 use crate::value::ValueError;
 
@@ -32,10 +32,6 @@ const ARMIJO: f64 = 1e-4;
 /// Backtracking halvings before the line search gives up.
 const HALVINGS: usize = 30;
 
-/// Logits at or beyond `c * START_CLAMP` start at the `z` of that point
-/// (where `tanh` still has slope `1 - START_CLAMP^2`).
-const START_CLAMP: f64 = 0.99;
-
 /// Maximises `V` (as `ln V`) over the defender's logits from `start`
 /// (adversary fixed at `adversary`), reporting one record per iteration to
 /// `observer`, stopping early once `cancel` is set.
@@ -47,16 +43,13 @@ pub fn ascend(
     cancel: &Cancel,
 ) -> Result<RunOutcome, OptimiseError> {
     let clock = Instant::now();
-    let c = settings.logit_bound;
-    let mut z: Vec<f64> = start
-        .iter()
-        .map(|&phi| (phi / c).clamp(-START_CLAMP, START_CLAMP).atanh())
-        .collect();
+    let c = Reparametrisation::new(settings.logit_bound);
+    let mut z = c.to_z(start);
     let mut here = Evaluated::at(objective, &z, adversary, c)?;
     let mut max_residual = here.residual;
     let mut memory = Memory::new(settings.lbfgs_memory);
     let mut history = vec![here.value];
-    let mut best = (here.value, squash(&z, c), 0);
+    let mut best = (here.value, c.to_phi(&z), 0);
     let window = settings.ascent_stall_iterations;
     let mut t = 0;
     let status = loop {
@@ -90,7 +83,7 @@ pub fn ascend(
             0.0
         };
         if here.value > best.0 {
-            best = (here.value, squash(&z, c), t + 1);
+            best = (here.value, c.to_phi(&z), t + 1);
         }
         history.push(here.value);
         observer.observe(&IterationRecord {
@@ -105,7 +98,7 @@ pub fn ascend(
             worst_case: Some(here.value),
             certified_lower: None,
             upper_bound: None,
-            logit_bound: c,
+            logit_bound: c.bound(),
         });
         if let Some(status) = status {
             break status;
@@ -131,7 +124,7 @@ pub fn ascend(
             optimisation: seconds,
             ..PhaseSeconds::default()
         },
-        logit_bound: c,
+        logit_bound: c.bound(),
         max_residual,
     })
 }
@@ -154,14 +147,14 @@ impl Evaluated {
         objective: &mut Objective,
         z: &[f64],
         adversary: &[f64],
-        c: f64,
+        c: Reparametrisation,
     ) -> Result<Self, OptimiseError> {
-        let point = objective.point(&squash(z, c), adversary)?;
+        let point = objective.point(&c.to_phi(z), adversary)?;
         let value = point.value.max(f64::MIN_POSITIVE);
-        let ascent = z
-            .iter()
-            .zip(&point.defender)
-            .map(|(&zi, &d)| c * (1.0 - zi.tanh().powi(2)) * d / value)
+        let ascent = c
+            .chain_rule(z, &point.defender)
+            .into_iter()
+            .map(|d| d / value)
             .collect();
         Ok(Self {
             value: point.value,
@@ -185,7 +178,7 @@ fn line_search(
     here: &Evaluated,
     memory: &mut Memory,
     adversary: &[f64],
-    c: f64,
+    c: Reparametrisation,
 ) -> Result<Option<(Vec<f64>, Evaluated, f64)>, OptimiseError> {
     let mut direction = memory.direction(&here.ascent);
     let mut slope = dot(&direction, &here.ascent);
@@ -279,9 +272,4 @@ impl Memory {
 
 fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
-}
-
-/// `phi = c tanh(z)`, componentwise.
-fn squash(z: &[f64], c: f64) -> Vec<f64> {
-    z.iter().map(|&zi| c * zi.tanh()).collect()
 }

@@ -2,9 +2,8 @@
 //! `min over phi_adv of V(phi_def, phi_adv)` by L-BFGS from several starts.
 //!
 //! argmin's gradient solvers have no box constraints, so the minimisation
-//! runs in unconstrained coordinates `z` with the smooth reparametrisation
-//! `phi = c tanh(z)`, which maps `R^n` onto the open box `(-c, c)^n`, and the
-//! chain rule `dV/dz = c (1 - tanh(z)^2) dV/dphi`. The solver is
+//! runs in the unconstrained coordinates `z` of `phi = c tanh(z)`
+//! ([`Reparametrisation`], method.md section 3). The solver is
 //! `LBFGS::new(MoreThuenteLineSearch::new(), m)`. The lowest value found over
 //! all starts is the defender's worst-case estimate: an upper bound on the
 //! true minimum over adversaries of this size and support.
@@ -24,6 +23,7 @@ use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 
 use super::objective::Objective;
+use super::reparam::Reparametrisation;
 use super::{OptimiseError, Settings};
 use crate::value::ValueError;
 
@@ -39,10 +39,6 @@ pub struct BestResponse {
 /// Random starts draw `z` uniformly from `[-START_RANGE, START_RANGE]`,
 /// that is `phi` in `(-0.76 c, 0.76 c)`.
 const START_RANGE: f64 = 1.0;
-
-/// The start at a given adversary keeps `|phi| <= START_CLAMP c`, where
-/// `tanh` still has slope `1 - START_CLAMP^2`.
-const START_CLAMP: f64 = 0.99;
 
 /// Where a best-response minimisation starts: at given adversaries
 /// (warm starts: the current adversary, the last best response found) and
@@ -65,13 +61,7 @@ pub fn best_response(
     settings: &Settings,
     rng: &mut ChaCha8Rng,
 ) -> Result<BestResponse, OptimiseError> {
-    let bound = settings.logit_bound;
-    let unsquashed = |logits: &[f64]| -> Vec<f64> {
-        logits
-            .iter()
-            .map(|&phi| (phi / bound).clamp(-START_CLAMP, START_CLAMP).atanh())
-            .collect()
-    };
+    let map = Reparametrisation::new(settings.logit_bound);
     let mut best: Option<BestResponse> = None;
     let mut dropped = None;
     let mut keep = |found: Result<BestResponse, OptimiseError>| match found {
@@ -92,7 +82,7 @@ pub fn best_response(
         keep(minimise_from(
             objective,
             defender,
-            unsquashed(logits),
+            map.to_z(logits),
             settings,
         ))?;
     }
@@ -117,8 +107,8 @@ fn minimise_from(
     start: Vec<f64>,
     settings: &Settings,
 ) -> Result<BestResponse, OptimiseError> {
-    let bound = settings.logit_bound;
-    let start_value = objective.value(defender, &squash(&start, bound))?;
+    let map = Reparametrisation::new(settings.logit_bound);
+    let start_value = objective.value(defender, &map.to_phi(&start))?;
     if start.is_empty() {
         return Ok(BestResponse {
             value: start_value,
@@ -128,7 +118,7 @@ fn minimise_from(
     let problem = AdversaryProblem {
         objective: RefCell::new(objective),
         defender,
-        bound,
+        map,
     };
     let solver = LBFGS::new(MoreThuenteLineSearch::new(), settings.lbfgs_memory);
     let result = Executor::new(problem, solver)
@@ -146,25 +136,20 @@ fn minimise_from(
     match state.get_best_param() {
         Some(z) if state.get_best_cost() < start_value => Ok(BestResponse {
             value: state.get_best_cost(),
-            adversary: squash(z, bound),
+            adversary: map.to_phi(z),
         }),
         _ => Ok(BestResponse {
             value: start_value,
-            adversary: squash(&start, bound),
+            adversary: map.to_phi(&start),
         }),
     }
-}
-
-/// `phi = c tanh(z)`, componentwise.
-fn squash(z: &[f64], bound: f64) -> Vec<f64> {
-    z.iter().map(|&zi| bound * zi.tanh()).collect()
 }
 
 /// argmin's view of `z -> V(phi_def, c tanh(z))`.
 struct AdversaryProblem<'a> {
     objective: RefCell<&'a mut Objective>,
     defender: &'a [f64],
-    bound: f64,
+    map: Reparametrisation,
 }
 
 impl CostFunction for AdversaryProblem<'_> {
@@ -172,7 +157,7 @@ impl CostFunction for AdversaryProblem<'_> {
     type Output = f64;
 
     fn cost(&self, z: &Vec<f64>) -> Result<f64, Error> {
-        let phi = squash(z, self.bound);
+        let phi = self.map.to_phi(z);
         Ok(self
             .objective
             .borrow_mut()
@@ -186,11 +171,8 @@ impl Gradient for AdversaryProblem<'_> {
     type Gradient = Vec<f64>;
 
     fn gradient(&self, z: &Vec<f64>) -> Result<Vec<f64>, Error> {
-        let phi = squash(z, self.bound);
+        let phi = self.map.to_phi(z);
         let point = self.objective.borrow_mut().point(self.defender, &phi)?;
-        Ok(z.iter()
-            .zip(&point.adversary)
-            .map(|(&zi, &d)| self.bound * (1.0 - zi.tanh().powi(2)) * d)
-            .collect())
+        Ok(self.map.chain_rule(z, &point.adversary))
     }
 }

@@ -12,7 +12,8 @@
 //!   value and both players' logit gradients by the adjoint method (section 2),
 //!   with the last point cached;
 //! * `best_response`: the adversary's best response by L-BFGS (argmin) in
-//!   the coordinates `phi = c tanh(z)`, from several starts;
+//!   the coordinates `phi = c tanh(z)` (`reparam.rs`, section 3), from
+//!   several starts;
 //! * `Optimiser`: the driver of alternating projected gradient
 //!   ascent-descent (section 4). Its solver takes one outer iteration: a
 //!   fast adversary time scale, plain or Adam (optionally optimistic)
@@ -21,7 +22,7 @@
 //!   stopping on the certified gap or a stall, the best defender seen, and
 //!   the observer;
 //! * `ascend`: the single-player fast path (the adversary has one action,
-//!   so max-min is max): L-BFGS on `ln V`;
+//!   so max-min is max): L-BFGS on `ln V` in the same coordinates;
 //! * [`rounded_candidates`]: partial and argmax roundings of the result,
 //!   each scored exactly on its own support;
 //! * [`optimise_structure`]: parallel seeded starts on one structure, the
@@ -46,6 +47,7 @@ mod observer;
 mod optimiser;
 mod play;
 mod race;
+mod reparam;
 mod rounding;
 mod settings;
 mod softmax;
