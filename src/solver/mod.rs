@@ -1140,16 +1140,31 @@ impl LinearSolver {
             if size == 0.0 || !size.is_finite() {
                 return Ok(error_bound);
             }
-            residual.iter_mut().for_each(|r| *r /= size);
-            correction.fill(0.0);
-            report.iterations += self
-                .solve_in(Direction::Forward, residual, correction, None)?
-                .iterations;
+            self.solve_correction(residual, size, correction, report)?;
             for (xi, di) in x.iter_mut().zip(correction.iter()) {
                 *xi -= size * di;
             }
         }
         Ok(previous)
+    }
+
+    /// A refinement's correction: solves `A c = r / size` (so that an
+    /// iterative method's absolute tolerance becomes a relative one) into
+    /// `correction`, counting the iterations in `report`; `r = residual`,
+    /// which is overwritten. The correction of the solution is `size * c`.
+    fn solve_correction(
+        &mut self,
+        residual: &mut [f64],
+        size: f64,
+        correction: &mut [f64],
+        report: &mut SolveReport,
+    ) -> Result<(), SolverError> {
+        residual.iter_mut().for_each(|r| *r /= size);
+        correction.fill(0.0);
+        report.iterations += self
+            .solve_in(Direction::Forward, residual, correction, None)?
+            .iterations;
+        Ok(())
     }
 
     /// Iterative refinement in extended precision, for when refinement in
@@ -1201,11 +1216,7 @@ impl LinearSolver {
                 return Ok(error_bound);
             }
             previous = error_bound;
-            residual.iter_mut().for_each(|r| *r /= size);
-            correction.fill(0.0);
-            report.iterations += self
-                .solve_in(Direction::Forward, residual, correction, None)?
-                .iterations;
+            self.solve_correction(residual, size, correction, report)?;
             for ((xi, li), di) in x.iter_mut().zip(low.iter_mut()).zip(correction.iter()) {
                 let (sum, error) = bound::two_sum(*xi, -size * di);
                 let (high, rest) = bound::two_sum(sum, *li + error);
