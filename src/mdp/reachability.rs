@@ -130,11 +130,6 @@ pub fn max_reachability(
             IMPROVEMENT_THRESHOLD
         };
         let (switched, gap) = improve(mdp, &values, &maybe, &mut strategy, threshold);
-        proof = if switched || proved {
-            Proof::Trial
-        } else {
-            Proof::Required
-        };
         if !switched && proved {
             return Ok(Reachability {
                 values,
@@ -146,6 +141,13 @@ pub fn max_reachability(
                 almost_sure,
             });
         }
+        // A switch is tried without proof; an unproved end is repeated
+        // with proof.
+        proof = if switched {
+            Proof::Trial
+        } else {
+            Proof::Required
+        };
         previous = values;
     }
     Err(MdpError::NotConverged(MAX_ITERATIONS))
