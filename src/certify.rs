@@ -62,6 +62,7 @@ use crate::mdp::{
 use crate::solver::{SolverError, SolverSettings};
 
 pub use crate::mdp::MdpError;
+pub mod gradient;
 pub mod strategy;
 
 /// Why a bound could not be computed.

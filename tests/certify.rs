@@ -484,3 +484,83 @@ fn the_reference_dense_solver_pivots_and_refuses_singular_systems() {
     assert_eq!(x, vec![1.5, 1.0]);
     assert_eq!(DMatrix::zeros(2).solve(&[1.0, 1.0]), None);
 }
+
+/// The lower bound's gradient (Danskin, method.md section 6) against
+/// central finite differences of the bound itself along a random direction
+/// in the defender's logits, at a random point. Returns whether the point
+/// was smooth with a nonzero slope; a point where the two one-sided
+/// differences disagree (the optimal adversary switches there) is skipped.
+fn lower_bound_gradient_matches_finite_differences(
+    game: &Posg,
+    not_phi: &Dra,
+    template: &Fsc,
+    seed: u64,
+) -> bool {
+    use posg_fsc::certify::gradient::lower_bound_gradient;
+    use posg_fsc::optimise::Softmax;
+    use posg_fsc::value::SolverSettings;
+    let softmax = Softmax::new(template, true);
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let logits: Vec<f64> = (0..softmax.num_parameters())
+        .map(|_| rng.random_range(-1.0..1.0))
+        .collect();
+    let direction: Vec<f64> = (0..logits.len())
+        .map(|_| rng.random_range(-1.0..1.0))
+        .collect();
+    let bound_at = |t: f64| {
+        let moved: Vec<f64> = logits
+            .iter()
+            .zip(&direction)
+            .map(|(l, d)| l + t * d)
+            .collect();
+        lower_bound(game, not_phi, &softmax.controller(&moved).unwrap())
+            .unwrap()
+            .value
+    };
+    let defender = softmax.controller(&logits).unwrap();
+    let found =
+        lower_bound_gradient(game, not_phi, &defender, &SolverSettings::default()).unwrap();
+    let (ahead, here, behind) = (bound_at(1e-5), bound_at(0.0), bound_at(-1e-5));
+    assert!((found.value - here).abs() < 1e-12, "seed {seed}");
+    let mu = softmax.probabilities(&logits);
+    let gradient = softmax.chain_rule(&mu, &found.entries, &found.initial);
+    let analytic: f64 = gradient.iter().zip(&direction).map(|(g, d)| g * d).sum();
+    let (forward, backward) = ((ahead - here) / 1e-5, (here - behind) / 1e-5);
+    if (forward - backward).abs() > 1e-3 * (1.0 + forward.abs()) {
+        return false;
+    }
+    let central = (ahead - behind) / 2e-5;
+    assert!(
+        (analytic - central).abs() < 1e-6 * (1.0 + central.abs()),
+        "seed {seed}: analytic {analytic} vs finite differences {central}"
+    );
+    central.abs() > 1e-6
+}
+
+#[test]
+fn the_lower_bounds_gradient_matches_finite_differences_of_the_bound() {
+    use posg_fsc::game::grid::GridSpec;
+    let mut checked = 0;
+    for seed in 0..40u64 {
+        let game = from_json_str(&common::random::game_json(seed), "random.posg.json").unwrap();
+        let (_, not_phi) = automata(FORMULAS[seed as usize % FORMULAS.len()]);
+        let template = common::random::controller(seed, &game, Role::Defender);
+        checked += usize::from(lower_bound_gradient_matches_finite_differences(
+            &game, &not_phi, &template, seed,
+        ));
+    }
+    let grids = [GridSpec::default(), GridSpec::square(4)];
+    for (i, grid) in grids.iter().enumerate() {
+        let game = grid.build().unwrap();
+        for seed in 0..24u64 {
+            let (_, not_phi) = automata(FORMULAS[seed as usize % FORMULAS.len()]);
+            let nodes = 1 + seed as usize % 2;
+            let template =
+                common::random::controller_with_nodes(seed + 100 * i as u64, &game, Role::Defender, nodes);
+            checked += usize::from(lower_bound_gradient_matches_finite_differences(
+                &game, &not_phi, &template, seed,
+            ));
+        }
+    }
+    assert!(checked >= 10, "only {checked} smooth points with a nonzero slope");
+}

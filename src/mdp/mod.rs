@@ -25,7 +25,7 @@ pub mod reachability;
 
 pub use end_components::{EndComponent, maximal_end_components};
 pub use rabin::{AcceptingComponent, max_rabin_analysis, max_rabin_qualitative};
-pub use reachability::{QualitativeReachability, Reachability, max_reachability};
+pub use reachability::{QualitativeReachability, Reachability, expected_visits, max_reachability};
 
 use thiserror::Error;
 

@@ -282,7 +282,6 @@ fn evaluate(
     proof: Proof,
     settings: &SolverSettings,
 ) -> Result<(Vec<f64>, EvaluationReport), MdpError> {
-    let n = mdp.num_states();
     let mut values: Vec<f64> = target.iter().map(|&t| f64::from(t)).collect();
     if maybe.is_empty() {
         let exact = EvaluationReport {
@@ -291,56 +290,7 @@ fn evaluate(
         };
         return Ok((values, exact));
     }
-    let mut index = vec![usize::MAX; n];
-    for (i, &s) in maybe.iter().enumerate() {
-        index[s] = i;
-    }
-    let mut row_offsets = vec![0];
-    let mut columns = Vec::new();
-    let mut coefficients = Vec::new();
-    let mut rhs = vec![0.0; maybe.len()];
-    let mut exits = vec![0.0; maybe.len()];
-    let mut row = Vec::new();
-    for (i, &s) in maybe.iter().enumerate() {
-        row.clear();
-        // The diagonal is formed by the solver from the exits (method.md
-        // section 8); 0 holds its place.
-        row.push((i, 0.0));
-        for &(t, p) in mdp
-            .distribution(s, strategy[s])
-            .iter()
-            .filter(|&&(t, _)| t != s)
-        {
-            if index[t] != usize::MAX {
-                row.push((index[t], -p));
-            } else {
-                exits[i] += p;
-                if target[t] {
-                    rhs[i] += p;
-                }
-            }
-        }
-        row.sort_by_key(|&(j, _)| j);
-        for &(j, a) in &row {
-            if columns.len() > row_offsets[i] && columns.last() == Some(&j) {
-                *coefficients.last_mut().expect("a column was pushed") += a;
-            } else {
-                columns.push(j);
-                coefficients.push(a);
-            }
-        }
-        row_offsets.push(columns.len());
-    }
-    let pattern = SparsePattern {
-        n: maybe.len(),
-        row_offsets,
-        columns,
-    };
-    let mut solver = LinearSolver::new(pattern, settings)?;
-    solver.factorize_with(|own, own_exits| {
-        own.copy_from_slice(&coefficients);
-        own_exits.copy_from_slice(&exits);
-    })?;
+    let (mut solver, rhs) = PolicySystem::build(mdp, target, maybe, strategy).factorised(settings)?;
     let mut solution: Vec<f64> = maybe.iter().map(|&s| start[s]).collect();
     let report = match proof {
         Proof::Trial => solver.solve_trial(&rhs, &mut solution)?,
@@ -354,6 +304,126 @@ fn evaluate(
         error_bound: report.error_bound.unwrap_or(f64::INFINITY),
     };
     Ok((values, report))
+}
+
+/// The expected number of visits `y(s)` to each state of `M` (the maybe
+/// states of `result`: neither decided 0 nor 1) before the chain of
+/// `result.strategy` started from `initial` leaves `M`: the solution of
+/// `(I - Q_sigma)^T y = p0` on `M`, 0 elsewhere. These are the adjoint
+/// weights of the policy's reachability value `sum_s p0(s) x(s)`: its
+/// derivative along a change `dP` of the transition probabilities of the
+/// policy's actions is `sum_{s in M} y(s) sum_t dP(t | s) x(t)` (method.md
+/// section 6, "the lower bound's gradient"). Solved in double precision
+/// without an error bound: it is a search direction, never a reported number.
+pub fn expected_visits(
+    mdp: &Mdp,
+    result: &Reachability,
+    initial: &[(usize, f64)],
+    settings: &SolverSettings,
+) -> Result<Vec<f64>, MdpError> {
+    let n = mdp.num_states();
+    let maybe: Vec<usize> = (0..n)
+        .filter(|&s| result.possible[s] && !result.almost_sure[s])
+        .collect();
+    let mut visits = vec![0.0; n];
+    if maybe.is_empty() {
+        return Ok(visits);
+    }
+    let system = PolicySystem::build(mdp, &result.almost_sure, &maybe, &result.strategy);
+    let mut start = vec![0.0; maybe.len()];
+    for &(s, p) in initial {
+        if system.index[s] != usize::MAX {
+            start[system.index[s]] += p;
+        }
+    }
+    let (mut solver, _) = system.factorised(settings)?;
+    let mut solution = vec![0.0; maybe.len()];
+    solver.solve_transpose(&start, &mut solution)?;
+    for (&s, &y) in maybe.iter().zip(&solution) {
+        visits[s] = y;
+    }
+    Ok(visits)
+}
+
+/// The linear system `(I - Q_sigma) x = b_sigma` of a policy on the maybe
+/// states `M` (module documentation, step 3), before factorisation.
+struct PolicySystem {
+    /// The position of each state in `M` (`usize::MAX` outside).
+    index: Vec<usize>,
+    pattern: SparsePattern,
+    /// The off-diagonal entries `-P(t | s)`; 0 holds the diagonal's place.
+    coefficients: Vec<f64>,
+    /// The probability of leaving each state of `M` (the diagonal).
+    exits: Vec<f64>,
+    /// `b_sigma(s) = P_sigma(target | s)`.
+    rhs: Vec<f64>,
+}
+
+impl PolicySystem {
+    fn build(mdp: &Mdp, target: &[bool], maybe: &[usize], strategy: &[usize]) -> Self {
+        let mut index = vec![usize::MAX; mdp.num_states()];
+        for (i, &s) in maybe.iter().enumerate() {
+            index[s] = i;
+        }
+        let mut row_offsets = vec![0];
+        let mut columns = Vec::new();
+        let mut coefficients = Vec::new();
+        let mut rhs = vec![0.0; maybe.len()];
+        let mut exits = vec![0.0; maybe.len()];
+        let mut row = Vec::new();
+        for (i, &s) in maybe.iter().enumerate() {
+            row.clear();
+            // The diagonal is formed by the solver from the exits (method.md
+            // section 8); 0 holds its place.
+            row.push((i, 0.0));
+            for &(t, p) in mdp
+                .distribution(s, strategy[s])
+                .iter()
+                .filter(|&&(t, _)| t != s)
+            {
+                if index[t] != usize::MAX {
+                    row.push((index[t], -p));
+                } else {
+                    exits[i] += p;
+                    if target[t] {
+                        rhs[i] += p;
+                    }
+                }
+            }
+            row.sort_by_key(|&(j, _)| j);
+            for &(j, a) in &row {
+                if columns.len() > row_offsets[i] && columns.last() == Some(&j) {
+                    *coefficients.last_mut().expect("a column was pushed") += a;
+                } else {
+                    columns.push(j);
+                    coefficients.push(a);
+                }
+            }
+            row_offsets.push(columns.len());
+        }
+        let pattern = SparsePattern {
+            n: maybe.len(),
+            row_offsets,
+            columns,
+        };
+        Self {
+            index,
+            pattern,
+            coefficients,
+            exits,
+            rhs,
+        }
+    }
+
+    /// The factorised system and its right-hand side.
+    fn factorised(self, settings: &SolverSettings) -> Result<(LinearSolver, Vec<f64>), MdpError> {
+        let mut solver = LinearSolver::new(self.pattern, settings)?;
+        solver.factorize_with(|own, own_exits| {
+            own.copy_from_slice(&self.coefficients);
+            own_exits.copy_from_slice(&self.exits);
+        })?;
+        Ok((solver, self.rhs))
+    }
 }
 
 /// `E'_a x = sum_{t != s} P(t | s, a) x(t) / sum_{t != s} P(t | s, a)`,

@@ -21,7 +21,6 @@ use super::observer::{IterationRecord, Observer};
 use super::optimiser::{Incumbent, PhaseSeconds, RunOutcome, gained_little, norm};
 use super::reparam::Reparametrisation;
 use super::{Cancel, OptimiseError, Settings, Status};
-use crate::value::ValueError;
 
 /// The largest change of any `z` coordinate in one trial step.
 const MAX_STEP: f64 = 1.0;
@@ -32,11 +31,49 @@ const ARMIJO: f64 = 1e-4;
 /// Backtracking halvings before the line search gives up.
 const HALVINGS: usize = 30;
 
-/// Maximises `V` (as `ln V`) over the defender's logits from `start`
-/// (adversary fixed at `adversary`), reporting one record per iteration to
-/// `observer`, stopping early once `cancel` is set.
-pub fn ascend(
-    objective: &mut Objective,
+/// A function of the defender's logits that the ascent maximises.
+pub(super) trait DefenderObjective {
+    /// The value at `defender`, its logit gradient and the larger residual
+    /// of the linear solves behind them.
+    fn point(&mut self, defender: &[f64]) -> Result<DefenderPoint, OptimiseError>;
+}
+
+/// A value of the defender's logits with its gradient.
+pub(super) struct DefenderPoint {
+    /// The value.
+    pub value: f64,
+    /// Its derivatives with respect to the defender's logits.
+    pub gradient: Vec<f64>,
+    /// The larger residual of the linear solves behind the two.
+    pub residual: f64,
+}
+
+/// `V(phi_def, phi_adv)` with the adversary's logits fixed: what the
+/// single-player ascent maximises.
+pub(super) struct AgainstFixed<'a> {
+    /// The value and its gradients.
+    pub objective: &'a mut Objective,
+    /// The adversary's logits.
+    pub adversary: &'a [f64],
+}
+
+impl DefenderObjective for AgainstFixed<'_> {
+    fn point(&mut self, defender: &[f64]) -> Result<DefenderPoint, OptimiseError> {
+        let point = self.objective.point(defender, self.adversary)?;
+        Ok(DefenderPoint {
+            value: point.value,
+            gradient: point.defender,
+            residual: point.residual,
+        })
+    }
+}
+
+/// Maximises the objective (as its logarithm) over the defender's logits
+/// from `start`, reporting one record per iteration to `observer`,
+/// stopping early once `cancel` is set; `adversary` is the adversary's
+/// logits recorded with the result.
+pub(super) fn ascend(
+    objective: &mut dyn DefenderObjective,
     (start, adversary): (&[f64], &[f64]),
     settings: &Settings,
     observer: &mut dyn Observer,
@@ -45,7 +82,7 @@ pub fn ascend(
     let clock = Instant::now();
     let c = Reparametrisation::new(settings.logit_bound);
     let mut z = c.to_z(start);
-    let mut here = Evaluated::at(objective, &z, adversary, c)?;
+    let mut here = Evaluated::at(objective, &z, c)?;
     let mut max_residual = here.residual;
     let mut memory = Memory::new(settings.lbfgs_memory);
     let mut history = vec![here.value];
@@ -66,7 +103,7 @@ pub fn ascend(
             None
         };
         let step = if status.is_none() {
-            match line_search(objective, &z, &here, &mut memory, adversary, c)? {
+            match line_search(objective, &z, &here, &mut memory, c)? {
                 Some((next_z, next, step)) => {
                     memory.remember(&next_z, &z, &next.ascent, &here.ascent);
                     z = next_z;
@@ -144,15 +181,14 @@ struct Evaluated {
 
 impl Evaluated {
     fn at(
-        objective: &mut Objective,
+        objective: &mut dyn DefenderObjective,
         z: &[f64],
-        adversary: &[f64],
         c: Reparametrisation,
     ) -> Result<Self, OptimiseError> {
-        let point = objective.point(&c.to_phi(z), adversary)?;
+        let point = objective.point(&c.to_phi(z))?;
         let value = point.value.max(f64::MIN_POSITIVE);
         let ascent = c
-            .chain_rule(z, &point.defender)
+            .chain_rule(z, &point.gradient)
             .into_iter()
             .map(|d| d / value)
             .collect();
@@ -160,7 +196,7 @@ impl Evaluated {
             value: point.value,
             log_value: value.ln(),
             ascent,
-            phi_gradient: point.defender,
+            phi_gradient: point.gradient,
             residual: point.residual,
         })
     }
@@ -173,11 +209,10 @@ impl Evaluated {
 /// tolerance (nearly deterministic choices can make `I - Q` nearly
 /// singular) is rejected like one that does not increase `V`.
 fn line_search(
-    objective: &mut Objective,
+    objective: &mut dyn DefenderObjective,
     z: &[f64],
     here: &Evaluated,
     memory: &mut Memory,
-    adversary: &[f64],
     c: Reparametrisation,
 ) -> Result<Option<(Vec<f64>, Evaluated, f64)>, OptimiseError> {
     let mut direction = memory.direction(&here.ascent);
@@ -198,11 +233,12 @@ fn line_search(
             .zip(&direction)
             .map(|(zi, d)| zi + step * d)
             .collect();
-        match Evaluated::at(objective, &trial, adversary, c) {
+        match Evaluated::at(objective, &trial, c) {
             Ok(next) if next.log_value >= here.log_value + ARMIJO * step * slope => {
                 return Ok(Some((trial, next, step)));
             }
-            Ok(_) | Err(OptimiseError::Value(ValueError::Solver(_))) => {}
+            Ok(_) => {}
+            Err(error) if error.is_numerical() => {}
             Err(error) => return Err(error),
         }
         step /= 2.0;

@@ -103,6 +103,8 @@ pub struct PhaseSeconds {
     pub certification: f64,
     /// Evaluating the rounded candidates at the end.
     pub rounding: f64,
+    /// The guarantee ascent at the end (method.md section 6).
+    pub guarantee: f64,
 }
 
 impl PhaseSeconds {
@@ -112,6 +114,7 @@ impl PhaseSeconds {
         self.best_responses += other.best_responses;
         self.certification += other.certification;
         self.rounding += other.rounding;
+        self.guarantee += other.guarantee;
     }
 }
 

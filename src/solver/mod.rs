@@ -1227,8 +1227,8 @@ impl LinearSolver {
         Ok(previous)
     }
 
-    /// Solves `A^T y = c`, `y` as `x` in [`Self::solve`].
-    #[cfg(test)]
+    /// Solves `A^T y = c`, `y` as `x` in [`Self::solve`] (no error bound:
+    /// for adjoint weights, which are directions, not reported numbers).
     pub fn solve_transpose(
         &mut self,
         c: &[f64],
