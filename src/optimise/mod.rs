@@ -60,7 +60,7 @@ pub(crate) use best_response::{Starts, best_response};
 pub use cancel::Cancel;
 pub use objective::{GmcSize, Objective, Point};
 pub use observer::{IterationRecord, Observer, ObserverError};
-pub(crate) use optimiser::{Certifier, Incumbent, Optimiser, PhaseSeconds, RunOutcome};
+pub(crate) use optimiser::{Certifier, Optimiser, PhaseSeconds, RunOutcome};
 pub use rounding::{TRUNCATION_THRESHOLDS, rounded_candidates, truncated};
 pub use settings::{MAX_LOGIT_BOUND, Settings, UpdateRule};
 pub use softmax::{Softmax, clip};
@@ -73,7 +73,6 @@ pub use warm_start::{WARM_START_MIX, embed, keep_better, pad, score, warm_starte
 use std::sync::{Mutex, PoisonError};
 use std::time::Instant;
 
-use guarantee::Guarantee;
 use play::perturbed;
 use race::{Racer, race};
 use rand::SeedableRng;
@@ -537,7 +536,6 @@ pub fn optimise_structure(
         settings,
         method,
         &mut phases,
-        cancel,
     )?;
     let objective = &run.objective;
     let outcome = &run.outcome;
@@ -706,7 +704,6 @@ fn finalise(
     settings: &Settings,
     method: Method,
     phases: &mut PhaseSeconds,
-    cancel: &Cancel,
 ) -> Result<Chosen, OptimiseError> {
     let best = &run.outcome.best;
     let objective = &run.objective;
@@ -725,23 +722,6 @@ fn finalise(
     };
     let mut chosen_score = best.score();
     let mut worst_case_known = true;
-    if let (Method::MaxMin, Some(c)) = (method, certifier) {
-        let clock = Instant::now();
-        let start = best.defender.clone();
-        let ascended = ascend_guarantee(game, c.not_phi, objective.defender(), &start, &adversary_logits, settings, cancel)?;
-        phases.guarantee += clock.elapsed().as_secs_f64();
-        if ascended.worst_case > chosen_score {
-            eprintln!("guarantee ascent: {} -> {} in {} iterations ({:?}), {:.2} s", chosen_score, ascended.worst_case, ascended.iteration, ascended.certified_lower, clock.elapsed().as_secs_f64());
-            chosen_score = ascended.worst_case;
-            chosen.defender = objective.defender().controller(&ascended.defender)?;
-            chosen.certified_lower = Some(ascended.worst_case);
-            chosen.name = "guarantee ascent".into();
-            chosen.candidates.push(CandidateReport { name: chosen.name.clone(), score: chosen_score });
-            worst_case_known = false;
-        } else {
-            eprintln!("guarantee ascent: no gain from {} ({} s)", chosen_score, clock.elapsed().as_secs_f64());
-        }
-    }
     let clock = Instant::now();
     if settings.round {
         let judge = Judge {
@@ -791,18 +771,11 @@ fn finalise(
                     .map(|_| score);
             }
         }
-    }
-    if !worst_case_known {
-        let judge = Judge {
-            game,
-            dra,
-            adversary: run.objective.adversary().template(),
-            adversary_logits: &adversary_logits,
-            settings,
-        };
-        let (worst_case, adversary) = judge.best_response(&chosen.defender, &mut run.rng)?;
-        chosen.worst_case = worst_case;
-        chosen.adversary = adversary;
+        if !worst_case_known {
+            let (worst_case, adversary) = judge.best_response(&chosen.defender, &mut run.rng)?;
+            chosen.worst_case = worst_case;
+            chosen.adversary = adversary;
+        }
     }
     phases.rounding += clock.elapsed().as_secs_f64();
     if let (Method::Ascent, Some(c)) = (method, certifier) {
@@ -817,47 +790,6 @@ fn finalise(
         phases.certification += clock.elapsed().as_secs_f64();
     }
     Ok(chosen)
-}
-
-/// The guarantee ascent (`guarantee.rs`): L-BFGS on the certified lower
-/// bound from the defender logits `start`; returns its best point, the
-/// bound in `worst_case`.
-fn ascend_guarantee(
-    game: &Posg,
-    not_phi: &Dra,
-    defender: &Softmax,
-    start: &[f64],
-    adversary: &[f64],
-    settings: &Settings,
-    cancel: &Cancel,
-) -> Result<Incumbent, OptimiseError> {
-    let mut guarantee = Guarantee {
-        game,
-        not_phi,
-        defender,
-        solver: settings.solver_settings(),
-    };
-    let outcome = ascend(&mut guarantee, (start, adversary), settings, &mut (), cancel)?;
-    if std::env::var("GT_PROBE").is_ok() {
-        let mut value = outcome.best.worst_case;
-        let mut controller = defender.controller(&outcome.best.defender)?;
-        for round in 0..6 {
-            let mut next: Option<(f64, Fsc, String)> = None;
-            for (name, candidate) in rounded_candidates(&controller)? {
-                let softmax = Softmax::new(&candidate, settings.optimise_initial);
-                let start = softmax.logits_of_template(settings.logit_bound);
-                let mut g = Guarantee { game, not_phi, defender: &softmax, solver: settings.solver_settings() };
-                let t = Instant::now();
-                let o = match ascend(&mut g, (&start, adversary), settings, &mut (), cancel) { Ok(o) => o, Err(e) => { eprintln!("  {name}: {e}"); continue; } };
-                eprintln!("  round {round} {name}: {} after {} its ({:.2} s)", o.best.worst_case, o.iterations, t.elapsed().as_secs_f64());
-                if o.best.worst_case > next.as_ref().map_or(value, |n| n.0) {
-                    next = Some((o.best.worst_case, softmax.controller(&o.best.defender)?, name));
-                }
-            }
-            match next { Some((v, c, name)) => { eprintln!("round {round}: {value} -> {v} by {name}"); value = v; controller = c; } None => break }
-        }
-    }
-    Ok(outcome.best)
 }
 
 /// Evaluates candidate defenders (with their own supports) against the

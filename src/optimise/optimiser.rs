@@ -455,7 +455,7 @@ impl<'a> Optimiser<'a> {
     /// current defender's rounding closes the gap, else
     /// [`Self::stop_or_widen`].
     fn after_check(
-        &self,
+        &mut self,
         check: &Check,
         status: Option<Status>,
         iterate: &mut Iterate,
@@ -468,6 +468,12 @@ impl<'a> Optimiser<'a> {
                 "no best-response check ran".into(),
             ))?
             .score();
+        let stall_judged = window_ends(iterate.iteration)
+            && books.history.len() + 1 >= self.settings.stall_checks;
+        if stall_judged || status.is_some() {
+            self.ascend_guarantee(iterate, books)?;
+        }
+        let score = books.best.as_ref().map_or(score, Incumbent::score);
         books.history.push(score);
         if window_ends(iterate.iteration) {
             books.window_ends.push(score);
@@ -483,8 +489,9 @@ impl<'a> Optimiser<'a> {
 
     /// [`Status::GapClosed`] when the certified gap is at most
     /// `gap_tolerance`; on a stall, the doubled logit bound when some
-    /// defender or adversary logit is within [`NEAR_BOUND`] of it and it is
-    /// below `logit_bound`, else [`Status::Stalled`].
+    /// defender or adversary logit is within [`NEAR_BOUND`] of it, it is
+    /// below `logit_bound` and the run does not ascend the guarantee (whose
+    /// ascent already uses `logit_bound`), else [`Status::Stalled`].
     fn stop_or_widen(&self, books: &mut Bookkeeping, iterate: &mut Iterate) -> Option<Status> {
         let s = &self.settings;
         let incumbent = books.best.as_ref()?;
@@ -498,7 +505,8 @@ impl<'a> Optimiser<'a> {
         }
         let bound = iterate.bound;
         let on_bound = |logits: &[f64]| logits.iter().any(|phi| phi.abs() >= NEAR_BOUND * bound);
-        if bound < s.logit_bound && (on_bound(&iterate.defender) || on_bound(&iterate.adversary)) {
+        let widens = bound < s.logit_bound && !self.ascends_guarantee();
+        if widens && (on_bound(&iterate.defender) || on_bound(&iterate.adversary)) {
             iterate.bound = (2.0 * bound).min(s.logit_bound);
             books.history.clear();
             // The score at the widening is the next window's baseline, so

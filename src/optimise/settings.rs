@@ -36,10 +36,12 @@ pub struct Settings {
     /// (docs/method.md section 3): the support, hence the GMC graph, never changes.
     #[arg(long, default_value_t = Settings::default().logit_bound)]
     pub logit_bound: f64,
-    /// The max-min run's first logit bound `c_0 <= c_max`: the bound doubles
-    /// (up to `logit_bound`) whenever progress stalls while some logit sits
-    /// on it, so determinism is capped only by `c_max` (the single-player
-    /// ascent uses `c_max` from the start).
+    /// The max-min run's first logit bound `c_0 <= c_max`: without the
+    /// guarantee ascent the bound doubles (up to `logit_bound`) whenever
+    /// progress stalls while some logit sits on it, so determinism is
+    /// capped only by `c_max`; the single-player ascent and the guarantee
+    /// ascent use `c_max` from the start, so with the guarantee ascent the
+    /// loop keeps `c_0` and stops on a stall.
     #[arg(long, default_value_t = Settings::default().initial_logit_bound)]
     pub initial_logit_bound: f64,
     /// Initial logits are drawn uniformly from `[-spread, spread]` (0: uniform controllers).
@@ -148,6 +150,14 @@ pub struct Settings {
     /// scores best (the unrounded one included); off: `--no-round`.
     #[arg(long = "no-round", action = clap::ArgAction::SetFalse)]
     pub round: bool,
+    /// On games with a certified lower bound, where each suffix-averaging
+    /// window of the max-min loop ends and when it stops, ascend the
+    /// certified lower bound itself from the best defender (L-BFGS with
+    /// its Danskin gradient, docs/method.md section 6) and keep the
+    /// result when it certifies higher; the stall rule then judges these
+    /// ascended bounds. Off (`--no-guarantee-ascent`): the paper's loop alone.
+    #[arg(long = "no-guarantee-ascent", action = clap::ArgAction::SetFalse)]
+    pub guarantee_ascent: bool,
     /// Largest residual `max |(I - Q) x - b|` accepted from a linear solve.
     #[arg(skip = Settings::default().solver_tolerance)]
     pub solver_tolerance: f64,
@@ -208,6 +218,7 @@ impl Default for Settings {
             gap_tolerance: 1e-4,
             single_player_ascent: true,
             round: true,
+            guarantee_ascent: true,
             solver_tolerance: crate::solver::DEFAULT_TOLERANCE,
             solver: SolverMethod::Auto,
             lu_limit: DEFAULT_LU_LIMIT,

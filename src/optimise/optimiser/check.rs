@@ -33,7 +33,9 @@
 
 use std::time::Instant;
 
+use super::super::ascent::ascend;
 use super::super::best_response::{BestResponse, Starts, best_response};
+use super::super::guarantee::Guarantee;
 use super::super::play::{Iterate, PlayState};
 use super::super::rounding::truncated;
 use super::{Bookkeeping, Incumbent, OptimiseError, Optimiser, PhaseSeconds};
@@ -95,6 +97,65 @@ impl Optimiser<'_> {
             }
         }
         current.ok_or(OptimiseError::BestResponse("no candidate checked".into()))
+    }
+
+    /// Whether the run ascends the certified lower bound at its stall
+    /// judgements ([`Self::ascend_guarantee`]): with a certifier and
+    /// `guarantee_ascent` on.
+    pub(super) fn ascends_guarantee(&self) -> bool {
+        self.certifier.is_some() && self.settings.guarantee_ascent
+    }
+
+    /// The guarantee ascent (method.md section 6, `guarantee.rs`), where a
+    /// suffix-averaging window ends and when the run stops: L-BFGS on the
+    /// certified lower bound itself from the incumbent defender. A higher
+    /// bound replaces the incumbent (its worst-case estimate: its value
+    /// against the current adversary, until [`Self::settle`]), so the
+    /// stall rule judges what the run would return if it stopped here. A
+    /// start whose product cannot be solved to the tolerance is left as it
+    /// is. Does nothing without a certifier or with `guarantee_ascent` off.
+    pub(super) fn ascend_guarantee(
+        &mut self,
+        iterate: &Iterate,
+        books: &mut Bookkeeping,
+    ) -> Result<(), OptimiseError> {
+        let (Some(certifier), Some(best)) = (self.certifier, books.best.as_ref()) else {
+            return Ok(());
+        };
+        if !self.ascends_guarantee() {
+            return Ok(());
+        }
+        let clock = Instant::now();
+        let mut guarantee = Guarantee {
+            game: certifier.game,
+            not_phi: certifier.not_phi,
+            defender: self.objective.defender(),
+            solver: self.settings.solver_settings(),
+        };
+        let start = (best.defender.as_slice(), best.adversary.as_slice());
+        let ascended = ascend(&mut guarantee, start, &self.settings, &mut (), &self.cancel);
+        books.phases.guarantee += clock.elapsed().as_secs_f64();
+        let polished = match ascended {
+            Ok(outcome) => outcome.best,
+            Err(error) if error.is_numerical() => return Ok(()),
+            Err(error) => return Err(error),
+        };
+        if polished.worst_case <= best.score() {
+            return Ok(());
+        }
+        let clock = Instant::now();
+        let worst_case = self
+            .objective
+            .value(&polished.defender, &iterate.adversary)?;
+        books.phases.optimisation += clock.elapsed().as_secs_f64();
+        books.best = Some(Incumbent {
+            defender: polished.defender,
+            adversary: iterate.adversary.clone(),
+            worst_case,
+            certified_lower: Some(polished.worst_case),
+            iteration: iterate.iteration,
+        });
+        Ok(())
     }
 
     /// The incumbent's full best response, once the run has stopped: from
