@@ -69,6 +69,7 @@ const HEADINGS: &[(&str, &[&str])] = &[
             "restarts",
             "best_response_iterations",
             "lbfgs_memory",
+            "guarantee_ascent",
         ],
     ),
     (

@@ -43,3 +43,62 @@ impl DefenderObjective for Guarantee<'_> {
         })
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::certify::lower_bound;
+    use crate::controller::{Fsc, Role};
+    use crate::game::grid::GridSpec;
+    use crate::optimise::Cancel;
+    use crate::optimise::Settings;
+    use crate::optimise::ascent::ascend;
+    use crate::pipeline::Automata;
+
+    /// From the uniform 2-node defender on a 6x6 grid the ascent climbs the
+    /// certified lower bound well above its start, and what it returns is
+    /// what `certify::lower_bound` certifies for the returned controller.
+    #[test]
+    fn the_ascent_raises_the_bound_it_reports_and_certify_agrees() {
+        let game = GridSpec {
+            width: 6,
+            height: 6,
+            unsafe_cells: vec![8, 15, 20],
+            goal_cells: vec![35],
+            ..GridSpec::default()
+        }
+        .build()
+        .unwrap();
+        let automata = Automata::from_ltl("!unsafe U goal").unwrap();
+        let not_phi = automata.not_phi.unwrap();
+        let template = Fsc::uniform_enabled(Role::Defender, 2, game.defender());
+        let softmax = Softmax::new(&template, false);
+        let settings = Settings::default();
+        let start = softmax.logits_of_template(settings.logit_bound);
+        let before = lower_bound(&game, &not_phi, &template).unwrap().value;
+        let mut guarantee = Guarantee {
+            game: &game,
+            not_phi: &not_phi,
+            defender: &softmax,
+            solver: settings.solver_settings(),
+        };
+        let adversary = [0.0];
+        let outcome = ascend(
+            &mut guarantee,
+            (&start, &adversary),
+            &settings,
+            &mut (),
+            &Cancel::new(),
+        )
+        .unwrap();
+        let reached = outcome.best.worst_case;
+        assert!(reached > before + 0.1, "{before} -> {reached}");
+        let controller = softmax.controller(&outcome.best.defender).unwrap();
+        let certified = lower_bound(&game, &not_phi, &controller).unwrap();
+        assert!(
+            (certified.value - reached).abs() <= 2.0 * certified.error_bound + 1e-15,
+            "ascent {reached}, certify {}",
+            certified.value
+        );
+    }
+}

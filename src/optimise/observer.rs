@@ -30,7 +30,9 @@ pub struct IterationRecord {
     /// The best-response value of `phi_def(t)`, when a check ran at `t`.
     pub worst_case: Option<f64>,
     /// When a check ran and an automaton for !phi was given: the certified
-    /// lower bound of `phi_def(t)` against every adversary (method.md section 6).
+    /// lower bound of `phi_def(t)` against every adversary (method.md section
+    /// 6); at a check where the guarantee ascent raised the best defender,
+    /// the ascended defender's bound instead.
     pub certified_lower: Option<f64>,
     /// With `certified_lower`: the smallest game upper bound over the best
     /// responses found so far (no defender of any size does better).

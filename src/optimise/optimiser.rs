@@ -411,8 +411,8 @@ impl<'a> Optimiser<'a> {
         let mut status = self.budget_spent(state.iterate.iteration, seconds);
         let check = if self.check_due(state.iterate.iteration, status) {
             let deep = books.checks % self.settings.best_response_every == 0;
-            let check = self.check(state, books, deep)?;
-            status = self.after_check(&check, status, &mut state.iterate, books)?;
+            let mut check = self.check(state, books, deep)?;
+            status = self.after_check(&mut check, status, &mut state.iterate, books)?;
             Some(check)
         } else {
             None
@@ -456,7 +456,7 @@ impl<'a> Optimiser<'a> {
     /// [`Self::stop_or_widen`].
     fn after_check(
         &mut self,
-        check: &Check,
+        check: &mut Check,
         status: Option<Status>,
         iterate: &mut Iterate,
         books: &mut Bookkeeping,
@@ -471,7 +471,9 @@ impl<'a> Optimiser<'a> {
         let stall_judged = window_ends(iterate.iteration)
             && books.history.len() + 1 >= self.settings.stall_checks;
         if stall_judged || status.is_some() {
-            self.ascend_guarantee(iterate, books)?;
+            if let Some(ascended) = self.ascend_guarantee(iterate, books)? {
+                check.certified_lower = Some(ascended);
+            }
         }
         let score = books.best.as_ref().map_or(score, Incumbent::score);
         books.history.push(score);

@@ -150,12 +150,13 @@ pub struct Settings {
     /// scores best (the unrounded one included); off: `--no-round`.
     #[arg(long = "no-round", action = clap::ArgAction::SetFalse)]
     pub round: bool,
-    /// On games with a certified lower bound, where each suffix-averaging
-    /// window of the max-min loop ends and when it stops, ascend the
-    /// certified lower bound itself from the best defender (L-BFGS with
-    /// its Danskin gradient, docs/method.md section 6) and keep the
-    /// result when it certifies higher; the stall rule then judges these
-    /// ascended bounds. Off (`--no-guarantee-ascent`): the paper's loop alone.
+    /// On games with a certified lower bound, wherever the max-min loop's
+    /// stall rule is judged (see `stall_checks`) and when the loop stops,
+    /// ascend the certified lower bound itself from the best defender
+    /// (L-BFGS with its Danskin gradient, docs/method.md section 6) and
+    /// keep the result when it certifies higher; the stall rule then judges
+    /// these ascended bounds. Off (`--no-guarantee-ascent`): the paper's
+    /// loop alone.
     #[arg(long = "no-guarantee-ascent", action = clap::ArgAction::SetFalse)]
     pub guarantee_ascent: bool,
     /// Largest residual `max |(I - Q) x - b|` accepted from a linear solve.

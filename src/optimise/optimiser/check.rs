@@ -46,7 +46,8 @@ pub(super) struct Check {
     /// The best-response value of the current defender (deep checks only).
     pub worst_case: Option<f64>,
     /// The current defender's certified lower bound (with a certifier,
-    /// unless its value showed it cannot beat the incumbent).
+    /// unless its value showed it cannot beat the incumbent); the ascended
+    /// bound where the guarantee ascent then raised the incumbent.
     pub certified_lower: Option<f64>,
     /// The argmax rounding of the current defender certifies within
     /// `gap_tolerance` of the upper bound (it is then the incumbent, and
@@ -114,16 +115,17 @@ impl Optimiser<'_> {
     /// stall rule judges what the run would return if it stopped here. A
     /// start whose product cannot be solved to the tolerance is left as it
     /// is. Does nothing without a certifier or with `guarantee_ascent` off.
+    /// Returns the new incumbent's bound when it replaced the incumbent.
     pub(super) fn ascend_guarantee(
         &mut self,
         iterate: &Iterate,
         books: &mut Bookkeeping,
-    ) -> Result<(), OptimiseError> {
+    ) -> Result<Option<f64>, OptimiseError> {
         let (Some(certifier), Some(best)) = (self.certifier, books.best.as_ref()) else {
-            return Ok(());
+            return Ok(None);
         };
         if !self.ascends_guarantee() {
-            return Ok(());
+            return Ok(None);
         }
         let clock = Instant::now();
         let mut guarantee = Guarantee {
@@ -137,11 +139,11 @@ impl Optimiser<'_> {
         books.phases.guarantee += clock.elapsed().as_secs_f64();
         let polished = match ascended {
             Ok(outcome) => outcome.best,
-            Err(error) if error.is_numerical() => return Ok(()),
+            Err(error) if error.is_numerical() => return Ok(None),
             Err(error) => return Err(error),
         };
         if polished.worst_case <= best.score() {
-            return Ok(());
+            return Ok(None);
         }
         let clock = Instant::now();
         let worst_case = self
@@ -155,7 +157,7 @@ impl Optimiser<'_> {
             certified_lower: Some(polished.worst_case),
             iteration: iterate.iteration,
         });
-        Ok(())
+        Ok(Some(polished.worst_case))
     }
 
     /// The incumbent's full best response, once the run has stopped: from
