@@ -518,8 +518,7 @@ fn lower_bound_gradient_matches_finite_differences(
             .value
     };
     let defender = softmax.controller(&logits).unwrap();
-    let found =
-        lower_bound_gradient(game, not_phi, &defender, &SolverSettings::default()).unwrap();
+    let found = lower_bound_gradient(game, not_phi, &defender, &SolverSettings::default()).unwrap();
     let (ahead, here, behind) = (bound_at(1e-5), bound_at(0.0), bound_at(-1e-5));
     assert!((found.value - here).abs() < 1e-12, "seed {seed}");
     let mu = softmax.probabilities(&logits);
@@ -555,12 +554,19 @@ fn the_lower_bounds_gradient_matches_finite_differences_of_the_bound() {
         for seed in 0..24u64 {
             let (_, not_phi) = automata(FORMULAS[seed as usize % FORMULAS.len()]);
             let nodes = 1 + seed as usize % 2;
-            let template =
-                common::random::controller_with_nodes(seed + 100 * i as u64, &game, Role::Defender, nodes);
+            let template = common::random::controller_with_nodes(
+                seed + 100 * i as u64,
+                &game,
+                Role::Defender,
+                nodes,
+            );
             checked += usize::from(lower_bound_gradient_matches_finite_differences(
                 &game, &not_phi, &template, seed,
             ));
         }
     }
-    assert!(checked >= 10, "only {checked} smooth points with a nonzero slope");
+    assert!(
+        checked >= 10,
+        "only {checked} smooth points with a nonzero slope"
+    );
 }

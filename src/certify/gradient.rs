@@ -23,13 +23,16 @@
 //! supports) contribute nothing: their values do not move while the
 //! supports stay fixed.
 
-use std::collections::HashMap;
+use rustc_hash::FxHashMap;
 
-use super::{Analysis, CertifyError, analyse};
+use super::{CertifyError, Product};
 use crate::automaton::Dra;
 use crate::controller::{Fsc, Role, Support};
 use crate::game::{AdversaryAction, DefenderAction, Posg};
-use crate::mdp::expected_visits;
+use crate::mdp::{
+    Mdp, QualitativeReachability, Reachability, accepting_end_components, accepting_union,
+    expected_visits, max_reachability_from, qualitative_reachability,
+};
 use crate::solver::SolverSettings;
 
 /// The certified lower bound of a defender's controller and its gradient.
@@ -55,10 +58,115 @@ pub fn lower_bound_gradient(
     defender: &Fsc,
     settings: &SolverSettings,
 ) -> Result<LowerBoundGradient, CertifyError> {
-    let analysis = analyse(game, dra_not_phi, defender, Role::Defender, settings)?;
-    let x = &analysis.result.values;
-    let y = expected_visits(&analysis.mdp, &analysis.result, &analysis.initial, settings)?;
-    let index: HashMap<(usize, usize, usize), usize> = analysis
+    LowerBoundGradients::new(game, dra_not_phi, *settings).at(defender)
+}
+
+/// [`lower_bound_gradient`] for many controllers, usually of one support:
+/// where the product MDP has the graph of the previous one
+/// ([`Mdp::same_graph`]), its graph analysis (accepting end components,
+/// qualitative reachability) is reused and policy iteration starts from the
+/// previous optimal strategy, which is proper on that graph.
+pub struct LowerBoundGradients<'a> {
+    game: &'a Posg,
+    dra_not_phi: &'a Dra,
+    settings: SolverSettings,
+    last: Option<LastAnalysis>,
+}
+
+/// The graph analysis of the last product and its optimal strategy.
+struct LastAnalysis {
+    mdp: Mdp,
+    qualitative: QualitativeReachability,
+    strategy: Vec<usize>,
+}
+
+impl<'a> LowerBoundGradients<'a> {
+    /// No analysis yet; policy evaluations solved by `settings`.
+    pub fn new(game: &'a Posg, dra_not_phi: &'a Dra, settings: SolverSettings) -> Self {
+        Self {
+            game,
+            dra_not_phi,
+            settings,
+            last: None,
+        }
+    }
+
+    /// The lower bound of `defender` and its gradient.
+    pub fn at(&mut self, defender: &Fsc) -> Result<LowerBoundGradient, CertifyError> {
+        let (product, result) = self.analyse(defender)?;
+        let y = expected_visits(&product.mdp, &result, &product.initial, &self.settings)?;
+        gradient(self.game, self.dra_not_phi, defender, &product, &result, &y)
+    }
+
+    /// The lower bound of `defender` alone, or the trivial bound 0 where
+    /// the product mixes too slowly to be solved to the tolerance (as
+    /// [`super::lower_value_or_trivial`]).
+    pub fn value_or_trivial(&mut self, defender: &Fsc) -> Result<f64, CertifyError> {
+        match self.analyse(defender) {
+            Ok((product, result)) => Ok(lower_value(&product, &result)),
+            Err(error) if error.is_slow_mixing() => Ok(0.0),
+            Err(error) => Err(error),
+        }
+    }
+
+    /// The product of `defender` and its optimal values and strategy for
+    /// `!phi`, reusing the last graph analysis where the graph is the same.
+    fn analyse(&mut self, defender: &Fsc) -> Result<(Product, Reachability), CertifyError> {
+        let (game, dra) = (self.game, self.dra_not_phi);
+        let product = Product::build(game, dra, defender, Role::Defender)?;
+        let last = match self.last.take() {
+            Some(last) if last.mdp.same_graph(&product.mdp) => last,
+            _ => {
+                let pairs = product.lift(dra.pairs());
+                let accepting = accepting_end_components(&product.mdp, &pairs)?;
+                let target = accepting_union(&product.mdp, &accepting);
+                let qualitative = qualitative_reachability(&product.mdp, &target)?;
+                LastAnalysis {
+                    mdp: product.mdp.clone(),
+                    strategy: qualitative.strategy.clone(),
+                    qualitative,
+                }
+            }
+        };
+        let result = max_reachability_from(
+            &product.mdp,
+            &last.qualitative,
+            &last.strategy,
+            &self.settings,
+        );
+        self.last = Some(match &result {
+            Ok(result) => LastAnalysis {
+                strategy: result.strategy.clone(),
+                ..last
+            },
+            Err(_) => last,
+        });
+        Ok((product, result?))
+    }
+}
+
+/// `L = 1 - sum p0 x`, `x` the optimal values of `!phi` on `product`.
+fn lower_value(product: &Product, result: &Reachability) -> f64 {
+    let not_phi: f64 = product
+        .initial
+        .iter()
+        .map(|&(m, p)| p * result.values[m])
+        .sum();
+    (1.0 - not_phi).clamp(0.0, 1.0)
+}
+
+/// The lower bound and its gradient from the optimal values and strategy
+/// `result` on `product` and the expected visits `y` (module documentation).
+fn gradient(
+    game: &Posg,
+    dra_not_phi: &Dra,
+    defender: &Fsc,
+    product: &Product,
+    result: &Reachability,
+    y: &[f64],
+) -> Result<LowerBoundGradient, CertifyError> {
+    let x = &result.values;
+    let index: FxHashMap<(usize, usize, usize), usize> = product
         .states
         .iter()
         .enumerate()
@@ -68,11 +176,11 @@ pub fn lower_bound_gradient(
     let letters = dra_not_phi.state_letters(game);
     let support = Support::of(defender);
     let mut entries = vec![0.0; support.num_entries()];
-    for (m, &(s, q, g)) in analysis.states.iter().enumerate() {
+    for (m, &(s, q, g)) in product.states.iter().enumerate() {
         if y[m] == 0.0 {
             continue;
         }
-        let w = adversary_action(&analysis, m, s);
+        let w = product.free_actions[s][result.strategy[m]];
         for &(o, p_o) in game.defender().observation_distribution(s) {
             for k in support.block(g, o) {
                 let (next, u) = support.entry(k);
@@ -92,18 +200,11 @@ pub fn lower_bound_gradient(
             *d -= p * value_at((s, q, g));
         }
     }
-    let not_phi: f64 = analysis.initial.iter().map(|&(m, p)| p * x[m]).sum();
-    let rounding = 2.0 * analysis.initial.len() as f64 * f64::EPSILON;
+    let rounding = 2.0 * product.initial.len() as f64 * f64::EPSILON;
     Ok(LowerBoundGradient {
-        value: (1.0 - not_phi).clamp(0.0, 1.0),
-        error_bound: analysis.result.error_bound + rounding,
+        value: lower_value(product, result),
+        error_bound: result.error_bound + rounding,
         entries,
         initial,
     })
-}
-
-/// The adversary's action in product state `m` (game state `s`) under the
-/// optimal strategy of `analysis`.
-fn adversary_action(analysis: &Analysis, m: usize, s: usize) -> usize {
-    analysis.free_actions[s][analysis.result.strategy[m]]
 }

@@ -24,8 +24,14 @@ pub mod rabin;
 pub mod reachability;
 
 pub use end_components::{EndComponent, maximal_end_components};
-pub use rabin::{AcceptingComponent, max_rabin_analysis, max_rabin_qualitative};
-pub use reachability::{QualitativeReachability, Reachability, expected_visits, max_reachability};
+pub use rabin::{
+    AcceptingComponent, accepting_end_components, accepting_union, max_rabin_analysis,
+    max_rabin_qualitative,
+};
+pub use reachability::{
+    QualitativeReachability, Reachability, expected_visits, max_reachability,
+    max_reachability_from, qualitative_reachability,
+};
 
 use thiserror::Error;
 
@@ -80,6 +86,19 @@ impl Mdp {
     /// positive probabilities.
     pub fn distribution(&self, s: usize, a: usize) -> &[(usize, f64)] {
         self.global_distribution(self.action_offsets[s] + a)
+    }
+
+    /// Whether `other` has the same states, actions and successors (its
+    /// probabilities aside): then every graph analysis of one (end
+    /// components, qualitative reachability) holds for the other.
+    pub fn same_graph(&self, other: &Mdp) -> bool {
+        self.action_offsets == other.action_offsets
+            && self.entry_offsets == other.entry_offsets
+            && self
+                .entries
+                .iter()
+                .zip(&other.entries)
+                .all(|(a, b)| a.0 == b.0)
     }
 
     fn global_distribution(&self, action: usize) -> &[(usize, f64)] {

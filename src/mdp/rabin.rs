@@ -98,7 +98,7 @@ pub fn max_rabin_qualitative(
 }
 
 /// Whether each state lies in an accepting end component.
-fn accepting_union(mdp: &Mdp, accepting: &[AcceptingComponent]) -> Vec<bool> {
+pub fn accepting_union(mdp: &Mdp, accepting: &[AcceptingComponent]) -> Vec<bool> {
     let mut target = vec![false; mdp.num_states()];
     for c in accepting {
         for &s in &c.component.states {

@@ -104,13 +104,37 @@ pub fn max_reachability(
     target: &[bool],
     settings: &SolverSettings,
 ) -> Result<Reachability, MdpError> {
+    let qualitative = qualitative_reachability(mdp, target)?;
+    max_reachability_from(mdp, &qualitative, &qualitative.strategy, settings)
+}
+
+/// [`max_reachability`] with its qualitative step (steps 1 and 2) given,
+/// computed for an MDP with the same graph ([`Mdp::same_graph`]: it
+/// depends on nothing else), and policy iteration started from `start` on
+/// the maybe states: the qualitative strategy, or the strategy of an
+/// earlier result on the same graph. Either is proper (every maybe state
+/// reaches the target with positive probability under it, a property of
+/// the graph), so every evaluation stays nonsingular.
+pub fn max_reachability_from(
+    mdp: &Mdp,
+    qualitative: &QualitativeReachability,
+    start: &[usize],
+    settings: &SolverSettings,
+) -> Result<Reachability, MdpError> {
     let n = mdp.num_states();
-    let QualitativeReachability {
-        possible: positive,
-        almost_sure,
-        mut strategy,
-    } = qualitative_reachability(mdp, target)?;
+    if qualitative.possible.len() != n || start.len() != n {
+        return Err(MdpError::Malformed(format!(
+            "a qualitative analysis or start strategy of {} states for {n}",
+            qualitative.possible.len()
+        )));
+    }
+    let positive = qualitative.possible.clone();
+    let almost_sure = qualitative.almost_sure.clone();
     let maybe: Vec<usize> = (0..n).filter(|&s| positive[s] && !almost_sure[s]).collect();
+    let mut strategy = qualitative.strategy.clone();
+    for &s in &maybe {
+        strategy[s] = start[s];
+    }
     let mut previous: Vec<f64> = almost_sure.iter().map(|&t| f64::from(t)).collect();
     let mut proof = Proof::Trial;
     for iterations in 1..=MAX_ITERATIONS {
@@ -290,7 +314,8 @@ fn evaluate(
         };
         return Ok((values, exact));
     }
-    let (mut solver, rhs) = PolicySystem::build(mdp, target, maybe, strategy).factorised(settings)?;
+    let (mut solver, rhs) =
+        PolicySystem::build(mdp, target, maybe, strategy).factorised(settings)?;
     let mut solution: Vec<f64> = maybe.iter().map(|&s| start[s]).collect();
     let report = match proof {
         Proof::Trial => solver.solve_trial(&rhs, &mut solution)?,

@@ -14,31 +14,43 @@ use super::OptimiseError;
 use super::ascent::{DefenderObjective, DefenderPoint};
 use super::softmax::Softmax;
 use crate::automaton::Dra;
-use crate::certify::gradient::lower_bound_gradient;
+use crate::certify::gradient::LowerBoundGradients;
 use crate::game::Posg;
 use crate::solver::SolverSettings;
 
 /// `L(phi_def)`: the certified lower bound of the defender with logits
 /// `phi_def` on the softmax map's support.
 pub(super) struct Guarantee<'a> {
-    /// The game.
-    pub game: &'a Posg,
-    /// An automaton for `!phi`.
-    pub not_phi: &'a Dra,
-    /// The defender's softmax map.
-    pub defender: &'a Softmax,
-    /// The solver of the policy evaluations.
-    pub solver: SolverSettings,
+    bounds: LowerBoundGradients<'a>,
+    defender: &'a Softmax,
+}
+
+impl<'a> Guarantee<'a> {
+    /// The bound on `defender`'s support in `game`, `not_phi` an automaton
+    /// for `!phi`, its policy evaluations solved by `solver`.
+    pub fn new(
+        game: &'a Posg,
+        not_phi: &'a Dra,
+        defender: &'a Softmax,
+        solver: SolverSettings,
+    ) -> Self {
+        Self {
+            bounds: LowerBoundGradients::new(game, not_phi, solver),
+            defender,
+        }
+    }
 }
 
 impl DefenderObjective for Guarantee<'_> {
     fn point(&mut self, logits: &[f64]) -> Result<DefenderPoint, OptimiseError> {
         let controller = self.defender.controller(logits)?;
-        let found = lower_bound_gradient(self.game, self.not_phi, &controller, &self.solver)?;
+        let found = self.bounds.at(&controller)?;
         let mu = self.defender.probabilities(logits);
         Ok(DefenderPoint {
             value: found.value,
-            gradient: self.defender.chain_rule(&mu, &found.entries, &found.initial),
+            gradient: self
+                .defender
+                .chain_rule(&mu, &found.entries, &found.initial),
             residual: 0.0,
         })
     }
@@ -76,12 +88,7 @@ mod tests {
         let settings = Settings::default();
         let start = softmax.logits_of_template(settings.logit_bound);
         let before = lower_bound(&game, &not_phi, &template).unwrap().value;
-        let mut guarantee = Guarantee {
-            game: &game,
-            not_phi: &not_phi,
-            defender: &softmax,
-            solver: settings.solver_settings(),
-        };
+        let mut guarantee = Guarantee::new(&game, &not_phi, &softmax, settings.solver_settings());
         let adversary = [0.0];
         let outcome = ascend(
             &mut guarantee,

@@ -51,6 +51,7 @@ use super::observer::{IterationRecord, Observer};
 use super::play::{GradientPlay, Iterate, PlayState, perturbed};
 use super::{Cancel, OptimiseError, Settings, Status};
 use crate::automaton::Dra;
+use crate::certify::gradient::LowerBoundGradients;
 use crate::controller::Fsc;
 use crate::game::Posg;
 use check::{Check, SuffixAverage};
@@ -61,6 +62,9 @@ use check::{Check, SuffixAverage};
 pub struct Optimiser<'a> {
     objective: Objective,
     certifier: Option<Certifier<'a>>,
+    /// The certifier's lower bounds of the structure's defenders, one
+    /// support, so one graph analysis for the whole run.
+    lower_bounds: Option<LowerBoundGradients<'a>>,
     cancel: Cancel,
     settings: Settings,
     rng: ChaCha8Rng,
@@ -265,6 +269,7 @@ impl<'a> Optimiser<'a> {
         Self {
             objective,
             certifier: None,
+            lower_bounds: None,
             cancel: Cancel::new(),
             settings: settings.clone(),
             rng,
@@ -278,6 +283,11 @@ impl<'a> Optimiser<'a> {
     /// certified gap.
     pub fn with_certifier(mut self, certifier: Certifier<'a>) -> Self {
         self.certifier = Some(certifier);
+        self.lower_bounds = Some(LowerBoundGradients::new(
+            certifier.game,
+            certifier.not_phi,
+            self.settings.solver_settings(),
+        ));
         self
     }
 
@@ -468,8 +478,8 @@ impl<'a> Optimiser<'a> {
                 "no best-response check ran".into(),
             ))?
             .score();
-        let stall_judged = window_ends(iterate.iteration)
-            && books.history.len() + 1 >= self.settings.stall_checks;
+        let stall_judged =
+            window_ends(iterate.iteration) && books.history.len() + 1 >= self.settings.stall_checks;
         if stall_judged || status.is_some() {
             if let Some(ascended) = self.ascend_guarantee(iterate, books)? {
                 check.certified_lower = Some(ascended);

@@ -128,12 +128,12 @@ impl Optimiser<'_> {
             return Ok(None);
         }
         let clock = Instant::now();
-        let mut guarantee = Guarantee {
-            game: certifier.game,
-            not_phi: certifier.not_phi,
-            defender: self.objective.defender(),
-            solver: self.settings.solver_settings(),
-        };
+        let mut guarantee = Guarantee::new(
+            certifier.game,
+            certifier.not_phi,
+            self.objective.defender(),
+            self.settings.solver_settings(),
+        );
         let start = (best.defender.as_slice(), best.adversary.as_slice());
         let ascended = ascend(&mut guarantee, start, &self.settings, &mut (), &self.cancel);
         books.phases.guarantee += clock.elapsed().as_secs_f64();
@@ -291,14 +291,10 @@ impl Optimiser<'_> {
             });
         }
         let clock = Instant::now();
-        let certified_lower = match self.certifier {
-            Some(certifier) => {
+        let certified_lower = match self.lower_bounds.as_mut() {
+            Some(bounds) => {
                 let defender = self.objective.defender().controller(&candidate)?;
-                Some(lower_value_or_trivial(
-                    certifier.game,
-                    certifier.not_phi,
-                    &defender,
-                )?)
+                Some(bounds.value_or_trivial(&defender)?)
             }
             None => None,
         };
