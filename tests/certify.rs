@@ -570,3 +570,45 @@ fn the_lower_bounds_gradient_matches_finite_differences_of_the_bound() {
         "only {checked} smooth points with a nonzero slope"
     );
 }
+
+/// One `LowerBoundGradients` evaluating many controllers of one support
+/// (reusing its graph analysis and warm-starting policy iteration from the
+/// last strategy) certifies what a fresh `lower_bound` certifies for each.
+#[test]
+fn lower_bounds_of_one_support_reuse_the_analysis_and_agree_with_fresh_ones() {
+    use posg_fsc::certify::gradient::LowerBoundGradients;
+    use posg_fsc::game::grid::GridSpec;
+    use posg_fsc::optimise::Softmax;
+    use posg_fsc::value::SolverSettings;
+    let game = GridSpec::square(4).build().unwrap();
+    let mut between = 0;
+    for (i, formula) in FORMULAS.iter().enumerate() {
+        let (_, not_phi) = automata(formula);
+        let template = common::random::controller_with_nodes(i as u64, &game, Role::Defender, 2);
+        let softmax = Softmax::new(&template, false);
+        let mut bounds = LowerBoundGradients::new(&game, &not_phi, SolverSettings::default());
+        let mut rng = ChaCha8Rng::seed_from_u64(i as u64);
+        for _ in 0..6 {
+            let logits: Vec<f64> = (0..softmax.num_parameters())
+                .map(|_| rng.random_range(-3.0..3.0))
+                .collect();
+            let defender = softmax.controller(&logits).unwrap();
+            let fresh = lower_bound(&game, &not_phi, &defender).unwrap();
+            let reused = bounds.at(&defender).unwrap();
+            let slack = fresh.error_bound + reused.error_bound + 1e-15;
+            assert!(
+                (fresh.value - reused.value).abs() <= slack,
+                "{formula}: fresh {} reused {}",
+                fresh.value,
+                reused.value
+            );
+            let value = bounds.value_or_trivial(&defender).unwrap();
+            assert!((fresh.value - value).abs() <= slack, "{formula}");
+            between += usize::from(fresh.value > 1e-9 && fresh.value < 1.0 - 1e-9);
+        }
+    }
+    assert!(
+        between >= 6,
+        "only {between} bounds strictly between 0 and 1"
+    );
+}
