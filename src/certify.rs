@@ -331,6 +331,22 @@ pub fn upper_bound_within(
     best_response(game, dra_phi, adversary, Role::Adversary, settings)
 }
 
+/// Whether a defender that sees the state and remembers everything can
+/// win `phi` almost surely against `adversary`: the qualitative part of
+/// [`upper_bound`], decided on the graph alone. When it cannot, no defender
+/// controller wins almost surely against every adversary.
+pub(crate) fn almost_sure_win_possible(
+    game: &Posg,
+    dra_phi: &Dra,
+    adversary: &Fsc,
+) -> Result<bool, CertifyError> {
+    let analysis = analyse_qualitative(game, dra_phi, adversary, Role::Adversary)?;
+    Ok(analysis
+        .initial
+        .iter()
+        .all(|&(m, _)| analysis.result.almost_sure[m]))
+}
+
 /// The free player's maximum probability of the automaton's language, with
 /// the player `fixed` playing `controller`.
 fn best_response(

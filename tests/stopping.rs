@@ -177,3 +177,33 @@ fn outpaced_starts_stop_early_and_the_race_is_reproducible() {
     }
     assert_ne!(*kept_status, Status::Outpaced);
 }
+
+/// The SAT source asks for an almost-surely winning support only where one
+/// can exist: on the paper's grid (value 0.699784 < 1 even for a defender
+/// that sees the state) the question is skipped, so the source returns at
+/// once; on the cue game, which 2 nodes win surely, it is asked and found.
+#[test]
+fn almost_sure_synthesis_is_asked_only_where_a_defender_could_win_surely() {
+    use posg_fsc::optimise::StructureSource;
+    let sat_note = |outcome: &pipeline::Outcome| {
+        outcome
+            .sources
+            .iter()
+            .find(|note| note.source == StructureSource::Sat)
+            .map(|note| (note.note.clone(), note.seconds))
+            .unwrap()
+    };
+    let paper = solve(&GridSpec::default().build().unwrap(), "!unsafe U goal", 1);
+    let (note, seconds) = sat_note(&paper);
+    assert!(note.starts_with("almost-sure synthesis skipped"), "{note}");
+    assert!(
+        seconds < Settings::default().synthesis.time_budget / 10.0,
+        "{seconds} s: {note}"
+    );
+    let cue = solve(&game(REMEMBER_THE_CUE), "F goal", 2);
+    let (note, _) = sat_note(&cue);
+    assert!(
+        note.contains("wins almost surely against every adversary"),
+        "{note}"
+    );
+}

@@ -22,6 +22,7 @@ use serde::{Deserialize, Serialize};
 
 use super::{OptimiseError, Settings, Structure, StructureOutcome};
 use crate::automaton::Dra;
+use crate::certify::almost_sure_win_possible;
 use crate::controller::{Fsc, Support};
 use crate::game::Posg;
 use crate::prune::{PruneSettings, prune};
@@ -160,7 +161,10 @@ pub const POSITIVE_BUDGET_SHARE: f64 = 0.25;
 
 /// The SAT source: almost-sure winning if possible (within
 /// [`ALMOST_SURE_BUDGET_SHARE`] of the time budget), else positive (within
-/// [`POSITIVE_BUDGET_SHARE`]).
+/// [`POSITIVE_BUDGET_SHARE`]). The almost-sure question is not asked when
+/// even a defender that sees the state cannot win almost surely against
+/// the structure's starting adversary ([`almost_sure_win_possible`]): no
+/// support can then win almost surely against every adversary.
 fn synthesised(
     game: &Posg,
     dra: &Dra,
@@ -178,7 +182,16 @@ fn synthesised(
     };
     let nodes = start.defender.num_nodes();
     let mut reasons = Vec::new();
-    for mode in [Mode::AlmostSure, Mode::Positive] {
+    let mut modes = vec![Mode::AlmostSure, Mode::Positive];
+    if !almost_sure_win_possible(game, dra, &start.adversary)? {
+        modes.remove(0);
+        reasons.push(
+            "almost-sure synthesis skipped: against the starting adversary even a defender that \
+             sees the state wins with probability below 1 (decided on the graph)"
+                .to_string(),
+        );
+    }
+    for mode in modes {
         let share = match mode {
             Mode::AlmostSure => ALMOST_SURE_BUDGET_SHARE,
             Mode::Positive => POSITIVE_BUDGET_SHARE,
