@@ -772,9 +772,17 @@ fn finalise(
             }
         }
         if !worst_case_known {
-            let (worst_case, adversary) = judge.best_response(&chosen.defender, &mut run.rng)?;
-            chosen.worst_case = worst_case;
-            chosen.adversary = adversary;
+            match judge.best_response(&chosen.defender, &mut run.rng) {
+                Ok((worst_case, adversary)) => {
+                    chosen.worst_case = worst_case;
+                    chosen.adversary = adversary;
+                }
+                // The rounded defender's GMC is too stiff for a best
+                // response: its certified lower bound is the estimate (the
+                // worst case is at least that).
+                Err(error) if error.is_numerical() => chosen.worst_case = chosen_score,
+                Err(error) => return Err(error),
+            }
         }
     }
     phases.rounding += clock.elapsed().as_secs_f64();

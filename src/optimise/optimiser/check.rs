@@ -40,6 +40,7 @@ use super::super::play::{Iterate, PlayState};
 use super::super::rounding::truncated;
 use super::{Bookkeeping, Incumbent, OptimiseError, Optimiser, PhaseSeconds};
 use crate::certify::{lower_value_or_trivial, upper_value_or_trivial};
+use crate::value::ValueError;
 
 /// The numbers of one check that the iteration record shows.
 pub(super) struct Check {
@@ -114,7 +115,10 @@ impl Optimiser<'_> {
     /// against the current adversary, until [`Self::settle`]), so the
     /// stall rule judges what the run would return if it stopped here. A
     /// start whose product cannot be solved to the tolerance is left as it
-    /// is. Does nothing without a certifier or with `guarantee_ascent` off.
+    /// is, and so is a better defender whose value against the current
+    /// adversary cannot be solved to the tolerance (a nearly deterministic
+    /// defender can make the GMC too stiff). Does nothing without a
+    /// certifier or with `guarantee_ascent` off.
     /// Returns the new incumbent's bound when it replaced the incumbent.
     pub(super) fn ascend_guarantee(
         &mut self,
@@ -146,10 +150,16 @@ impl Optimiser<'_> {
             return Ok(None);
         }
         let clock = Instant::now();
-        let worst_case = self
-            .objective
-            .value(&polished.defender, &iterate.adversary)?;
+        let worst_case = self.objective.value(&polished.defender, &iterate.adversary);
         books.phases.optimisation += clock.elapsed().as_secs_f64();
+        let worst_case = match worst_case {
+            Ok(value) => value,
+            // Nearly deterministic choices can make the GMC too stiff to
+            // solve: such a defender is not kept, so that every number of
+            // the run's own stays computable.
+            Err(ValueError::Solver(_)) => return Ok(None),
+            Err(error) => return Err(error.into()),
+        };
         books.best = Some(Incumbent {
             defender: polished.defender,
             adversary: iterate.adversary.clone(),
@@ -163,7 +173,9 @@ impl Optimiser<'_> {
     /// The incumbent's full best response, once the run has stopped: from
     /// the adversary it was judged against, the last best response found
     /// and `restarts` random starts; its worst case and adversary become
-    /// that response's, which also tightens the game upper bound.
+    /// that response's, which also tightens the game upper bound. Where
+    /// every start runs into a system it cannot solve to the tolerance, the
+    /// incumbent keeps its numbers.
     pub(super) fn settle(&mut self, books: &mut Bookkeeping) -> Result<(), OptimiseError> {
         let Some(best) = books.best.as_ref() else {
             return Err(OptimiseError::BestResponse(
@@ -176,7 +188,14 @@ impl Optimiser<'_> {
             at: &at,
             restarts: self.settings.restarts,
         };
-        let found = self.respond(&best.defender, starts, &mut books.phases)?;
+        let found = match self.respond(&best.defender, starts, &mut books.phases) {
+            Ok(found) => found,
+            // Every start ran into a GMC too stiff to solve (a nearly
+            // deterministic defender from the guarantee ascent can cause
+            // it): the incumbent keeps the worst-case estimate it has.
+            Err(error) if error.is_numerical() => return Ok(()),
+            Err(error) => return Err(error),
+        };
         self.tighten_against(&found.adversary, books)?;
         let best = books.best.as_mut().expect("checked above");
         if found.value <= best.worst_case {
