@@ -422,7 +422,8 @@ impl<'a> Optimiser<'a> {
         let check = if self.check_due(state.iterate.iteration, status) {
             let deep = books.checks % self.settings.best_response_every == 0;
             let mut check = self.check(state, books, deep)?;
-            status = self.after_check(&mut check, status, &mut state.iterate, books)?;
+            let timing = (status, seconds);
+            status = self.after_check(&mut check, timing, &mut state.iterate, books)?;
             Some(check)
         } else {
             None
@@ -467,7 +468,7 @@ impl<'a> Optimiser<'a> {
     fn after_check(
         &mut self,
         check: &mut Check,
-        status: Option<Status>,
+        (status, seconds): (Option<Status>, f64),
         iterate: &mut Iterate,
         books: &mut Bookkeeping,
     ) -> Result<Option<Status>, OptimiseError> {
@@ -480,8 +481,9 @@ impl<'a> Optimiser<'a> {
             .score();
         let stall_judged =
             window_ends(iterate.iteration) && books.history.len() + 1 >= self.settings.stall_checks;
-        if stall_judged || status.is_some() {
-            if let Some(ascended) = self.ascend_guarantee(iterate, books)? {
+        let out_of_time = matches!(status, Some(Status::TimeBudget | Status::Cancelled));
+        if (stall_judged || status.is_some()) && !out_of_time {
+            if let Some(ascended) = self.ascend_guarantee(iterate, books, seconds)? {
                 check.certified_lower = Some(ascended);
             }
         }
@@ -503,7 +505,7 @@ impl<'a> Optimiser<'a> {
     /// `gap_tolerance`; on a stall, the doubled logit bound when some
     /// defender or adversary logit is within [`NEAR_BOUND`] of it, it is
     /// below `logit_bound` and the run does not ascend the guarantee (whose
-    /// ascent already uses `logit_bound`), else [`Status::Stalled`].
+    /// ascent goes beyond the loop's bound), else [`Status::Stalled`].
     fn stop_or_widen(&self, books: &mut Bookkeeping, iterate: &mut Iterate) -> Option<Status> {
         let s = &self.settings;
         let incumbent = books.best.as_ref()?;

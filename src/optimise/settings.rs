@@ -39,9 +39,9 @@ pub struct Settings {
     /// The max-min run's first logit bound `c_0 <= c_max`: without the
     /// guarantee ascent the bound doubles (up to `logit_bound`) whenever
     /// progress stalls while some logit sits on it, so determinism is
-    /// capped only by `c_max`; the single-player ascent and the guarantee
-    /// ascent use `c_max` from the start, so with the guarantee ascent the
-    /// loop keeps `c_0` and stops on a stall.
+    /// capped only by `c_max`; the single-player ascent uses `c_max` from
+    /// the start and the guarantee ascent `min(2 c_0, c_max)`, and with the
+    /// guarantee ascent the loop keeps `c_0` and stops on a stall.
     #[arg(long, default_value_t = Settings::default().initial_logit_bound)]
     pub initial_logit_bound: f64,
     /// Initial logits are drawn uniformly from `[-spread, spread]` (0: uniform controllers).

@@ -38,7 +38,7 @@ use super::super::best_response::{BestResponse, Starts, best_response};
 use super::super::guarantee::Guarantee;
 use super::super::play::{Iterate, PlayState};
 use super::super::rounding::truncated;
-use super::{Bookkeeping, Incumbent, OptimiseError, Optimiser, PhaseSeconds};
+use super::{Bookkeeping, Incumbent, OptimiseError, Optimiser, PhaseSeconds, Settings};
 use crate::certify::{lower_value_or_trivial, upper_value_or_trivial};
 use crate::value::ValueError;
 
@@ -108,7 +108,8 @@ impl Optimiser<'_> {
         self.certifier.is_some() && self.settings.guarantee_ascent
     }
 
-    /// The guarantee ascent (method.md section 6, `guarantee.rs`), where a
+    /// The guarantee ascent (method.md section 6, `guarantee.rs`), `seconds`
+    /// into the run (it spends at most the rest of the time budget), where a
     /// suffix-averaging window ends and when the run stops: L-BFGS on the
     /// certified lower bound itself from the incumbent defender. A higher
     /// bound replaces the incumbent (its worst-case estimate: its value
@@ -124,6 +125,7 @@ impl Optimiser<'_> {
         &mut self,
         iterate: &Iterate,
         books: &mut Bookkeeping,
+        seconds: f64,
     ) -> Result<Option<f64>, OptimiseError> {
         let (Some(certifier), Some(best)) = (self.certifier, books.best.as_ref()) else {
             return Ok(None);
@@ -139,7 +141,22 @@ impl Optimiser<'_> {
             self.settings.solver_settings(),
         );
         let start = (best.defender.as_slice(), best.adversary.as_slice());
-        let ascended = ascend(&mut guarantee, start, &self.settings, &mut (), &self.cancel);
+        // The ascent spends what is left of the run's time budget.
+        let budget = self.settings.time_budget;
+        // It stays within twice the loop's logit bound: beyond, nearly
+        // deterministic defenders make chains too stiff to certify in
+        // double precision, and the exact solves of the final certificate
+        // then take minutes (PAYNT's dodge-6-lines-position, 1 node).
+        let settings = Settings {
+            time_budget: if budget > 0.0 {
+                (budget - seconds).max(f64::MIN_POSITIVE)
+            } else {
+                0.0
+            },
+            logit_bound: (2.0 * iterate.bound).min(self.settings.logit_bound),
+            ..self.settings.clone()
+        };
+        let ascended = ascend(&mut guarantee, start, &settings, &mut (), &self.cancel);
         books.phases.guarantee += clock.elapsed().as_secs_f64();
         let polished = match ascended {
             Ok(outcome) => outcome.best,
