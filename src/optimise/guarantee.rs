@@ -13,35 +13,24 @@
 use super::OptimiseError;
 use super::ascent::{DefenderObjective, DefenderPoint};
 use super::softmax::Softmax;
-use crate::automaton::Dra;
 use crate::certify::gradient::LowerBoundGradients;
-use crate::game::Posg;
-use crate::solver::SolverSettings;
 
 /// `L(phi_def)`: the certified lower bound of the defender with logits
 /// `phi_def` on the softmax map's support.
-pub(super) struct Guarantee<'a> {
-    bounds: LowerBoundGradients<'a>,
-    defender: &'a Softmax,
+pub(super) struct Guarantee<'a, 'b> {
+    bounds: &'b mut LowerBoundGradients<'a>,
+    defender: &'b Softmax,
 }
 
-impl<'a> Guarantee<'a> {
-    /// The bound on `defender`'s support in `game`, `not_phi` an automaton
-    /// for `!phi`, its policy evaluations solved by `solver`.
-    pub fn new(
-        game: &'a Posg,
-        not_phi: &'a Dra,
-        defender: &'a Softmax,
-        solver: SolverSettings,
-    ) -> Self {
-        Self {
-            bounds: LowerBoundGradients::new(game, not_phi, solver),
-            defender,
-        }
+impl<'a, 'b> Guarantee<'a, 'b> {
+    /// The bound of `defender`'s controllers by `bounds` (the run's, so
+    /// that the graph analysis of the support is shared with its checks).
+    pub fn new(bounds: &'b mut LowerBoundGradients<'a>, defender: &'b Softmax) -> Self {
+        Self { bounds, defender }
     }
 }
 
-impl DefenderObjective for Guarantee<'_> {
+impl DefenderObjective for Guarantee<'_, '_> {
     fn point(&mut self, logits: &[f64]) -> Result<DefenderPoint, OptimiseError> {
         let controller = self.defender.controller(logits)?;
         let found = self.bounds.at(&controller)?;
@@ -88,7 +77,8 @@ mod tests {
         let settings = Settings::default();
         let start = softmax.logits_of_template(settings.logit_bound);
         let before = lower_bound(&game, &not_phi, &template).unwrap().value;
-        let mut guarantee = Guarantee::new(&game, &not_phi, &softmax, settings.solver_settings());
+        let mut bounds = LowerBoundGradients::new(&game, &not_phi, settings.solver_settings());
+        let mut guarantee = Guarantee::new(&mut bounds, &softmax);
         let adversary = [0.0];
         let outcome = ascend(
             &mut guarantee,

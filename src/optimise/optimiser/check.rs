@@ -127,19 +127,14 @@ impl Optimiser<'_> {
         books: &mut Bookkeeping,
         seconds: f64,
     ) -> Result<Option<f64>, OptimiseError> {
-        let (Some(certifier), Some(best)) = (self.certifier, books.best.as_ref()) else {
-            return Ok(None);
-        };
         if !self.ascends_guarantee() {
             return Ok(None);
         }
+        let (Some(bounds), Some(best)) = (self.lower_bounds.as_mut(), books.best.as_ref()) else {
+            return Ok(None);
+        };
         let clock = Instant::now();
-        let mut guarantee = Guarantee::new(
-            certifier.game,
-            certifier.not_phi,
-            self.objective.defender(),
-            self.settings.solver_settings(),
-        );
+        let mut guarantee = Guarantee::new(bounds, self.objective.defender());
         let start = (best.defender.as_slice(), best.adversary.as_slice());
         // The ascent spends what is left of the run's time budget.
         let budget = self.settings.time_budget;
