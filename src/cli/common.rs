@@ -108,8 +108,10 @@ fn plot_format(text: &str) -> Result<PlotFormat, String> {
 pub struct SolverArgs {
     /// `lu` (sparse LU, direct), `krylov` (BiCGSTAB with an ILU(0)
     /// preconditioner, iterative, warm-started) or `auto` (LU up to
-    /// --lu-limit unknowns; above, a short BiCGSTAB trial predicts whether
-    /// krylov costs less than LU; eval reports why as `solver_reason`).
+    /// --lu-limit unknowns unless its analysis predicts a costly
+    /// factorisation; there and above the limit, a short BiCGSTAB trial
+    /// predicts whether krylov costs less than LU; eval reports why as
+    /// `solver_reason`).
     #[arg(long, default_value = "auto", value_parser = solver_method)]
     pub solver: SolverMethod,
     /// With --solver auto: the most unknowns |T| solved by LU.

@@ -13,8 +13,13 @@
 //! A start that runs into such a point is dropped (its estimate would not
 //! be trustworthy), never reported as a number; if every start is dropped
 //! the check fails with the solver's error.
+//!
+//! A search with a deadline (the final best responses of a run with a time
+//! budget) starts no random restart after it and stops each L-BFGS run
+//! there: its value is still the lowest found, a weaker estimate.
 
 use std::cell::RefCell;
+use std::time::{Duration, Instant};
 
 use argmin::core::{CostFunction, Error, Executor, Gradient, State};
 use argmin::solver::linesearch::MoreThuenteLineSearch;
@@ -42,18 +47,43 @@ const START_RANGE: f64 = 1.0;
 
 /// Where a best-response minimisation starts: at given adversaries
 /// (warm starts: the current adversary, the last best response found) and
-/// from `restarts` random points.
+/// from `restarts` random points, and when it must end.
 #[derive(Debug, Clone, Copy)]
 pub struct Starts<'a> {
     /// Adversary logits to start from (at least one).
     pub at: &'a [&'a [f64]],
     /// Random starts besides them.
     pub restarts: usize,
+    /// When the search ends (`None`: after every start's iterations): no
+    /// random restart begins after it, and each L-BFGS run stops there
+    /// (a warm start still gets its value at the start).
+    pub deadline: Option<Instant>,
+}
+
+impl<'a> Starts<'a> {
+    /// The warm starts `at` and `restarts` random ones, without a deadline.
+    pub fn new(at: &'a [&'a [f64]], restarts: usize) -> Self {
+        Self {
+            at,
+            restarts,
+            deadline: None,
+        }
+    }
+
+    /// These starts, ending at `deadline` if given.
+    pub fn until(self, deadline: Option<Instant>) -> Self {
+        Self { deadline, ..self }
+    }
+
+    fn past_deadline(&self) -> bool {
+        self.deadline.is_some_and(|end| Instant::now() >= end)
+    }
 }
 
 /// Minimises `V` over the adversary's logits with the defender's fixed at
 /// `defender`, from each of `starts`, each with at most
-/// `settings.best_response_iterations` L-BFGS iterations.
+/// `settings.best_response_iterations` L-BFGS iterations and within the
+/// starts' deadline.
 pub fn best_response(
     objective: &mut Objective,
     defender: &[f64],
@@ -79,18 +109,29 @@ pub fn best_response(
     };
     let parameters = starts.at.first().map_or(0, |logits| logits.len());
     for logits in starts.at {
+        let start = map.to_z(logits);
         keep(minimise_from(
             objective,
             defender,
-            map.to_z(logits),
+            start,
             settings,
+            starts.deadline,
         ))?;
     }
     for _ in 0..starts.restarts {
+        if starts.past_deadline() {
+            break;
+        }
         let start = (0..parameters)
             .map(|_| rng.random_range(-START_RANGE..=START_RANGE))
             .collect();
-        keep(minimise_from(objective, defender, start, settings))?;
+        keep(minimise_from(
+            objective,
+            defender,
+            start,
+            settings,
+            starts.deadline,
+        ))?;
     }
     match (best, dropped) {
         (Some(best), _) => Ok(best),
@@ -106,6 +147,7 @@ fn minimise_from(
     defender: &[f64],
     start: Vec<f64>,
     settings: &Settings,
+    deadline: Option<Instant>,
 ) -> Result<BestResponse, OptimiseError> {
     let map = Reparametrisation::new(settings.logit_bound);
     let start_value = objective.value(defender, &map.to_phi(&start))?;
@@ -121,12 +163,16 @@ fn minimise_from(
         map,
     };
     let solver = LBFGS::new(MoreThuenteLineSearch::new(), settings.lbfgs_memory);
-    let result = Executor::new(problem, solver)
-        .configure(|state| {
-            state
-                .param(start.clone())
-                .max_iters(settings.best_response_iterations)
-        })
+    let mut executor = Executor::new(problem, solver).configure(|state| {
+        state
+            .param(start.clone())
+            .max_iters(settings.best_response_iterations)
+    });
+    if let Some(end) = deadline {
+        let left = end.saturating_duration_since(Instant::now());
+        executor = executor.timeout(left.max(Duration::from_nanos(1)));
+    }
+    let result = executor
         .run()
         .map_err(|e| match e.downcast::<crate::value::ValueError>() {
             Ok(value_error) => OptimiseError::Value(value_error),
@@ -174,5 +220,60 @@ impl Gradient for AdversaryProblem<'_> {
         let phi = self.map.to_phi(z);
         let point = self.objective.borrow_mut().point(self.defender, &phi)?;
         Ok(self.map.chain_rule(z, &point.adversary))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use rand::SeedableRng;
+
+    use super::*;
+    use crate::controller::{Fsc, Role};
+    use crate::game::grid::GridSpec;
+    use crate::optimise::Softmax;
+    use crate::pipeline::Automata;
+
+    /// The paper's 3x2 grid with 1-node controllers on full supports, and
+    /// the uniform logits of both.
+    fn paper_grid() -> (Objective, Vec<f64>, Vec<f64>) {
+        let game = GridSpec::default().build().unwrap();
+        let dra = Automata::from_ltl("GF goal & G !unsafe").unwrap().phi;
+        let settings = Settings::default();
+        let softmax = |role, player| Softmax::new(&Fsc::uniform_enabled(role, 1, player), false);
+        let objective = Objective::new(
+            &game,
+            &dra,
+            softmax(Role::Defender, game.defender()),
+            softmax(Role::Adversary, game.adversary()),
+            &settings.solver_settings(),
+        )
+        .unwrap();
+        let defender = objective
+            .defender()
+            .logits_of_template(settings.logit_bound);
+        let adversary = objective
+            .adversary()
+            .logits_of_template(settings.logit_bound);
+        (objective, defender, adversary)
+    }
+
+    /// Past the deadline no random restart begins (the random stream is
+    /// left as it was) and the warm start keeps at most its start's value;
+    /// without one, the restarts draw from the stream.
+    #[test]
+    fn past_its_deadline_a_search_starts_no_restart_but_keeps_its_warm_start() {
+        let (mut objective, defender, adversary) = paper_grid();
+        let settings = Settings::default();
+        let warm = [adversary.as_slice()];
+        let at_start = objective.value(&defender, &adversary).unwrap();
+        let untouched = ChaCha8Rng::seed_from_u64(3);
+        let mut rng = untouched.clone();
+        let late = Starts::new(&warm, 50).until(Some(Instant::now()));
+        let found = best_response(&mut objective, &defender, late, &settings, &mut rng).unwrap();
+        assert_eq!(rng, untouched, "a restart drew from the stream");
+        assert!(found.value <= at_start, "{} above {at_start}", found.value);
+        let unhurried = Starts::new(&warm, 1);
+        best_response(&mut objective, &defender, unhurried, &settings, &mut rng).unwrap();
+        assert_ne!(rng, untouched, "the restart did not run");
     }
 }

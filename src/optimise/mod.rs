@@ -534,7 +534,7 @@ pub fn optimise_structure(
         &mut run,
         upper_bound,
         settings,
-        method,
+        (method, clock),
         &mut phases,
     )?;
     let objective = &run.objective;
@@ -693,7 +693,8 @@ struct Chosen {
 /// certified lower bound with a certifier, the worst-case estimate
 /// without), keeps the best (the unrounded defender wins ties), and
 /// completes its numbers: worst-case estimate, certified lower bound and
-/// the smallest game upper bound.
+/// the smallest game upper bound. Its best responses end at the
+/// [`Settings::final_deadline`] of the structure's run, begun at `started`.
 #[allow(clippy::too_many_arguments)]
 fn finalise(
     game: &Posg,
@@ -702,7 +703,7 @@ fn finalise(
     run: &mut StartRun,
     upper_bound: Option<f64>,
     settings: &Settings,
-    method: Method,
+    (method, started): (Method, Instant),
     phases: &mut PhaseSeconds,
 ) -> Result<Chosen, OptimiseError> {
     let best = &run.outcome.best;
@@ -730,6 +731,7 @@ fn finalise(
             adversary: objective.adversary().template(),
             adversary_logits: &adversary_logits,
             settings,
+            deadline: settings.final_deadline(started, Instant::now()),
         };
         for (name, candidate) in rounded_candidates(&chosen.defender)? {
             let scored = match (method, certifier) {
@@ -808,6 +810,8 @@ struct Judge<'a> {
     adversary: &'a Fsc,
     adversary_logits: &'a [f64],
     settings: &'a Settings,
+    /// When its best responses end (with a time budget).
+    deadline: Option<Instant>,
 }
 
 impl Judge<'_> {
@@ -834,10 +838,7 @@ impl Judge<'_> {
         let found = best_response(
             &mut objective,
             &logits,
-            Starts {
-                at: &[self.adversary_logits],
-                restarts: self.settings.restarts,
-            },
+            Starts::new(&[self.adversary_logits], self.settings.restarts).until(self.deadline),
             self.settings,
             rng,
         )?;

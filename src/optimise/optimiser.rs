@@ -544,7 +544,7 @@ impl<'a> Optimiser<'a> {
         status: Status,
         clock: Instant,
     ) -> Result<RunOutcome, OptimiseError> {
-        self.settle(&mut books)?;
+        self.settle(&mut books, clock)?;
         let best = books.best.ok_or(OptimiseError::BestResponse(
             "no best-response check ran".into(),
         ))?;

@@ -1,6 +1,8 @@
 //! [`Settings`]: every number the optimiser uses, with its default, checked
 //! once by [`Settings::validate`] and recorded verbatim in `summary.json`.
 
+use std::time::{Duration, Instant};
+
 use serde::{Deserialize, Serialize};
 
 use super::{OptimiseError, StructureSource};
@@ -231,7 +233,22 @@ impl Default for Settings {
     }
 }
 
+/// With a time budget, the share of it that a structure's final best
+/// responses get at least, however late they start.
+const FINAL_SHARE_OF_BUDGET: f64 = 0.1;
+
 impl Settings {
+    /// With a time budget, when the final best responses of a structure whose
+    /// run began at `started` must end: at the end of the budget, or a tenth
+    /// of the budget from `now` if that is later (`None` without a budget).
+    pub fn final_deadline(&self, started: Instant, now: Instant) -> Option<Instant> {
+        (self.time_budget > 0.0).then(|| {
+            let budget = Duration::from_secs_f64(self.time_budget);
+            let share = Duration::from_secs_f64(self.time_budget * FINAL_SHARE_OF_BUDGET);
+            (started + budget).max(now + share)
+        })
+    }
+
     /// The linear solver's settings: [`Self::solver`], [`Self::solver_tolerance`]
     /// and [`Self::lu_limit`].
     pub fn solver_settings(&self) -> SolverSettings {
@@ -349,4 +366,29 @@ pub const MAX_LOGIT_BOUND: f64 = 100.0;
 
 fn invalid(field: &'static str, problem: String) -> OptimiseError {
     OptimiseError::Settings { field, problem }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_final_deadline_is_the_budgets_end_or_a_tenth_of_it_after_a_late_stop() {
+        let started = Instant::now();
+        let budget = Settings {
+            time_budget: 20.0,
+            ..Settings::default()
+        };
+        let early = started + Duration::from_secs(5);
+        let late = started + Duration::from_secs(30);
+        assert_eq!(
+            budget.final_deadline(started, early),
+            Some(started + Duration::from_secs(20))
+        );
+        assert_eq!(
+            budget.final_deadline(started, late),
+            Some(late + Duration::from_secs(2))
+        );
+        assert_eq!(Settings::default().final_deadline(started, late), None);
+    }
 }

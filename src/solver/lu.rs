@@ -186,6 +186,13 @@ impl LuSolver {
         self.system.lu.stored_entries()
     }
 
+    /// Floating-point operations of one numeric factorisation, from the
+    /// symbolic analysis: what decides whether LU or BiCGSTAB costs less
+    /// (see [`super::LinearSolver::new`]).
+    pub fn factorisation_flops(&self) -> f64 {
+        self.system.lu.factorisation_flops()
+    }
+
     /// Whether the factors keep `L`: false after [`Self::factorize_and_solve`]
     /// until a later solve factorises again.
     pub fn keeps_lower(&self) -> bool {

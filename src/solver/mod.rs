@@ -426,6 +426,43 @@ pub fn lu_cost_in_iterations(nnz: usize) -> f64 {
     (30.0 * (nnz as f64 / 1.3e6).powf(0.25)).min(SLOW_KRYLOV_ITERATIONS as f64)
 }
 
+/// How many times faster a floating-point operation of the LU's dense
+/// kernels runs than one of a BiCGSTAB + ILU(0) iteration (sparse, bound by
+/// memory). Measured with `eval --gradient` on PAYNT's dodge-8 (7,938
+/// unknowns, 38,684 entries, an LU of 2.5e9 flops) on the 2-core machine:
+/// LU 0.18 s against BiCGSTAB's 0.5 ms per iteration, about 14 and 0.8
+/// GFlop/s.
+pub const DENSE_SPEEDUP: f64 = 16.0;
+
+/// Below this predicted LU cost (in BiCGSTAB iterations), `auto` takes LU
+/// without a trial: the trial alone ([`PROBE_ITERATIONS`]) and the two
+/// solves of a value and its gradient would cost about as much.
+pub const TRIAL_WORTH_ITERATIONS: f64 = 4.0 * PROBE_ITERATIONS as f64;
+
+/// The cost of an LU of `flops` floating-point operations
+/// ([`LuSolver::factorisation_flops`]) in BiCGSTAB + ILU(0) iterations on
+/// `pattern`, each two products with `A` and two ILU solves (about `8 nnz`
+/// flops) and six vector updates (`12 n`), at [`DENSE_SPEEDUP`].
+pub fn lu_iterations_from_flops(flops: f64, pattern: &SparsePattern) -> f64 {
+    let per_iteration = 8.0 * pattern.nnz() as f64 + 12.0 * pattern.n as f64;
+    flops / (DENSE_SPEEDUP * per_iteration.max(1.0))
+}
+
+/// The BiCGSTAB settings of a system of `n` unknowns: with `auto` up to the
+/// switch limit, at most `lu_cost` iterations per solve (then LU is
+/// cheaper).
+fn krylov_settings(settings: &SolverSettings, n: usize, lu_cost: f64) -> SolverSettings {
+    if settings.method == SolverMethod::Auto && n <= settings.lu_switch_limit.max(settings.lu_limit)
+    {
+        SolverSettings {
+            max_iterations: settings.max_iterations.min(lu_cost.ceil() as usize).max(1),
+            ..*settings
+        }
+    } else {
+        *settings
+    }
+}
+
 /// Why `settings` give the method [`SolverSettings::method_for`] chooses
 /// for `n` unknowns, before any solve.
 fn initial_reason(settings: &SolverSettings, n: usize) -> String {
@@ -571,7 +608,9 @@ fn accept(residual: f64, x: &[f64], tolerance: f64) -> Result<f64, SolverError> 
 /// [`SolverSettings::lu_switch_limit`] unknowns it first predicts the cost
 /// of BiCGSTAB from a short trial and takes LU at once when that is cheaper
 /// (`choose_by_trial`), and it gives BiCGSTAB only as many iterations per
-/// solve as an LU costs ([`lu_cost_in_iterations`]) before turning to LU:
+/// solve as an LU costs ([`lu_cost_in_iterations`], or
+/// [`lu_iterations_from_flops`] below the LU limit, where the analysis
+/// predicts a costly LU and BiCGSTAB is tried first) before turning to LU:
 /// slowly mixing chains are solved faster by LU, and a wrong prediction
 /// costs at most one LU's worth of iterations (the ski-rental bound: at
 /// most about twice the better method per solve). [`Self::reason`] says why
@@ -581,6 +620,10 @@ pub struct LinearSolver {
     reason: String,
     probe_pending: bool,
     fall_back_to_lu: bool,
+    /// What one LU costs, in BiCGSTAB iterations (the trial's yardstick).
+    lu_cost: f64,
+    /// The LU analysed to predict that cost, kept for the fall-back.
+    spare_lu: Option<Box<LuSolver>>,
     krylov_budget: usize,
     /// Whether [`Self::factorize_and_solve`] solves during the LU's
     /// factorisation (see there).
@@ -677,41 +720,58 @@ pub type SolvePair = (
 
 impl LinearSolver {
     /// Prepares solves for matrices with `pattern` (for LU: the symbolic
-    /// analysis).
+    /// analysis). With `auto` below the LU limit, the analysis predicts the
+    /// LU's cost ([`lu_iterations_from_flops`]); where it exceeds
+    /// [`TRIAL_WORTH_ITERATIONS`] (chains whose graph has large separators,
+    /// like the products of several moving agents), BiCGSTAB starts with a
+    /// trial, and the analysed LU is kept for the fall-back.
     pub fn new(pattern: SparsePattern, settings: &SolverSettings) -> Result<Self, SolverError> {
         let auto = settings.method == SolverMethod::Auto;
-        let pattern_n = pattern.n;
-        let krylov_settings = if auto && pattern.n <= settings.lu_switch_limit {
-            SolverSettings {
-                max_iterations: settings
-                    .max_iterations
-                    .min(lu_cost_in_iterations(pattern.nnz()).ceil() as usize)
-                    .max(1),
-                ..*settings
+        let n = pattern.n;
+        let mut reason = initial_reason(settings, n);
+        let mut lu_cost = lu_cost_in_iterations(pattern.nnz());
+        let mut spare_lu = None;
+        let backend = match settings.method_for(n) {
+            SolverMethod::Krylov => Backend::Krylov(Box::new(KrylovSolver::new(
+                pattern,
+                &krylov_settings(settings, n, lu_cost),
+            )?)),
+            _ => {
+                let lu = Box::new(LuSolver::new(pattern, settings.tolerance)?);
+                let flops = lu.factorisation_flops();
+                let predicted = lu_iterations_from_flops(flops, lu.pattern());
+                if auto && predicted > TRIAL_WORTH_ITERATIONS {
+                    lu_cost = predicted;
+                    reason = format!(
+                        "auto: krylov, {n} unknowns: an LU of {flops:.1e} flops costs about                          {predicted:.0} BiCGSTAB iterations; a trial decides"
+                    );
+                    let krylov = KrylovSolver::new(
+                        lu.pattern().clone(),
+                        &krylov_settings(settings, n, lu_cost),
+                    )?;
+                    spare_lu = Some(lu);
+                    Backend::Krylov(Box::new(krylov))
+                } else {
+                    Backend::Lu(lu)
+                }
             }
-        } else {
-            *settings
         };
-        let method = settings.method_for(pattern.n);
-        let reason = initial_reason(settings, pattern.n);
-        let probe_pending =
-            auto && method == SolverMethod::Krylov && pattern.n <= settings.lu_switch_limit;
-        let backend = match method {
-            SolverMethod::Krylov => {
-                Backend::Krylov(Box::new(KrylovSolver::new(pattern, &krylov_settings)?))
-            }
-            _ => Backend::Lu(Box::new(LuSolver::new(pattern, settings.tolerance)?)),
-        };
+        let krylov_budget = krylov_settings(settings, n, lu_cost).max_iterations;
+        let probe_pending = auto
+            && matches!(backend, Backend::Krylov(_))
+            && (spare_lu.is_some() || n <= settings.lu_switch_limit);
         Ok(Self {
             backend,
             reason,
             probe_pending,
             fall_back_to_lu: auto,
-            solve_while_factorising: pattern_n <= SOLVE_WHILE_FACTORISING_UNKNOWNS,
-            krylov_budget: krylov_settings.max_iterations,
+            lu_cost,
+            spare_lu,
+            solve_while_factorising: n <= SOLVE_WHILE_FACTORISING_UNKNOWNS,
+            krylov_budget,
             tolerance: settings.tolerance,
             exact_limit: settings.exact_limit,
-            exits: vec![0.0; pattern_n],
+            exits: vec![0.0; n],
             expected_time: ExpectedTime::new(),
             scratch: BoundScratch::default(),
         })
@@ -1312,7 +1372,7 @@ impl LinearSolver {
         let target = krylov::ACCURACY_MARGIN * self.tolerance;
         let predicted = probe.predicted_iterations(target);
         let (n, nnz) = (krylov.pattern().n, krylov.pattern().nnz());
-        let lu_cost = lu_cost_in_iterations(nnz);
+        let lu_cost = self.lu_cost;
         let trial = format!(
             "{n} unknowns, {nnz} nonzeros: a trial of {} BiCGSTAB iterations reduced the \
              residual from {:.1e} to {:.1e} and the next {} to {:.1e}, predicting {} iterations \
@@ -1380,9 +1440,13 @@ impl LinearSolver {
                     self.krylov_budget, self.reason
                 );
             }
-            let (pattern, values) = (krylov.pattern().clone(), krylov.values().to_vec());
+            let values = krylov.values().to_vec();
+            let lu = match self.spare_lu.take() {
+                Some(analysed) => analysed,
+                None => Box::new(LuSolver::new(krylov.pattern().clone(), self.tolerance)?),
+            };
             // BiCGSTAB's memory is freed before the numeric LU needs its own.
-            self.backend = Backend::Lu(Box::new(LuSolver::new(pattern, self.tolerance)?));
+            self.backend = Backend::Lu(lu);
             let exits = self.exits.clone();
             self.factorize_with(|own, own_exits| {
                 own.copy_from_slice(&values);
@@ -1739,6 +1803,79 @@ mod tests {
         for (a, e) in x.iter().zip(&exact) {
             assert!((a - e).abs() <= 1e-9);
         }
+    }
+
+    #[test]
+    fn below_the_lu_limit_auto_tries_krylov_only_where_the_analysed_lu_is_costly() {
+        // A random chain fills its LU almost densely; a grid walk hardly.
+        let (random, values) = random_chain(3000, 6, 0.3, 11);
+        let (grid, _) = test_systems::grid_walk(60);
+        let settings = SolverSettings::default();
+        let mut solver = LinearSolver::new(random.clone(), &settings).unwrap();
+        assert_eq!(solver.method(), SolverMethod::Krylov);
+        assert!(
+            solver.reason().contains("flops") && solver.reason().contains("a trial decides"),
+            "{}",
+            solver.reason()
+        );
+        let walk = LinearSolver::new(grid, &settings).unwrap();
+        assert_eq!(walk.method(), SolverMethod::Lu, "{}", walk.reason());
+        solver.factorize(&values).unwrap();
+        let b = vec![0.5; random.n];
+        let mut x = vec![0.0; random.n];
+        let report = solver.solve(&b, &mut x).unwrap();
+        assert_eq!(solver.method(), SolverMethod::Krylov, "{}", solver.reason());
+        assert!(report.error_bound.unwrap() <= DEFAULT_TOLERANCE);
+        let mut lu = LinearSolver::new(
+            random,
+            &SolverSettings {
+                method: SolverMethod::Lu,
+                ..settings
+            },
+        )
+        .unwrap();
+        lu.factorize(&values).unwrap();
+        let mut exact = vec![0.0; b.len()];
+        lu.solve(&b, &mut exact).unwrap();
+        for (a, e) in x.iter().zip(&exact) {
+            assert!((a - e).abs() <= 2.0 * DEFAULT_TOLERANCE, "{a} against {e}");
+        }
+    }
+
+    #[test]
+    fn a_slow_krylov_solve_below_the_lu_limit_falls_back_to_the_analysed_lu() {
+        // Exits of 1e-3 per step, expected times of 1e3: BiCGSTAB does not
+        // reach its target within its 5 iterations.
+        let (pattern, values) = random_chain(3000, 6, 1e-3, 12);
+        let settings = SolverSettings {
+            max_iterations: 5,
+            ..SolverSettings::default()
+        };
+        let mut solver = LinearSolver::new(pattern.clone(), &settings).unwrap();
+        assert_eq!(solver.method(), SolverMethod::Krylov);
+        solver.factorize(&values).unwrap();
+        let b = vec![1.0; pattern.n];
+        let mut x = vec![0.0; pattern.n];
+        let report = solver.solve(&b, &mut x).unwrap();
+        assert_eq!(solver.method(), SolverMethod::Lu, "{}", solver.reason());
+        assert!(
+            solver.reason().starts_with("auto: lu"),
+            "{}",
+            solver.reason()
+        );
+        assert!(report.error_bound.unwrap() <= DEFAULT_TOLERANCE);
+        assert!(solver.spare_lu.is_none(), "the analysed LU was used");
+    }
+
+    #[test]
+    fn the_lu_cost_from_flops_scales_with_the_flops_and_falls_with_the_entries() {
+        let (small, _) = test_systems::tridiagonal(100, 0.4);
+        let (large, _) = test_systems::tridiagonal(1000, 0.4);
+        let cost = lu_iterations_from_flops(1e9, &small);
+        assert!((lu_iterations_from_flops(2e9, &small) - 2.0 * cost).abs() < 1e-6 * cost);
+        assert!(lu_iterations_from_flops(1e9, &large) < cost);
+        // 298 entries and 100 unknowns: 8 * 298 + 12 * 100 flops per iteration.
+        assert!((cost - 1e9 / (DENSE_SPEEDUP * 3584.0)).abs() < 1e-6 * cost);
     }
 
     #[test]

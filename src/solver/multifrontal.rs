@@ -169,6 +169,21 @@ impl MultifrontalLu {
         self.lower.len() + self.upper.len()
     }
 
+    /// Floating-point operations of one numeric factorisation, from the
+    /// supernodes alone: per front with `c` pivot columns and `r` rows below
+    /// them, `2/3 c^3` for the pivot block's LU, `2 r c^2` for the two
+    /// triangular solves and `2 r^2 c` for the update matrix.
+    pub(crate) fn factorisation_flops(&self) -> f64 {
+        self.structure
+            .supernodes
+            .iter()
+            .map(|node| {
+                let (c, r) = (node.columns() as f64, node.rows.len() as f64);
+                2.0 / 3.0 * c * c * c + 2.0 * r * c * c + 2.0 * r * r * c
+            })
+            .sum()
+    }
+
     /// Whether the last factorisation kept `L`: the factors then serve
     /// [`Self::solve_many_in_place`] and [`Self::solve_transpose_in_place`].
     pub(crate) fn lower_kept(&self) -> bool {

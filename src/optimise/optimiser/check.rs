@@ -185,10 +185,15 @@ impl Optimiser<'_> {
     /// The incumbent's full best response, once the run has stopped: from
     /// the adversary it was judged against, the last best response found
     /// and `restarts` random starts; its worst case and adversary become
-    /// that response's, which also tightens the game upper bound. Where
-    /// every start runs into a system it cannot solve to the tolerance, the
-    /// incumbent keeps its numbers.
-    pub(super) fn settle(&mut self, books: &mut Bookkeeping) -> Result<(), OptimiseError> {
+    /// that response's, which also tightens the game upper bound. With a
+    /// time budget it ends at [`Settings::final_deadline`] of the run that
+    /// began at `started`. Where every start runs into a system it cannot
+    /// solve to the tolerance, the incumbent keeps its numbers.
+    pub(super) fn settle(
+        &mut self,
+        books: &mut Bookkeeping,
+        started: Instant,
+    ) -> Result<(), OptimiseError> {
         let Some(best) = books.best.as_ref() else {
             return Err(OptimiseError::BestResponse(
                 "no best-response check ran".into(),
@@ -196,10 +201,8 @@ impl Optimiser<'_> {
         };
         let mut at: Vec<&[f64]> = vec![&best.adversary];
         at.extend(books.last_response.as_deref());
-        let starts = Starts {
-            at: &at,
-            restarts: self.settings.restarts,
-        };
+        let deadline = self.settings.final_deadline(started, Instant::now());
+        let starts = Starts::new(&at, self.settings.restarts).until(deadline);
         let found = match self.respond(&best.defender, starts, &mut books.phases) {
             Ok(found) => found,
             // Every start ran into a GMC too stiff to solve (a nearly
@@ -295,7 +298,7 @@ impl Optimiser<'_> {
             } else {
                 0
             };
-            let starts = Starts { at: &at, restarts };
+            let starts = Starts::new(&at, restarts);
             let found = self.respond(&candidate, starts, &mut books.phases)?;
             self.tighten_against(&found.adversary, books)?;
             books.last_response = Some(found.adversary.clone());
