@@ -82,7 +82,7 @@ const HEADINGS: &[(&str, &[&str])] = &[
             "stall_tolerance",
         ],
     ),
-    ("Rounding", &["round"]),
+    ("Rounding", &["round", "local_search"]),
     (
         "Support synthesis (--structures sat) and Algorithm 1 (paper)",
         &[

@@ -43,6 +43,7 @@ mod ascent;
 mod best_response;
 mod cancel;
 mod guarantee;
+mod local_search;
 mod objective;
 mod observer;
 mod optimiser;
@@ -686,7 +687,51 @@ struct Chosen {
     certified_lower: Option<f64>,
     upper_bound: Option<f64>,
     candidates: Vec<CandidateReport>,
+    /// The score the defender was chosen by.
+    score: f64,
+    /// Whether `worst_case` is the defender's own (else it still needs a
+    /// best response).
+    worst_case_known: bool,
 }
+
+impl Chosen {
+    /// Records the candidate `name` with its score (and best response, if
+    /// `judge` computed one) and takes it when it scores higher than the
+    /// chosen defender.
+    fn consider(&mut self, name: String, candidate: Fsc, scored: Scored, judge: &Judge<'_>) {
+        let (score, found) = scored;
+        self.candidates.push(CandidateReport {
+            name: name.clone(),
+            score,
+        });
+        if score <= self.score {
+            return;
+        }
+        self.score = score;
+        self.name = name;
+        self.defender = candidate;
+        match found {
+            Some((worst_case, adversary)) => {
+                self.worst_case = worst_case;
+                self.adversary = adversary;
+                self.worst_case_known = true;
+            }
+            None if judge.method == Method::Ascent => {
+                self.worst_case = score;
+                self.worst_case_known = true;
+            }
+            None => self.worst_case_known = false,
+        }
+        self.certified_lower = judge
+            .certifier
+            .filter(|_| judge.method == Method::MaxMin)
+            .map(|_| score);
+    }
+}
+
+/// A candidate's score, and its best response (value and adversary) when
+/// the score is one.
+type Scored = (f64, Option<(f64, Fsc)>);
 
 /// Scores the rounded candidates of the run's best defender like the run
 /// scored its candidates (single player: the exact value; else the
@@ -720,9 +765,9 @@ fn finalise(
             name: "unrounded".into(),
             score: best.score(),
         }],
+        score: best.score(),
+        worst_case_known: true,
     };
-    let mut chosen_score = best.score();
-    let mut worst_case_known = true;
     let clock = Instant::now();
     if settings.round {
         let judge = Judge {
@@ -732,48 +777,34 @@ fn finalise(
             adversary_logits: &adversary_logits,
             settings,
             deadline: settings.final_deadline(started, Instant::now()),
+            method,
+            certifier,
         };
-        for (name, candidate) in rounded_candidates(&chosen.defender)? {
-            let scored = match (method, certifier) {
-                (Method::Ascent, _) => judge.value(&candidate).map(|v| (v, None)),
-                (Method::MaxMin, Some(c)) => lower_value_or_trivial(game, c.not_phi, &candidate)
-                    .map(|v| (v, None))
-                    .map_err(OptimiseError::from),
-                (Method::MaxMin, None) => judge
-                    .best_response(&candidate, &mut run.rng)
-                    .map(|found| (found.0, Some(found))),
-            };
-            let (score, found) = match scored {
-                Ok(scored) => scored,
-                Err(OptimiseError::Value(ValueError::Solver(_))) => continue,
-                Err(error) => return Err(error),
-            };
-            chosen.candidates.push(CandidateReport {
-                name: name.clone(),
-                score,
-            });
-            if score > chosen_score {
-                chosen_score = score;
-                chosen.name = name;
-                chosen.defender = candidate;
-                match found {
-                    Some((worst_case, adversary)) => {
-                        chosen.worst_case = worst_case;
-                        chosen.adversary = adversary;
-                        worst_case_known = true;
-                    }
-                    None if method == Method::Ascent => {
-                        chosen.worst_case = score;
-                        worst_case_known = true;
-                    }
-                    None => worst_case_known = false,
+        // The rounded candidates, then the local search from the best of
+        // them (with a certifier), scored alike.
+        let mut candidates = rounded_candidates(&chosen.defender)?;
+        let mut search = certifier.filter(|_| settings.local_search);
+        while !candidates.is_empty() {
+            for (name, candidate) in std::mem::take(&mut candidates) {
+                if let Some(scored) = judge.score(&candidate, &mut run.rng)? {
+                    chosen.consider(name, candidate, scored, &judge);
                 }
-                chosen.certified_lower = certifier
-                    .filter(|_| method == Method::MaxMin)
-                    .map(|_| score);
+            }
+            if let Some(c) = search.take() {
+                let deadline = settings.local_search_deadline(started, Instant::now());
+                let found = local_search::climb_with_restarts(
+                    game,
+                    c.not_phi,
+                    &chosen.defender,
+                    &mut run.rng,
+                    deadline,
+                )?;
+                if found != chosen.defender {
+                    candidates.push(("local-search".into(), found));
+                }
             }
         }
-        if !worst_case_known {
+        if !chosen.worst_case_known {
             match judge.best_response(&chosen.defender, &mut run.rng) {
                 Ok((worst_case, adversary)) => {
                     chosen.worst_case = worst_case;
@@ -782,7 +813,7 @@ fn finalise(
                 // The rounded defender's GMC is too stiff for a best
                 // response: its certified lower bound is the estimate (the
                 // worst case is at least that).
-                Err(error) if error.is_numerical() => chosen.worst_case = chosen_score,
+                Err(error) if error.is_numerical() => chosen.worst_case = chosen.score,
                 Err(error) => return Err(error),
             }
         }
@@ -812,9 +843,36 @@ struct Judge<'a> {
     settings: &'a Settings,
     /// When its best responses end (with a time budget).
     deadline: Option<Instant>,
+    method: Method,
+    certifier: Option<Certifier<'a>>,
 }
 
 impl Judge<'_> {
+    /// A candidate's score as the run scored its candidates (single player:
+    /// the exact value; else the certified lower bound with a certifier,
+    /// the best-response value without); `None` when the candidate's GMC is
+    /// too stiff to evaluate.
+    fn score(
+        &self,
+        candidate: &Fsc,
+        rng: &mut ChaCha8Rng,
+    ) -> Result<Option<Scored>, OptimiseError> {
+        let scored = match (self.method, self.certifier) {
+            (Method::Ascent, _) => self.value(candidate).map(|v| (v, None)),
+            (Method::MaxMin, Some(c)) => lower_value_or_trivial(self.game, c.not_phi, candidate)
+                .map(|v| (v, None))
+                .map_err(OptimiseError::from),
+            (Method::MaxMin, None) => self
+                .best_response(candidate, rng)
+                .map(|found| (found.0, Some(found))),
+        };
+        match scored {
+            Ok(scored) => Ok(Some(scored)),
+            Err(OptimiseError::Value(ValueError::Solver(_))) => Ok(None),
+            Err(error) => Err(error),
+        }
+    }
+
     /// The exact value against the adversary with the run's logits.
     fn value(&self, defender: &Fsc) -> Result<f64, OptimiseError> {
         let mut objective = self.objective(defender)?;
