@@ -831,6 +831,10 @@ impl LinearSolver {
     /// pattern) and the row sums `A 1`, the probabilities of leaving `T`,
     /// into the exits. The diagonal is their sum, never `1 - Q(m, m)`
     /// (method.md section 8).
+    ///
+    /// With `auto`, an ILU(0) that meets a zero pivot (it subtracts, and a
+    /// nearly closed block can cancel to 0 where the LU, which never
+    /// subtracts, cannot) hands the matrix to LU for good.
     pub fn factorize_with(
         &mut self,
         fill: impl FnOnce(&mut [f64], &mut [f64]),
@@ -841,7 +845,16 @@ impl LinearSolver {
                 self.exits.copy_from_slice(lu.exits());
                 factorised
             }
-            Backend::Krylov(krylov) => krylov.factorize_with(&mut self.exits, fill),
+            Backend::Krylov(krylov) => match krylov.factorize_with(&mut self.exits, fill) {
+                Err(SolverError::Singular(_)) if self.fall_back_to_lu => {
+                    self.reason = format!(
+                        "auto: lu, ILU(0) met a zero pivot (before: {})",
+                        self.reason
+                    );
+                    self.fall_back()
+                }
+                factorised => factorised,
+            },
         }
     }
 
