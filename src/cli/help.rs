@@ -82,7 +82,15 @@ const HEADINGS: &[(&str, &[&str])] = &[
             "stall_tolerance",
         ],
     ),
-    ("Rounding", &["round", "local_search"]),
+    (
+        "Rounding",
+        &[
+            "round",
+            "local_search",
+            "local_search_restarts",
+            "local_search_evaluations",
+        ],
+    ),
     (
         "Support synthesis (--structures sat) and Algorithm 1 (paper)",
         &[

@@ -1,5 +1,5 @@
 //! Local search over the supports of the defender on the certified lower bound
-//! (method.md section 6, "Deterministic local search").
+//! (method.md section 6, "Local search on the supports").
 //!
 //! The certified lower bound is not continuous where a choice leaves the
 //! support: on an objective that must hold forever (a safety objective,
@@ -10,13 +10,20 @@
 //! deterministic controller. This search starts at the best candidate and
 //! changes one block `(g, o)` at a time, dropping a choice or playing one
 //! enabled `(next node, action)` pair, keeping every change that raises the
-//! certified lower bound (first improvement), until a sweep over all blocks
-//! changes nothing or the deadline passes.
+//! certified lower bound (first improvement). Where a sweep over all blocks
+//! changes nothing and a node is unused, it tries memory: one choice is sent
+//! to a copy of its next node (a change of no value by itself) together with
+//! one change in the copy's blocks. It stops when neither raises the bound,
+//! or at the deadline. Restarts from seeded random memoryless defenders run
+//! in parallel; the search is reproducible for a seed unless a deadline
+//! cuts it.
 
+use std::cell::Cell;
 use std::time::Instant;
 
-use rand::Rng;
+use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
 
 use crate::automaton::Dra;
 use crate::certify::{CertifyError, lower_value_or_trivial};
@@ -27,56 +34,203 @@ use crate::game::{AdversaryAction, DefenderAction, Posg};
 /// than this (bounds are accurate to the solver's tolerance, 1e-9).
 const IMPROVEMENT: f64 = 1e-8;
 
+/// A defender where a climb ended, with its certified lower bound.
+#[derive(Debug, Clone)]
+pub struct Climbed {
+    /// The defender.
+    pub defender: Fsc,
+    /// Its certified lower bound `L` (the trivial 0 where its product
+    /// mixes too slowly to certify).
+    pub bound: f64,
+}
+
+/// How long one climb may go on: at most `evaluations` certified lower
+/// bounds, and until `deadline` (with a time budget).
+#[derive(Debug, Clone, Copy)]
+pub struct Effort {
+    /// The most bounds one climb evaluates.
+    pub evaluations: usize,
+    /// When every climb ends, whatever it has evaluated.
+    pub deadline: Option<Instant>,
+}
+
+/// What one climb searches: the game, the automaton of `!phi`, every
+/// enabled `(next node, action)` pair of each block, and its effort (with
+/// the bounds it has evaluated so far).
+struct Landscape<'a> {
+    game: &'a Posg,
+    not_phi: &'a Dra,
+    pairs: Vec<Vec<Choice>>,
+    effort: Effort,
+    evaluated: Cell<usize>,
+}
+
+impl Landscape<'_> {
+    /// Whether the climb has spent its effort.
+    fn exhausted(&self) -> bool {
+        self.evaluated.get() >= self.effort.evaluations
+            || self
+                .effort
+                .deadline
+                .is_some_and(|end| Instant::now() >= end)
+    }
+
+    fn bound(&self, defender: &Fsc) -> Result<f64, CertifyError> {
+        self.evaluated.set(self.evaluated.get() + 1);
+        lower_value_or_trivial(self.game, self.not_phi, defender)
+    }
+
+    /// The first of `candidates` that certifies more than `bound` by
+    /// [`IMPROVEMENT`]; `None` when none does or the effort is spent.
+    fn first_improvement(
+        &self,
+        candidates: impl Iterator<Item = Fsc>,
+        bound: f64,
+    ) -> Result<Option<Climbed>, CertifyError> {
+        for candidate in candidates {
+            if self.exhausted() {
+                return Ok(None);
+            }
+            let value = self.bound(&candidate)?;
+            if value > bound + IMPROVEMENT {
+                return Ok(Some(Climbed {
+                    defender: candidate,
+                    bound: value,
+                }));
+            }
+        }
+        Ok(None)
+    }
+}
+
 /// Hill-climbs from the defender `start` on the certified lower bound (the
 /// trivial 0 where a product mixes too slowly to certify): the moves in a
 /// block `(g, o)` are dropping one of its choices (the others
 /// renormalised) and playing one enabled `(next node, action)` pair of
-/// `game`'s defender with probability 1. Stops after a sweep over all
-/// blocks without a change or at `deadline`; returns where it stopped.
+/// `game`'s defender with probability 1; where no such move raises the
+/// bound and a node is unused, the splits of [`splits`] followed by such
+/// moves. Stops where no move raises the bound, or when `effort` is spent.
 pub fn climb(
     game: &Posg,
     not_phi: &Dra,
     start: &Fsc,
-    deadline: Option<Instant>,
-) -> Result<Fsc, CertifyError> {
+    effort: Effort,
+) -> Result<Climbed, CertifyError> {
     let universe = Fsc::uniform_enabled(Role::Defender, start.num_nodes(), game.defender());
-    let mut current = start.clone();
-    let mut bound = lower_value_or_trivial(game, not_phi, &current)?;
-    let past = || deadline.is_some_and(|end| Instant::now() >= end);
-    let mut visited = visited_blocks(game, &current);
-    'sweeps: loop {
-        let mut changed = false;
-        for b in 0..current.blocks.len() {
-            if !visited[b] {
-                continue;
-            }
-            let mut better = None;
-            for candidate in moves(&current, b, &universe.blocks[b]) {
-                if past() {
-                    break 'sweeps;
-                }
-                let value = lower_value_or_trivial(game, not_phi, &candidate)?;
-                if value > bound + IMPROVEMENT {
-                    better = Some((candidate, value));
-                    break;
-                }
-            }
-            if let Some((candidate, value)) = better {
-                (current, bound, changed) = (candidate, value, true);
-                visited = visited_blocks(game, &current);
-            }
-        }
-        if !changed {
-            break;
-        }
+    let landscape = Landscape {
+        game,
+        not_phi,
+        pairs: universe.blocks,
+        effort,
+        evaluated: Cell::new(0),
+    };
+    let mut current = climb_within_memory(
+        &landscape,
+        Climbed {
+            bound: landscape.bound(start)?,
+            defender: start.clone(),
+        },
+    )?;
+    while let Some(better) = first_improving_split(&landscape, &current)? {
+        current = better;
     }
     Ok(current)
 }
 
+/// The first split of `current` ([`splits`]) from which single-block
+/// moves climb above its bound, where they end; `None` when none does (or
+/// the effort is spent).
+fn first_improving_split(
+    landscape: &Landscape<'_>,
+    current: &Climbed,
+) -> Result<Option<Climbed>, CertifyError> {
+    for split in splits(landscape.game, &current.defender) {
+        if landscape.exhausted() {
+            break;
+        }
+        // The split changes no value: it starts where `current` is.
+        let from = Climbed {
+            defender: split,
+            bound: current.bound,
+        };
+        let end = climb_within_memory(landscape, from)?;
+        if end.bound > current.bound + IMPROVEMENT {
+            return Ok(Some(end));
+        }
+    }
+    Ok(None)
+}
+
+/// Sweeps of single-block moves ([`sweep`]) from `from` until one changes
+/// nothing.
+fn climb_within_memory(landscape: &Landscape<'_>, from: Climbed) -> Result<Climbed, CertifyError> {
+    let mut current = from;
+    while let Some(better) = sweep(landscape, &current)? {
+        current = better;
+    }
+    Ok(current)
+}
+
+/// One sweep of single-block moves over the blocks in use, each block
+/// taking its first improving move; `None` when no block changed (or the
+/// effort was spent before any did).
+fn sweep(landscape: &Landscape<'_>, from: &Climbed) -> Result<Option<Climbed>, CertifyError> {
+    let mut current = from.clone();
+    let mut changed = false;
+    let mut in_use = blocks_in_use(landscape.game, &current.defender);
+    for b in 0..current.defender.blocks.len() {
+        if !in_use[b] {
+            continue;
+        }
+        let moves = block_moves(&current.defender, b, &landscape.pairs[b]);
+        if let Some(better) = landscape.first_improvement(moves, current.bound)? {
+            current = better;
+            changed = true;
+            in_use = blocks_in_use(landscape.game, &current.defender);
+        }
+        if landscape.exhausted() {
+            break;
+        }
+    }
+    Ok(changed.then_some(current))
+}
+
+/// The splits of `fsc` where it has an unused node `h` (no block of `h`
+/// in use): for each choice `(g', u)` of a block in use, `fsc` with that
+/// choice sent to `h` instead and `h` a copy of node `g'` (blocks and next
+/// nodes), which changes no value. Empty where every node is in use.
+fn splits<'a>(game: &Posg, fsc: &'a Fsc) -> impl Iterator<Item = Fsc> + 'a {
+    let in_use = blocks_in_use(game, fsc);
+    let observations = fsc.num_observations();
+    let unused = |h: usize| (0..observations).all(|o| !in_use[h * observations + o]);
+    let spare = (0..fsc.num_nodes()).find(|&h| unused(h));
+    spare
+        .into_iter()
+        .flat_map(move |spare| {
+            let in_use = in_use.clone();
+            (0..fsc.blocks.len())
+                .filter(move |&b| in_use[b])
+                .flat_map(move |b| (0..fsc.blocks[b].len()).map(move |i| (b, i, spare)))
+        })
+        .map(move |(b, i, spare)| split(fsc, b, i, spare))
+}
+
+/// `fsc` with choice `i` of block `b` sent to node `spare`, which becomes
+/// a copy of that choice's next node.
+fn split(fsc: &Fsc, b: usize, i: usize, spare: usize) -> Fsc {
+    let observations = fsc.num_observations();
+    let copied = fsc.blocks[b][i].next;
+    let mut split = fsc.clone();
+    for o in 0..observations {
+        split.blocks[spare * observations + o] = fsc.blocks[copied * observations + o].clone();
+    }
+    split.blocks[b][i].next = spare;
+    split
+}
+
 /// The controllers one move away from `fsc` in block `b`: each choice
-/// dropped (if the block has several), then each of `pairs` alone (unless
-/// the block is already that pair alone).
-fn moves<'a>(fsc: &'a Fsc, b: usize, pairs: &'a [Choice]) -> impl Iterator<Item = Fsc> + 'a {
+/// dropped (if the block has several), then each of `pairs` alone.
+fn block_moves<'a>(fsc: &'a Fsc, b: usize, pairs: &'a [Choice]) -> impl Iterator<Item = Fsc> + 'a {
     let block = &fsc.blocks[b];
     let drops = (0..block.len())
         .filter(move |_| block.len() > 1)
@@ -92,69 +246,83 @@ fn moves<'a>(fsc: &'a Fsc, b: usize, pairs: &'a [Choice]) -> impl Iterator<Item 
                 .collect();
             with_block(fsc, b, renormalised)
         });
-    let singles = pairs
+    drops.chain(single_moves(fsc, b, pairs))
+}
+
+/// `fsc` with block `b` playing one of `pairs` with probability 1, for
+/// each pair but the one the block already plays alone.
+fn single_moves<'a>(fsc: &'a Fsc, b: usize, pairs: &'a [Choice]) -> impl Iterator<Item = Fsc> + 'a {
+    let block = &fsc.blocks[b];
+    pairs
         .iter()
         .filter(move |pair| {
             !(block.len() == 1 && (block[0].next, block[0].action) == (pair.next, pair.action))
         })
-        .map(move |pair| {
-            let single = Choice {
-                probability: 1.0,
-                logit: None,
-                ..*pair
-            };
-            with_block(fsc, b, vec![single])
-        });
-    drops.chain(singles)
+        .map(move |pair| with_block(fsc, b, vec![certain(pair)]))
 }
 
-/// [`climb`] from `start` for at most half the time to `deadline`, then
-/// from random memoryless deterministic defenders (each block `(g, o)` one
-/// enabled pair `(g, u)`, `u` uniformly drawn from `rng`; the climb adds
-/// memory) until `deadline`; returns the end point with the highest
-/// certified lower bound.
+/// `pair` played with probability 1.
+fn certain(pair: &Choice) -> Choice {
+    Choice {
+        probability: 1.0,
+        logit: None,
+        ..*pair
+    }
+}
+
+/// [`climb`] from `start` and from `restarts` random memoryless
+/// deterministic defenders (each block `(g, o)` one enabled pair `(g, u)`,
+/// `u` uniformly drawn from a stream seeded by `rng`; the climb adds
+/// memory), all in parallel, each until it ends or spends `effort`; returns the
+/// end point with the highest certified lower bound (the first such, in
+/// the order `start`, then the restarts).
 pub fn climb_with_restarts(
     game: &Posg,
     not_phi: &Dra,
     start: &Fsc,
+    restarts: usize,
     rng: &mut ChaCha8Rng,
-    deadline: Instant,
-) -> Result<Fsc, CertifyError> {
+    effort: Effort,
+) -> Result<Climbed, CertifyError> {
     let universe = Fsc::uniform_enabled(Role::Defender, start.num_nodes(), game.defender());
-    let now = Instant::now();
-    let halfway = now + deadline.saturating_duration_since(now) / 2;
-    let mut best = climb(game, not_phi, start, Some(halfway))?;
-    let mut best_bound = lower_value_or_trivial(game, not_phi, &best)?;
-    while Instant::now() < deadline {
-        let mut random = start.clone();
-        // Memoryless draws: every block keeps its node (the climb adds memory).
-        let observations = random.num_observations();
-        for (b, (block, pairs)) in random.blocks.iter_mut().zip(&universe.blocks).enumerate() {
-            let stay: Vec<&Choice> = pairs
-                .iter()
-                .filter(|p| p.next == b / observations)
-                .collect();
-            let pair = *stay[rng.random_range(0..stay.len())];
-            *block = vec![Choice {
-                probability: 1.0,
-                logit: None,
-                ..pair
-            }];
-        }
-        let end = climb(game, not_phi, &random, Some(deadline))?;
-        let bound = lower_value_or_trivial(game, not_phi, &end)?;
-        if bound > best_bound {
-            (best, best_bound) = (end, bound);
-        }
+    let mut starts = vec![start.clone()];
+    for _ in 0..restarts {
+        let mut stream = ChaCha8Rng::seed_from_u64(rng.random());
+        starts.push(random_memoryless(start, &universe, &mut stream));
     }
-    Ok(best)
+    let ends = starts
+        .par_iter()
+        .map(|from| climb(game, not_phi, from, effort))
+        .collect::<Result<Vec<_>, _>>()?;
+    let mut ends = ends.into_iter();
+    let first = ends.next().expect("the search climbs from the start");
+    Ok(ends.fold(
+        first,
+        |best, end| if end.bound > best.bound { end } else { best },
+    ))
+}
+
+/// `shape` (nodes, initial distribution) with each block `(g, o)` playing
+/// one of `universe`'s pairs `(g, u)` with probability 1, drawn uniformly
+/// from `rng`.
+fn random_memoryless(shape: &Fsc, universe: &Fsc, rng: &mut ChaCha8Rng) -> Fsc {
+    let mut random = shape.clone();
+    let observations = random.num_observations();
+    for (b, (block, pairs)) in random.blocks.iter_mut().zip(&universe.blocks).enumerate() {
+        let stay: Vec<&Choice> = pairs
+            .iter()
+            .filter(|p| p.next == b / observations)
+            .collect();
+        *block = vec![certain(stay[rng.random_range(0..stay.len())])];
+    }
+    random
 }
 
 /// Which blocks `(g, o)` of the defender `fsc` can be used in `game`
 /// against any adversary: those of the pairs `(s, g)` reachable from the
 /// initial states and nodes, where `o` is an observation of `s`. A move in
 /// any other block changes no value.
-fn visited_blocks(game: &Posg, fsc: &Fsc) -> Vec<bool> {
+fn blocks_in_use(game: &Posg, fsc: &Fsc) -> Vec<bool> {
     let nodes = fsc.num_nodes();
     let observations = fsc.num_observations();
     let mut seen = vec![false; game.num_states() * nodes];
@@ -198,16 +366,18 @@ fn with_block(fsc: &Fsc, b: usize, choices: Vec<Choice>) -> Fsc {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::game::file::from_json_str;
     use crate::game::grid::GridSpec;
     use crate::optimise::truncated;
     use crate::pipeline::Automata;
 
-    /// From the worst deterministic start (every block on the first enabled
-    /// pair) on a 4x4 grid, the climb raises the bound and ends at a
-    /// deterministic controller that no single change certifies higher.
-    #[test]
-    fn the_climb_ends_at_a_deterministic_local_optimum_of_the_bound() {
-        let game = GridSpec {
+    const UNLIMITED: Effort = Effort {
+        evaluations: usize::MAX,
+        deadline: None,
+    };
+
+    fn grid_4x4() -> Posg {
+        GridSpec {
             width: 4,
             height: 4,
             unsafe_cells: vec![5, 10],
@@ -215,55 +385,120 @@ mod tests {
             ..GridSpec::default()
         }
         .build()
-        .unwrap();
-        let not_phi = Automata::from_ltl("!unsafe U goal")
-            .unwrap()
-            .not_phi
-            .unwrap();
-        let uniform = Fsc::uniform_enabled(Role::Defender, 1, game.defender());
-        let start = truncated(&uniform, f64::INFINITY).unwrap();
+        .unwrap()
+    }
+
+    fn not_phi(formula: &str) -> Dra {
+        Automata::from_ltl(formula).unwrap().not_phi.unwrap()
+    }
+
+    /// Every block on its first enabled pair (next node 0): node 0 only is
+    /// in use, and every node plays the same actions.
+    fn first_pairs(game: &Posg, nodes: usize) -> Fsc {
+        let uniform = Fsc::uniform_enabled(Role::Defender, nodes, game.defender());
+        truncated(&uniform, f64::INFINITY).unwrap()
+    }
+
+    /// From the worst deterministic start on a 4x4 grid, the climb raises
+    /// the bound and ends at a deterministic controller that no single
+    /// change certifies higher.
+    #[test]
+    fn the_climb_ends_at_a_deterministic_local_optimum_of_the_bound() {
+        let game = grid_4x4();
+        let not_phi = not_phi("!unsafe U goal");
+        let start = first_pairs(&game, 1);
         let before = lower_value_or_trivial(&game, &not_phi, &start).unwrap();
-        let found = climb(&game, &not_phi, &start, None).unwrap();
-        let reached = lower_value_or_trivial(&game, &not_phi, &found).unwrap();
+        let found = climb(&game, &not_phi, &start, UNLIMITED).unwrap();
+        let reached = lower_value_or_trivial(&game, &not_phi, &found.defender).unwrap();
+        assert_eq!(reached, found.bound);
         assert!(reached > before + 0.1, "{before} -> {reached}");
-        assert!(found.blocks.iter().all(|block| block.len() == 1));
-        for (b, pairs) in uniform.blocks.iter().enumerate() {
-            for neighbour in moves(&found, b, pairs) {
+        assert!(found.defender.blocks.iter().all(|block| block.len() == 1));
+        let universe = Fsc::uniform_enabled(Role::Defender, 1, game.defender());
+        for (b, pairs) in universe.blocks.iter().enumerate() {
+            for neighbour in block_moves(&found.defender, b, pairs) {
                 let value = lower_value_or_trivial(&game, &not_phi, &neighbour).unwrap();
                 assert!(value <= reached + IMPROVEMENT, "block {b}: {value}");
             }
         }
     }
 
-    /// The restarts keep the best end point: on the 4x4 grid from the worst
-    /// start it certifies at least what the climb from that start reaches,
-    /// and it is deterministic (restarts are memoryless, the climb may add
-    /// memory; here the controller has 2 nodes).
+    /// The cue game (tests/stopping.rs): the defender sees the adversary's
+    /// cue once and must later answer L after A, R after B. From two nodes
+    /// that both answer L, with node 1 unused, no single-block change
+    /// raises the bound 0 (a second node in use still answers L); the
+    /// memory move (after B, a copy of node 0 that answers R) wins surely.
     #[test]
-    fn restarts_keep_the_best_end_point() {
-        use rand::SeedableRng;
-        let game = GridSpec {
-            width: 4,
-            height: 4,
-            unsafe_cells: vec![5, 10],
-            goal_cells: vec![15],
-            ..GridSpec::default()
-        }
-        .build()
-        .unwrap();
-        let not_phi = Automata::from_ltl("!unsafe U goal")
-            .unwrap()
-            .not_phi
-            .unwrap();
-        let uniform = Fsc::uniform_enabled(Role::Defender, 2, game.defender());
-        let start = truncated(&uniform, f64::INFINITY).unwrap();
-        let climbed = climb(&game, &not_phi, &start, None).unwrap();
-        let alone = lower_value_or_trivial(&game, &not_phi, &climbed).unwrap();
-        let mut rng = ChaCha8Rng::seed_from_u64(5);
-        let deadline = Instant::now() + std::time::Duration::from_millis(300);
-        let best = climb_with_restarts(&game, &not_phi, &start, &mut rng, deadline).unwrap();
-        let reached = lower_value_or_trivial(&game, &not_phi, &best).unwrap();
-        assert!(reached >= alone - 1e-12, "{reached} below {alone}");
-        assert!(best.blocks.iter().all(|block| block.len() == 1));
+    fn memory_moves_add_the_memory_a_single_change_cannot() {
+        let game = from_json_str(REMEMBER_THE_CUE, "cue.posg.json").unwrap();
+        let not_phi = not_phi("F goal");
+        let start = first_pairs(&game, 2);
+        let universe = Fsc::uniform_enabled(Role::Defender, 2, game.defender());
+        let landscape = Landscape {
+            game: &game,
+            not_phi: &not_phi,
+            pairs: universe.blocks,
+            effort: UNLIMITED,
+            evaluated: Cell::new(0),
+        };
+        let from = Climbed {
+            bound: landscape.bound(&start).unwrap(),
+            defender: start.clone(),
+        };
+        assert_eq!(from.bound, 0.0);
+        assert!(sweep(&landscape, &from).unwrap().is_none());
+        let found = climb(&game, &not_phi, &start, UNLIMITED).unwrap();
+        assert!((found.bound - 1.0).abs() < 1e-9, "{}", found.bound);
+        let in_use = blocks_in_use(&game, &found.defender);
+        assert!(
+            in_use[game.defender().num_observations()..]
+                .iter()
+                .any(|&used| used)
+        );
     }
+
+    /// The restarts keep the best end point and are reproducible: on the
+    /// 4x4 grid from the worst start they certify at least what the climb
+    /// from that start reaches, the same defender for the same seed, and a
+    /// deterministic one.
+    #[test]
+    fn restarts_keep_the_best_end_point_and_are_reproducible() {
+        let game = grid_4x4();
+        let not_phi = not_phi("!unsafe U goal");
+        let start = first_pairs(&game, 2);
+        let alone = climb(&game, &not_phi, &start, UNLIMITED).unwrap();
+        let search = || {
+            let mut rng = ChaCha8Rng::seed_from_u64(5);
+            climb_with_restarts(&game, &not_phi, &start, 3, &mut rng, UNLIMITED).unwrap()
+        };
+        let best = search();
+        assert!(
+            best.bound >= alone.bound,
+            "{} below {}",
+            best.bound,
+            alone.bound
+        );
+        assert_eq!(best.defender, search().defender);
+        assert!(best.defender.blocks.iter().all(|block| block.len() == 1));
+    }
+
+    const REMEMBER_THE_CUE: &str = r#"{"posg": 1,
+    "states": ["start", "cueA", "cueB", "askA", "askB", "goal", "trap"],
+    "initial": {"start": 1.0},
+    "labels": {"goal": ["goal"]},
+    "defender": {"actions": ["L", "R"], "observations": ["blank", "A", "B", "ask"],
+                 "observe": {"start": {"blank": 1.0}, "cueA": {"A": 1.0}, "cueB": {"B": 1.0},
+                             "askA": {"ask": 1.0}, "askB": {"ask": 1.0},
+                             "goal": {"blank": 1.0}, "trap": {"blank": 1.0}}},
+    "adversary": {"actions": ["a", "b"], "observe": "full"},
+    "transitions": [
+        {"state": "start", "defender": "*", "adversary": "a", "next": {"cueA": 1.0}},
+        {"state": "start", "defender": "*", "adversary": "b", "next": {"cueB": 1.0}},
+        {"state": "cueA", "defender": "*", "adversary": "*", "next": {"askA": 1.0}},
+        {"state": "cueB", "defender": "*", "adversary": "*", "next": {"askB": 1.0}},
+        {"state": "askA", "defender": "L", "adversary": "*", "next": {"goal": 1.0}},
+        {"state": "askA", "defender": "R", "adversary": "*", "next": {"trap": 1.0}},
+        {"state": "askB", "defender": "R", "adversary": "*", "next": {"goal": 1.0}},
+        {"state": "askB", "defender": "L", "adversary": "*", "next": {"trap": 1.0}},
+        {"state": "goal", "defender": "*", "adversary": "*", "next": {"goal": 1.0}},
+        {"state": "trap", "defender": "*", "adversary": "*", "next": {"trap": 1.0}}]}"#;
 }

@@ -695,6 +695,13 @@ struct Chosen {
 }
 
 impl Chosen {
+    /// Whether the chosen defender's score is within `tolerance` of the
+    /// upper bound: no defender can certify more than that.
+    fn bracket_closed(&self, tolerance: f64) -> bool {
+        self.upper_bound
+            .is_some_and(|upper| upper - self.score <= tolerance)
+    }
+
     /// Records the candidate `name` with its score (and best response, if
     /// `judge` computed one) and takes it when it scores higher than the
     /// chosen defender.
@@ -790,15 +797,21 @@ fn finalise(
                     chosen.consider(name, candidate, scored, &judge);
                 }
             }
-            if let Some(c) = search.take() {
-                let deadline = settings.local_search_deadline(started, Instant::now());
+            // A bracket already closed leaves the search nothing to find.
+            let open = !chosen.bracket_closed(settings.gap_tolerance);
+            if let Some(c) = search.take().filter(|_| open) {
                 let found = local_search::climb_with_restarts(
                     game,
                     c.not_phi,
                     &chosen.defender,
+                    settings.local_search_restarts,
                     &mut run.rng,
-                    deadline,
-                )?;
+                    local_search::Effort {
+                        evaluations: settings.local_search_evaluations,
+                        deadline: settings.final_deadline(started, Instant::now()),
+                    },
+                )?
+                .defender;
                 if found != chosen.defender {
                     candidates.push(("local-search".into(), found));
                 }

@@ -153,15 +153,26 @@ pub struct Settings {
     #[arg(long = "no-round", action = clap::ArgAction::SetFalse)]
     pub round: bool,
     /// With rounding and a certified lower bound: from the best rounded
-    /// candidate, then from random memoryless deterministic defenders,
-    /// change one block at a time (drop a choice, or play one enabled
-    /// (next node, action) pair) while that raises the certified lower
-    /// bound (docs/method.md section 6, local search), and offer the best
-    /// end point as the candidate `local-search`. It takes half the
-    /// structure's run time (at least a second), and ends at the time
-    /// budget's final deadline; off: `--no-local-search`.
+    /// candidate and from `local_search_restarts` random memoryless
+    /// deterministic defenders, change the support one block at a time
+    /// (drop a choice, play one enabled (next node, action) pair, or give a
+    /// choice a copy of its next node with one change there) while that
+    /// raises the certified lower bound (docs/method.md section 6, local
+    /// search), and offer the best end point as the candidate
+    /// `local-search`. Each climb ends by itself, after
+    /// `local_search_evaluations` bounds, or at the time budget's final
+    /// deadline; off: `--no-local-search`.
     #[arg(long = "no-local-search", action = clap::ArgAction::SetFalse)]
     pub local_search: bool,
+    /// How many random memoryless starts the local search climbs from
+    /// besides the best candidate (in parallel; seeded from `seed`).
+    #[arg(long, default_value_t = Settings::default().local_search_restarts)]
+    pub local_search_restarts: usize,
+    /// The most certified lower bounds one climb of the local search
+    /// evaluates (a deterministic limit on its effort, so that a seed
+    /// gives the same search on every machine).
+    #[arg(long, default_value_t = Settings::default().local_search_evaluations)]
+    pub local_search_evaluations: usize,
     /// On games with a certified lower bound, wherever the max-min loop's
     /// stall rule is judged (see `stall_checks`) and when the loop stops,
     /// ascend the certified lower bound itself from the best defender
@@ -232,6 +243,8 @@ impl Default for Settings {
             single_player_ascent: true,
             round: true,
             local_search: true,
+            local_search_restarts: 16,
+            local_search_evaluations: 300,
             guarantee_ascent: true,
             solver_tolerance: crate::solver::DEFAULT_TOLERANCE,
             solver: SolverMethod::Auto,
@@ -248,12 +261,6 @@ impl Default for Settings {
 /// responses get at least, however late they start.
 const FINAL_SHARE_OF_BUDGET: f64 = 0.1;
 
-/// The share of a structure's run time that its local search gets.
-pub const LOCAL_SEARCH_SHARE: f64 = 0.5;
-
-/// The least time the local search gets, however quick the run before it.
-pub const MIN_LOCAL_SEARCH_SECONDS: f64 = 1.0;
-
 impl Settings {
     /// With a time budget, when the final best responses of a structure whose
     /// run began at `started` must end: at the end of the budget, or a tenth
@@ -264,19 +271,6 @@ impl Settings {
             let share = Duration::from_secs_f64(self.time_budget * FINAL_SHARE_OF_BUDGET);
             (started + budget).max(now + share)
         })
-    }
-
-    /// When the local search of a structure whose run began at `started`
-    /// must end, starting at `now`: after [`LOCAL_SEARCH_SHARE`] of the
-    /// time the run took (at least [`MIN_LOCAL_SEARCH_SECONDS`]), and with a
-    /// time budget at [`Self::final_deadline`] if that is sooner.
-    pub fn local_search_deadline(&self, started: Instant, now: Instant) -> Instant {
-        let share = now
-            .saturating_duration_since(started)
-            .mul_f64(LOCAL_SEARCH_SHARE);
-        let own = now + share.max(Duration::from_secs_f64(MIN_LOCAL_SEARCH_SECONDS));
-        self.final_deadline(started, now)
-            .map_or(own, |final_deadline| own.min(final_deadline))
     }
 
     /// The linear solver's settings: [`Self::solver`], [`Self::solver_tolerance`]
