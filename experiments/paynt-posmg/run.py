@@ -213,6 +213,34 @@ def cached(path, compute, only_cached=False):
     return record
 
 
+def seed_peer_records(path, models_dir, timeout):
+    """Writes the cached PAYNT and Storm records of every row of the earlier
+    results CSV at `path` whose records are missing, so that only posg-fsc
+    runs again. Values go back to the tools' own (p, not 1 - p)."""
+    with open(path) as handle:
+        lines = [line for line in handle if not line.startswith("#")]
+    for row in csv.DictReader(lines):
+        directory = os.path.join(models_dir, row["model"])
+        if not os.path.isdir(directory):
+            continue
+        _, direction, _ = prop_of(directory)
+        number = lambda text: float(text) if text else None
+        paynt = os.path.join(directory, f"paynt-{row['k']}-t{timeout}.json")
+        if not os.path.exists(paynt):
+            with open(paynt, "w") as handle:
+                json.dump({"command": f"from {path}", "value": number(row["paynt_value"]),
+                           "status": row["paynt_status"],
+                           "synthesis_seconds": number(row["paynt_synthesis_s"]),
+                           "wall_seconds": number(row["paynt_wall_s"]),
+                           "cpu_seconds": number(row["paynt_cpu_s"])}, handle, indent=1)
+        storm = os.path.join(directory, "storm.json")
+        if not os.path.exists(storm):
+            value = defender(number(row["fully_observable_defender_value"]), direction)
+            with open(storm, "w") as handle:
+                json.dump({"value": value, "states": int(row["states"]),
+                           "player": prop_of(directory)[0]}, handle, indent=1)
+
+
 def defender(value, direction):
     """A probability of F goal as the defender's value (1 - p when it minimises)."""
     if value is None:
@@ -231,11 +259,17 @@ def main():
                         help="posg-fsc's --time-budget per structure (s; default: none)")
     parser.add_argument("--phase", choices=["paynt", "posg", "all", "csv"], default="all",
                         help="csv: write the CSV from the cached records only")
+    parser.add_argument("--peers-from", metavar="CSV",
+                        help="take PAYNT's and Storm's records from this earlier results CSV "
+                             "where none is cached (rerun posg-fsc alone; the CSV's first line "
+                             "then names it)")
     parser.add_argument("--models", nargs="*", default=MODELS)
     parser.add_argument("--out", default=os.path.join(ROOT, "results", "paynt-posmg.csv"))
     args = parser.parse_args()
     models_dir = os.path.join(args.work, "models")
     prepare(models_dir, args.repo)
+    if args.peers_from:
+        seed_peer_records(args.peers_from, models_dir, args.timeout)
     if args.phase != "paynt":
         build()
     if args.phase == "posg":
