@@ -220,18 +220,93 @@ fn paynts_controllers_keep_paynts_values() {
     assert!((v - 225.0 / 512.0).abs() < 1e-12, "{v}");
 }
 
+/// PAYNT's optimal 1-memory controller for its attacker-one-defender
+/// (`python -m paynt attacker-one-defender --fsc-memory-size 1`, PAYNT
+/// 0.5.0): `A(P0,Oo,M0)` for every observation of the defender's states.
+const ATTACKER_ONE_DEFENDER_PAYNT_1: [(&str, &str); 28] = [
+    ("o1", "dstay"),
+    ("o2", "ddown"),
+    ("o8", "dup"),
+    ("o9", "ddown"),
+    ("o10", "dstay"),
+    ("o11", "ddown"),
+    ("o12", "dup"),
+    ("o13", "ddown"),
+    ("o14", "ddown"),
+    ("o15", "ddown"),
+    ("o16", "dstay"),
+    ("o17", "dstay"),
+    ("o28", "dup"),
+    ("o29", "dup"),
+    ("o30", "dup"),
+    ("o31", "dup"),
+    ("o32", "dup"),
+    ("o33", "dup"),
+    ("o34", "dup"),
+    ("o35", "dup"),
+    ("o40", "__NOLABEL__"),
+    ("o41", "__NOLABEL__"),
+    ("o42", "__NOLABEL__"),
+    ("o43", "__NOLABEL__"),
+    ("o44", "__NOLABEL__"),
+    ("o45", "__NOLABEL__"),
+    ("o46", "__NOLABEL__"),
+    ("o47", "__NOLABEL__"),
+];
+
+/// PAYNT's value of that controller, from its own check
+/// (`P(F goal) = 0.9812395549976761` against the best opponent).
+const ATTACKER_ONE_DEFENDER_PAYNT_1_VALUE: f64 = 1.0 - 0.9812395549976761;
+
+/// PAYNT's optimum is a deterministic controller that a softmax controller
+/// only approaches, and whose certified bound is far above that of any
+/// controller near it (docs/method.md section 6): the local search finds
+/// it, where gradient play and rounding end at 0.016319.
+#[test]
+fn paynts_optimum_on_attacker_one_defender_is_certified_and_reached_by_solve() {
+    let data = "tests/data/paynt/attacker-one-defender";
+    let import = read(Path::new(&format!("{data}.drn"))).unwrap();
+    let props = std::fs::read_to_string(format!("{data}.props")).unwrap();
+    let formula = parse_props(&props).unwrap().objective.to_string();
+    assert_eq!(formula, "G !goal");
+    let rules: Vec<_> = ATTACKER_ONE_DEFENDER_PAYNT_1
+        .iter()
+        .map(|&(observation, action)| (0, observation, action, 0))
+        .collect();
+    let paynt = certified(&import.game, &formula, &paynt_controller(1, &rules));
+    assert!(
+        (paynt - ATTACKER_ONE_DEFENDER_PAYNT_1_VALUE).abs() < 1e-9,
+        "{paynt}"
+    );
+    let dir = temp_dir("attacker-one-defender");
+    let summary = solve_drn(&format!("{data}.drn"), &format!("{data}.props"), &dir);
+    let lower = summary["certified"]["certified_lower"].as_f64().unwrap();
+    assert!(
+        lower >= paynt - 1e-9,
+        "solve certified {lower}, PAYNT {paynt}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 fn temp_dir(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("posg-fsc-{name}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     dir
 }
 
-/// `posg-fsc solve` on the DRN file and property file; the summary.
+/// `posg-fsc solve` on the pennies DRN file and the property file `props`
+/// (1 node, seed 1); the summary.
 fn solve(props: &str, out: &Path) -> Value {
+    solve_drn(PENNIES, props, out)
+}
+
+/// `posg-fsc solve DRN --props PROPS --def-nodes 1 --seed 1` into `out`,
+/// defaults otherwise; the summary.
+fn solve_drn(drn: &str, props: &str, out: &Path) -> Value {
     let output = Command::new(env!("CARGO_BIN_EXE_posg-fsc"))
         .args([
             "solve",
-            PENNIES,
+            drn,
             "--props",
             props,
             "--def-nodes",
