@@ -124,7 +124,7 @@ pub fn climb(
         effort,
         evaluated: Cell::new(0),
     };
-    let mut current = climb_within_memory(
+    let mut current = climb_by_single_moves(
         &landscape,
         Climbed {
             bound: landscape.bound(start)?,
@@ -153,7 +153,7 @@ fn first_improving_split(
             defender: split,
             bound: current.bound,
         };
-        let end = climb_within_memory(landscape, from)?;
+        let end = climb_by_single_moves(landscape, from)?;
         if end.bound > current.bound + IMPROVEMENT {
             return Ok(Some(end));
         }
@@ -163,7 +163,7 @@ fn first_improving_split(
 
 /// Sweeps of single-block moves ([`sweep`]) from `from` until one changes
 /// nothing.
-fn climb_within_memory(landscape: &Landscape<'_>, from: Climbed) -> Result<Climbed, CertifyError> {
+fn climb_by_single_moves(landscape: &Landscape<'_>, from: Climbed) -> Result<Climbed, CertifyError> {
     let mut current = from;
     while let Some(better) = sweep(landscape, &current)? {
         current = better;
