@@ -313,12 +313,18 @@ def main():
                         help="posg-fsc runs are killed after this many seconds")
     parser.add_argument("--beat-timeout", type=int, default=30,
                         help="limit (s) of the second GD run, towards P>=best+1e-4")
+    parser.add_argument("--peers-from", metavar="JSON",
+                        help="take PAYNT's and Storm GD's runs from this earlier sidecar "
+                             "(results/pomdp-peers.json) where none is cached: posg-fsc runs "
+                             "again alone; a GD run asked against another bound still runs")
     parser.add_argument("--models", nargs="*", default=list(MODELS))
     parser.add_argument("--out", default=os.path.join(ROOT, "results", "pomdp-peers.csv"))
     args = parser.parse_args()
     build()
     models_dir = os.path.join(args.work, "models")
     states = prepare(models_dir, args.repo)
+    if args.peers_from:
+        seed_peer_runs(args, models_dir)
     records, rows = [], []
     for name in args.models:
         directory = os.path.join(models_dir, name)
@@ -360,6 +366,25 @@ def main():
     write(args, rows, records)
 
 
+def seed_peer_runs(args, models_dir):
+    """Writes the cached runs of PAYNT and Storm GD from the earlier sidecar
+    `args.peers_from` where they are missing. A GD run's record holds the
+    bound it was asked for; it stands as it was, whatever posg-fsc now finds."""
+    with open(args.peers_from) as handle:
+        runs = json.load(handle)["runs"]
+    files = {"paynt": "paynt-{k}-t{t}.json", "storm-gd": "gd-{k}-t{t}.json",
+             "storm-gd>=best-0.01": "gd-near-{k}-t{t}.json", "storm-gd>best": "gd-beat-{k}-t{b}.json"}
+    for run in runs:
+        if run["tool"] not in files or run["model"] not in MODELS:
+            continue
+        name = files[run["tool"]].format(k=run["k"], t=args.timeout, b=args.beat_timeout)
+        path = os.path.join(models_dir, run["model"], name)
+        if not os.path.exists(path):
+            record = {key: value for key, value in run.items() if key not in ("model", "k", "tool")}
+            with open(path, "w") as handle:
+                json.dump(record, handle, indent=1)
+
+
 def best_tools(case):
     """The tools within TOLERANCE of the best value found in the case."""
     values = {tool: r["value"] for tool, r in case.items() if r["value"] is not None}
@@ -386,6 +411,7 @@ def write(args, rows, records):
                          f"{TOLERANCE}, run only where the first GD run met its bound, "
                          f"SIGINT after {args.beat_timeout} s",
         "versions": versions(),
+        "peers_from": args.peers_from,
         "values": "probability of the property's path formula (1 - p for Pmin)",
         "cpu_seconds": "user+sys of the child process and its children (getrusage deltas)",
     }

@@ -88,7 +88,7 @@ const HEADINGS: &[(&str, &[&str])] = &[
             "round",
             "local_search",
             "local_search_restarts",
-            "local_search_evaluations",
+            "local_search_work",
         ],
     ),
     (

@@ -806,10 +806,11 @@ fn finalise(
                     &chosen.defender,
                     settings.local_search_restarts,
                     &mut run.rng,
-                    local_search::Effort {
-                        evaluations: settings.local_search_evaluations,
-                        deadline: settings.final_deadline(started, Instant::now()),
-                    },
+                    local_search::Effort::of_work(
+                        settings.local_search_work,
+                        game.num_states() * chosen.defender.num_nodes() * c.not_phi.num_states(),
+                        settings.final_deadline(started, Instant::now()),
+                    ),
                 )?
                 .defender;
                 if found != chosen.defender {

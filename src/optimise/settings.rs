@@ -159,20 +159,23 @@ pub struct Settings {
     /// choice a copy of its next node with one change there) while that
     /// raises the certified lower bound (docs/method.md section 6, local
     /// search), and offer the best end point as the candidate
-    /// `local-search`. Each climb ends by itself, after
-    /// `local_search_evaluations` bounds, or at the time budget's final
-    /// deadline; off: `--no-local-search`.
+    /// `local-search`. Each climb ends by itself, when it has spent
+    /// `local_search_work`, or at the time budget's final deadline; off:
+    /// `--no-local-search`.
     #[arg(long = "no-local-search", action = clap::ArgAction::SetFalse)]
     pub local_search: bool,
     /// How many random memoryless starts the local search climbs from
     /// besides the best candidate (in parallel; seeded from `seed`).
     #[arg(long, default_value_t = Settings::default().local_search_restarts)]
     pub local_search_restarts: usize,
-    /// The most certified lower bounds one climb of the local search
-    /// evaluates (a deterministic limit on its effort, so that a seed
-    /// gives the same search on every machine).
-    #[arg(long, default_value_t = Settings::default().local_search_evaluations)]
-    pub local_search_evaluations: usize,
+    /// The most work one climb of the local search spends, counted as
+    /// bound evaluations times the size of the product they analyse
+    /// (`|S| x defender nodes x |Q|` of the automaton of `!phi`): 120,000
+    /// is 300 evaluations on a 400-state product, 30 on a 4,000-state one.
+    /// A count, not seconds, so a seed gives the same search on every
+    /// machine.
+    #[arg(long, default_value_t = Settings::default().local_search_work)]
+    pub local_search_work: usize,
     /// On games with a certified lower bound, wherever the max-min loop's
     /// stall rule is judged (see `stall_checks`) and when the loop stops,
     /// ascend the certified lower bound itself from the best defender
@@ -244,7 +247,7 @@ impl Default for Settings {
             round: true,
             local_search: true,
             local_search_restarts: 16,
-            local_search_evaluations: 300,
+            local_search_work: 120_000,
             guarantee_ascent: true,
             solver_tolerance: crate::solver::DEFAULT_TOLERANCE,
             solver: SolverMethod::Auto,
