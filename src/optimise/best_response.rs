@@ -108,23 +108,16 @@ pub fn best_response(
         Err(error) => Err(error),
     };
     let parameters = starts.at.first().map_or(0, |logits| logits.len());
-    for logits in starts.at {
-        let start = map.to_z(logits);
-        keep(minimise_from(
-            objective,
-            defender,
-            start,
-            settings,
-            starts.deadline,
-        ))?;
-    }
-    for _ in 0..starts.restarts {
-        if starts.past_deadline() {
-            break;
-        }
-        let start = (0..parameters)
-            .map(|_| rng.random_range(-START_RANGE..=START_RANGE))
-            .collect();
+    let warm = starts.at.iter().map(|logits| map.to_z(logits));
+    // Every warm start runs; a random one is drawn only before the deadline.
+    let random = (0..starts.restarts)
+        .take_while(|_| !starts.past_deadline())
+        .map(|_| {
+            (0..parameters)
+                .map(|_| rng.random_range(-START_RANGE..=START_RANGE))
+                .collect()
+        });
+    for start in warm.chain(random) {
         keep(minimise_from(
             objective,
             defender,

@@ -514,24 +514,7 @@ mod tests {
         assert!(best.defender.blocks.iter().all(|block| block.len() == 1));
     }
 
-    const REMEMBER_THE_CUE: &str = r#"{"posg": 1,
-    "states": ["start", "cueA", "cueB", "askA", "askB", "goal", "trap"],
-    "initial": {"start": 1.0},
-    "labels": {"goal": ["goal"]},
-    "defender": {"actions": ["L", "R"], "observations": ["blank", "A", "B", "ask"],
-                 "observe": {"start": {"blank": 1.0}, "cueA": {"A": 1.0}, "cueB": {"B": 1.0},
-                             "askA": {"ask": 1.0}, "askB": {"ask": 1.0},
-                             "goal": {"blank": 1.0}, "trap": {"blank": 1.0}}},
-    "adversary": {"actions": ["a", "b"], "observe": "full"},
-    "transitions": [
-        {"state": "start", "defender": "*", "adversary": "a", "next": {"cueA": 1.0}},
-        {"state": "start", "defender": "*", "adversary": "b", "next": {"cueB": 1.0}},
-        {"state": "cueA", "defender": "*", "adversary": "*", "next": {"askA": 1.0}},
-        {"state": "cueB", "defender": "*", "adversary": "*", "next": {"askB": 1.0}},
-        {"state": "askA", "defender": "L", "adversary": "*", "next": {"goal": 1.0}},
-        {"state": "askA", "defender": "R", "adversary": "*", "next": {"trap": 1.0}},
-        {"state": "askB", "defender": "R", "adversary": "*", "next": {"goal": 1.0}},
-        {"state": "askB", "defender": "L", "adversary": "*", "next": {"trap": 1.0}},
-        {"state": "goal", "defender": "*", "adversary": "*", "next": {"goal": 1.0}},
-        {"state": "trap", "defender": "*", "adversary": "*", "next": {"trap": 1.0}}]}"#;
+    /// The cue game of tests/stopping.rs.
+    const REMEMBER_THE_CUE: &str =
+        include_str!("../../tests/data/valid/remember-the-cue.posg.json");
 }
