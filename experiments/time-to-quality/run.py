@@ -7,7 +7,10 @@ their true values) and the POMDP benchmarks, for one or more binaries
 Per case and binary it records, from `curve.csv` and `summary.json`: the
 wall seconds at which the best certified lower bound of any start first
 (the best exact value, for single-player runs, which have no checks)
-came within 1e-2 and 1e-3 of the run's final certified lower bound, the
+came within 1e-2 and 1e-3 of the run's final certified lower bound (the
+returned defender's, reached at the latest when the process ends: a
+candidate of the rounding or of the local search may raise it after the
+last point of the curve; the plot marks it with a dot), the
 final bracket, why it stopped, the phase seconds (thread seconds summed
 over starts), wall and CPU seconds of the whole process.
 
@@ -140,6 +143,10 @@ def run_case(binary, label, case, directory, options):
     certified = summary.get("certified") or {}
     final = certified.get("certified_lower")
     points = best_so_far(os.path.join(out, "curve.csv"))
+    if final is not None:
+        # The returned defender (after rounding and the local search) is
+        # there when the process ends, whether or not the curve shows it.
+        points.append((wall, max(final, points[-1][1]) if points else final))
     phases = best.get("phases", {})
     row = {
         "case": name, "binary": label, "formula": formula, "defender_nodes": k, "adversary_nodes": m,
@@ -173,7 +180,8 @@ def plot(rows, curves, path):
         for (case, label), points in curves.items():
             if case == name and points:
                 xs, ys = zip(*points)
-                axis.step(xs, ys, where="post", label=label)
+                line, = axis.step(xs, ys, where="post", label=label)
+                axis.plot(xs[-1:], ys[-1:], "o", color=line.get_color(), markersize=4)
         axis.set_title(name, fontsize=9)
         axis.set_xscale("symlog", linthresh=0.1)
         axis.set_xlabel("seconds", fontsize=8)
