@@ -12,9 +12,9 @@
 //! enabled `(next node, action)` pair, keeping every change that raises the
 //! certified lower bound (first improvement). Where a sweep over all blocks
 //! changes nothing and a node is unused, it tries memory: one choice is sent
-//! to a copy of its next node (a change of no value by itself) together with
-//! one change in the copy's blocks. It stops when neither raises the bound,
-//! or at the deadline. Restarts from seeded random memoryless defenders run
+//! to a copy of its next node (a change of no value by itself), and sweeps
+//! climb from there. It stops when neither raises the bound, or when its
+//! effort is spent. Restarts from seeded random memoryless defenders run
 //! in parallel; the search is reproducible for a seed unless a deadline
 //! cuts it.
 
@@ -230,17 +230,20 @@ fn sweep(landscape: &Landscape<'_>, from: &Climbed) -> Result<Option<Climbed>, C
 fn splits<'a>(game: &Posg, fsc: &'a Fsc) -> impl Iterator<Item = Fsc> + 'a {
     let in_use = blocks_in_use(game, fsc);
     let observations = fsc.num_observations();
-    let unused = |h: usize| (0..observations).all(|o| !in_use[h * observations + o]);
-    let spare = (0..fsc.num_nodes()).find(|&h| unused(h));
+    let spare =
+        (0..fsc.num_nodes()).find(|&h| (0..observations).all(|o| !in_use[h * observations + o]));
+    let choices_in_use: Vec<(usize, usize)> = (0..in_use.len())
+        .filter(|&b| in_use[b])
+        .flat_map(|b| (0..fsc.blocks[b].len()).map(move |i| (b, i)))
+        .collect();
     spare
+        .map(|spare| (spare, choices_in_use))
         .into_iter()
-        .flat_map(move |spare| {
-            let in_use = in_use.clone();
-            (0..fsc.blocks.len())
-                .filter(move |&b| in_use[b])
-                .flat_map(move |b| (0..fsc.blocks[b].len()).map(move |i| (b, i, spare)))
+        .flat_map(move |(spare, choices)| {
+            choices
+                .into_iter()
+                .map(move |(b, i)| split(fsc, b, i, spare))
         })
-        .map(move |(b, i, spare)| split(fsc, b, i, spare))
 }
 
 /// `fsc` with choice `i` of block `b` sent to node `spare`, which becomes
