@@ -110,9 +110,11 @@ fn outpaced_starts_stop_early_and_the_race_is_reproducible() {
     // every repetition, whatever the threads' timing. The race is the
     // paper's loop's (with the guarantee ascent every start's score jumps
     // to its ascended bound at the first stall judgement, and the starts
-    // stall together).
+    // stall together; with the local search, its bound before the race is
+    // a floor that can outpace every start).
     let paper_loop = Settings {
         guarantee_ascent: false,
+        local_search: false,
         ..Settings::default()
     };
     let grid = GridSpec {

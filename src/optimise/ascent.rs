@@ -163,6 +163,7 @@ pub(super) fn ascend(
         },
         logit_bound: c.bound(),
         max_residual,
+        last_response: None,
     })
 }
 

@@ -15,8 +15,8 @@
 //! to a copy of its next node (a change of no value by itself), and sweeps
 //! climb from there. It stops when neither raises the bound, or when its
 //! effort is spent. Restarts from seeded random memoryless defenders run
-//! in parallel; the search is reproducible for a seed unless a deadline
-//! cuts it.
+//! in parallel rounds, more of them where climbs end early; the search is
+//! reproducible for a seed unless a deadline cuts it.
 
 use std::cell::Cell;
 use std::time::Instant;
@@ -45,43 +45,38 @@ pub struct Climbed {
     pub bound: f64,
 }
 
-/// How long one climb may go on: at most `evaluations` certified lower
-/// bounds, and until `deadline` (with a time budget).
+/// How long one climb may go on: until its bound evaluations have solved
+/// products of `work` states in all (at least one evaluation beyond the
+/// start's), and until `deadline` (with a time budget).
 #[derive(Debug, Clone, Copy)]
 pub struct Effort {
-    /// The most bounds one climb evaluates.
-    pub evaluations: usize,
+    /// The product states (reachable, summed over evaluations) one climb
+    /// may solve.
+    pub work: usize,
     /// When every climb ends, whatever it has evaluated.
     pub deadline: Option<Instant>,
-}
-
-impl Effort {
-    /// The effort of `work` units (bound evaluations times product states)
-    /// on a product of `product_states` states: at least one evaluation
-    /// beyond the start's.
-    pub fn of_work(work: usize, product_states: usize, deadline: Option<Instant>) -> Self {
-        Self {
-            evaluations: (work / product_states.max(1)).max(2),
-            deadline,
-        }
-    }
+    /// A bound that ends the restarts: no defender certifies more than an
+    /// upper bound, so one within the gap tolerance of it is enough
+    /// (`f64::INFINITY`: none known).
+    pub enough: f64,
 }
 
 /// What one climb searches: the game, the automaton of `!phi`, every
 /// enabled `(next node, action)` pair of each block, and its effort (with
-/// the bounds it has evaluated so far).
+/// the bounds it has evaluated so far and the product states they solved).
 struct Landscape<'a> {
     game: &'a Posg,
     not_phi: &'a Dra,
     pairs: Vec<Vec<Choice>>,
     effort: Effort,
     evaluated: Cell<usize>,
+    spent: Cell<usize>,
 }
 
 impl Landscape<'_> {
     /// Whether the climb has spent its effort.
     fn exhausted(&self) -> bool {
-        self.evaluated.get() >= self.effort.evaluations
+        (self.evaluated.get() >= 2 && self.spent.get() >= self.effort.work)
             || self
                 .effort
                 .deadline
@@ -98,7 +93,13 @@ impl Landscape<'_> {
             exact_limit: 0,
             ..SolverSettings::default()
         };
-        match lower_bound_within(self.game, self.not_phi, defender, &settings) {
+        let bound = lower_bound_within(self.game, self.not_phi, defender, &settings);
+        // A product that could not be proved counts as large as the game.
+        let states = bound
+            .as_ref()
+            .map_or(self.game.num_states(), |b| b.mdp_states);
+        self.spent.set(self.spent.get() + states);
+        match bound {
             Ok(bound) => Ok(bound.value),
             Err(error) if error.is_slow_mixing() => Ok(0.0),
             Err(error) => Err(error),
@@ -135,12 +136,14 @@ impl Landscape<'_> {
 /// `game`'s defender with probability 1; where no such move raises the
 /// bound and a node is unused, the splits of [`splits`] followed by such
 /// moves. Stops where no move raises the bound, or when `effort` is spent.
-pub fn climb(
+/// Returns the end point and the work spent (the product states its
+/// evaluations solved).
+fn climb(
     game: &Posg,
     not_phi: &Dra,
     start: &Fsc,
     effort: Effort,
-) -> Result<Climbed, CertifyError> {
+) -> Result<(Climbed, usize), CertifyError> {
     let universe = Fsc::uniform_enabled(Role::Defender, start.num_nodes(), game.defender());
     let landscape = Landscape {
         game,
@@ -148,6 +151,7 @@ pub fn climb(
         pairs: universe.blocks,
         effort,
         evaluated: Cell::new(0),
+        spent: Cell::new(0),
     };
     let mut current = climb_by_single_moves(
         &landscape,
@@ -159,7 +163,7 @@ pub fn climb(
     while let Some(better) = first_improving_split(&landscape, &current)? {
         current = better;
     }
-    Ok(current)
+    Ok((current, landscape.spent.get()))
 }
 
 /// The first split of `current` ([`splits`]) from which single-block
@@ -301,12 +305,22 @@ fn certain(pair: &Choice) -> Choice {
     }
 }
 
-/// [`climb`] from `start` and from `restarts` random memoryless
-/// deterministic defenders (each block `(g, o)` one enabled pair `(g, u)`,
-/// `u` uniformly drawn from a stream seeded by `rng`; the climb adds
-/// memory), all in parallel, each until it ends or spends `effort`; returns the
-/// end point with the highest certified lower bound (the first such, in
-/// the order `start`, then the restarts).
+/// The most rounds of restarts [`climb_with_restarts`] runs.
+const MAX_RESTART_ROUNDS: usize = 16;
+
+/// [`climb`] from `start` and from random memoryless deterministic
+/// defenders (each block `(g, o)` one enabled pair `(g, u)`, `u` uniformly
+/// drawn from a stream seeded by `rng`; the climb adds memory), each until
+/// it ends or spends `effort`. The restarts run in rounds of `restarts`
+/// climbs in parallel (the first also climbs from `start`); another round
+/// follows while the climbs so far have spent less than one round at full
+/// effort (`restarts` times `effort.work`) and none reached `effort.enough`,
+/// up to [`MAX_RESTART_ROUNDS`] rounds and until the deadline: where climbs
+/// end early at local optima
+/// (small products), more of them run. Returns the end point with the
+/// highest certified lower bound (the first such, in the order `start`,
+/// then the restarts as drawn). The rounds depend on counts only, so the
+/// search is reproducible for a seed unless a deadline cuts it.
 pub fn climb_with_restarts(
     game: &Posg,
     not_phi: &Dra,
@@ -316,21 +330,31 @@ pub fn climb_with_restarts(
     effort: Effort,
 ) -> Result<Climbed, CertifyError> {
     let universe = Fsc::uniform_enabled(Role::Defender, start.num_nodes(), game.defender());
-    let mut starts = vec![start.clone()];
-    for _ in 0..restarts {
-        let mut stream = ChaCha8Rng::seed_from_u64(rng.random());
-        starts.push(random_memoryless(start, &universe, &mut stream));
+    let budget = restarts.saturating_mul(effort.work);
+    let mut froms = vec![start.clone()];
+    let (mut best, mut spent): (Option<Climbed>, usize) = (None, 0);
+    for _ in 0..MAX_RESTART_ROUNDS {
+        for _ in 0..restarts {
+            let mut stream = ChaCha8Rng::seed_from_u64(rng.random());
+            froms.push(random_memoryless(start, &universe, &mut stream));
+        }
+        let ends = std::mem::take(&mut froms)
+            .par_iter()
+            .map(|from| climb(game, not_phi, from, effort))
+            .collect::<Result<Vec<_>, _>>()?;
+        for (end, work) in ends {
+            spent = spent.saturating_add(work);
+            if best.as_ref().is_none_or(|b| end.bound > b.bound) {
+                best = Some(end);
+            }
+        }
+        let out_of_time = effort.deadline.is_some_and(|end| Instant::now() >= end);
+        let found_enough = best.as_ref().is_some_and(|b| b.bound >= effort.enough);
+        if restarts == 0 || spent >= budget || out_of_time || found_enough {
+            break;
+        }
     }
-    let ends = starts
-        .par_iter()
-        .map(|from| climb(game, not_phi, from, effort))
-        .collect::<Result<Vec<_>, _>>()?;
-    let mut ends = ends.into_iter();
-    let first = ends.next().expect("the search climbs from the start");
-    Ok(ends.fold(
-        first,
-        |best, end| if end.bound > best.bound { end } else { best },
-    ))
+    Ok(best.expect("the search climbs from the start"))
 }
 
 /// `shape` (nodes, initial distribution) with each block `(g, o)` playing
@@ -404,8 +428,9 @@ mod tests {
     use crate::pipeline::Automata;
 
     const UNLIMITED: Effort = Effort {
-        evaluations: usize::MAX,
+        work: usize::MAX,
         deadline: None,
+        enough: f64::INFINITY,
     };
 
     fn grid_4x4() -> Posg {
@@ -440,7 +465,7 @@ mod tests {
         let not_phi = not_phi("!unsafe U goal");
         let start = first_pairs(&game, 1);
         let before = lower_value_or_trivial(&game, &not_phi, &start).unwrap();
-        let found = climb(&game, &not_phi, &start, UNLIMITED).unwrap();
+        let found = climb(&game, &not_phi, &start, UNLIMITED).unwrap().0;
         let reached = lower_value_or_trivial(&game, &not_phi, &found.defender).unwrap();
         assert!(
             (reached - found.bound).abs() < 1e-12,
@@ -475,6 +500,7 @@ mod tests {
             pairs: universe.blocks,
             effort: UNLIMITED,
             evaluated: Cell::new(0),
+            spent: Cell::new(0),
         };
         let from = Climbed {
             bound: landscape.bound(&start).unwrap(),
@@ -482,7 +508,7 @@ mod tests {
         };
         assert_eq!(from.bound, 0.0);
         assert!(sweep(&landscape, &from).unwrap().is_none());
-        let found = climb(&game, &not_phi, &start, UNLIMITED).unwrap();
+        let found = climb(&game, &not_phi, &start, UNLIMITED).unwrap().0;
         assert!((found.bound - 1.0).abs() < 1e-9, "{}", found.bound);
         let in_use = blocks_in_use(&game, &found.defender);
         assert!(
@@ -501,7 +527,7 @@ mod tests {
         let game = grid_4x4();
         let not_phi = not_phi("!unsafe U goal");
         let start = first_pairs(&game, 2);
-        let alone = climb(&game, &not_phi, &start, UNLIMITED).unwrap();
+        let alone = climb(&game, &not_phi, &start, UNLIMITED).unwrap().0;
         let search = || {
             let mut rng = ChaCha8Rng::seed_from_u64(5);
             climb_with_restarts(&game, &not_phi, &start, 3, &mut rng, UNLIMITED).unwrap()

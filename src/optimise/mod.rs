@@ -184,8 +184,9 @@ pub enum Status {
     Converged,
     /// A [`Cancel`] flag asked the run to stop.
     Cancelled,
-    /// Another start of the portfolio was ahead by more than this one
-    /// gained over the second half of its run (`race.rs`).
+    /// Another start of the portfolio (or the local search before the
+    /// race) was ahead by more than this one gained over the second half of
+    /// its run, or closed the certified gap (`race.rs`).
     Outpaced,
 }
 
@@ -462,6 +463,13 @@ pub fn optimise_structure(
         settings: settings.for_start(start),
         stream: stream + ((start as u64) << 32),
     };
+    let presolved = match (method, certifier) {
+        (Method::MaxMin, Some(c)) if settings.round && settings.local_search => Some(
+            search_supports(game, c, structure, settings, stream, clock)?,
+        ),
+        _ => None,
+    };
+    let presolve_seconds = clock.elapsed().as_secs_f64();
     let runs = match method {
         Method::MaxMin => {
             let racers = (0..settings.starts)
@@ -471,7 +479,10 @@ pub fn optimise_structure(
                     Racer::new(optimiser.with_cancel(cancel), live(i))
                 })
                 .collect();
-            race(racers, settings)
+            let floor = presolved.as_ref().map(|climbed| climbed.bound);
+            let mut finished = race(racers, settings, floor);
+            settle(&mut finished, certifier.is_none(), (clock, floor))?;
+            finished
                 .into_iter()
                 .map(|result| {
                     let (optimiser, outcome) = result?;
@@ -508,7 +519,7 @@ pub fn optimise_structure(
         .collect();
     let best_start = (0..runs.len())
         .reduce(|b, i| {
-            if runs[i].outcome.best.score() > runs[b].outcome.best.score() {
+            if ranks_above(&runs[i].outcome, &runs[b].outcome) {
                 i
             } else {
                 b
@@ -518,7 +529,10 @@ pub fn optimise_structure(
             field: "starts",
             problem: "must be at least 1".into(),
         })?;
-    let mut phases = PhaseSeconds::default();
+    let mut phases = PhaseSeconds {
+        local_search: presolve_seconds,
+        ..PhaseSeconds::default()
+    };
     for run in &runs {
         phases.add(&run.outcome.phases);
     }
@@ -533,11 +547,17 @@ pub fn optimise_structure(
         dra,
         certifier,
         &mut run,
-        upper_bound,
+        (upper_bound, presolved),
         settings,
         (method, clock),
         &mut phases,
     )?;
+    // Whichever candidate closed it, a closed bracket is why the run ended.
+    let status = if chosen.bracket_closed(settings.gap_tolerance) {
+        Status::GapClosed
+    } else {
+        run.outcome.status
+    };
     let objective = &run.objective;
     let outcome = &run.outcome;
     Ok(StructureOutcome {
@@ -553,7 +573,7 @@ pub fn optimise_structure(
             error_bound: objective.largest_error_bound(),
             iterations: outcome.iterations,
             checks: outcome.checks,
-            status: outcome.status,
+            status,
             seconds: clock.elapsed().as_secs_f64(),
             certified_lower: chosen.certified_lower,
             upper_bound: chosen.upper_bound,
@@ -573,6 +593,77 @@ pub fn optimise_structure(
         defender: chosen.defender,
         adversary: chosen.adversary,
     })
+}
+
+/// The full best responses ([`Optimiser::settle`]) of the finished
+/// max-min starts: of the best-scoring start only, or of every start with
+/// `all` (without a certifier the score is the worst case itself, which
+/// settling can lower). `started` is when the structure's run began,
+/// `floor` the bound proved before the race.
+fn settle(
+    finished: &mut [Result<(Optimiser<'_>, RunOutcome), OptimiseError>],
+    all: bool,
+    (started, floor): (Instant, Option<f64>),
+) -> Result<(), OptimiseError> {
+    let best = finished
+        .iter()
+        .enumerate()
+        .filter_map(|(i, result)| Some((i, &result.as_ref().ok()?.1)))
+        .reduce(|b, c| if ranks_above(c.1, b.1) { c } else { b })
+        .map(|(i, _)| i);
+    finished
+        .par_iter_mut()
+        .enumerate()
+        .filter(|(i, _)| all || Some(*i) == best)
+        .try_for_each(|(_, result)| match result {
+            Ok((optimiser, outcome)) => optimiser.settle(outcome, started, floor),
+            Err(_) => Ok(()),
+        })
+}
+
+/// The local search on the supports (`local_search.rs`) before the
+/// max-min race: from the argmax rounding of the structure's defender and
+/// `local_search_restarts` seeded random memoryless ones, on a random
+/// stream of its own (`stream + (2^32 - 1) 2^32`, apart from the starts'),
+/// each climb bounded by `local_search_work` and, with a time budget, by
+/// the final deadline of the run begun at `started`; the restarts end once
+/// a climb is within `gap_tolerance` of the upper bound against the
+/// structure's starting adversary. Its end point's
+/// bound is the race's floor ([`race`]) and the end point a candidate of
+/// the final rounding.
+fn search_supports(
+    game: &Posg,
+    certifier: Certifier<'_>,
+    structure: &Structure,
+    settings: &Settings,
+    stream: u64,
+    started: Instant,
+) -> Result<local_search::Climbed, OptimiseError> {
+    let start = rounding::truncated(&structure.defender, f64::INFINITY)?;
+    let mut rng = ChaCha8Rng::seed_from_u64(settings.seed);
+    rng.set_stream(stream.wrapping_add(u64::from(u32::MAX) << 32));
+    let upper = upper_value_or_trivial(game, certifier.phi, &structure.adversary)?;
+    Ok(local_search::climb_with_restarts(
+        game,
+        certifier.not_phi,
+        &start,
+        settings.local_search_restarts,
+        &mut rng,
+        local_search::Effort {
+            work: settings.local_search_work,
+            deadline: settings.final_deadline(started, Instant::now()),
+            enough: upper - settings.gap_tolerance,
+        },
+    )?)
+}
+
+/// Whether start outcome `a` is kept before `b`: a start that closed the
+/// certified gap first (its argmax rounding, which the final rounding
+/// recovers, may certify more than its incumbent's logits), then the
+/// higher score.
+fn ranks_above(a: &RunOutcome, b: &RunOutcome) -> bool {
+    let closed = |o: &RunOutcome| o.status == Status::GapClosed;
+    (closed(a), a.best.score()) > (closed(b), b.best.score())
 }
 
 /// One start's run and the objective it ran on.
@@ -753,7 +844,7 @@ fn finalise(
     dra: &Dra,
     certifier: Option<Certifier<'_>>,
     run: &mut StartRun,
-    upper_bound: Option<f64>,
+    (upper_bound, presolved): (Option<f64>, Option<local_search::Climbed>),
     settings: &Settings,
     (method, started): (Method, Instant),
     phases: &mut PhaseSeconds,
@@ -776,6 +867,7 @@ fn finalise(
         worst_case_known: true,
     };
     let clock = Instant::now();
+    let mut climb_seconds = 0.0;
     if settings.round {
         let judge = Judge {
             game,
@@ -787,9 +879,17 @@ fn finalise(
             method,
             certifier,
         };
-        // The rounded candidates, then the local search from the best of
-        // them (with a certifier), scored alike.
+        // The rounded candidates and the end point of the search before
+        // the race, then the local search from the best of them (with a
+        // certifier; with restarts unless they ran before the race), scored
+        // alike.
         let mut candidates = rounded_candidates(&chosen.defender)?;
+        let restarts = match &presolved {
+            Some(_) => 0,
+            None => settings.local_search_restarts,
+        };
+        let searched = presolved.map(|climbed| climbed.defender);
+        candidates.extend(searched.clone().map(|d| ("local-search".to_string(), d)));
         let mut search = certifier.filter(|_| settings.local_search);
         while !candidates.is_empty() {
             for (name, candidate) in std::mem::take(&mut candidates) {
@@ -797,29 +897,42 @@ fn finalise(
                     chosen.consider(name, candidate, scored, &judge);
                 }
             }
-            // A bracket already closed leaves the search nothing to find.
-            let open = !chosen.bracket_closed(settings.gap_tolerance);
+            // A bracket already closed leaves the search nothing to find,
+            // and a climb's end point is where it would end again.
+            let open = !chosen.bracket_closed(settings.gap_tolerance)
+                && searched.as_ref() != Some(&chosen.defender);
             if let Some(c) = search.take().filter(|_| open) {
+                let climbing = Instant::now();
                 let found = local_search::climb_with_restarts(
                     game,
                     c.not_phi,
                     &chosen.defender,
-                    settings.local_search_restarts,
+                    restarts,
                     &mut run.rng,
-                    local_search::Effort::of_work(
-                        settings.local_search_work,
-                        game.num_states() * chosen.defender.num_nodes() * c.not_phi.num_states(),
-                        settings.final_deadline(started, Instant::now()),
-                    ),
+                    local_search::Effort {
+                        work: settings.local_search_work,
+                        deadline: settings.final_deadline(started, Instant::now()),
+                        enough: chosen
+                            .upper_bound
+                            .map_or(f64::INFINITY, |u| u - settings.gap_tolerance),
+                    },
                 )?
                 .defender;
+                climb_seconds += climbing.elapsed().as_secs_f64();
                 if found != chosen.defender {
                     candidates.push(("local-search".into(), found));
                 }
             }
         }
         if !chosen.worst_case_known {
-            match judge.best_response(&chosen.defender, &mut run.rng) {
+            // Within a closed bracket any response is within the tolerance
+            // of the truth: the warm start alone.
+            let restarts = if chosen.bracket_closed(settings.gap_tolerance) {
+                0
+            } else {
+                settings.restarts
+            };
+            match judge.best_response(&chosen.defender, restarts, &mut run.rng) {
                 Ok((worst_case, adversary)) => {
                     chosen.worst_case = worst_case;
                     chosen.adversary = adversary;
@@ -832,7 +945,8 @@ fn finalise(
             }
         }
     }
-    phases.rounding += clock.elapsed().as_secs_f64();
+    phases.rounding += clock.elapsed().as_secs_f64() - climb_seconds;
+    phases.local_search += climb_seconds;
     if let (Method::Ascent, Some(c)) = (method, certifier) {
         let clock = Instant::now();
         chosen.certified_lower =
@@ -877,7 +991,7 @@ impl Judge<'_> {
                 .map(|v| (v, None))
                 .map_err(OptimiseError::from),
             (Method::MaxMin, None) => self
-                .best_response(candidate, rng)
+                .best_response(candidate, self.settings.restarts, rng)
                 .map(|found| (found.0, Some(found))),
         };
         match scored {
@@ -897,10 +1011,12 @@ impl Judge<'_> {
     }
 
     /// The best-response value ([`best_response`], started from the run's
-    /// adversary) and the adversary reaching it.
+    /// adversary and `restarts` random adversaries) and the adversary
+    /// reaching it.
     fn best_response(
         &self,
         defender: &Fsc,
+        restarts: usize,
         rng: &mut ChaCha8Rng,
     ) -> Result<(f64, Fsc), OptimiseError> {
         let mut objective = self.objective(defender)?;
@@ -910,7 +1026,7 @@ impl Judge<'_> {
         let found = best_response(
             &mut objective,
             &logits,
-            Starts::new(&[self.adversary_logits], self.settings.restarts).until(self.deadline),
+            Starts::new(&[self.adversary_logits], restarts).until(self.deadline),
             self.settings,
             rng,
         )?;

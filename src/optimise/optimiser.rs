@@ -109,6 +109,9 @@ pub struct PhaseSeconds {
     pub rounding: f64,
     /// The guarantee ascent at the end (method.md section 6).
     pub guarantee: f64,
+    /// The local search on the supports, before the race and after the
+    /// rounding (method.md section 6; wall seconds of its parallel climbs).
+    pub local_search: f64,
 }
 
 impl PhaseSeconds {
@@ -119,6 +122,7 @@ impl PhaseSeconds {
         self.certification += other.certification;
         self.rounding += other.rounding;
         self.guarantee += other.guarantee;
+        self.local_search += other.local_search;
     }
 }
 
@@ -146,6 +150,9 @@ pub struct RunOutcome {
     pub logit_bound: f64,
     /// The largest residual of any linear solve of the run.
     pub max_residual: f64,
+    /// The adversary of the run's last L-BFGS best response (a warm start
+    /// for [`Optimiser::settle`]).
+    pub last_response: Option<Vec<f64>>,
 }
 
 /// What the best-response checks certify with (method.md section 6): the
@@ -178,6 +185,11 @@ impl Run {
     /// check.
     pub fn best_score(&self) -> Option<f64> {
         self.books.best.as_ref().map(Incumbent::score)
+    }
+
+    /// The smallest game upper bound so far (with a certifier).
+    pub fn upper_bound(&self) -> Option<f64> {
+        self.books.upper_bound
     }
 
     /// The number of checks since the logit bound last widened.
@@ -535,16 +547,15 @@ impl<'a> Optimiser<'a> {
         }
     }
 
-    /// The run's outcome, stopped for `status` at `state`; the optimiser
-    /// keeps the last iterate.
+    /// The run's outcome, stopped for `status` at `state` (its incumbent not
+    /// yet settled: [`Self::settle`]); the optimiser keeps the last iterate.
     fn outcome(
         &mut self,
         state: PlayState,
-        mut books: Bookkeeping,
+        books: Bookkeeping,
         status: Status,
         clock: Instant,
     ) -> Result<RunOutcome, OptimiseError> {
-        self.settle(&mut books, clock)?;
         let best = books.best.ok_or(OptimiseError::BestResponse(
             "no best-response check ran".into(),
         ))?;
@@ -562,6 +573,7 @@ impl<'a> Optimiser<'a> {
             phases: books.phases,
             logit_bound: iterate.bound,
             max_residual: iterate.max_residual,
+            last_response: books.last_response,
         })
     }
 }

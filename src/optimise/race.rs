@@ -6,7 +6,13 @@
 //! stopped as [`Status::Outpaced`] when another start's best score exceeds
 //! its own best plus what it gained over the round (the second half of its
 //! run): repeating that progress, which would take as many iterations as
-//! it has run so far, would still leave it behind. Decisions are taken
+//! it has run so far, would still leave it behind. Once one start has
+//! closed the certified gap (its own, or the best score against the
+//! smallest game upper bound of any start: every start's upper bound
+//! bounds the same game value), the others are stopped as outpaced too:
+//! none can certify more than `gap_tolerance` above it; a bound proved
+//! before the race (the local search's) counts as a best score here.
+//! Decisions are taken
 //! between rounds on numbers at the same iteration of every start, so
 //! they, and every start's iterations, do not depend on thread timing: a
 //! seeded run is reproducible.
@@ -64,10 +70,14 @@ impl<'a, O: Observer + Send> Racer<'a, O> {
 
 /// Runs every start (an error in place of a start that failed to begin
 /// or failed later) until each stops; returns each start's optimiser and
-/// outcome, or its error.
+/// outcome, or its error. `floor` is a certified lower bound already
+/// proved for a defender outside the race (the local search's, run before
+/// it): once it is within `gap_tolerance` of a start's upper bound, the
+/// race is over.
 pub(super) fn race<'a, O: Observer + Send>(
     mut racers: Vec<Result<Racer<'a, O>, OptimiseError>>,
     settings: &Settings,
+    floor: Option<f64>,
 ) -> Vec<Result<(Optimiser<'a>, RunOutcome), OptimiseError>> {
     let mut last = 0usize;
     while racers
@@ -83,7 +93,7 @@ pub(super) fn race<'a, O: Observer + Send>(
                 *entry = Err(error);
             }
         });
-        stop_the_outpaced(&mut racers, settings);
+        stop_the_outpaced(&mut racers, settings, floor);
         last = last.saturating_mul(2).saturating_add(1);
     }
     racers
@@ -93,14 +103,30 @@ pub(super) fn race<'a, O: Observer + Send>(
 }
 
 /// After a round: stops each running start outpaced by the best score of
-/// any start (module documentation), and records each start's best score.
-fn stop_the_outpaced<O>(racers: &mut [Result<Racer<'_, O>, OptimiseError>], settings: &Settings) {
-    let leader = racers
-        .iter()
-        .filter_map(|entry| entry.as_ref().ok()?.run.best_score())
+/// any start, or by a closed gap (module documentation; `floor` counts as
+/// a score), and records each start's best score.
+fn stop_the_outpaced<O>(
+    racers: &mut [Result<Racer<'_, O>, OptimiseError>],
+    settings: &Settings,
+    floor: Option<f64>,
+) {
+    let started = || racers.iter().filter_map(|entry| entry.as_ref().ok());
+    let leader = started()
+        .filter_map(|racer| racer.run.best_score())
+        .chain(floor)
         .reduce(f64::max);
+    let upper = started()
+        .filter_map(|racer| racer.run.upper_bound())
+        .reduce(f64::min);
+    let gap_closed = started().any(|racer| racer.stopped == Some(Status::GapClosed))
+        || leader
+            .zip(upper)
+            .is_some_and(|(lower, upper)| upper - lower <= settings.gap_tolerance);
     for racer in racers.iter_mut().filter_map(|entry| entry.as_mut().ok()) {
         let best = racer.run.best_score();
+        if gap_closed && racer.stopped.is_none() {
+            racer.stopped = Some(Status::Outpaced);
+        }
         if let (Some(best), Some(before), Some(leader), None) =
             (best, racer.round_best, leader, racer.stopped)
         {

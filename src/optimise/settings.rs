@@ -152,28 +152,31 @@ pub struct Settings {
     /// scores best (the unrounded one included); off: `--no-round`.
     #[arg(long = "no-round", action = clap::ArgAction::SetFalse)]
     pub round: bool,
-    /// With rounding and a certified lower bound: from the best rounded
-    /// candidate and from `local_search_restarts` random memoryless
-    /// deterministic defenders, change the support one block at a time
-    /// (drop a choice, play one enabled (next node, action) pair, or give a
-    /// choice a copy of its next node with one change there) while that
-    /// raises the certified lower bound (docs/method.md section 6, local
-    /// search), and offer the best end point as the candidate
-    /// `local-search`. Each climb ends by itself, when it has spent
-    /// `local_search_work`, or at the time budget's final deadline; off:
-    /// `--no-local-search`.
+    /// With rounding and a certified lower bound: change deterministic
+    /// supports one block at a time (drop a choice, play one enabled (next
+    /// node, action) pair, or send a choice to a copy of its next node and
+    /// climb from there) while that raises the certified lower bound
+    /// (docs/method.md section 6, local search). On games it climbs before
+    /// the max-min race from the argmax rounding of the structure's
+    /// defender and `local_search_restarts` random memoryless deterministic
+    /// defenders (its bound is the race's floor: the race ends once an
+    /// upper bound meets it), and once more after the race from the best
+    /// rounded candidate; on one-player models after the ascent, from the
+    /// best rounded candidate and the restarts. The best end point is the
+    /// candidate `local-search`. Each climb ends by itself, when it has
+    /// spent `local_search_work`, or at the time budget's final deadline;
+    /// off: `--no-local-search`.
     #[arg(long = "no-local-search", action = clap::ArgAction::SetFalse)]
     pub local_search: bool,
     /// How many random memoryless starts the local search climbs from
     /// besides the best candidate (in parallel; seeded from `seed`).
     #[arg(long, default_value_t = Settings::default().local_search_restarts)]
     pub local_search_restarts: usize,
-    /// The most work one climb of the local search spends, counted as
-    /// bound evaluations times the size of the product they analyse
-    /// (`|S| x defender nodes x |Q|` of the automaton of `!phi`): 120,000
-    /// is 300 evaluations on a 400-state product, 30 on a 4,000-state one.
-    /// A count, not seconds, so a seed gives the same search on every
-    /// machine.
+    /// The most work one climb of the local search spends, counted as the
+    /// reachable product states its bound evaluations solve, summed:
+    /// 120,000 is 300 evaluations on a 400-state product, 30 on a
+    /// 4,000-state one. A count, not seconds, so a seed gives the same
+    /// search on every machine.
     #[arg(long, default_value_t = Settings::default().local_search_work)]
     pub local_search_work: usize,
     /// On games with a certified lower bound, wherever the max-min loop's

@@ -145,19 +145,22 @@ pub fn candidate_structures(
 }
 
 /// The share of the synthesis time budget the SAT source gives the
-/// almost-sure question: its lemmas can be weak on large POMDPs (the 8x8
-/// grid POMDP with 3 nodes takes over 120 s), while the positive question
-/// answers in milliseconds there, so an unanswered almost-sure question
-/// must not hold `solve` up for the whole budget.
-pub const ALMOST_SURE_BUDGET_SHARE: f64 = 0.1;
+/// almost-sure question (6 s of the default 120): its lemmas can be weak
+/// on large POMDPs (the 8x8 grid POMDP with 3 nodes takes over 120 s),
+/// while the positive question answers in milliseconds there, so an
+/// unanswered almost-sure question must not hold `solve` up for the whole
+/// budget. On PAYNT's game suite no almost-sure answer came after 0.3 s;
+/// dodge-6-lines with 2-3 nodes spent 12 s (a tenth) without one.
+pub const ALMOST_SURE_BUDGET_SHARE: f64 = 0.05;
 
 /// The share of the synthesis time budget the SAT source gives the
-/// positive question. It answers in milliseconds to seconds where it helps
-/// (the games that need memory); on PAYNT's attacker-defender game (1,179
-/// states) it gave no answer in 120 s, and `solve` optimises the other
-/// structures only after the sources answer, so an unanswered question
-/// must not hold it up for the whole budget either.
-pub const POSITIVE_BUDGET_SHARE: f64 = 0.25;
+/// positive question (12 s of the default 120). It answers in milliseconds
+/// to seconds where it helps (the games that need memory; at most 5.2 s
+/// on PAYNT's suite, dodge-8 with 3 nodes); on PAYNT's attacker-defender
+/// game (1,179 states) it gave no answer in 120 s, and `solve` optimises
+/// the other structures only after the sources answer, so an unanswered
+/// question must not hold it up for the whole budget either.
+pub const POSITIVE_BUDGET_SHARE: f64 = 0.1;
 
 /// The SAT source: almost-sure winning if possible (within
 /// [`ALMOST_SURE_BUDGET_SHARE`] of the time budget), else positive (within

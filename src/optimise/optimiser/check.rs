@@ -14,9 +14,11 @@
 //! the upper bound further. Without a certifier every check is deep for
 //! both candidates, with `restarts` random starts besides the warm ones,
 //! since the worst-case estimate is then their score.
-//! When the run ends, the kept defender gets a full best response
-//! ([`Optimiser::settle`]) with `restarts` random starts besides the warm
-//! ones: its reported worst case is always a best-response value.
+//! When the portfolio ends, the kept defender of the start chosen (of
+//! every start without a certifier, whose ranking is by worst case) gets a
+//! full best response ([`Optimiser::settle`]) with `restarts` random
+//! starts besides the warm ones: its reported worst case is always a
+//! best-response value.
 //!
 //! Certification is the costly part of a check (a product MDP built and
 //! solved per bound), so a check certifies only what can change the run:
@@ -38,7 +40,7 @@ use super::super::best_response::{BestResponse, Starts, best_response};
 use super::super::guarantee::Guarantee;
 use super::super::play::{Iterate, PlayState};
 use super::super::rounding::truncated;
-use super::{Bookkeeping, Incumbent, OptimiseError, Optimiser, PhaseSeconds, Settings};
+use super::{Bookkeeping, Incumbent, OptimiseError, Optimiser, PhaseSeconds, RunOutcome, Settings};
 use crate::certify::{lower_value_or_trivial, upper_value_or_trivial};
 use crate::value::ValueError;
 
@@ -182,28 +184,42 @@ impl Optimiser<'_> {
         Ok(Some(polished.worst_case))
     }
 
-    /// The incumbent's full best response, once the run has stopped: from
-    /// the adversary it was judged against, the last best response found
-    /// and `restarts` random starts; its worst case and adversary become
-    /// that response's, which also tightens the game upper bound. With a
-    /// time budget it ends at [`Settings::final_deadline`] of the run that
-    /// began at `started`. Where every start runs into a system it cannot
-    /// solve to the tolerance, the incumbent keeps its numbers.
-    pub(super) fn settle(
+    /// The incumbent's full best response, once the run has stopped
+    /// (`outcome`): from the adversary it was judged against, the last best
+    /// response found and `restarts` random starts (none once the certified
+    /// gap is closed, by the incumbent or by `floor`, a bound proved
+    /// outside the run: any response then lies within `gap_tolerance` of
+    /// the truth); its worst case and adversary become that response's,
+    /// which also tightens the game upper bound. With a time budget it ends
+    /// at [`Settings::final_deadline`] of the run that began at `started`.
+    /// Where every start runs into a system it cannot solve to the
+    /// tolerance, the incumbent keeps its numbers.
+    pub fn settle(
         &mut self,
-        books: &mut Bookkeeping,
+        outcome: &mut RunOutcome,
         started: Instant,
+        floor: Option<f64>,
     ) -> Result<(), OptimiseError> {
-        let Some(best) = books.best.as_ref() else {
-            return Err(OptimiseError::BestResponse(
-                "no best-response check ran".into(),
-            ));
+        let best = &outcome.best;
+        let lower = best
+            .certified_lower
+            .into_iter()
+            .chain(floor)
+            .reduce(f64::max);
+        let gap_closed = lower
+            .zip(outcome.upper_bound)
+            .is_some_and(|(lower, upper)| upper - lower <= self.settings.gap_tolerance);
+        let restarts = if gap_closed {
+            0
+        } else {
+            self.settings.restarts
         };
         let mut at: Vec<&[f64]> = vec![&best.adversary];
-        at.extend(books.last_response.as_deref());
+        at.extend(outcome.last_response.as_deref());
         let deadline = self.settings.final_deadline(started, Instant::now());
-        let starts = Starts::new(&at, self.settings.restarts).until(deadline);
-        let found = match self.respond(&best.defender, starts, &mut books.phases) {
+        let starts = Starts::new(&at, restarts).until(deadline);
+        let defender = best.defender.clone();
+        let found = match self.respond(&defender, starts, &mut outcome.phases) {
             Ok(found) => found,
             // Every start ran into a GMC too stiff to solve (a nearly
             // deterministic defender from the guarantee ascent can cause
@@ -211,8 +227,12 @@ impl Optimiser<'_> {
             Err(error) if error.is_numerical() => return Ok(()),
             Err(error) => return Err(error),
         };
-        self.tighten_against(&found.adversary, books)?;
-        let best = books.best.as_mut().expect("checked above");
+        self.tighten_against(
+            &found.adversary,
+            &mut outcome.upper_bound,
+            &mut outcome.phases,
+        )?;
+        let best = &mut outcome.best;
         if found.value <= best.worst_case {
             best.worst_case = found.value;
             best.adversary = found.adversary;
@@ -248,19 +268,25 @@ impl Optimiser<'_> {
         let mut mu = softmax.probabilities(&iterate.adversary);
         mu.entries.clone_from(&books.adversary_average.mean);
         let averaged = softmax.logits_of(&mu, self.settings.logit_bound);
-        self.tighten_against(&iterate.adversary, books)?;
-        self.tighten_against(&averaged, books)?;
+        self.tighten_against(
+            &iterate.adversary,
+            &mut books.upper_bound,
+            &mut books.phases,
+        )?;
+        self.tighten_against(&averaged, &mut books.upper_bound, &mut books.phases)?;
         let tightened = books.upper_bound < before || before.is_none();
         books.upper_schedule.after(books.checks, tightened);
         Ok(tightened)
     }
 
-    /// With a certifier: tightens the game upper bound with the adversary
-    /// of logits `adversary` (the best any defender does against it).
+    /// With a certifier: tightens the game upper bound `upper_bound` with
+    /// the adversary of logits `adversary` (the best any defender does
+    /// against it), timed as certification in `phases`.
     fn tighten_against(
         &self,
         adversary: &[f64],
-        books: &mut Bookkeeping,
+        upper_bound: &mut Option<f64>,
+        phases: &mut PhaseSeconds,
     ) -> Result<(), OptimiseError> {
         let Some(certifier) = self.certifier else {
             return Ok(());
@@ -268,8 +294,8 @@ impl Optimiser<'_> {
         let clock = Instant::now();
         let adversary = self.objective.adversary().controller(adversary)?;
         let upper = upper_value_or_trivial(certifier.game, certifier.phi, &adversary)?;
-        tighten(&mut books.upper_bound, upper);
-        books.phases.certification += clock.elapsed().as_secs_f64();
+        tighten(upper_bound, upper);
+        phases.certification += clock.elapsed().as_secs_f64();
         Ok(())
     }
 
@@ -300,7 +326,7 @@ impl Optimiser<'_> {
             };
             let starts = Starts::new(&at, restarts);
             let found = self.respond(&candidate, starts, &mut books.phases)?;
-            self.tighten_against(&found.adversary, books)?;
+            self.tighten_against(&found.adversary, &mut books.upper_bound, &mut books.phases)?;
             books.last_response = Some(found.adversary.clone());
             found
         } else {
