@@ -626,7 +626,8 @@ fn settle(
 /// `local_search_restarts` seeded random memoryless ones, on a random
 /// stream of its own (`stream + (2^32 - 1) 2^32`, apart from the starts'),
 /// each climb bounded by `local_search_work` and, with a time budget, by
-/// the final deadline of the run begun at `started`; the restarts end once
+/// [`Settings::search_deadline`] of the run begun at `started` (a quarter
+/// of the budget); the restarts end once
 /// a climb is within `gap_tolerance` of the upper bound against the
 /// structure's starting adversary. Its end point's
 /// bound is the race's floor ([`race`]) and the end point a candidate of
@@ -651,7 +652,7 @@ fn search_supports(
         &mut rng,
         local_search::Effort {
             work: settings.local_search_work,
-            deadline: settings.final_deadline(started, Instant::now()),
+            deadline: settings.search_deadline(started),
             enough: upper - settings.gap_tolerance,
         },
     )?)

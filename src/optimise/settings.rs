@@ -267,6 +267,10 @@ impl Default for Settings {
 /// responses get at least, however late they start.
 const FINAL_SHARE_OF_BUDGET: f64 = 0.1;
 
+/// With a time budget, the share of it that the local search before a
+/// structure's race may spend.
+const SEARCH_SHARE_OF_BUDGET: f64 = 0.25;
+
 impl Settings {
     /// With a time budget, when the final best responses of a structure whose
     /// run began at `started` must end: at the end of the budget, or a tenth
@@ -277,6 +281,14 @@ impl Settings {
             let share = Duration::from_secs_f64(self.time_budget * FINAL_SHARE_OF_BUDGET);
             (started + budget).max(now + share)
         })
+    }
+
+    /// With a time budget, when the local search before a structure's
+    /// max-min race, begun at `started`, must end: after a quarter of the
+    /// budget, so that the race keeps the rest (`None` without a budget).
+    pub fn search_deadline(&self, started: Instant) -> Option<Instant> {
+        (self.time_budget > 0.0)
+            .then(|| started + Duration::from_secs_f64(self.time_budget * SEARCH_SHARE_OF_BUDGET))
     }
 
     /// The linear solver's settings: [`Self::solver`], [`Self::solver_tolerance`]
@@ -420,5 +432,19 @@ mod tests {
             Some(late + Duration::from_secs(2))
         );
         assert_eq!(Settings::default().final_deadline(started, late), None);
+    }
+
+    #[test]
+    fn the_search_before_the_race_gets_a_quarter_of_the_budget() {
+        let started = Instant::now();
+        let budget = Settings {
+            time_budget: 20.0,
+            ..Settings::default()
+        };
+        assert_eq!(
+            budget.search_deadline(started),
+            Some(started + Duration::from_secs(5))
+        );
+        assert_eq!(Settings::default().search_deadline(started), None);
     }
 }
