@@ -464,9 +464,9 @@ pub fn optimise_structure(
         stream: stream + ((start as u64) << 32),
     };
     let presolved = match (method, certifier) {
-        (Method::MaxMin, Some(c)) if settings.round && settings.local_search => Some(
-            search_supports(game, c, structure, settings, stream, clock)?,
-        ),
+        (Method::MaxMin, Some(c)) if settings.round && settings.local_search => {
+            search_supports(game, c, structure, settings, stream, clock)?
+        }
         _ => None,
     };
     let presolve_seconds = clock.elapsed().as_secs_f64();
@@ -631,7 +631,10 @@ fn settle(
 /// a climb is within `gap_tolerance` of the upper bound against the
 /// structure's starting adversary. Its end point's
 /// bound is the race's floor ([`race`]) and the end point a candidate of
-/// the final rounding.
+/// the final rounding. `None` where the structure's starting defender
+/// already certifies within `gap_tolerance` of that upper bound (the race
+/// ends at its first check; on PAYNT's pursuit-evasion only randomised
+/// defenders win, and the search cost 17 s there).
 fn search_supports(
     game: &Posg,
     certifier: Certifier<'_>,
@@ -639,12 +642,16 @@ fn search_supports(
     settings: &Settings,
     stream: u64,
     started: Instant,
-) -> Result<local_search::Climbed, OptimiseError> {
+) -> Result<Option<local_search::Climbed>, OptimiseError> {
+    let upper = upper_value_or_trivial(game, certifier.phi, &structure.adversary)?;
+    let enough = upper - settings.gap_tolerance;
+    if lower_value_or_trivial(game, certifier.not_phi, &structure.defender)? >= enough {
+        return Ok(None);
+    }
     let start = rounding::truncated(&structure.defender, f64::INFINITY)?;
     let mut rng = ChaCha8Rng::seed_from_u64(settings.seed);
     rng.set_stream(stream.wrapping_add(u64::from(u32::MAX) << 32));
-    let upper = upper_value_or_trivial(game, certifier.phi, &structure.adversary)?;
-    Ok(local_search::climb_with_restarts(
+    Ok(Some(local_search::climb_with_restarts(
         game,
         certifier.not_phi,
         &start,
@@ -653,9 +660,9 @@ fn search_supports(
         local_search::Effort {
             work: settings.local_search_work,
             deadline: settings.search_deadline(started),
-            enough: upper - settings.gap_tolerance,
+            enough,
         },
-    )?)
+    )?))
 }
 
 /// Whether start outcome `a` is kept before `b`: a start that closed the
