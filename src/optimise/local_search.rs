@@ -306,17 +306,22 @@ fn certain(pair: &Choice) -> Choice {
 }
 
 /// The most rounds of restarts [`climb_with_restarts`] runs.
-const MAX_RESTART_ROUNDS: usize = 16;
+const MAX_RESTART_ROUNDS: usize = 4;
+
+/// Further rounds of restarts run while the climbs have spent less than
+/// one round at full effort divided by this.
+const ROUNDS_BUDGET_DIVISOR: usize = 4;
 
 /// [`climb`] from `start` and from random memoryless deterministic
 /// defenders (each block `(g, o)` one enabled pair `(g, u)`, `u` uniformly
 /// drawn from a stream seeded by `rng`; the climb adds memory), each until
 /// it ends or spends `effort`. The restarts run in rounds of `restarts`
 /// climbs in parallel (the first also climbs from `start`); another round
-/// follows while the climbs so far have spent less than one round at full
-/// effort (`restarts` times `effort.work`) and none reached `effort.enough`,
-/// up to [`MAX_RESTART_ROUNDS`] rounds and until the deadline: where climbs
-/// end early at local optima
+/// follows while the climbs so far have spent less than a
+/// [`ROUNDS_BUDGET_DIVISOR`]-th of one round at full effort (`restarts`
+/// times `effort.work`) and none reached `effort.enough`, up to
+/// [`MAX_RESTART_ROUNDS`] rounds and until the deadline: where climbs end
+/// early at local optima
 /// (small products), more of them run. Returns the end point with the
 /// highest certified lower bound (the first such, in the order `start`,
 /// then the restarts as drawn). The rounds depend on counts only, so the
@@ -330,7 +335,7 @@ pub fn climb_with_restarts(
     effort: Effort,
 ) -> Result<Climbed, CertifyError> {
     let universe = Fsc::uniform_enabled(Role::Defender, start.num_nodes(), game.defender());
-    let budget = restarts.saturating_mul(effort.work);
+    let budget = restarts.saturating_mul(effort.work) / ROUNDS_BUDGET_DIVISOR;
     let mut froms = vec![start.clone()];
     let (mut best, mut spent): (Option<Climbed>, usize) = (None, 0);
     for _ in 0..MAX_RESTART_ROUNDS {
