@@ -9,7 +9,9 @@
 use posg_fsc::game::Posg;
 use posg_fsc::game::file::from_json_str;
 use posg_fsc::game::grid::GridSpec;
-use posg_fsc::optimise::{Settings, Status};
+use std::sync::{Arc, Mutex};
+
+use posg_fsc::optimise::{IterationRecord, Observer, SearchRecord, Settings, Status};
 use posg_fsc::pipeline::{self, Automata, Sizes};
 
 fn game(text: &str) -> Posg {
@@ -188,5 +190,52 @@ fn almost_sure_synthesis_is_asked_only_where_a_defender_could_win_surely() {
     assert!(
         note.contains("wins almost surely against every adversary"),
         "{note}"
+    );
+}
+
+/// Keeps the local search's records and when each came relative to the
+/// race's records.
+struct SearchLog(Arc<Mutex<Vec<(SearchRecord, usize)>>>, usize);
+
+impl Observer for SearchLog {
+    fn observe(&mut self, _record: &IterationRecord) {
+        self.1 += 1;
+    }
+
+    fn searched(&mut self, record: &SearchRecord) {
+        self.0.lock().unwrap().push((*record, self.1));
+    }
+}
+
+/// The local search before the race reports its bound to the observer as
+/// soon as it ends, before the race's first record, and the result is
+/// certified at least at that bound (it is the race's floor and a
+/// candidate of the final rounding).
+#[test]
+fn the_search_before_the_race_is_reported_before_the_race_and_bounds_the_result() {
+    let log = Arc::new(Mutex::new(Vec::new()));
+    let automata = Automata::from_ltl("!unsafe U goal").unwrap();
+    let sizes = Sizes {
+        defender: 2,
+        adversary: 1,
+    };
+    let settings = Settings {
+        structures: vec![posg_fsc::optimise::StructureSource::Full],
+        ..Settings::default()
+    };
+    let grid = GridSpec::default().build().unwrap();
+    let outcome = pipeline::solve(&grid, &automata, sizes, &settings, |_| {
+        Box::new(SearchLog(log.clone(), 0))
+    })
+    .unwrap();
+    let log = log.lock().unwrap();
+    assert_eq!(log.len(), 1, "{log:?}");
+    let (record, records_before) = log[0];
+    assert_eq!(records_before, 0, "reported before the race");
+    let lower = outcome.certified.unwrap().certified_lower;
+    assert!(record.certified_lower > 0.0);
+    assert!(
+        lower >= record.certified_lower - 1e-12,
+        "{lower} < {record:?}"
     );
 }

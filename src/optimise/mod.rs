@@ -60,7 +60,7 @@ use ascent::{AgainstFixed, ascend};
 pub(crate) use best_response::{Starts, best_response};
 pub use cancel::Cancel;
 pub use objective::{GmcSize, Objective, Point};
-pub use observer::{IterationRecord, Observer, ObserverError};
+pub use observer::{IterationRecord, Observer, ObserverError, SearchRecord};
 pub(crate) use optimiser::{Certifier, Optimiser, PhaseSeconds, RunOutcome};
 pub use rounding::{TRUNCATION_THRESHOLDS, rounded_candidates, truncated};
 pub use settings::{MAX_LOGIT_BOUND, Settings, UpdateRule};
@@ -470,6 +470,15 @@ pub fn optimise_structure(
         _ => None,
     };
     let presolve_seconds = clock.elapsed().as_secs_f64();
+    if let Some(climbed) = &presolved {
+        shared
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner)
+            .searched(&SearchRecord {
+                seconds: presolve_seconds,
+                certified_lower: climbed.bound,
+            });
+    }
     let runs = match method {
         Method::MaxMin => {
             let racers = (0..settings.starts)

@@ -1,5 +1,6 @@
 //! What the optimiser reports while it runs: one [`IterationRecord`] per
-//! outer iteration, handed to an [`Observer`]. Writers of output (the CSV
+//! outer iteration (and a [`SearchRecord`] when a local search before the
+//! race ends), handed to an [`Observer`]. Writers of output (the CSV
 //! curve, a progress bar) are observers; the loop itself writes nothing.
 
 use serde::Serialize;
@@ -42,6 +43,17 @@ pub struct IterationRecord {
     pub logit_bound: f64,
 }
 
+/// What the local search on the supports before a structure's max-min
+/// race found (method.md section 6): the race's floor.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct SearchRecord {
+    /// Wall-clock seconds since the structure's optimisation started, when
+    /// the search ended.
+    pub seconds: f64,
+    /// The certified lower bound of the search's best end point.
+    pub certified_lower: f64,
+}
+
 /// An observer's failure (an output file could not be written, say).
 pub type ObserverError = Box<dyn std::error::Error + Send + Sync>;
 
@@ -50,6 +62,10 @@ pub type ObserverError = Box<dyn std::error::Error + Send + Sync>;
 pub trait Observer {
     /// Called once per outer iteration.
     fn observe(&mut self, record: &IterationRecord);
+
+    /// Called once when the local search before a max-min race has ended,
+    /// before the race's first record.
+    fn searched(&mut self, _record: &SearchRecord) {}
 
     /// Called once after the last record: flushes output and reports the
     /// first failure, which fails the run.
@@ -68,6 +84,12 @@ impl Observer for Vec<Box<dyn Observer + Send>> {
     fn observe(&mut self, record: &IterationRecord) {
         for observer in self {
             observer.observe(record);
+        }
+    }
+
+    fn searched(&mut self, record: &SearchRecord) {
+        for observer in self {
+            observer.searched(record);
         }
     }
 

@@ -15,7 +15,7 @@ use crate::controller::{self, Fsc};
 use crate::game::Posg;
 use crate::optimise::StructureOutcome;
 use crate::optimise::{
-    IterationRecord, Observer, ObserverError, Settings, SourceNote, StructureReport,
+    IterationRecord, Observer, ObserverError, SearchRecord, Settings, SourceNote, StructureReport,
 };
 use crate::output::{
     CurveCsv, CurvePlot, OutputError, PlotFormat, Returned, Title, create_dir, plot_curve,
@@ -302,6 +302,10 @@ struct Named<O>(PathBuf, O);
 impl<O: Observer> Observer for Named<O> {
     fn observe(&mut self, record: &IterationRecord) {
         self.1.observe(record);
+    }
+
+    fn searched(&mut self, record: &SearchRecord) {
+        self.1.searched(record);
     }
 
     fn finish(&mut self) -> Result<(), ObserverError> {
