@@ -45,9 +45,10 @@ pub struct Climbed {
     pub bound: f64,
 }
 
-/// How long one climb may go on: until its bound evaluations have solved
-/// products of `work` states in all (at least one evaluation beyond the
-/// start's), and until `deadline` (with a time budget).
+/// How long the search goes on: each climb until its bound evaluations
+/// have solved products of `work` states in all (at least one evaluation
+/// beyond the start's), every climb until `deadline` (with a time budget),
+/// and the rounds of restarts until a climb reaches `enough`.
 #[derive(Debug, Clone, Copy)]
 pub struct Effort {
     /// The product states (reachable, summed over evaluations) one climb
@@ -67,7 +68,7 @@ pub struct Effort {
 struct Landscape<'a> {
     game: &'a Posg,
     not_phi: &'a Dra,
-    pairs: Vec<Vec<Choice>>,
+    pairs: &'a [Vec<Choice>],
     effort: Effort,
     evaluated: Cell<usize>,
     spent: Cell<usize>,
@@ -135,20 +136,21 @@ impl Landscape<'_> {
 /// renormalised) and playing one enabled `(next node, action)` pair of
 /// `game`'s defender with probability 1; where no such move raises the
 /// bound and a node is unused, the splits of [`splits`] followed by such
-/// moves. Stops where no move raises the bound, or when `effort` is spent.
-/// Returns the end point and the work spent (the product states its
-/// evaluations solved).
+/// moves. `pairs` are those pairs per block (the blocks of
+/// [`Fsc::uniform_enabled`] with `start`'s nodes). Stops where no move
+/// raises the bound, or when `effort` is spent. Returns the end point and
+/// the work spent (the product states its evaluations solved).
 fn climb(
     game: &Posg,
     not_phi: &Dra,
+    pairs: &[Vec<Choice>],
     start: &Fsc,
     effort: Effort,
 ) -> Result<(Climbed, usize), CertifyError> {
-    let universe = Fsc::uniform_enabled(Role::Defender, start.num_nodes(), game.defender());
     let landscape = Landscape {
         game,
         not_phi,
-        pairs: universe.blocks,
+        pairs,
         effort,
         evaluated: Cell::new(0),
         spent: Cell::new(0),
@@ -321,8 +323,7 @@ const ROUNDS_BUDGET_DIVISOR: usize = 4;
 /// [`ROUNDS_BUDGET_DIVISOR`]-th of one round at full effort (`restarts`
 /// times `effort.work`) and none reached `effort.enough`, up to
 /// [`MAX_RESTART_ROUNDS`] rounds and until the deadline: where climbs end
-/// early at local optima
-/// (small products), more of them run. Returns the end point with the
+/// early at local optima (small products), more of them run. Returns the end point with the
 /// highest certified lower bound (the first such, in the order `start`,
 /// then the restarts as drawn). The rounds depend on counts only, so the
 /// search is reproducible for a seed unless a deadline cuts it.
@@ -345,7 +346,7 @@ pub fn climb_with_restarts(
         }
         let ends = std::mem::take(&mut froms)
             .par_iter()
-            .map(|from| climb(game, not_phi, from, effort))
+            .map(|from| climb(game, not_phi, &universe.blocks, from, effort))
             .collect::<Result<Vec<_>, _>>()?;
         for (end, work) in ends {
             spent = spent.saturating_add(work);
@@ -470,7 +471,10 @@ mod tests {
         let not_phi = not_phi("!unsafe U goal");
         let start = first_pairs(&game, 1);
         let before = lower_value_or_trivial(&game, &not_phi, &start).unwrap();
-        let found = climb(&game, &not_phi, &start, UNLIMITED).unwrap().0;
+        let universe = Fsc::uniform_enabled(Role::Defender, 1, game.defender());
+        let found = climb(&game, &not_phi, &universe.blocks, &start, UNLIMITED)
+            .unwrap()
+            .0;
         let reached = lower_value_or_trivial(&game, &not_phi, &found.defender).unwrap();
         assert!(
             (reached - found.bound).abs() < 1e-12,
@@ -479,7 +483,6 @@ mod tests {
         );
         assert!(reached > before + 0.1, "{before} -> {reached}");
         assert!(found.defender.blocks.iter().all(|block| block.len() == 1));
-        let universe = Fsc::uniform_enabled(Role::Defender, 1, game.defender());
         for (b, pairs) in universe.blocks.iter().enumerate() {
             for neighbour in block_moves(&found.defender, b, pairs) {
                 let value = lower_value_or_trivial(&game, &not_phi, &neighbour).unwrap();
@@ -502,7 +505,7 @@ mod tests {
         let landscape = Landscape {
             game: &game,
             not_phi: &not_phi,
-            pairs: universe.blocks,
+            pairs: &universe.blocks,
             effort: UNLIMITED,
             evaluated: Cell::new(0),
             spent: Cell::new(0),
@@ -513,7 +516,9 @@ mod tests {
         };
         assert_eq!(from.bound, 0.0);
         assert!(sweep(&landscape, &from).unwrap().is_none());
-        let found = climb(&game, &not_phi, &start, UNLIMITED).unwrap().0;
+        let found = climb(&game, &not_phi, &universe.blocks, &start, UNLIMITED)
+            .unwrap()
+            .0;
         assert!((found.bound - 1.0).abs() < 1e-9, "{}", found.bound);
         let in_use = blocks_in_use(&game, &found.defender);
         assert!(
@@ -532,7 +537,10 @@ mod tests {
         let game = grid_4x4();
         let not_phi = not_phi("!unsafe U goal");
         let start = first_pairs(&game, 2);
-        let alone = climb(&game, &not_phi, &start, UNLIMITED).unwrap().0;
+        let universe = Fsc::uniform_enabled(Role::Defender, 2, game.defender());
+        let alone = climb(&game, &not_phi, &universe.blocks, &start, UNLIMITED)
+            .unwrap()
+            .0;
         let search = || {
             let mut rng = ChaCha8Rng::seed_from_u64(5);
             climb_with_restarts(&game, &not_phi, &start, 3, &mut rng, UNLIMITED).unwrap()

@@ -562,7 +562,7 @@ pub fn optimise_structure(
         &mut phases,
     )?;
     // Whichever candidate closed it, a closed bracket is why the run ended.
-    let status = if chosen.bracket_closed(settings.gap_tolerance) {
+    let status = if chosen.bracket_closed(settings) {
         Status::GapClosed
     } else {
         run.outcome.status
@@ -803,11 +803,11 @@ struct Chosen {
 }
 
 impl Chosen {
-    /// Whether the chosen defender's score is within `tolerance` of the
-    /// upper bound: no defender can certify more than that.
-    fn bracket_closed(&self, tolerance: f64) -> bool {
+    /// Whether the chosen defender's score closes the certified gap to the
+    /// upper bound ([`Settings::gap_closed`]).
+    fn bracket_closed(&self, settings: &Settings) -> bool {
         self.upper_bound
-            .is_some_and(|upper| upper - self.score <= tolerance)
+            .is_some_and(|upper| settings.gap_closed(self.score, upper))
     }
 
     /// Records the candidate `name` with its score (and best response, if
@@ -916,8 +916,8 @@ fn finalise(
             }
             // A bracket already closed leaves the search nothing to find,
             // and a climb's end point is where it would end again.
-            let open = !chosen.bracket_closed(settings.gap_tolerance)
-                && searched.as_ref() != Some(&chosen.defender);
+            let open =
+                !chosen.bracket_closed(settings) && searched.as_ref() != Some(&chosen.defender);
             if let Some(c) = search.take().filter(|_| open) {
                 let climbing = Instant::now();
                 let found = local_search::climb_with_restarts(
@@ -942,13 +942,7 @@ fn finalise(
             }
         }
         if !chosen.worst_case_known {
-            // Within a closed bracket any response is within the tolerance
-            // of the truth: the warm start alone.
-            let restarts = if chosen.bracket_closed(settings.gap_tolerance) {
-                0
-            } else {
-                settings.restarts
-            };
+            let restarts = settings.final_restarts(chosen.bracket_closed(settings));
             match judge.best_response(&chosen.defender, restarts, &mut run.rng) {
                 Ok((worst_case, adversary)) => {
                     chosen.worst_case = worst_case;

@@ -522,7 +522,7 @@ impl<'a> Optimiser<'a> {
         let s = &self.settings;
         let incumbent = books.best.as_ref()?;
         if let (Some(lower), Some(upper)) = (incumbent.certified_lower, books.upper_bound) {
-            if upper - lower <= s.gap_tolerance {
+            if s.gap_closed(lower, upper) {
                 return Some(Status::GapClosed);
             }
         }

@@ -121,7 +121,7 @@ fn stop_the_outpaced<O>(
     let gap_closed = started().any(|racer| racer.stopped == Some(Status::GapClosed))
         || leader
             .zip(upper)
-            .is_some_and(|(lower, upper)| upper - lower <= settings.gap_tolerance);
+            .is_some_and(|(lower, upper)| settings.gap_closed(lower, upper));
     for racer in racers.iter_mut().filter_map(|entry| entry.as_mut().ok()) {
         let best = racer.run.best_score();
         if gap_closed && racer.stopped.is_none() {

@@ -283,6 +283,20 @@ impl Settings {
         })
     }
 
+    /// Whether the certified gap between a lower bound `lower` and an upper
+    /// bound `upper` is closed: at most `gap_tolerance` (method.md section
+    /// 4's stopping rule; no defender certifies more than `upper`).
+    pub fn gap_closed(&self, lower: f64, upper: f64) -> bool {
+        upper - lower <= self.gap_tolerance
+    }
+
+    /// The random restarts of a final best response: `restarts`, none where
+    /// the certified gap is closed (any response is then within
+    /// `gap_tolerance` of the truth, so the warm starts suffice).
+    pub fn final_restarts(&self, gap_closed: bool) -> usize {
+        if gap_closed { 0 } else { self.restarts }
+    }
+
     /// With a time budget, when the local search before a structure's
     /// max-min race, begun at `started`, must end: after a quarter of the
     /// budget, so that the race keeps the rest (`None` without a budget).

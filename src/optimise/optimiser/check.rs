@@ -208,12 +208,8 @@ impl Optimiser<'_> {
             .reduce(f64::max);
         let gap_closed = lower
             .zip(outcome.upper_bound)
-            .is_some_and(|(lower, upper)| upper - lower <= self.settings.gap_tolerance);
-        let restarts = if gap_closed {
-            0
-        } else {
-            self.settings.restarts
-        };
+            .is_some_and(|(lower, upper)| self.settings.gap_closed(lower, upper));
+        let restarts = self.settings.final_restarts(gap_closed);
         let mut at: Vec<&[f64]> = vec![&best.adversary];
         at.extend(outcome.last_response.as_deref());
         let deadline = self.settings.final_deadline(started, Instant::now());
@@ -426,7 +422,7 @@ impl Optimiser<'_> {
             }
         };
         books.phases.certification += clock.elapsed().as_secs_f64();
-        Ok(upper - lower <= self.settings.gap_tolerance)
+        Ok(self.settings.gap_closed(lower, upper))
     }
 }
 
