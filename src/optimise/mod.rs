@@ -485,7 +485,7 @@ pub fn optimise_structure(
                 .into_par_iter()
                 .map(|i| {
                     let optimiser = max_min_start(game, dra, certifier, structure, &start(i))?;
-                    Racer::new(optimiser.with_cancel(cancel), live(i))
+                    Racer::new(optimiser.with_cancel(cancel), live(i), clock)
                 })
                 .collect();
             let floor = presolved.as_ref().map(|climbed| climbed.bound);

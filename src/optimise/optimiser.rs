@@ -319,8 +319,11 @@ impl<'a> Optimiser<'a> {
     /// defender), not yet checked or reported: [`Self::advance`] goes on
     /// until the certified gap closes, progress stalls at the widest logit
     /// bound, `max_iterations` or the time budget, reporting every outer
-    /// iteration to its observer; [`Self::finish`] ends it.
-    pub fn begin(&mut self) -> Result<Run, OptimiseError> {
+    /// iteration to its observer; [`Self::finish`] ends it. `started` is
+    /// when the structure's optimisation began (before the local search
+    /// that precedes the race): the records' seconds and the time budget
+    /// count from it.
+    pub fn begin(&mut self, started: Instant) -> Result<Run, OptimiseError> {
         let mut solver =
             GradientPlay::new(&self.settings, self.defender.len(), self.adversary.len());
         let mut books = Bookkeeping::new(
@@ -335,14 +338,13 @@ impl<'a> Optimiser<'a> {
             bound: self.settings.initial_logit_bound,
             max_residual: 0.0,
         };
-        let clock = Instant::now();
         let state = self.timed(&mut books, |objective| solver.init(objective, start))?;
         Ok(Run {
             solver,
             books,
             state: Some(state),
             judged: false,
-            clock,
+            clock: started,
         })
     }
 

@@ -17,6 +17,8 @@
 //! they, and every start's iterations, do not depend on thread timing: a
 //! seeded run is reproducible.
 
+use std::time::Instant;
+
 use rayon::prelude::*;
 
 use super::optimiser::{Optimiser, Run, RunOutcome};
@@ -34,9 +36,14 @@ pub(super) struct Racer<'a, O> {
 }
 
 impl<'a, O: Observer + Send> Racer<'a, O> {
-    /// The start of `optimiser`, reporting to `observer`.
-    pub fn new(mut optimiser: Optimiser<'a>, observer: O) -> Result<Self, OptimiseError> {
-        let run = optimiser.begin()?;
+    /// The start of `optimiser`, reporting to `observer`; `started` is when
+    /// the structure's optimisation began ([`Optimiser::begin`]).
+    pub fn new(
+        mut optimiser: Optimiser<'a>,
+        observer: O,
+        started: Instant,
+    ) -> Result<Self, OptimiseError> {
+        let run = optimiser.begin(started)?;
         Ok(Self {
             optimiser,
             run,
