@@ -30,8 +30,8 @@ use crate::automaton::Dra;
 use crate::controller::{Fsc, Role, Support};
 use crate::game::{AdversaryAction, DefenderAction, Posg};
 use crate::mdp::{
-    Mdp, QualitativeReachability, Reachability, accepting_end_components, accepting_union,
-    expected_visits, max_reachability_from, qualitative_reachability,
+    Mdp, PolicySystems, QualitativeReachability, Reachability, accepting_end_components,
+    accepting_union, max_reachability_with, qualitative_reachability,
 };
 use crate::solver::SolverSettings;
 
@@ -73,11 +73,13 @@ pub struct LowerBoundGradients<'a> {
     last: Option<LastAnalysis>,
 }
 
-/// The graph analysis of the last product and its optimal strategy.
+/// The graph analysis of the last product, its optimal strategy and its
+/// policies' linear systems (one symbolic analysis for the graph).
 struct LastAnalysis {
     mdp: Mdp,
     qualitative: QualitativeReachability,
     strategy: Vec<usize>,
+    systems: PolicySystems,
 }
 
 impl<'a> LowerBoundGradients<'a> {
@@ -93,9 +95,10 @@ impl<'a> LowerBoundGradients<'a> {
 
     /// The lower bound of `defender` and its gradient.
     pub fn at(&mut self, defender: &Fsc) -> Result<LowerBoundGradient, CertifyError> {
-        let (product, result) = self.analyse(defender)?;
-        let y = expected_visits(&product.mdp, &result, &product.initial, &self.settings)?;
-        gradient(self.game, self.dra_not_phi, defender, &product, &result, &y)
+        let (game, dra) = (self.game, self.dra_not_phi);
+        let (product, result, systems) = self.analyse(defender)?;
+        let y = systems.expected_visits(&product.initial)?;
+        gradient(game, dra, defender, &product, &result, &y)
     }
 
     /// The lower bound of `defender` alone, or the trivial bound 0 where
@@ -103,18 +106,23 @@ impl<'a> LowerBoundGradients<'a> {
     /// [`super::lower_value_or_trivial`]).
     pub fn value_or_trivial(&mut self, defender: &Fsc) -> Result<f64, CertifyError> {
         match self.analyse(defender) {
-            Ok((product, result)) => Ok(lower_value(&product, &result)),
+            Ok((product, result, _)) => Ok(lower_value(&product, &result)),
             Err(error) if error.is_slow_mixing() => Ok(0.0),
             Err(error) => Err(error),
         }
     }
 
     /// The product of `defender` and its optimal values and strategy for
-    /// `!phi`, reusing the last graph analysis where the graph is the same.
-    fn analyse(&mut self, defender: &Fsc) -> Result<(Product, Reachability), CertifyError> {
+    /// `!phi`, reusing the last graph analysis where the graph is the same;
+    /// and the policies' systems, holding the optimal strategy's
+    /// factorisation.
+    fn analyse(
+        &mut self,
+        defender: &Fsc,
+    ) -> Result<(Product, Reachability, &mut PolicySystems), CertifyError> {
         let (game, dra) = (self.game, self.dra_not_phi);
         let product = Product::build(game, dra, defender, Role::Defender)?;
-        let last = match self.last.take() {
+        let mut last = match self.last.take() {
             Some(last) if last.mdp.same_graph(&product.mdp) => last,
             _ => {
                 let pairs = product.lift(dra.pairs());
@@ -124,24 +132,22 @@ impl<'a> LowerBoundGradients<'a> {
                 LastAnalysis {
                     mdp: product.mdp.clone(),
                     strategy: qualitative.strategy.clone(),
+                    systems: PolicySystems::new(&product.mdp, &qualitative, &self.settings)?,
                     qualitative,
                 }
             }
         };
-        let result = max_reachability_from(
+        let result = max_reachability_with(
             &product.mdp,
             &last.qualitative,
             &last.strategy,
-            &self.settings,
+            &mut last.systems,
         );
-        self.last = Some(match &result {
-            Ok(result) => LastAnalysis {
-                strategy: result.strategy.clone(),
-                ..last
-            },
-            Err(_) => last,
-        });
-        Ok((product, result?))
+        if let Ok(result) = &result {
+            last.strategy.clone_from(&result.strategy);
+        }
+        let last = self.last.insert(last);
+        Ok((product, result?, &mut last.systems))
     }
 }
 

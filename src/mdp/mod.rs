@@ -29,8 +29,8 @@ pub use rabin::{
     max_rabin_qualitative,
 };
 pub use reachability::{
-    QualitativeReachability, Reachability, expected_visits, max_reachability,
-    max_reachability_from, qualitative_reachability,
+    PolicySystems, QualitativeReachability, Reachability, max_reachability, max_reachability_with,
+    qualitative_reachability,
 };
 
 use thiserror::Error;

@@ -105,7 +105,8 @@ pub fn max_reachability(
     settings: &SolverSettings,
 ) -> Result<Reachability, MdpError> {
     let qualitative = qualitative_reachability(mdp, target)?;
-    max_reachability_from(mdp, &qualitative, &qualitative.strategy, settings)
+    let mut systems = PolicySystems::new(mdp, &qualitative, settings)?;
+    max_reachability_with(mdp, &qualitative, &qualitative.strategy, &mut systems)
 }
 
 /// [`max_reachability`] with its qualitative step (steps 1 and 2) given,
@@ -114,46 +115,41 @@ pub fn max_reachability(
 /// the maybe states: the qualitative strategy, or the strategy of an
 /// earlier result on the same graph. Either is proper (every maybe state
 /// reaches the target with positive probability under it, a property of
-/// the graph), so every evaluation stays nonsingular.
-pub fn max_reachability_from(
+/// the graph), so every evaluation stays nonsingular. The policies'
+/// systems are `systems`, built by [`PolicySystems::new`] for the same
+/// graph and qualitative step, so that MDPs of one graph (a controller's
+/// products as its probabilities change) share one symbolic analysis; on
+/// return they hold the factorisation of the returned strategy.
+pub fn max_reachability_with(
     mdp: &Mdp,
     qualitative: &QualitativeReachability,
     start: &[usize],
-    settings: &SolverSettings,
+    systems: &mut PolicySystems,
 ) -> Result<Reachability, MdpError> {
     let n = mdp.num_states();
-    if qualitative.possible.len() != n || start.len() != n {
+    if qualitative.possible.len() != n || start.len() != n || !systems.fits(mdp, qualitative) {
         return Err(MdpError::Malformed(format!(
-            "a qualitative analysis or start strategy of {} states for {n}",
+            "a qualitative analysis, start strategy or policy systems of {} states for {n}",
             qualitative.possible.len()
         )));
     }
     let positive = qualitative.possible.clone();
     let almost_sure = qualitative.almost_sure.clone();
-    let maybe: Vec<usize> = (0..n).filter(|&s| positive[s] && !almost_sure[s]).collect();
     let mut strategy = qualitative.strategy.clone();
-    for &s in &maybe {
+    for &s in &systems.maybe {
         strategy[s] = start[s];
     }
     let mut previous: Vec<f64> = almost_sure.iter().map(|&t| f64::from(t)).collect();
     let mut proof = Proof::Trial;
     for iterations in 1..=MAX_ITERATIONS {
-        let (values, report) = evaluate(
-            mdp,
-            &almost_sure,
-            &maybe,
-            &strategy,
-            &previous,
-            proof,
-            settings,
-        )?;
-        let proved = report.error_bound <= settings.tolerance;
+        let (values, report) = evaluate(mdp, systems, &almost_sure, &strategy, &previous, proof)?;
+        let proved = report.error_bound <= systems.tolerance;
         let threshold = if proved {
             IMPROVEMENT_THRESHOLD.max(4.0 * report.error_bound)
         } else {
             IMPROVEMENT_THRESHOLD
         };
-        let (switched, gap) = improve(mdp, &values, &maybe, &mut strategy, threshold);
+        let (switched, gap) = improve(mdp, &values, &systems.maybe, &mut strategy, threshold);
         if !switched && proved {
             return Ok(Reachability {
                 values,
@@ -293,35 +289,35 @@ struct EvaluationReport {
 }
 
 /// The reachability probabilities of the policy: 1 on `target`, the solution
-/// of `(I - Q) x = b` on `maybe` (diagonal: the probability of leaving the
-/// state), 0 elsewhere; and the solve's residual and error bound. The
-/// linear solver is chosen by `settings`; an iterative one starts from
-/// `start` (the previous policy's values).
+/// of `(I - Q) x = b` on the maybe states (diagonal: the probability of
+/// leaving the state), 0 elsewhere; and the solve's residual and error
+/// bound. An iterative solver starts from `start` (the previous policy's
+/// values).
 fn evaluate(
     mdp: &Mdp,
+    systems: &mut PolicySystems,
     target: &[bool],
-    maybe: &[usize],
     strategy: &[usize],
     start: &[f64],
     proof: Proof,
-    settings: &SolverSettings,
 ) -> Result<(Vec<f64>, EvaluationReport), MdpError> {
     let mut values: Vec<f64> = target.iter().map(|&t| f64::from(t)).collect();
-    if maybe.is_empty() {
+    if systems.maybe.is_empty() {
         let exact = EvaluationReport {
             residual: 0.0,
             error_bound: 0.0,
         };
         return Ok((values, exact));
     }
-    let (mut solver, rhs) =
-        PolicySystem::build(mdp, target, maybe, strategy).factorised(settings)?;
+    let rhs = systems.factorise(mdp, strategy)?;
+    let maybe = &systems.maybe;
     let mut solution: Vec<f64> = maybe.iter().map(|&s| start[s]).collect();
+    let solver = systems.solver()?;
     let report = match proof {
         Proof::Trial => solver.solve_trial(&rhs, &mut solution)?,
         Proof::Required => solver.solve(&rhs, &mut solution)?,
     };
-    for (&s, &x) in maybe.iter().zip(&solution) {
+    for (&s, &x) in systems.maybe.iter().zip(&solution) {
         values[s] = x;
     }
     let report = EvaluationReport {
@@ -331,97 +327,109 @@ fn evaluate(
     Ok((values, report))
 }
 
-/// The expected number of visits `y(s)` to each state of `M` (the maybe
-/// states of `result`: neither decided 0 nor 1) before the chain of
-/// `result.strategy` started from `initial` leaves `M`: the solution of
-/// `(I - Q_sigma)^T y = p0` on `M`, 0 elsewhere. These are the adjoint
-/// weights of the policy's reachability value `sum_s p0(s) x(s)`: its
-/// derivative along a change `dP` of the transition probabilities of the
-/// policy's actions is `sum_{s in M} y(s) sum_t dP(t | s) x(t)` (method.md
-/// section 6, "the lower bound's gradient"). Solved in double precision
-/// without an error bound: it is a search direction, never a reported number.
-pub fn expected_visits(
-    mdp: &Mdp,
-    result: &Reachability,
-    initial: &[(usize, f64)],
-    settings: &SolverSettings,
-) -> Result<Vec<f64>, MdpError> {
-    let n = mdp.num_states();
-    let maybe: Vec<usize> = (0..n)
-        .filter(|&s| result.possible[s] && !result.almost_sure[s])
-        .collect();
-    let mut visits = vec![0.0; n];
-    if maybe.is_empty() {
-        return Ok(visits);
-    }
-    let system = PolicySystem::build(mdp, &result.almost_sure, &maybe, &result.strategy);
-    let mut start = vec![0.0; maybe.len()];
-    for &(s, p) in initial {
-        if system.index[s] != usize::MAX {
-            start[system.index[s]] += p;
+/// The linear systems `(I - Q_sigma) x = b_sigma` of every policy `sigma`
+/// on the maybe states `M` of one graph (module documentation, step 3),
+/// sharing one sparsity pattern: the union of the edges inside `M` of every
+/// action, the diagonal included. The solver's symbolic analysis (fill-
+/// reducing ordering, elimination structure, choice of method) is done
+/// once, at the first factorisation; each policy then refactorises its
+/// numbers only, with structural zeros where its action has no edge. Valid
+/// for every MDP with the graph and the qualitative step it was built for
+/// ([`Mdp::same_graph`]).
+pub struct PolicySystems {
+    /// `M`, in the order of the unknowns.
+    maybe: Vec<usize>,
+    /// Where the probability of each entry of the MDP's distributions goes
+    /// (indexed like its entries; entries of states outside `M` are unused).
+    slots: Vec<Slot>,
+    /// The sizes the systems were built for: states, state-action pairs, entries.
+    shape: (usize, usize, usize),
+    pattern: Option<SparsePattern>,
+    solver: Option<LinearSolver>,
+    settings: SolverSettings,
+    tolerance: f64,
+}
+
+/// Where one transition `s -> t` of a maybe state's action goes in its
+/// policy's system.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Slot {
+    /// An off-diagonal entry `-P(t | s)` at this position of the values.
+    Inside(usize),
+    /// Leaving `M`: into the exits, and into `b` when `t` is in the target.
+    Leaving {
+        /// `t` is a target state.
+        target: bool,
+    },
+    /// A self-loop (or an entry of a state outside `M`): not in the system.
+    Unused,
+}
+
+impl PolicySystems {
+    /// The systems of `mdp`'s policies on the maybe states of `qualitative`
+    /// (neither 0 nor 1 by the graph), solved by `settings`.
+    pub fn new(
+        mdp: &Mdp,
+        qualitative: &QualitativeReachability,
+        settings: &SolverSettings,
+    ) -> Result<Self, MdpError> {
+        let n = mdp.num_states();
+        if qualitative.possible.len() != n || qualitative.almost_sure.len() != n {
+            return Err(MdpError::Malformed(format!(
+                "a qualitative analysis of {} states for {n}",
+                qualitative.possible.len()
+            )));
         }
-    }
-    let (mut solver, _) = system.factorised(settings)?;
-    let mut solution = vec![0.0; maybe.len()];
-    solver.solve_transpose(&start, &mut solution)?;
-    for (&s, &y) in maybe.iter().zip(&solution) {
-        visits[s] = y;
-    }
-    Ok(visits)
-}
-
-/// The linear system `(I - Q_sigma) x = b_sigma` of a policy on the maybe
-/// states `M` (module documentation, step 3), before factorisation.
-struct PolicySystem {
-    /// The position of each state in `M` (`usize::MAX` outside).
-    index: Vec<usize>,
-    pattern: SparsePattern,
-    /// The off-diagonal entries `-P(t | s)`; 0 holds the diagonal's place.
-    coefficients: Vec<f64>,
-    /// The probability of leaving each state of `M` (the diagonal).
-    exits: Vec<f64>,
-    /// `b_sigma(s) = P_sigma(target | s)`.
-    rhs: Vec<f64>,
-}
-
-impl PolicySystem {
-    fn build(mdp: &Mdp, target: &[bool], maybe: &[usize], strategy: &[usize]) -> Self {
-        let mut index = vec![usize::MAX; mdp.num_states()];
+        let maybe: Vec<usize> = (0..n)
+            .filter(|&s| qualitative.possible[s] && !qualitative.almost_sure[s])
+            .collect();
+        let mut index = vec![usize::MAX; n];
         for (i, &s) in maybe.iter().enumerate() {
             index[s] = i;
         }
         let mut row_offsets = vec![0];
         let mut columns = Vec::new();
-        let mut coefficients = Vec::new();
-        let mut rhs = vec![0.0; maybe.len()];
-        let mut exits = vec![0.0; maybe.len()];
-        let mut row = Vec::new();
+        let mut slots = vec![Slot::Unused; mdp.entries.len()];
         for (i, &s) in maybe.iter().enumerate() {
-            row.clear();
+            let row_start = columns.len();
             // The diagonal is formed by the solver from the exits (method.md
-            // section 8); 0 holds its place.
-            row.push((i, 0.0));
-            for &(t, p) in mdp
-                .distribution(s, strategy[s])
-                .iter()
-                .filter(|&&(t, _)| t != s)
-            {
-                if index[t] != usize::MAX {
-                    row.push((index[t], -p));
-                } else {
-                    exits[i] += p;
-                    if target[t] {
-                        rhs[i] += p;
-                    }
+            // section 8); the pattern holds its place.
+            columns.push(i);
+            for action in mdp.global_actions(s) {
+                let inside = mdp.global_distribution(action).iter().map(|&(t, _)| t);
+                columns.extend(
+                    inside
+                        .filter(|&t| t != s)
+                        .map(|t| index[t])
+                        .filter(|&j| j != usize::MAX),
+                );
+            }
+            columns[row_start..].sort_unstable();
+            let mut kept = row_start;
+            for k in row_start..columns.len() {
+                if k == row_start || columns[k] != columns[kept - 1] {
+                    columns[kept] = columns[k];
+                    kept += 1;
                 }
             }
-            row.sort_by_key(|&(j, _)| j);
-            for &(j, a) in &row {
-                if columns.len() > row_offsets[i] && columns.last() == Some(&j) {
-                    *coefficients.last_mut().expect("a column was pushed") += a;
-                } else {
-                    columns.push(j);
-                    coefficients.push(a);
+            columns.truncate(kept);
+            let row = &columns[row_start..];
+            for action in mdp.global_actions(s) {
+                let entries = mdp.entry_offsets[action]..mdp.entry_offsets[action + 1];
+                for (slot, &(t, _)) in slots[entries.clone()].iter_mut().zip(&mdp.entries[entries])
+                {
+                    *slot = if t == s {
+                        Slot::Unused
+                    } else if index[t] == usize::MAX {
+                        Slot::Leaving {
+                            target: qualitative.almost_sure[t],
+                        }
+                    } else {
+                        let offset = row
+                            .binary_search(&index[t])
+                            .expect("every edge inside M is in the union pattern");
+                        Slot::Inside(row_start + offset)
+                    };
                 }
             }
             row_offsets.push(columns.len());
@@ -431,23 +439,102 @@ impl PolicySystem {
             row_offsets,
             columns,
         };
-        Self {
-            index,
-            pattern,
-            coefficients,
-            exits,
-            rhs,
-        }
+        Ok(Self {
+            maybe,
+            slots,
+            shape: (n, mdp.num_state_actions(), mdp.entries.len()),
+            pattern: Some(pattern),
+            solver: None,
+            settings: *settings,
+            tolerance: settings.tolerance,
+        })
     }
 
-    /// The factorised system and its right-hand side.
-    fn factorised(self, settings: &SolverSettings) -> Result<(LinearSolver, Vec<f64>), MdpError> {
-        let mut solver = LinearSolver::new(self.pattern, settings)?;
-        solver.factorize_with(|own, own_exits| {
-            own.copy_from_slice(&self.coefficients);
-            own_exits.copy_from_slice(&self.exits);
+    /// Whether these systems were built for `mdp`'s shape and for
+    /// `qualitative`'s maybe states.
+    fn fits(&self, mdp: &Mdp, qualitative: &QualitativeReachability) -> bool {
+        let shape = (mdp.num_states(), mdp.num_state_actions(), mdp.entries.len());
+        shape == self.shape
+            && self
+                .maybe
+                .iter()
+                .all(|&s| qualitative.possible[s] && !qualitative.almost_sure[s])
+    }
+
+    /// The solver, once a system was factorised.
+    fn solver(&mut self) -> Result<&mut LinearSolver, MdpError> {
+        self.solver.as_mut().ok_or(MdpError::Malformed(
+            "no policy system was factorised".into(),
+        ))
+    }
+
+    /// Factorises the system of `strategy` (its actions on `M`, read with
+    /// `mdp`'s probabilities); returns `b_sigma`.
+    fn factorise(&mut self, mdp: &Mdp, strategy: &[usize]) -> Result<Vec<f64>, MdpError> {
+        if let Some(pattern) = self.pattern.take() {
+            self.solver = Some(LinearSolver::new(pattern, &self.settings)?);
+        }
+        let Self {
+            maybe,
+            slots,
+            solver,
+            ..
+        } = self;
+        let solver = solver.as_mut().ok_or(MdpError::Malformed(
+            "the policy systems lost their solver".into(),
+        ))?;
+        let mut rhs = vec![0.0; maybe.len()];
+        solver.factorize_with(|values, exits| {
+            values.fill(0.0);
+            exits.fill(0.0);
+            for (i, &s) in maybe.iter().enumerate() {
+                let action = mdp.action_offsets[s] + strategy[s];
+                let entries = mdp.entry_offsets[action]..mdp.entry_offsets[action + 1];
+                for (slot, &(_, p)) in slots[entries.clone()].iter().zip(&mdp.entries[entries]) {
+                    match *slot {
+                        Slot::Inside(k) => values[k] = -p,
+                        Slot::Leaving { target } => {
+                            exits[i] += p;
+                            if target {
+                                rhs[i] += p;
+                            }
+                        }
+                        Slot::Unused => {}
+                    }
+                }
+            }
         })?;
-        Ok((solver, self.rhs))
+        Ok(rhs)
+    }
+
+    /// The expected number of visits `y(s)` to each state of `M` before
+    /// the chain of the strategy last returned by [`max_reachability_with`]
+    /// on these systems, started from `initial`, leaves `M`: the solution of
+    /// `(I - Q_sigma)^T y = p0` on `M`, 0 elsewhere, with the factorisation
+    /// of `sigma` the systems hold (the last policy evaluated is the one
+    /// returned). These are the adjoint weights of the policy's
+    /// reachability value `sum_s p0(s) x(s)`: its derivative along a change
+    /// `dP` of the transition probabilities of the policy's actions is
+    /// `sum_{s in M} y(s) sum_t dP(t | s) x(t)` (method.md section 6, "the
+    /// lower bound's gradient"). Solved in double precision without an
+    /// error bound: it is a search direction, never a reported number.
+    pub fn expected_visits(&mut self, initial: &[(usize, f64)]) -> Result<Vec<f64>, MdpError> {
+        let mut visits = vec![0.0; self.shape.0];
+        if self.maybe.is_empty() {
+            return Ok(visits);
+        }
+        let mut start = vec![0.0; self.maybe.len()];
+        for &(s, p) in initial {
+            if let Ok(i) = self.maybe.binary_search(&s) {
+                start[i] += p;
+            }
+        }
+        let mut solution = vec![0.0; self.maybe.len()];
+        self.solver()?.solve_transpose(&start, &mut solution)?;
+        for (&s, &y) in self.maybe.iter().zip(&solution) {
+            visits[s] = y;
+        }
+        Ok(visits)
     }
 }
 
@@ -565,6 +652,81 @@ mod tests {
         assert_eq!(&result.strategy[..3], &[1, 1, 0]);
         assert!(result.residual < 1e-12);
         assert!(result.iterations >= 2, "the start policy is not optimal");
+    }
+
+    /// `gamble` with other probabilities, the same graph. On paper: x2 =
+    /// max(0.2, x1), x1 = max(0.5 + 0.5 x0, x2), x0 = max(x0, 0.5 x1): x0 =
+    /// 1/3, x1 = x2 = 2/3 with strategy (1, 0, 1).
+    fn gamble_reweighted() -> Mdp {
+        mdp(&[
+            &[&[(0, 1.0)], &[(1, 0.5), (4, 0.5)]],
+            &[&[(3, 0.5), (0, 0.5)], &[(2, 1.0)]],
+            &[&[(3, 0.2), (4, 0.8)], &[(1, 1.0)]],
+            &[&[(3, 1.0)]],
+            &[&[(4, 1.0)]],
+        ])
+    }
+
+    /// One set of policy systems serves two MDPs of one graph: each gets
+    /// its values on paper, and the expected visits of each optimal
+    /// strategy from state 0 (on paper: under (1, 1, 0), y = (1, 1/2,
+    /// 1/2); under (1, 0, 1), y0 = 1 + y1 / 2 and y1 = y0 / 2, so y = (4/3,
+    /// 2/3, 0)).
+    #[test]
+    fn policy_systems_serve_every_mdp_of_their_graph() {
+        let target = [false, false, false, true, false];
+        let qualitative = qualitative_reachability(&gamble(), &target).unwrap();
+        let settings = SolverSettings::default();
+        let mut systems = PolicySystems::new(&gamble(), &qualitative, &settings).unwrap();
+        let close =
+            |got: &[f64], want: &[f64]| got.iter().zip(want).all(|(g, w)| (g - w).abs() < 1e-14);
+        let first =
+            max_reachability_with(&gamble(), &qualitative, &qualitative.strategy, &mut systems)
+                .unwrap();
+        assert!(
+            close(&first.values, &[0.3, 0.6, 0.6, 1.0, 0.0]),
+            "{:?}",
+            first.values
+        );
+        let visits = systems.expected_visits(&[(0, 1.0)]).unwrap();
+        assert!(close(&visits, &[1.0, 0.5, 0.5, 0.0, 0.0]), "{visits:?}");
+        let reweighted = gamble_reweighted();
+        assert!(reweighted.same_graph(&gamble()));
+        let second =
+            max_reachability_with(&reweighted, &qualitative, &first.strategy, &mut systems)
+                .unwrap();
+        let third = 2.0 / 3.0;
+        assert!(
+            close(&second.values, &[1.0 / 3.0, third, third, 1.0, 0.0]),
+            "{:?}",
+            second.values
+        );
+        assert_eq!(&second.strategy[..3], &[1, 0, 1]);
+        assert!(second.error_bound <= settings.tolerance);
+        let visits = systems.expected_visits(&[(0, 1.0)]).unwrap();
+        assert!(
+            close(&visits, &[4.0 / 3.0, third, 0.0, 0.0, 0.0]),
+            "{visits:?}"
+        );
+    }
+
+    /// Systems built for another graph's shape are refused, not misread.
+    #[test]
+    fn policy_systems_of_another_shape_are_an_error() {
+        let target = [false, false, false, true, false];
+        let qualitative = qualitative_reachability(&gamble(), &target).unwrap();
+        let settings = SolverSettings::default();
+        let mut systems = PolicySystems::new(&gamble(), &qualitative, &settings).unwrap();
+        let smaller = mdp(&[
+            &[&[(0, 1.0)], &[(1, 0.5), (4, 0.5)]],
+            &[&[(3, 0.3), (0, 0.7)]],
+            &[&[(3, 0.6), (4, 0.4)], &[(1, 1.0)]],
+            &[&[(3, 1.0)]],
+            &[&[(4, 1.0)]],
+        ]);
+        let found =
+            max_reachability_with(&smaller, &qualitative, &qualitative.strategy, &mut systems);
+        assert!(matches!(found, Err(MdpError::Malformed(_))), "{found:?}");
     }
 
     /// Retrying (action 0) reaches 1 almost surely; the one-shot action 1
