@@ -84,6 +84,29 @@ fn a_gap_that_cannot_close_stops_on_stall_and_says_so() {
     assert!((bracket.upper_bound - 1.0).abs() < 1e-9, "{bracket:?}");
 }
 
+/// The work cap ends a run that would otherwise go on to its stall: with
+/// `max_work` worth 20 outer iterations of gradient play (11 evaluations
+/// of the GMC each, its best responses counting too) the run stops by the
+/// 20th iteration, says so, and still certifies what any controller gets.
+#[test]
+fn the_work_cap_stops_a_run_and_says_so() {
+    let g = game(BLIND_GUESS);
+    let uncapped = solve(&g, "F goal", 1);
+    let report = &uncapped.best().report;
+    assert!(report.iterations > 20, "{report:?}");
+    let per_iteration = (Settings::default().adversary_steps + 1) * report.gmc.states;
+    let settings = Settings {
+        max_work: (20 * per_iteration) as f64,
+        ..Settings::default()
+    };
+    let capped = solve_with(&g, "F goal", 1, &settings);
+    let report = &capped.best().report;
+    assert_eq!(report.status, Status::WorkBudget, "{report:?}");
+    assert!(report.iterations <= 20, "{report:?}");
+    let bracket = capped.certified.unwrap();
+    assert!((bracket.certified_lower - 0.5).abs() < 1e-9, "{bracket:?}");
+}
+
 /// The adversary hides a cue (A or B) that the defender sees once; then
 /// both cues look alike and the defender must answer L after A, R after B.
 /// A 2-node defender remembers the cue and wins surely (value 1); with one

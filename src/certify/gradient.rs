@@ -71,6 +71,7 @@ pub struct LowerBoundGradients<'a> {
     dra_not_phi: &'a Dra,
     settings: SolverSettings,
     last: Option<LastAnalysis>,
+    work: f64,
 }
 
 /// The graph analysis of the last product, its optimal strategy and its
@@ -90,7 +91,15 @@ impl<'a> LowerBoundGradients<'a> {
             dra_not_phi,
             settings,
             last: None,
+            work: 0.0,
         }
+    }
+
+    /// The work of the bounds computed so far: the product's states per
+    /// linear solve (each policy evaluation, and each gradient's adjoint
+    /// solve).
+    pub fn work(&self) -> f64 {
+        self.work
     }
 
     /// The lower bound of `defender` and its gradient.
@@ -98,6 +107,7 @@ impl<'a> LowerBoundGradients<'a> {
         let (game, dra) = (self.game, self.dra_not_phi);
         let (product, result, systems) = self.analyse(defender)?;
         let y = systems.expected_visits(&product.initial)?;
+        self.work += product.mdp.num_states() as f64;
         gradient(game, dra, defender, &product, &result, &y)
     }
 
@@ -145,6 +155,7 @@ impl<'a> LowerBoundGradients<'a> {
         );
         if let Ok(result) = &result {
             last.strategy.clone_from(&result.strategy);
+            self.work += (product.mdp.num_states() * result.iterations) as f64;
         }
         let last = self.last.insert(last);
         Ok((product, result?, &mut last.systems))

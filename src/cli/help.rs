@@ -18,6 +18,7 @@ const COMMON: &[&str] = &[
     "seed",
     "starts",
     "max_iterations",
+    "max_work",
     "time_budget",
     "structures",
     "quiet",

@@ -36,6 +36,10 @@ pub(super) trait DefenderObjective {
     /// The value at `defender`, its logit gradient and the larger residual
     /// of the linear solves behind them.
     fn point(&mut self, defender: &[f64]) -> Result<DefenderPoint, OptimiseError>;
+
+    /// The work of the evaluations so far, in states solved (the unit of
+    /// [`Settings::max_work`]).
+    fn work(&self) -> f64;
 }
 
 /// A value of the defender's logits with its gradient.
@@ -66,12 +70,17 @@ impl DefenderObjective for AgainstFixed<'_> {
             residual: point.residual,
         })
     }
+
+    fn work(&self) -> f64 {
+        self.objective.work()
+    }
 }
 
 /// Maximises the objective (as its logarithm) over the defender's logits
 /// from `start`, reporting one record per iteration to `observer`,
-/// stopping early once `cancel` is set; `adversary` is the adversary's
-/// logits recorded with the result.
+/// stopping early once `cancel` is set, and at `max_iterations`, at a
+/// positive `max_work` spent by this ascent, at the time budget or on a
+/// stall; `adversary` is the adversary's logits recorded with the result.
 pub(super) fn ascend(
     objective: &mut dyn DefenderObjective,
     (start, adversary): (&[f64], &[f64]),
@@ -80,6 +89,7 @@ pub(super) fn ascend(
     cancel: &Cancel,
 ) -> Result<RunOutcome, OptimiseError> {
     let clock = Instant::now();
+    let work_before = objective.work();
     let c = Reparametrisation::new(settings.logit_bound);
     let mut z = c.to_z(start);
     let mut here = Evaluated::at(objective, &z, c)?;
@@ -95,6 +105,8 @@ pub(super) fn ascend(
             Some(Status::Cancelled)
         } else if t + 1 >= settings.max_iterations {
             Some(Status::MaxIterations)
+        } else if settings.max_work > 0.0 && objective.work() - work_before >= settings.max_work {
+            Some(Status::WorkBudget)
         } else if settings.time_budget > 0.0 && seconds >= settings.time_budget {
             Some(Status::TimeBudget)
         } else if window > 0 && gained_little(&history, window, settings.stall_tolerance) {

@@ -43,6 +43,10 @@ impl DefenderObjective for Guarantee<'_, '_> {
             residual: 0.0,
         })
     }
+
+    fn work(&self) -> f64 {
+        self.bounds.work()
+    }
 }
 
 #[cfg(test)]

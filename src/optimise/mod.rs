@@ -174,6 +174,8 @@ fn keep_solved<T>(results: Vec<Result<T, OptimiseError>>) -> Result<Kept<T>, Opt
 pub enum Status {
     /// `max_iterations` outer iterations ran.
     MaxIterations,
+    /// The max-min loop spent `max_work` (GMC states solved).
+    WorkBudget,
     /// The time budget ran out.
     TimeBudget,
     /// The best score stopped improving (at the widest logit bound).

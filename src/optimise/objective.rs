@@ -37,6 +37,8 @@ pub struct Objective {
     adversary: Softmax,
     cache: Option<(Vec<f64>, Vec<f64>, Point)>,
     largest_error_bound: f64,
+    /// The GMC states solved so far: its reachable states per evaluation.
+    work: f64,
 }
 
 /// The size of a structure's GMC.
@@ -78,6 +80,7 @@ impl Objective {
             adversary,
             cache: None,
             largest_error_bound: 0.0,
+            work: 0.0,
         })
     }
 
@@ -86,6 +89,13 @@ impl Objective {
     /// exact value.
     pub fn largest_error_bound(&self) -> f64 {
         self.largest_error_bound
+    }
+
+    /// The work of the evaluations so far: the GMC's reachable states
+    /// times the number of evaluations (cached answers are free), the unit
+    /// of [`super::Settings::max_work`].
+    pub fn work(&self) -> f64 {
+        self.work
     }
 
     /// The defender's softmax map.
@@ -119,6 +129,7 @@ impl Objective {
         }
         let mu_def = self.defender.probabilities(defender);
         let mu_adv = self.adversary.probabilities(adversary);
+        self.work += self.evaluator.gmc().num_states() as f64;
         let evaluation = self.evaluator.evaluate(&mu_def, &mu_adv)?;
         self.largest_error_bound = self.largest_error_bound.max(evaluation.error_bound);
         Ok(evaluation.value)
@@ -134,6 +145,7 @@ impl Objective {
         }
         let mu_def = self.defender.probabilities(defender);
         let mu_adv = self.adversary.probabilities(adversary);
+        self.work += self.evaluator.gmc().num_states() as f64;
         let (evaluation, gradient) = self.evaluator.evaluate_with_gradient(&mu_def, &mu_adv)?;
         self.largest_error_bound = self.largest_error_bound.max(evaluation.error_bound);
         let point = Point {

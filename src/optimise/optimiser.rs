@@ -454,13 +454,17 @@ impl<'a> Optimiser<'a> {
 
     /// [`Status::Cancelled`] once the cancel flag is set,
     /// [`Status::MaxIterations`] after iteration `max_iterations - 1`,
-    /// [`Status::TimeBudget`] once `seconds` reach a positive time budget.
+    /// [`Status::WorkBudget`] once the objective's work reaches a positive
+    /// `max_work`, [`Status::TimeBudget`] once `seconds` reach a positive
+    /// time budget.
     fn budget_spent(&self, t: usize, seconds: f64) -> Option<Status> {
         let s = &self.settings;
         if self.cancel.is_cancelled() {
             Some(Status::Cancelled)
         } else if t + 1 >= s.max_iterations {
             Some(Status::MaxIterations)
+        } else if s.max_work > 0.0 && self.objective.work() >= s.max_work {
+            Some(Status::WorkBudget)
         } else if s.time_budget > 0.0 && seconds >= s.time_budget {
             Some(Status::TimeBudget)
         } else {

@@ -57,6 +57,15 @@ pub struct Settings {
     /// certified gap or on stalled progress.
     #[arg(long, default_value_t = Settings::default().max_iterations)]
     pub max_iterations: usize,
+    /// The most work one start's max-min loop spends, in GMC states
+    /// solved: every evaluation of the value (and its gradients) on the
+    /// structure's GMC counts its reachable states, the gradient steps'
+    /// and the best responses' alike (0: no limit). A cap like
+    /// `max_iterations` in units that grow with the chain, so that a run on
+    /// a large game ends in bounded time, at the same iteration on every
+    /// machine.
+    #[arg(long, default_value_t = Settings::default().max_work)]
+    pub max_work: f64,
     /// Independent starts of the optimiser per structure, run in parallel
     /// (rayon), each with its own seeded random stream; the best by
     /// certified lower bound (by worst-case estimate without an automaton
@@ -227,6 +236,7 @@ impl Default for Settings {
             initial_spread: 1.0,
             optimise_initial: false,
             max_iterations: 3000,
+            max_work: DEFAULT_MAX_WORK,
             starts: 4,
             time_budget: 0.0,
             adversary_steps: 10,
@@ -262,6 +272,12 @@ impl Default for Settings {
         }
     }
 }
+
+/// The default [`Settings::max_work`]: 3.5 million GMC states solved per
+/// start, about 160 outer iterations of gradient play on a GMC of 2,000
+/// states (PAYNT's dodge games with 3 nodes), more than `max_iterations`
+/// on any GMC below 106 states.
+pub const DEFAULT_MAX_WORK: f64 = 3.5e6;
 
 /// With a time budget, the share of it that a structure's final best
 /// responses get at least, however late they start.
@@ -359,6 +375,7 @@ impl Settings {
         let non_negative = [
             ("initial_spread", self.initial_spread),
             ("time_budget", self.time_budget),
+            ("max_work", self.max_work),
             ("defender_decay", self.defender_decay),
             ("stall_tolerance", self.stall_tolerance),
             ("stall_gain", self.stall_gain),
