@@ -143,7 +143,7 @@ pub fn max_reachability_with(
     let mut proof = Proof::Trial;
     for iterations in 1..=MAX_ITERATIONS {
         let (values, report) = evaluate(mdp, systems, &almost_sure, &strategy, &previous, proof)?;
-        let proved = report.error_bound <= systems.tolerance;
+        let proved = report.error_bound <= systems.settings.tolerance;
         let threshold = if proved {
             IMPROVEMENT_THRESHOLD.max(4.0 * report.error_bound)
         } else {
@@ -347,7 +347,6 @@ pub struct PolicySystems {
     pattern: Option<SparsePattern>,
     solver: Option<LinearSolver>,
     settings: SolverSettings,
-    tolerance: f64,
 }
 
 /// Where one transition `s -> t` of a maybe state's action goes in its
@@ -446,7 +445,6 @@ impl PolicySystems {
             pattern: Some(pattern),
             solver: None,
             settings: *settings,
-            tolerance: settings.tolerance,
         })
     }
 
