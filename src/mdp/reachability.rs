@@ -342,8 +342,11 @@ pub struct PolicySystems {
     /// Where the probability of each entry of the MDP's distributions goes
     /// (indexed like its entries; entries of states outside `M` are unused).
     slots: Vec<Slot>,
-    /// The sizes the systems were built for: states, state-action pairs, entries.
-    shape: (usize, usize, usize),
+    /// The MDP the systems were built for (its graph is what they fit).
+    graph: Mdp,
+    /// The qualitative step they were built for: which states can reach
+    /// the target, which reach it almost surely.
+    decided: (Vec<bool>, Vec<bool>),
     pattern: Option<SparsePattern>,
     solver: Option<LinearSolver>,
     settings: SolverSettings,
@@ -441,22 +444,23 @@ impl PolicySystems {
         Ok(Self {
             maybe,
             slots,
-            shape: (n, mdp.num_state_actions(), mdp.entries.len()),
+            graph: mdp.clone(),
+            decided: (
+                qualitative.possible.clone(),
+                qualitative.almost_sure.clone(),
+            ),
             pattern: Some(pattern),
             solver: None,
             settings: *settings,
         })
     }
 
-    /// Whether these systems were built for `mdp`'s shape and for
-    /// `qualitative`'s maybe states.
+    /// Whether these systems were built for `mdp`'s graph
+    /// ([`Mdp::same_graph`]) and for `qualitative`.
     fn fits(&self, mdp: &Mdp, qualitative: &QualitativeReachability) -> bool {
-        let shape = (mdp.num_states(), mdp.num_state_actions(), mdp.entries.len());
-        shape == self.shape
-            && self
-                .maybe
-                .iter()
-                .all(|&s| qualitative.possible[s] && !qualitative.almost_sure[s])
+        self.graph.same_graph(mdp)
+            && self.decided.0 == qualitative.possible
+            && self.decided.1 == qualitative.almost_sure
     }
 
     /// The solver, once a system was factorised.
@@ -469,6 +473,17 @@ impl PolicySystems {
     /// Factorises the system of `strategy` (its actions on `M`, read with
     /// `mdp`'s probabilities); returns `b_sigma`.
     fn factorise(&mut self, mdp: &Mdp, strategy: &[usize]) -> Result<Vec<f64>, MdpError> {
+        if let Some(&s) = self
+            .maybe
+            .iter()
+            .find(|&&s| strategy[s] >= mdp.num_actions(s))
+        {
+            return Err(MdpError::Malformed(format!(
+                "action {} of state {s}, which has {}",
+                strategy[s],
+                mdp.num_actions(s)
+            )));
+        }
         if let Some(pattern) = self.pattern.take() {
             self.solver = Some(LinearSolver::new(pattern, &self.settings)?);
         }
@@ -517,7 +532,7 @@ impl PolicySystems {
     /// lower bound's gradient"). Solved in double precision without an
     /// error bound: it is a search direction, never a reported number.
     pub fn expected_visits(&mut self, initial: &[(usize, f64)]) -> Result<Vec<f64>, MdpError> {
-        let mut visits = vec![0.0; self.shape.0];
+        let mut visits = vec![0.0; self.graph.num_states()];
         if self.maybe.is_empty() {
             return Ok(visits);
         }
@@ -708,7 +723,8 @@ mod tests {
         );
     }
 
-    /// Systems built for another graph's shape are refused, not misread.
+    /// Systems built for another graph are refused, not misread: another
+    /// shape, or the same shape with another successor.
     #[test]
     fn policy_systems_of_another_shape_are_an_error() {
         let target = [false, false, false, true, false];
@@ -724,6 +740,17 @@ mod tests {
         ]);
         let found =
             max_reachability_with(&smaller, &qualitative, &qualitative.strategy, &mut systems);
+        assert!(matches!(found, Err(MdpError::Malformed(_))), "{found:?}");
+        // The same numbers of states, actions and entries, another successor.
+        let rewired = mdp(&[
+            &[&[(0, 1.0)], &[(1, 0.5), (4, 0.5)]],
+            &[&[(3, 0.3), (0, 0.7)], &[(2, 1.0)]],
+            &[&[(3, 0.6), (0, 0.4)], &[(1, 1.0)]],
+            &[&[(3, 1.0)]],
+            &[&[(4, 1.0)]],
+        ]);
+        let found =
+            max_reachability_with(&rewired, &qualitative, &qualitative.strategy, &mut systems);
         assert!(matches!(found, Err(MdpError::Malformed(_))), "{found:?}");
     }
 

@@ -174,7 +174,7 @@ fn keep_solved<T>(results: Vec<Result<T, OptimiseError>>) -> Result<Kept<T>, Opt
 pub enum Status {
     /// `max_iterations` outer iterations ran.
     MaxIterations,
-    /// The max-min loop spent `max_work` (GMC states solved).
+    /// The max-min loop or an ascent spent its `max_work` (states solved).
     WorkBudget,
     /// The time budget ran out.
     TimeBudget,

@@ -60,7 +60,9 @@ pub struct Settings {
     /// The most work one start's max-min loop spends, in GMC states
     /// solved: every evaluation of the value (and its gradients) on the
     /// structure's GMC counts its reachable states, the gradient steps'
-    /// and the best responses' alike (0: no limit). A cap like
+    /// and the best responses' alike (0: no limit); each guarantee ascent
+    /// may spend a further quarter of it, counted in its product MDP's
+    /// states per policy evaluation. A cap like
     /// `max_iterations` in units that grow with the chain, so that a run on
     /// a large game ends in bounded time, at the same iteration on every
     /// machine.
@@ -275,8 +277,9 @@ impl Default for Settings {
 
 /// The default [`Settings::max_work`]: 3.5 million GMC states solved per
 /// start, about 160 outer iterations of gradient play on a GMC of 2,000
-/// states (PAYNT's dodge games with 3 nodes), more than `max_iterations`
-/// on any GMC below 106 states.
+/// states (PAYNT's dodge games with 3 nodes); the gradient steps alone
+/// (11 evaluations per iteration) reach it within `max_iterations` only
+/// on GMCs of more than 106 states, best responses count too.
 pub const DEFAULT_MAX_WORK: f64 = 3.5e6;
 
 /// With a time budget, the share of it that a structure's final best
