@@ -11,7 +11,8 @@
 //! held fixed (Danskin's theorem); where several strategies are optimal it
 //! is the derivative of one of them, a one-sided derivative of `L`. With
 //! `x` the optimal values of `!phi` and `y` the expected visits to the
-//! undecided states under `sigma*` (`PolicySystems::expected_visits`, `src/mdp/reachability.rs`):
+//! undecided states under `sigma*` (`PolicySystems::expected_visits` in
+//! `src/mdp/reachability.rs`):
 //!
 //! ```text
 //! dL/d mu_def(g', u | g, o) = - sum_{(s, q, g) undecided} y(s, q, g) O_def(o | s)
