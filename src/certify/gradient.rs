@@ -31,8 +31,8 @@ use crate::automaton::Dra;
 use crate::controller::{Fsc, Role, Support};
 use crate::game::{AdversaryAction, DefenderAction, Posg};
 use crate::mdp::{
-    Mdp, PolicySystems, QualitativeReachability, Reachability, accepting_end_components,
-    accepting_union, max_reachability_with, qualitative_reachability,
+    PolicySystems, Reachability, accepting_end_components, accepting_union, max_reachability_with,
+    qualitative_reachability,
 };
 use crate::solver::SolverSettings;
 
@@ -75,13 +75,11 @@ pub struct LowerBoundGradients<'a> {
     work: f64,
 }
 
-/// The graph analysis of the last product, its optimal strategy and its
-/// policies' linear systems (one symbolic analysis for the graph).
+/// The graph analysis of the last product (in its policies' linear
+/// systems: one symbolic analysis for the graph) and its optimal strategy.
 struct LastAnalysis {
-    mdp: Mdp,
-    qualitative: QualitativeReachability,
-    strategy: Vec<usize>,
     systems: PolicySystems,
+    strategy: Vec<usize>,
 }
 
 impl<'a> LowerBoundGradients<'a> {
@@ -134,26 +132,19 @@ impl<'a> LowerBoundGradients<'a> {
         let (game, dra) = (self.game, self.dra_not_phi);
         let product = Product::build(game, dra, defender, Role::Defender)?;
         let mut last = match self.last.take() {
-            Some(last) if last.mdp.same_graph(&product.mdp) => last,
+            Some(last) if last.systems.fits(&product.mdp) => last,
             _ => {
                 let pairs = product.lift(dra.pairs());
                 let accepting = accepting_end_components(&product.mdp, &pairs)?;
                 let target = accepting_union(&product.mdp, &accepting);
                 let qualitative = qualitative_reachability(&product.mdp, &target)?;
                 LastAnalysis {
-                    mdp: product.mdp.clone(),
                     strategy: qualitative.strategy.clone(),
-                    systems: PolicySystems::new(&product.mdp, &qualitative, &self.settings)?,
-                    qualitative,
+                    systems: PolicySystems::new(&product.mdp, qualitative, &self.settings)?,
                 }
             }
         };
-        let result = max_reachability_with(
-            &product.mdp,
-            &last.qualitative,
-            &last.strategy,
-            &mut last.systems,
-        );
+        let result = max_reachability_with(&product.mdp, &last.strategy, &mut last.systems);
         if let Ok(result) = &result {
             last.strategy.clone_from(&result.strategy);
             self.work += (product.mdp.num_states() * result.iterations) as f64;

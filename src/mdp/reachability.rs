@@ -105,34 +105,34 @@ pub fn max_reachability(
     settings: &SolverSettings,
 ) -> Result<Reachability, MdpError> {
     let qualitative = qualitative_reachability(mdp, target)?;
-    let mut systems = PolicySystems::new(mdp, &qualitative, settings)?;
-    max_reachability_with(mdp, &qualitative, &qualitative.strategy, &mut systems)
+    let start = qualitative.strategy.clone();
+    let mut systems = PolicySystems::new(mdp, qualitative, settings)?;
+    max_reachability_with(mdp, &start, &mut systems)
 }
 
-/// [`max_reachability`] with its qualitative step (steps 1 and 2) given,
-/// computed for an MDP with the same graph ([`Mdp::same_graph`]: it
-/// depends on nothing else), and policy iteration started from `start` on
-/// the maybe states: the qualitative strategy, or the strategy of an
-/// earlier result on the same graph. Either is proper (every maybe state
-/// reaches the target with positive probability under it, a property of
-/// the graph), so every evaluation stays nonsingular. The policies'
-/// systems are `systems`, built by [`PolicySystems::new`] for the same
-/// graph and qualitative step, so that MDPs of one graph (a controller's
-/// products as its probabilities change) share one symbolic analysis; on
-/// return they hold the factorisation of the returned strategy.
+/// [`max_reachability`] on `systems`, built by [`PolicySystems::new`] for
+/// an MDP with the same graph ([`Mdp::same_graph`]) with its qualitative
+/// step (steps 1 and 2, which depend on the graph alone), so that MDPs of
+/// one graph (a controller's products as its probabilities change) share
+/// the graph analysis and one symbolic analysis; policy iteration starts
+/// from `start` on the maybe states: the qualitative strategy, or the
+/// strategy of an earlier result on the same graph. Either is proper
+/// (every maybe state reaches the target with positive probability under
+/// it, a property of the graph), so every evaluation stays nonsingular. On
+/// return the systems hold the factorisation of the returned strategy.
 pub fn max_reachability_with(
     mdp: &Mdp,
-    qualitative: &QualitativeReachability,
     start: &[usize],
     systems: &mut PolicySystems,
 ) -> Result<Reachability, MdpError> {
     let n = mdp.num_states();
-    if qualitative.possible.len() != n || start.len() != n || !systems.fits(mdp, qualitative) {
+    if start.len() != n || !systems.fits(mdp) {
         return Err(MdpError::Malformed(format!(
-            "a qualitative analysis, start strategy or policy systems of {} states for {n}",
-            qualitative.possible.len()
+            "a start strategy of {} states, or policy systems of another graph, for an MDP of {n}",
+            start.len()
         )));
     }
+    let qualitative = &systems.qualitative;
     let positive = qualitative.possible.clone();
     let almost_sure = qualitative.almost_sure.clone();
     let mut strategy = qualitative.strategy.clone();
@@ -344,9 +344,8 @@ pub struct PolicySystems {
     slots: Vec<Slot>,
     /// The MDP the systems were built for (its graph is what they fit).
     graph: Mdp,
-    /// The qualitative step they were built for: which states can reach
-    /// the target, which reach it almost surely.
-    decided: (Vec<bool>, Vec<bool>),
+    /// Its qualitative step (steps 1 and 2).
+    qualitative: QualitativeReachability,
     pattern: Option<SparsePattern>,
     solver: Option<LinearSolver>,
     settings: SolverSettings,
@@ -368,11 +367,12 @@ enum Slot {
 }
 
 impl PolicySystems {
-    /// The systems of `mdp`'s policies on the maybe states of `qualitative`
-    /// (neither 0 nor 1 by the graph), solved by `settings`.
+    /// The systems of `mdp`'s policies on the maybe states of
+    /// `qualitative`, `mdp`'s qualitative step (neither 0 nor 1 by the
+    /// graph), solved by `settings`.
     pub fn new(
         mdp: &Mdp,
-        qualitative: &QualitativeReachability,
+        qualitative: QualitativeReachability,
         settings: &SolverSettings,
     ) -> Result<Self, MdpError> {
         let n = mdp.num_states();
@@ -445,10 +445,7 @@ impl PolicySystems {
             maybe,
             slots,
             graph: mdp.clone(),
-            decided: (
-                qualitative.possible.clone(),
-                qualitative.almost_sure.clone(),
-            ),
+            qualitative,
             pattern: Some(pattern),
             solver: None,
             settings: *settings,
@@ -456,11 +453,9 @@ impl PolicySystems {
     }
 
     /// Whether these systems were built for `mdp`'s graph
-    /// ([`Mdp::same_graph`]) and for `qualitative`.
-    fn fits(&self, mdp: &Mdp, qualitative: &QualitativeReachability) -> bool {
+    /// ([`Mdp::same_graph`]).
+    pub fn fits(&self, mdp: &Mdp) -> bool {
         self.graph.same_graph(mdp)
-            && self.decided.0 == qualitative.possible
-            && self.decided.1 == qualitative.almost_sure
     }
 
     /// The solver, once a system was factorised.
@@ -690,12 +685,10 @@ mod tests {
         let target = [false, false, false, true, false];
         let qualitative = qualitative_reachability(&gamble(), &target).unwrap();
         let settings = SolverSettings::default();
-        let mut systems = PolicySystems::new(&gamble(), &qualitative, &settings).unwrap();
+        let mut systems = PolicySystems::new(&gamble(), qualitative.clone(), &settings).unwrap();
         let close =
             |got: &[f64], want: &[f64]| got.iter().zip(want).all(|(g, w)| (g - w).abs() < 1e-14);
-        let first =
-            max_reachability_with(&gamble(), &qualitative, &qualitative.strategy, &mut systems)
-                .unwrap();
+        let first = max_reachability_with(&gamble(), &qualitative.strategy, &mut systems).unwrap();
         assert!(
             close(&first.values, &[0.3, 0.6, 0.6, 1.0, 0.0]),
             "{:?}",
@@ -705,9 +698,7 @@ mod tests {
         assert!(close(&visits, &[1.0, 0.5, 0.5, 0.0, 0.0]), "{visits:?}");
         let reweighted = gamble_reweighted();
         assert!(reweighted.same_graph(&gamble()));
-        let second =
-            max_reachability_with(&reweighted, &qualitative, &first.strategy, &mut systems)
-                .unwrap();
+        let second = max_reachability_with(&reweighted, &first.strategy, &mut systems).unwrap();
         let third = 2.0 / 3.0;
         assert!(
             close(&second.values, &[1.0 / 3.0, third, third, 1.0, 0.0]),
@@ -730,7 +721,7 @@ mod tests {
         let target = [false, false, false, true, false];
         let qualitative = qualitative_reachability(&gamble(), &target).unwrap();
         let settings = SolverSettings::default();
-        let mut systems = PolicySystems::new(&gamble(), &qualitative, &settings).unwrap();
+        let mut systems = PolicySystems::new(&gamble(), qualitative.clone(), &settings).unwrap();
         let smaller = mdp(&[
             &[&[(0, 1.0)], &[(1, 0.5), (4, 0.5)]],
             &[&[(3, 0.3), (0, 0.7)]],
@@ -738,8 +729,7 @@ mod tests {
             &[&[(3, 1.0)]],
             &[&[(4, 1.0)]],
         ]);
-        let found =
-            max_reachability_with(&smaller, &qualitative, &qualitative.strategy, &mut systems);
+        let found = max_reachability_with(&smaller, &qualitative.strategy, &mut systems);
         assert!(matches!(found, Err(MdpError::Malformed(_))), "{found:?}");
         // The same numbers of states, actions and entries, another successor.
         let rewired = mdp(&[
@@ -749,8 +739,7 @@ mod tests {
             &[&[(3, 1.0)]],
             &[&[(4, 1.0)]],
         ]);
-        let found =
-            max_reachability_with(&rewired, &qualitative, &qualitative.strategy, &mut systems);
+        let found = max_reachability_with(&rewired, &qualitative.strategy, &mut systems);
         assert!(matches!(found, Err(MdpError::Malformed(_))), "{found:?}");
     }
 

@@ -655,8 +655,8 @@ fn search_supports(
     started: Instant,
 ) -> Result<Option<local_search::Climbed>, OptimiseError> {
     let upper = upper_value_or_trivial(game, certifier.phi, &structure.adversary)?;
-    let enough = upper - settings.gap_tolerance;
-    if lower_value_or_trivial(game, certifier.not_phi, &structure.defender)? >= enough {
+    let lower = lower_value_or_trivial(game, certifier.not_phi, &structure.defender)?;
+    if settings.gap_closed(lower, upper) {
         return Ok(None);
     }
     let start = rounding::truncated(&structure.defender, f64::INFINITY)?;
@@ -671,7 +671,7 @@ fn search_supports(
         local_search::Effort {
             work: settings.local_search_work,
             deadline: settings.search_deadline(started),
-            enough,
+            enough: upper - settings.gap_tolerance,
         },
     )?))
 }
