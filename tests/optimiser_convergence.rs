@@ -14,8 +14,8 @@ use posg_fsc::controller::{Choice, Fsc, Role, Support};
 use posg_fsc::game::Posg;
 use posg_fsc::game::file::from_json_str;
 use posg_fsc::optimise::{
-    Cancel, Method, Settings, Status, Structure, embed, keep_better, optimise_structure, pad,
-    rounded_candidates, score, truncated, warm_started,
+    Cancel, IterationRecord, Method, Observer, Settings, Status, Structure, embed, keep_better,
+    optimise_structure, pad, rounded_candidates, score, truncated, warm_started,
 };
 use posg_fsc::value::SolverSettings;
 use posg_fsc::value::evaluate_controllers;
@@ -228,6 +228,80 @@ fn the_support_never_changes_and_the_solves_stay_accurate() {
             outcome.report
         );
     }
+}
+
+/// Every start's records, in the order they arrived.
+#[derive(Clone, Default)]
+struct Records(std::sync::Arc<std::sync::Mutex<Vec<IterationRecord>>>);
+
+impl Observer for Records {
+    fn observe(&mut self, record: &IterationRecord) {
+        self.0.lock().unwrap().push(*record);
+    }
+}
+
+/// The single-player ascent runs under the max-min loop's driver (issue 25,
+/// item 6): every iteration of every start is reported live; a check's
+/// worst case is the value itself (the adversary cannot act) and comes at
+/// the driver's check iterations; the run ends on the driver's rules, and
+/// the work cap stops it like any run.
+#[test]
+fn the_single_player_ascent_runs_under_the_drivers_checks_and_rules() {
+    let g = game(CORRIDOR);
+    let (phi, _) = automata("F goal");
+    let structure = Structure::full(&g, 2, 1, false);
+    let run = |settings: &Settings| {
+        let records = Records::default();
+        let mut observer = records.clone();
+        let outcome = optimise_structure(
+            &g,
+            &phi,
+            None,
+            &structure,
+            settings,
+            0,
+            &mut observer,
+            &Cancel::new(),
+        )
+        .unwrap();
+        let records = records.0.lock().unwrap().clone();
+        (outcome.report, records)
+    };
+    let settings = Settings::default();
+    let (report, records) = run(&settings);
+    assert_eq!(report.method, Method::Ascent);
+    for start in 0..settings.starts {
+        let mine: Vec<&IterationRecord> = records.iter().filter(|r| r.start == start).collect();
+        let iterations: Vec<usize> = mine.iter().map(|r| r.iteration).collect();
+        assert_eq!(
+            iterations,
+            (0..mine.len()).collect::<Vec<_>>(),
+            "start {start}"
+        );
+        let last = mine.len() - 1;
+        for record in &mine {
+            let t = record.iteration;
+            let due = t % settings.check_every == 0 || (t + 1).is_power_of_two() || t == last;
+            assert_eq!(
+                record.worst_case.is_some(),
+                due,
+                "start {start}: {record:?}"
+            );
+            if let Some(worst_case) = record.worst_case {
+                assert_eq!(worst_case, record.value, "start {start}: {record:?}");
+            }
+        }
+    }
+    let driver_ends = [Status::Converged, Status::Stalled, Status::Outpaced];
+    assert!(driver_ends.contains(&report.status), "{report:?}");
+    assert!(report.worst_case > 1.0 - 1e-3, "{report:?}");
+    let capped = Settings {
+        max_work: (3 * report.gmc.states) as f64,
+        ..Settings::default()
+    };
+    let (report, _) = run(&capped);
+    assert_eq!(report.status, Status::WorkBudget, "{report:?}");
+    assert!(report.iterations <= 3, "{report:?}");
 }
 
 #[test]

@@ -1,26 +1,33 @@
-//! The single-player fast path: `max over phi_def of V(phi_def)` when the
-//! adversary cannot influence the game (it has one action), so max-min
-//! reduces to max and no best-response check is needed.
+//! The single-player solver: L-BFGS ascent on `ln V` over the defender's
+//! logits, for games where the adversary cannot influence the game (it
+//! has one action): max-min reduces to max, and a check's best response is
+//! the value itself. [`Ascent`] runs under the same driver as gradient play
+//! ([`super::Optimiser`]: the same stopping rules, checks and observers);
+//! the guarantee ascent (`guarantee.rs`) takes the same steps
+//! ([`Lbfgs`]) on the certified lower bound.
 //!
 //! L-BFGS (two-loop recursion, memory `lbfgs_memory`) with a backtracking
 //! Armijo line search, in the unconstrained coordinates `z` of
 //! `phi = c tanh(z)` with `c = logit_bound` ([`Reparametrisation`],
 //! method.md section 3: every supported choice keeps probability at least
-//! `exp(-2c) / |block|`, so the support never changes). Each trial step moves no
-//! coordinate of `z` by more than [`MAX_STEP`].
+//! `exp(-2c) / |block|`, so the support never changes). Each trial step
+//! moves no coordinate of `z` by more than [`MAX_STEP`], and a trial point
+//! whose linear system cannot be solved to the tolerance is rejected like
+//! one that does not increase `V` (argmin's L-BFGS, which the best
+//! responses use, has neither: its line searches take the first step along
+//! the unscaled gradient and stop at the first error).
 //!
 //! Requirements on the problem: `V` smooth in `phi` on the fixed support
 //! (it is: a rational function without poles there). Reference: Nocedal
 //! and Wright, Numerical Optimization (2006), algorithms 7.4 and 3.1.
 
 use std::collections::VecDeque;
-use std::time::Instant;
 
-use super::objective::Objective;
-use super::observer::{IterationRecord, Observer};
-use super::optimiser::{Incumbent, PhaseSeconds, RunOutcome, gained_little, norm};
+use super::objective::{Objective, Point};
+use super::optimiser::{Solver, norm};
+use super::play::{Iterate, PlayState};
 use super::reparam::Reparametrisation;
-use super::{Cancel, OptimiseError, Settings, Status};
+use super::{OptimiseError, Settings};
 
 /// The largest change of any `z` coordinate in one trial step.
 const MAX_STEP: f64 = 1.0;
@@ -36,10 +43,6 @@ pub(super) trait DefenderObjective {
     /// The value at `defender`, its logit gradient and the larger residual
     /// of the linear solves behind them.
     fn point(&mut self, defender: &[f64]) -> Result<DefenderPoint, OptimiseError>;
-
-    /// The work of the evaluations so far, in states solved (the unit of
-    /// [`Settings::max_work`]).
-    fn work(&self) -> f64;
 }
 
 /// A value of the defender's logits with its gradient.
@@ -53,12 +56,10 @@ pub(super) struct DefenderPoint {
 }
 
 /// `V(phi_def, phi_adv)` with the adversary's logits fixed: what the
-/// single-player ascent maximises.
-pub(super) struct AgainstFixed<'a> {
-    /// The value and its gradients.
-    pub objective: &'a mut Objective,
-    /// The adversary's logits.
-    pub adversary: &'a [f64],
+/// single-player solver maximises.
+struct AgainstFixed<'a> {
+    objective: &'a mut Objective,
+    adversary: &'a [f64],
 }
 
 impl DefenderObjective for AgainstFixed<'_> {
@@ -70,113 +71,164 @@ impl DefenderObjective for AgainstFixed<'_> {
             residual: point.residual,
         })
     }
+}
 
-    fn work(&self) -> f64 {
-        self.objective.work()
+/// The L-BFGS ascent's state: the point `z` it is at, its value there and
+/// the curvature pairs it remembers.
+pub(super) struct Lbfgs {
+    map: Reparametrisation,
+    z: Vec<f64>,
+    here: Evaluated,
+    memory: Memory,
+}
+
+impl Lbfgs {
+    /// The ascent of `objective` from the logits `start`, in the
+    /// coordinates of the logit bound `bound`, remembering
+    /// `settings.lbfgs_memory` pairs.
+    pub fn start(
+        objective: &mut dyn DefenderObjective,
+        start: &[f64],
+        bound: f64,
+        settings: &Settings,
+    ) -> Result<Self, OptimiseError> {
+        let map = Reparametrisation::new(bound);
+        let z = map.to_z(start);
+        let here = Evaluated::at(objective, &z, map)?;
+        Ok(Self {
+            map,
+            z,
+            here,
+            memory: Memory::new(settings.lbfgs_memory),
+        })
+    }
+
+    /// One step of the line search along the L-BFGS direction: the step
+    /// length taken, `None` at a stationary point to working precision
+    /// (then the ascent stays where it is).
+    pub fn step(
+        &mut self,
+        objective: &mut dyn DefenderObjective,
+    ) -> Result<Option<f64>, OptimiseError> {
+        let Some((z, next, step)) =
+            line_search(objective, &self.z, &self.here, &mut self.memory, self.map)?
+        else {
+            return Ok(None);
+        };
+        self.memory
+            .remember(&z, &self.z, &next.ascent, &self.here.ascent);
+        self.z = z;
+        self.here = next;
+        Ok(Some(step))
+    }
+
+    /// The value where the ascent is.
+    pub fn value(&self) -> f64 {
+        self.here.value
+    }
+
+    /// The logits `phi = c tanh(z)` where the ascent is.
+    pub fn logits(&self) -> Vec<f64> {
+        self.map.to_phi(&self.z)
+    }
+
+    /// `dV/dphi` where the ascent is.
+    fn gradient(&self) -> &[f64] {
+        &self.here.phi_gradient
+    }
+
+    /// The larger residual of the linear solves behind the last point.
+    fn residual(&self) -> f64 {
+        self.here.residual
     }
 }
 
-/// Maximises the objective (as its logarithm) over the defender's logits
-/// from `start`, reporting one record per iteration to `observer`,
-/// stopping early once `cancel` is set, and at `max_iterations`, at a
-/// positive `max_work` spent by this ascent, at the time budget or on a
-/// stall; `adversary` is the adversary's logits recorded with the result.
-pub(super) fn ascend(
-    objective: &mut dyn DefenderObjective,
-    (start, adversary): (&[f64], &[f64]),
-    settings: &Settings,
-    observer: &mut dyn Observer,
-    cancel: &Cancel,
-) -> Result<RunOutcome, OptimiseError> {
-    let clock = Instant::now();
-    let work_before = objective.work();
-    let c = Reparametrisation::new(settings.logit_bound);
-    let mut z = c.to_z(start);
-    let mut here = Evaluated::at(objective, &z, c)?;
-    let mut max_residual = here.residual;
-    let mut memory = Memory::new(settings.lbfgs_memory);
-    let mut history = vec![here.value];
-    let mut best = (here.value, c.to_phi(&z), 0);
-    let window = settings.ascent_stall_iterations;
-    let mut t = 0;
-    let status = loop {
-        let seconds = clock.elapsed().as_secs_f64();
-        let mut status = if cancel.is_cancelled() {
-            Some(Status::Cancelled)
-        } else if t + 1 >= settings.max_iterations {
-            Some(Status::MaxIterations)
-        } else if settings.max_work > 0.0 && objective.work() - work_before >= settings.max_work {
-            Some(Status::WorkBudget)
-        } else if settings.time_budget > 0.0 && seconds >= settings.time_budget {
-            Some(Status::TimeBudget)
-        } else if window > 0 && gained_little(&history, window, settings.stall_tolerance) {
-            Some(Status::Stalled)
-        } else {
-            None
-        };
-        let step = if status.is_none() {
-            match line_search(objective, &z, &here, &mut memory, c)? {
-                Some((next_z, next, step)) => {
-                    memory.remember(&next_z, &z, &next.ascent, &here.ascent);
-                    z = next_z;
-                    here = next;
-                    max_residual = max_residual.max(here.residual);
-                    step
-                }
-                None => {
-                    status = Some(Status::Converged);
-                    0.0
-                }
-            }
-        } else {
-            0.0
-        };
-        if here.value > best.0 {
-            best = (here.value, c.to_phi(&z), t + 1);
+/// The single-player solver under the driver: each iteration is one L-BFGS
+/// step of the defender on `V` against the adversary's fixed logits; once
+/// no step increases `V` the solver has converged
+/// ([`super::Status::Converged`]).
+pub(super) struct Ascent {
+    settings: Settings,
+    lbfgs: Option<Lbfgs>,
+    last_step: f64,
+    converged: bool,
+}
+
+impl Ascent {
+    /// The solver with the L-BFGS memory of `settings`.
+    pub fn new(settings: &Settings) -> Self {
+        Self {
+            settings: settings.clone(),
+            lbfgs: None,
+            last_step: 0.0,
+            converged: false,
         }
-        history.push(here.value);
-        observer.observe(&IterationRecord {
-            start: 0,
-            iteration: t,
-            seconds,
-            value: here.value,
-            defender_gradient_norm: norm(&here.phi_gradient),
+    }
+
+    /// The state at `iterate`, the ascent being at `lbfgs`.
+    fn state(lbfgs: &Lbfgs, mut iterate: Iterate) -> PlayState {
+        iterate.defender = lbfgs.logits();
+        iterate.max_residual = iterate.max_residual.max(lbfgs.residual());
+        PlayState {
+            iterate,
+            point: Point {
+                value: lbfgs.value(),
+                defender: lbfgs.gradient().to_vec(),
+                adversary: Vec::new(),
+                residual: lbfgs.residual(),
+            },
             adversary_gradient_norm: 0.0,
-            defender_step: step,
-            adversary_step: 0.0,
-            worst_case: Some(here.value),
-            certified_lower: None,
-            upper_bound: None,
-            logit_bound: c.bound(),
-        });
-        if let Some(status) = status {
-            break status;
         }
-        t += 1;
-    };
-    let seconds = clock.elapsed().as_secs_f64();
-    Ok(RunOutcome {
-        best: Incumbent {
-            defender: best.1,
-            adversary: adversary.to_vec(),
-            worst_case: best.0,
-            certified_lower: None,
-            iteration: best.2,
-        },
-        upper_bound: None,
-        last_value: here.value,
-        iterations: t + 1,
-        checks: 0,
-        status,
-        seconds,
-        phases: PhaseSeconds {
-            optimisation: seconds,
-            ..PhaseSeconds::default()
-        },
-        logit_bound: c.bound(),
-        max_residual,
-        last_response: None,
-    })
+    }
+}
+
+impl Solver for Ascent {
+    fn init(
+        &mut self,
+        objective: &mut Objective,
+        start: Iterate,
+    ) -> Result<PlayState, OptimiseError> {
+        let mut against = AgainstFixed {
+            objective,
+            adversary: &start.adversary,
+        };
+        let lbfgs = Lbfgs::start(&mut against, &start.defender, start.bound, &self.settings)?;
+        let state = Self::state(&lbfgs, start);
+        self.lbfgs = Some(lbfgs);
+        Ok(state)
+    }
+
+    fn next_iter(
+        &mut self,
+        objective: &mut Objective,
+        state: PlayState,
+    ) -> Result<PlayState, OptimiseError> {
+        let mut iterate = state.iterate;
+        let lbfgs = self.lbfgs.as_mut().ok_or(OptimiseError::BestResponse(
+            "the ascent was stepped before it started".into(),
+        ))?;
+        let mut against = AgainstFixed {
+            objective,
+            adversary: &iterate.adversary,
+        };
+        match lbfgs.step(&mut against)? {
+            Some(step) => self.last_step = step,
+            None => {
+                self.last_step = 0.0;
+                self.converged = true;
+            }
+        }
+        iterate.iteration += 1;
+        Ok(Self::state(lbfgs, iterate))
+    }
+
+    fn steps(&self, _iteration: usize) -> (f64, f64) {
+        (self.last_step, 0.0)
+    }
+
+    fn converged(&self) -> bool {
+        self.converged
+    }
 }
 
 /// The value, the ascent objective `ln V` and its `z`-gradient at one point.

@@ -21,8 +21,9 @@
 //!   also certify, a logit bound that widens when progress stalls on it,
 //!   stopping on the certified gap or a stall, the best defender seen, and
 //!   the observer;
-//! * `ascend`: the single-player fast path (the adversary has one action,
-//!   so max-min is max): L-BFGS on `ln V` in the same coordinates;
+//! * `Ascent`: the single-player solver under the same driver (the
+//!   adversary has one action, so max-min is max): L-BFGS steps on `ln V`
+//!   in the same coordinates;
 //! * [`rounded_candidates`]: partial and argmax roundings of the result,
 //!   each scored exactly on its own support;
 //! * [`optimise_structure`]: parallel seeded starts on one structure, the
@@ -56,7 +57,6 @@ mod softmax;
 mod structures;
 mod warm_start;
 
-use ascent::{AgainstFixed, ascend};
 pub(crate) use best_response::{Starts, best_response};
 pub use cancel::Cancel;
 pub use objective::{GmcSize, Objective, Point};
@@ -74,7 +74,6 @@ pub use warm_start::{WARM_START_MIX, embed, keep_better, pad, score, warm_starte
 use std::sync::{Mutex, PoisonError};
 use std::time::Instant;
 
-use play::perturbed;
 use race::{Racer, race};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -182,7 +181,7 @@ pub enum Status {
     Stalled,
     /// The certified gap closed to `gap_tolerance`.
     GapClosed,
-    /// The single-player ascent found no ascent step (a stationary point).
+    /// The single-player solver found no ascent step (a stationary point).
     Converged,
     /// A [`Cancel`] flag asked the run to stop.
     Cancelled,
@@ -199,8 +198,8 @@ pub enum Method {
     /// Alternating projected gradient ascent-descent with best-response
     /// checks (method.md section 4).
     MaxMin,
-    /// The single-player L-BFGS ascent (`ascend`): the adversary has one
-    /// action, so max-min is max.
+    /// The single-player L-BFGS ascent (`Ascent`) under the same driver:
+    /// the adversary has one action, so max-min is max.
     Ascent,
 }
 
@@ -419,10 +418,11 @@ where
 
 /// Optimises on one structure: `settings.starts` independent starts in
 /// parallel (rayon), start `i` with random stream `stream + (i << 32)` of
-/// `settings.seed`; each runs the max-min loop (`Optimiser`; the starts
-/// race in lockstep rounds and an outpaced start stops, `race.rs`) or,
-/// when the adversary has one action and `settings.single_player_ascent`,
-/// the single-player L-BFGS ascent (`ascend`). The start with the best score
+/// `settings.seed`; each runs under the driver (`Optimiser`; the starts
+/// race in lockstep rounds and an outpaced start stops, `race.rs`) with
+/// gradient play or, when the adversary has one action and
+/// `settings.single_player_ascent`, the single-player L-BFGS solver
+/// (`Ascent`). The start with the best score
 /// (certified lower bound with an automaton `negated` for !phi, else
 /// worst-case estimate; the first of equals) is kept; then its rounded candidates
 /// ([`rounded_candidates`]) are scored alike and the best of the unrounded
@@ -481,36 +481,32 @@ pub fn optimise_structure(
                 certified_lower: climbed.bound,
             });
     }
-    let runs = match method {
-        Method::MaxMin => {
-            let racers = (0..settings.starts)
-                .into_par_iter()
-                .map(|i| {
-                    let optimiser = max_min_start(game, dra, certifier, structure, &start(i))?;
-                    Racer::new(optimiser.with_cancel(cancel), live(i), clock)
-                })
-                .collect();
-            let floor = presolved.as_ref().map(|climbed| climbed.bound);
-            let mut finished = race(racers, settings, floor);
-            settle(&mut finished, certifier.is_none(), (clock, floor))?;
-            finished
-                .into_iter()
-                .map(|result| {
-                    let (optimiser, outcome) = result?;
-                    let (objective, rng) = optimiser.into_parts();
-                    Ok(StartRun {
-                        outcome,
-                        objective,
-                        rng,
-                    })
-                })
-                .collect::<Vec<_>>()
-        }
-        Method::Ascent => (0..settings.starts)
-            .into_par_iter()
-            .map(|i| ascent_start(game, dra, structure, &start(i), (&mut live(i), cancel)))
-            .collect::<Vec<_>>(),
-    };
+    // The single-player ascent is certified once, at the end (`finalise`):
+    // its checks' value is exact already.
+    let run_certifier = certifier.filter(|_| method == Method::MaxMin);
+    let racers = (0..settings.starts)
+        .into_par_iter()
+        .map(|i| {
+            let optimiser =
+                start_optimiser((game, dra), (method, run_certifier), structure, &start(i))?;
+            Racer::new(optimiser.with_cancel(cancel), live(i), clock)
+        })
+        .collect();
+    let floor = presolved.as_ref().map(|climbed| climbed.bound);
+    let mut finished = race(racers, settings, floor);
+    settle(&mut finished, run_certifier.is_none(), (clock, floor))?;
+    let runs = finished
+        .into_iter()
+        .map(|result| {
+            let (optimiser, outcome) = result?;
+            let (objective, rng) = optimiser.into_parts();
+            Ok(StartRun {
+                outcome,
+                objective,
+                rng,
+            })
+        })
+        .collect::<Vec<_>>();
     let observer = shared.into_inner().unwrap_or_else(PoisonError::into_inner);
     let (runs, failed_starts) = keep_solved(runs)?;
     let (indices, mut runs): (Vec<usize>, Vec<StartRun>) = runs.into_iter().unzip();
@@ -734,57 +730,19 @@ fn start_objective(
     Ok((objective, rng))
 }
 
-/// One max-min start, ready to race: its optimiser on its own objective
-/// and random stream, certifying with `certifier` when given.
-fn max_min_start<'a>(
-    game: &Posg,
-    dra: &Dra,
-    certifier: Option<Certifier<'a>>,
+/// One start, ready to race: its optimiser (running `method`) on its own
+/// objective and random stream, certifying with `certifier` when given.
+fn start_optimiser<'a>(
+    (game, dra): (&Posg, &Dra),
+    (method, certifier): (Method, Option<Certifier<'a>>),
     structure: &Structure,
     start: &Start,
 ) -> Result<Optimiser<'a>, OptimiseError> {
     let (objective, rng) = start_objective(game, dra, structure, start)?;
-    let optimiser = Optimiser::new(objective, &start.settings, rng);
+    let optimiser = Optimiser::new(method, objective, &start.settings, rng);
     Ok(match certifier {
         Some(certifier) => optimiser.with_certifier(certifier),
         None => optimiser,
-    })
-}
-
-/// One start of the single-player ascent on its own objective and random
-/// stream, reporting to `watch.0` and stopping early once `watch.1` is set.
-fn ascent_start(
-    game: &Posg,
-    dra: &Dra,
-    structure: &Structure,
-    start: &Start,
-    (observer, cancel): (&mut dyn Observer, &Cancel),
-) -> Result<StartRun, OptimiseError> {
-    let (mut objective, mut rng) = start_objective(game, dra, structure, start)?;
-    let settings = &start.settings;
-    let bound = settings.logit_bound;
-    let logits = perturbed(
-        objective.defender().logits_of_template(bound),
-        settings.initial_spread,
-        bound,
-        &mut rng,
-    );
-    let adversary = objective.adversary().logits_of_template(bound);
-    let mut against = AgainstFixed {
-        objective: &mut objective,
-        adversary: &adversary,
-    };
-    let outcome = ascend(
-        &mut against,
-        (&logits, &adversary),
-        settings,
-        observer,
-        cancel,
-    )?;
-    Ok(StartRun {
-        outcome,
-        objective,
-        rng,
     })
 }
 

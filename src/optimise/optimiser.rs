@@ -1,10 +1,13 @@
-//! The max-min loop's driver (method.md section 4), in argmin's shape: the
-//! solver `GradientPlay` (`play.rs`) takes one outer iteration of
-//! alternating projected gradient ascent-descent; the [`Optimiser`] (the
-//! executor) runs it and owns everything between iterations: the stopping
-//! rules, the schedule of best-response checks and their certification, the
-//! logit bound's widening, the bookkeeping of the best defender seen, and
-//! the [`Observer`], which it alone calls (once per iteration).
+//! The driver of every optimisation run (method.md section 4), in argmin's
+//! shape: a [`Solver`] takes one outer iteration, either alternating
+//! projected gradient ascent-descent (`GradientPlay`, `play.rs`, the
+//! max-min loop) or, where the adversary cannot influence the game, an
+//! L-BFGS step of the defender (`Ascent`, `ascent.rs`); the [`Optimiser`]
+//! (the executor) runs it and owns everything between iterations: the
+//! stopping rules, the schedule of best-response checks and their
+//! certification, the logit bound's widening, the bookkeeping of the best
+//! defender seen, and the [`Observer`], which it alone calls (once per
+//! iteration).
 //!
 //! After iteration `t` (the adversary has responded to `phi_def(t)`):
 //!
@@ -14,6 +17,12 @@
 //! 3. the observer sees iteration `t`'s record;
 //! 4. unless the run stops, the solver's next iteration begins with the
 //!    defender's step `phi_def(t+1)`.
+//!
+//! The single-player solver's checks need no best response (the value
+//! is the worst case), rank the current defender only (its iterates do not
+//! cycle) and start at the widest logit bound (its coordinates keep it
+//! inside); a run stops as [`Status::Converged`] when the solver finds no
+//! ascent step. Everything else is the same for both solvers.
 //!
 //! Alternating gradient play cycles around the saddle of bilinear games
 //! such as matching pennies; what converges is the *best defender seen*,
@@ -46,20 +55,52 @@ use std::time::Instant;
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
 
+use super::ascent::Ascent;
 use super::objective::Objective;
 use super::observer::{IterationRecord, Observer};
 use super::play::{GradientPlay, Iterate, PlayState, perturbed};
-use super::{Cancel, OptimiseError, Settings, Status};
+use super::{Cancel, Method, OptimiseError, Settings, Status};
 use crate::automaton::Dra;
 use crate::certify::gradient::LowerBoundGradients;
 use crate::controller::Fsc;
 use crate::game::Posg;
 use check::{Check, SuffixAverage};
 
-/// The driver of the max-min loop on one structure: the objective, the
-/// random stream of the best-response checks, the certifier and the
-/// iterate `(phi_def, phi_adv)` it starts from (and ends at).
+/// One outer iteration of an optimisation run, in argmin's shape: the
+/// solver owns its update rules and state between iterations, the driver
+/// ([`Optimiser`]) everything else.
+pub(super) trait Solver: Send {
+    /// Iteration 0 from `start`: the state the first check judges.
+    fn init(
+        &mut self,
+        objective: &mut Objective,
+        start: Iterate,
+    ) -> Result<PlayState, OptimiseError>;
+
+    /// Iteration `t + 1` from the state of iteration `t`.
+    fn next_iter(
+        &mut self,
+        objective: &mut Objective,
+        state: PlayState,
+    ) -> Result<PlayState, OptimiseError>;
+
+    /// The defender's and the adversary's step sizes at iteration `t`, for
+    /// the iteration record.
+    fn steps(&self, t: usize) -> (f64, f64);
+
+    /// Whether the solver found no further step (the run then stops as
+    /// [`Status::Converged`]).
+    fn converged(&self) -> bool {
+        false
+    }
+}
+
+/// The driver of an optimisation run on one structure: the method (which
+/// solver it drives), the objective, the random stream of the
+/// best-response checks, the certifier and the iterate `(phi_def, phi_adv)`
+/// it starts from (and ends at).
 pub struct Optimiser<'a> {
+    method: Method,
     objective: Objective,
     certifier: Option<Certifier<'a>>,
     /// The certifier's lower bounds of the structure's defenders, one
@@ -170,7 +211,7 @@ pub struct Certifier<'a> {
 /// A max-min run in progress ([`Optimiser::begin`]), between the solver's
 /// iterations: the solver, the books and the current state.
 pub struct Run {
-    solver: GradientPlay,
+    solver: Box<dyn Solver>,
     books: Bookkeeping,
     /// `None` only after an iteration failed.
     state: Option<PlayState>,
@@ -262,23 +303,34 @@ impl Bookkeeping {
 
 impl<'a> Optimiser<'a> {
     /// Starts from the templates' logits plus noise uniform in
-    /// `[-initial_spread, initial_spread]` drawn from `rng`, clipped to
-    /// `[-c_0, c_0]` (`c_0 = initial_logit_bound`).
-    pub fn new(objective: Objective, settings: &Settings, mut rng: ChaCha8Rng) -> Self {
-        let bound = settings.initial_logit_bound;
+    /// `[-initial_spread, initial_spread]` drawn from `rng`, clipped to the
+    /// starting logit bound: `c_0 = initial_logit_bound` for the max-min
+    /// loop, `logit_bound` for the single-player ascent (whose adversary
+    /// keeps its template's logits).
+    pub fn new(
+        method: Method,
+        objective: Objective,
+        settings: &Settings,
+        mut rng: ChaCha8Rng,
+    ) -> Self {
+        let bound = starting_bound(method, settings);
         let defender = perturbed(
             objective.defender().logits_of_template(bound),
             settings.initial_spread,
             bound,
             &mut rng,
         );
-        let adversary = perturbed(
-            objective.adversary().logits_of_template(bound),
-            settings.initial_spread,
-            bound,
-            &mut rng,
-        );
+        let adversary = match method {
+            Method::MaxMin => perturbed(
+                objective.adversary().logits_of_template(bound),
+                settings.initial_spread,
+                bound,
+                &mut rng,
+            ),
+            Method::Ascent => objective.adversary().logits_of_template(bound),
+        };
         Self {
+            method,
             objective,
             certifier: None,
             lower_bounds: None,
@@ -324,8 +376,14 @@ impl<'a> Optimiser<'a> {
     /// that precedes the race): the records' seconds and the time budget
     /// count from it.
     pub fn begin(&mut self, started: Instant) -> Result<Run, OptimiseError> {
-        let mut solver =
-            GradientPlay::new(&self.settings, self.defender.len(), self.adversary.len());
+        let mut solver: Box<dyn Solver> = match self.method {
+            Method::MaxMin => Box::new(GradientPlay::new(
+                &self.settings,
+                self.defender.len(),
+                self.adversary.len(),
+            )),
+            Method::Ascent => Box::new(Ascent::new(&self.settings)),
+        };
         let mut books = Bookkeeping::new(
             self.defender.len(),
             self.adversary.len(),
@@ -335,7 +393,7 @@ impl<'a> Optimiser<'a> {
             iteration: 0,
             defender: self.defender.clone(),
             adversary: self.adversary.clone(),
-            bound: self.settings.initial_logit_bound,
+            bound: starting_bound(self.method, &self.settings),
             max_residual: 0.0,
         };
         let state = self.timed(&mut books, |objective| solver.init(objective, start))?;
@@ -377,7 +435,7 @@ impl<'a> Optimiser<'a> {
             };
             let seconds = run.clock.elapsed().as_secs_f64();
             let status = self.between_iterations(
-                &run.solver,
+                run.solver.as_ref(),
                 &mut state,
                 &mut run.books,
                 seconds,
@@ -426,13 +484,16 @@ impl<'a> Optimiser<'a> {
     /// `observer`. Returns why the run stops, if it does.
     fn between_iterations(
         &mut self,
-        solver: &GradientPlay,
+        solver: &dyn Solver,
         state: &mut PlayState,
         books: &mut Bookkeeping,
         seconds: f64,
         observer: &mut dyn Observer,
     ) -> Result<Option<Status>, OptimiseError> {
-        let mut status = self.budget_spent(state.iterate.iteration, seconds);
+        let t = state.iterate.iteration;
+        let work = self.objective.work();
+        let mut status = budget_spent(&self.settings, t, work, seconds, &self.cancel)
+            .or_else(|| solver.converged().then_some(Status::Converged));
         let check = if self.check_due(state.iterate.iteration, status) {
             let deep = books.checks % self.settings.best_response_every == 0;
             let mut check = self.check(state, books, deep)?;
@@ -450,26 +511,6 @@ impl<'a> Optimiser<'a> {
             books.upper_bound,
         ));
         Ok(status)
-    }
-
-    /// [`Status::Cancelled`] once the cancel flag is set,
-    /// [`Status::MaxIterations`] after iteration `max_iterations - 1`,
-    /// [`Status::WorkBudget`] once the objective's work reaches a positive
-    /// `max_work`, [`Status::TimeBudget`] once `seconds` reach a positive
-    /// time budget.
-    fn budget_spent(&self, t: usize, seconds: f64) -> Option<Status> {
-        let s = &self.settings;
-        if self.cancel.is_cancelled() {
-            Some(Status::Cancelled)
-        } else if t + 1 >= s.max_iterations {
-            Some(Status::MaxIterations)
-        } else if s.max_work > 0.0 && self.objective.work() >= s.max_work {
-            Some(Status::WorkBudget)
-        } else if s.time_budget > 0.0 && seconds >= s.time_budget {
-            Some(Status::TimeBudget)
-        } else {
-            None
-        }
     }
 
     /// A check is due at multiples of `check_every`, at the end of each
@@ -588,13 +629,14 @@ impl<'a> Optimiser<'a> {
 /// `(phi_def(t), phi_adv(t))`, the step sizes, the check's numbers when one
 /// ran (the upper bound only with a certified lower bound), the logit bound.
 fn record(
-    solver: &GradientPlay,
+    solver: &dyn Solver,
     state: &PlayState,
     seconds: f64,
     check: Option<&Check>,
     upper_bound: Option<f64>,
 ) -> IterationRecord {
     let t = state.iterate.iteration;
+    let (defender_step, adversary_step) = solver.steps(t);
     IterationRecord {
         start: 0,
         iteration: t,
@@ -602,12 +644,47 @@ fn record(
         value: state.point.value,
         defender_gradient_norm: norm(&state.point.defender),
         adversary_gradient_norm: state.adversary_gradient_norm,
-        defender_step: solver.defender_step(t),
-        adversary_step: solver.adversary_step(),
+        defender_step,
+        adversary_step,
         worst_case: check.and_then(|c| c.worst_case),
         certified_lower: check.and_then(|c| c.certified_lower),
         upper_bound: upper_bound.filter(|_| check.is_some_and(|c| c.certified_lower.is_some())),
         logit_bound: state.iterate.bound,
+    }
+}
+
+/// The logit bound a run starts at: `initial_logit_bound` for the max-min
+/// loop (it widens on stalls), `logit_bound` for the single-player ascent.
+fn starting_bound(method: Method, settings: &Settings) -> f64 {
+    match method {
+        Method::MaxMin => settings.initial_logit_bound,
+        Method::Ascent => settings.logit_bound,
+    }
+}
+
+/// The budgets every loop stops on, after iteration `t` (the driver's
+/// runs and the guarantee ascent): [`Status::Cancelled`] once `cancel` is
+/// set, [`Status::MaxIterations`] after iteration `max_iterations - 1`,
+/// [`Status::WorkBudget`] once `work` (states solved) reaches a positive
+/// `max_work`, [`Status::TimeBudget`] once `seconds` reach a positive time
+/// budget.
+pub(super) fn budget_spent(
+    s: &Settings,
+    t: usize,
+    work: f64,
+    seconds: f64,
+    cancel: &Cancel,
+) -> Option<Status> {
+    if cancel.is_cancelled() {
+        Some(Status::Cancelled)
+    } else if t + 1 >= s.max_iterations {
+        Some(Status::MaxIterations)
+    } else if s.max_work > 0.0 && work >= s.max_work {
+        Some(Status::WorkBudget)
+    } else if s.time_budget > 0.0 && seconds >= s.time_budget {
+        Some(Status::TimeBudget)
+    } else {
+        None
     }
 }
 

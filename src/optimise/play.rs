@@ -22,7 +22,7 @@ use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 
 use super::objective::{Objective, Point};
-use super::optimiser::norm;
+use super::optimiser::{Solver, norm};
 use super::softmax::clip;
 use super::{OptimiseError, Settings, UpdateRule};
 
@@ -92,33 +92,6 @@ impl GradientPlay {
         self.adversary_step
     }
 
-    /// Iteration 0: the adversary's response to the starting defender.
-    pub fn init(
-        &mut self,
-        objective: &mut Objective,
-        start: Iterate,
-    ) -> Result<PlayState, OptimiseError> {
-        self.respond(objective, start)
-    }
-
-    /// Iteration `t + 1` from the state of iteration `t`: the defender's
-    /// ascent step `phi_def(t+1) = clip_c(phi_def(t) + eta_def(t) d_def)`,
-    /// then the adversary's response.
-    pub fn next_iter(
-        &mut self,
-        objective: &mut Objective,
-        state: PlayState,
-    ) -> Result<PlayState, OptimiseError> {
-        let PlayState {
-            mut iterate, point, ..
-        } = state;
-        let eta = self.defender_step(iterate.iteration);
-        self.defender
-            .step(&mut iterate.defender, &point.defender, eta, iterate.bound);
-        iterate.iteration += 1;
-        self.respond(objective, iterate)
-    }
-
     /// The adversary's `k_adv` descent steps
     /// `phi_adv <- clip_c(phi_adv - eta_adv d_adv)` against the iterate's
     /// defender, then the value and gradients where they end.
@@ -146,6 +119,40 @@ impl GradientPlay {
             point,
             adversary_gradient_norm,
         })
+    }
+}
+
+impl Solver for GradientPlay {
+    /// Iteration 0: the adversary's response to the starting defender.
+    fn init(
+        &mut self,
+        objective: &mut Objective,
+        start: Iterate,
+    ) -> Result<PlayState, OptimiseError> {
+        self.respond(objective, start)
+    }
+
+    /// Iteration `t + 1` from the state of iteration `t`: the defender's
+    /// ascent step `phi_def(t+1) = clip_c(phi_def(t) + eta_def(t) d_def)`,
+    /// then the adversary's response.
+    fn next_iter(
+        &mut self,
+        objective: &mut Objective,
+        state: PlayState,
+    ) -> Result<PlayState, OptimiseError> {
+        let PlayState {
+            mut iterate, point, ..
+        } = state;
+        let eta = self.defender_step(iterate.iteration);
+        self.defender
+            .step(&mut iterate.defender, &point.defender, eta, iterate.bound);
+        iterate.iteration += 1;
+        self.respond(objective, iterate)
+    }
+
+    /// `eta_def(t)` and `eta_adv`.
+    fn steps(&self, t: usize) -> (f64, f64) {
+        (self.defender_step(t), self.adversary_step())
     }
 }
 

@@ -27,11 +27,6 @@ impl Reparametrisation {
         Self { bound }
     }
 
-    /// The logit bound `c`.
-    pub fn bound(self) -> f64 {
-        self.bound
-    }
-
     /// `z = atanh(phi / c)` of a starting point, each `|phi|` first clamped
     /// to `START_CLAMP * c`.
     pub fn to_z(self, phi: &[f64]) -> Vec<f64> {

@@ -138,12 +138,12 @@ pub struct Settings {
     /// (see `stall_checks`).
     #[arg(long, default_value_t = Settings::default().stall_gain)]
     pub stall_gain: f64,
-    /// The single-player ascent's stall window: it stops when `V` has
-    /// gained at most `stall_tolerance` times itself over this many
-    /// iterations (0: never).
+    /// The guarantee ascent's stall window: it stops when the certified
+    /// lower bound has gained at most `stall_tolerance` times itself over
+    /// this many steps (0: never).
     #[arg(long, default_value_t = Settings::default().ascent_stall_iterations)]
     pub ascent_stall_iterations: usize,
-    /// The relative gain below which the single-player ascent counts as
+    /// The relative gain below which the guarantee ascent counts as
     /// stalled (see `ascent_stall_iterations`).
     #[arg(long, default_value_t = Settings::default().stall_tolerance)]
     pub stall_tolerance: f64,
@@ -153,9 +153,9 @@ pub struct Settings {
     #[arg(long, default_value_t = Settings::default().gap_tolerance)]
     pub gap_tolerance: f64,
     /// Single-player games (the adversary has one action) are optimised by
-    /// L-BFGS ascent on the defender's logits, `max V`, with no
-    /// best-response checks; off (`--no-single-player-ascent`): the max-min
-    /// loop runs on them too.
+    /// L-BFGS steps on the defender's logits, `max V`, under the same
+    /// driver (a check's worst case is the value itself); off
+    /// (`--no-single-player-ascent`): gradient play runs on them too.
     #[arg(long = "no-single-player-ascent", action = clap::ArgAction::SetFalse)]
     pub single_player_ascent: bool,
     /// At the end, also evaluate the argmax-rounded defender and its partial

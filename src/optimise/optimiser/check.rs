@@ -35,12 +35,13 @@
 
 use std::time::Instant;
 
-use super::super::ascent::ascend;
 use super::super::best_response::{BestResponse, Starts, best_response};
-use super::super::guarantee::Guarantee;
+use super::super::guarantee::{Guarantee, ascend};
 use super::super::play::{Iterate, PlayState};
 use super::super::rounding::truncated;
-use super::{Bookkeeping, Incumbent, OptimiseError, Optimiser, PhaseSeconds, RunOutcome, Settings};
+use super::{
+    Bookkeeping, Incumbent, Method, OptimiseError, Optimiser, PhaseSeconds, RunOutcome, Settings,
+};
 use crate::certify::{lower_value_or_trivial, upper_value_or_trivial};
 use crate::value::ValueError;
 
@@ -77,12 +78,19 @@ impl Optimiser<'_> {
     ) -> Result<Check, OptimiseError> {
         books.checks += 1;
         let iterate = &state.iterate;
-        let averaged = self.averaged_defender(iterate, &books.defender_average);
         let upper_tightened = self.certify_against_adversaries(iterate, books)?;
         let rounding_closes_gap = self.rounding_closes_gap(iterate, books, upper_tightened)?;
         let deep = deep || self.certifier.is_none();
         let mut current = None;
-        for (i, candidate) in [iterate.defender.clone(), averaged].into_iter().enumerate() {
+        // The single-player ascent does not cycle: its average only lags.
+        let candidates = match self.method {
+            Method::MaxMin => vec![
+                iterate.defender.clone(),
+                self.averaged_defender(iterate, &books.defender_average),
+            ],
+            Method::Ascent => vec![iterate.defender.clone()],
+        };
+        for (i, candidate) in candidates.into_iter().enumerate() {
             let respond = deep && (i == 0 || self.certifier.is_none());
             let current_closes = i == 0 && rounding_closes_gap;
             let judged = self.judge(candidate, respond, !current_closes, iterate, books)?;
@@ -142,7 +150,6 @@ impl Optimiser<'_> {
         };
         let clock = Instant::now();
         let mut guarantee = Guarantee::new(bounds, self.objective.defender());
-        let start = (best.defender.as_slice(), best.adversary.as_slice());
         // The ascent spends what is left of the run's time budget.
         let budget = self.settings.time_budget;
         // It stays within twice the loop's logit bound: beyond, nearly
@@ -159,14 +166,14 @@ impl Optimiser<'_> {
             max_work: self.settings.max_work * GUARANTEE_SHARE_OF_WORK,
             ..self.settings.clone()
         };
-        let ascended = ascend(&mut guarantee, start, &settings, &mut (), &self.cancel);
+        let ascended = ascend(&mut guarantee, &best.defender, &settings, &self.cancel);
         books.phases.guarantee += clock.elapsed().as_secs_f64();
         let polished = match ascended {
-            Ok(outcome) => outcome.best,
+            Ok(ascended) => ascended,
             Err(error) if error.is_numerical() => return Ok(None),
             Err(error) => return Err(error),
         };
-        if polished.worst_case <= best.score() {
+        if polished.bound <= best.score() {
             return Ok(None);
         }
         let clock = Instant::now();
@@ -184,10 +191,10 @@ impl Optimiser<'_> {
             defender: polished.defender,
             adversary: iterate.adversary.clone(),
             worst_case,
-            certified_lower: Some(polished.worst_case),
+            certified_lower: Some(polished.bound),
             iteration: iterate.iteration,
         });
-        Ok(Some(polished.worst_case))
+        Ok(Some(polished.bound))
     }
 
     /// The incumbent's full best response, once the run has stopped
@@ -199,13 +206,17 @@ impl Optimiser<'_> {
     /// which also tightens the game upper bound. With a time budget it ends
     /// at [`Settings::final_deadline`] of the run that began at `started`.
     /// Where every start runs into a system it cannot solve to the
-    /// tolerance, the incumbent keeps its numbers.
+    /// tolerance, the incumbent keeps its numbers; the single-player
+    /// ascent's incumbent has its exact worst case already.
     pub fn settle(
         &mut self,
         outcome: &mut RunOutcome,
         started: Instant,
         floor: Option<f64>,
     ) -> Result<(), OptimiseError> {
+        if self.method == Method::Ascent {
+            return Ok(());
+        }
         let best = &outcome.best;
         let lower = best
             .certified_lower
@@ -304,7 +315,9 @@ impl Optimiser<'_> {
     /// One candidate defender of the check at iteration `t`: with
     /// `respond`, its best response warm-started from the current
     /// adversary and the last best response found (which then tightens the
-    /// game upper bound), else its value against the current adversary;
+    /// game upper bound), else (and always for the single-player ascent,
+    /// where it is the best response) its value against the current
+    /// adversary;
     /// with a certifier, its certified lower bound, unless `may_skip` and
     /// that value shows it cannot beat the incumbent (module documentation).
     fn judge(
@@ -315,7 +328,7 @@ impl Optimiser<'_> {
         iterate: &Iterate,
         books: &mut Bookkeeping,
     ) -> Result<Judged, OptimiseError> {
-        let found = if respond {
+        let found = if respond && self.method == Method::MaxMin {
             let mut at: Vec<&[f64]> = vec![&iterate.adversary];
             at.extend(books.last_response.as_deref());
             // Without a certifier the best-response value is the score, and
