@@ -292,8 +292,21 @@ fn the_single_player_ascent_runs_under_the_drivers_checks_and_rules() {
             }
         }
     }
-    let driver_ends = [Status::Converged, Status::Stalled, Status::Outpaced];
-    assert!(driver_ends.contains(&report.status), "{report:?}");
+    // The optimum is deterministic: the logits creep towards the box's
+    // face, and ten steps that each gain less than 1e-12 of V end the
+    // run as converged long before the stall rule is judged (iteration
+    // 255), while the line search still finds steps (the last record's
+    // step is positive; where the line search fails it is 0).
+    assert_eq!(report.status, Status::Converged, "{report:?}");
+    assert!(report.iterations < 255, "{report:?}");
+    let still_stepping = (0..settings.starts).filter(|&start| {
+        let last = records.iter().rfind(|r| r.start == start).unwrap();
+        last.defender_step > 0.0
+    });
+    assert!(
+        still_stepping.count() > 0,
+        "no start stopped on negligible gains"
+    );
     assert!(report.worst_case > 1.0 - 1e-3, "{report:?}");
     let capped = Settings {
         max_work: (3 * report.gmc.states) as f64,

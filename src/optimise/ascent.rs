@@ -32,6 +32,15 @@ use super::{OptimiseError, Settings};
 /// The largest change of any `z` coordinate in one trial step.
 const MAX_STEP: f64 = 1.0;
 
+/// A step that gains at most this fraction of `V` gains nothing that a
+/// reported digit shows (argmin's `tol_cost`, relative).
+const NEGLIGIBLE_GAIN: f64 = 1e-12;
+
+/// The single-player solver has converged after this many consecutive
+/// negligible steps (where the line search still finds one: logits
+/// creeping towards a face of the box).
+const NEGLIGIBLE_STEPS: usize = 10;
+
 /// Armijo's sufficient-increase constant.
 const ARMIJO: f64 = 1e-4;
 
@@ -145,12 +154,15 @@ impl Lbfgs {
 
 /// The single-player solver under the driver: each iteration is one L-BFGS
 /// step of the defender on `V` against the adversary's fixed logits; once
-/// no step increases `V` the solver has converged
+/// no step increases `V`, or [`NEGLIGIBLE_STEPS`] consecutive steps each
+/// gained at most [`NEGLIGIBLE_GAIN`] of it, the solver has converged
 /// ([`super::Status::Converged`]).
 pub(super) struct Ascent {
     settings: Settings,
     lbfgs: Option<Lbfgs>,
     last_step: f64,
+    /// Consecutive steps that gained at most [`NEGLIGIBLE_GAIN`].
+    negligible_steps: usize,
     converged: bool,
 }
 
@@ -161,6 +173,7 @@ impl Ascent {
             settings: settings.clone(),
             lbfgs: None,
             last_step: 0.0,
+            negligible_steps: 0,
             converged: false,
         }
     }
@@ -211,8 +224,18 @@ impl Solver for Ascent {
             objective,
             adversary: &iterate.adversary,
         };
+        let before = lbfgs.value();
         match lbfgs.step(&mut against)? {
-            Some(step) => self.last_step = step,
+            Some(step) => {
+                self.last_step = step;
+                let negligible = lbfgs.value() - before <= NEGLIGIBLE_GAIN * lbfgs.value().abs();
+                self.negligible_steps = if negligible {
+                    self.negligible_steps + 1
+                } else {
+                    0
+                };
+                self.converged = self.negligible_steps >= NEGLIGIBLE_STEPS;
+            }
             None => {
                 self.last_step = 0.0;
                 self.converged = true;

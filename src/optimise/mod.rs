@@ -181,7 +181,8 @@ pub enum Status {
     Stalled,
     /// The certified gap closed to `gap_tolerance`.
     GapClosed,
-    /// The single-player solver found no ascent step (a stationary point).
+    /// The single-player solver found no ascent step (a stationary point),
+    /// or ten consecutive steps each gained less than `1e-12` of the value.
     Converged,
     /// A [`Cancel`] flag asked the run to stop.
     Cancelled,
