@@ -102,6 +102,12 @@ pub enum CertifyError {
 }
 
 impl CertifyError {
+    /// Whether the optimality certificate of the best response failed
+    /// (method.md section 6): the bound is then unproved, not wrong.
+    pub fn is_unproved_optimum(&self) -> bool {
+        matches!(self, Self::Mdp(MdpError::OptimalityUnproved(_)))
+    }
+
     /// Whether a policy evaluation could not be solved to the tolerance
     /// because the product mixes too slowly (method.md section 8): the
     /// bound is unknown, not wrong, and the trivial bound stays sound.
@@ -132,10 +138,11 @@ pub struct Bound {
     /// evaluation's `max_s |((I - Q) x - b)(s)|` and the Bellman gap
     /// `max_s (max_a E'_a x - E'_sigma(s) x)`.
     pub residual: f64,
-    /// A bound on the error of `value` from the linear solves
-    /// (a bound on `|x(s) - x_sigma(s)|` for the exact reachability
-    /// probabilities `x_sigma` of the strategy found, method.md section 8,
-    /// plus the rounding of the sum over the initial states).
+    /// A bound on the distance from `value` to the true bound: `value` is
+    /// the proved side of the free player's optimum (its optimality
+    /// certificate, method.md section 6), and the optimum lies between
+    /// the strategy's own value (within the linear solves' error, section
+    /// 8) and it; plus the rounding of the sums over the initial states.
     pub error_bound: f64,
     /// Whether the bound is exactly 0, exactly 1 or strictly between,
     /// decided on the product's graph (not by comparing `value` with 0 or 1).
@@ -257,7 +264,7 @@ pub fn lower_value_or_trivial(
 ) -> Result<f64, CertifyError> {
     match lower_bound(game, dra_not_phi, defender) {
         Ok(bound) => Ok(bound.value),
-        Err(error) if error.is_slow_mixing() => Ok(0.0),
+        Err(error) if error.is_slow_mixing() || error.is_unproved_optimum() => Ok(0.0),
         Err(error) => Err(error),
     }
 }
@@ -271,7 +278,7 @@ pub fn upper_value_or_trivial(
 ) -> Result<f64, CertifyError> {
     match upper_bound(game, dra_phi, adversary) {
         Ok(bound) => Ok(bound.value),
-        Err(error) if error.is_slow_mixing() => Ok(1.0),
+        Err(error) if error.is_slow_mixing() || error.is_unproved_optimum() => Ok(1.0),
         Err(error) => Err(error),
     }
 }
@@ -359,12 +366,15 @@ fn best_response(
     let start = Instant::now();
     let analysis = analyse(game, dra, controller, fixed, settings)?;
     let result = &analysis.result;
-    let value: f64 = analysis
-        .initial
-        .iter()
-        .map(|&(m, p)| p * result.values[m])
-        .sum();
-    let rounding = 2.0 * analysis.initial.len() as f64 * f64::EPSILON;
+    let at_initial = |x: &[f64]| -> f64 { analysis.initial.iter().map(|&(m, p)| p * x[m]).sum() };
+    // The free player's optimum is proved below `proved` (the optimality
+    // certificate) and above the strategy's value `attained` less its
+    // error bound: the bound reported is the proved side.
+    let (attained, proved) = (at_initial(&result.values), at_initial(&result.upper));
+    // The sums of nonnegative terms are exact where every term is 0, and
+    // within a relative `n eps` otherwise.
+    let rounding = 2.0 * analysis.initial.len() as f64 * f64::EPSILON * proved;
+    let value = proved + rounding;
     let qualitative = if analysis.initial.iter().all(|&(m, _)| !result.possible[m]) {
         Qualitative::Zero
     } else if analysis.initial.iter().all(|&(m, _)| result.almost_sure[m]) {
@@ -395,7 +405,7 @@ fn best_response(
         mdp_states: analysis.states.len(),
         seconds: start.elapsed().as_secs_f64(),
         residual: result.residual,
-        error_bound: result.error_bound + rounding,
+        error_bound: result.error_bound + (proved - attained).max(0.0) + 2.0 * rounding,
         qualitative,
     })
 }

@@ -116,7 +116,7 @@ impl<'a> LowerBoundGradients<'a> {
     pub fn value_or_trivial(&mut self, defender: &Fsc) -> Result<f64, CertifyError> {
         match self.analyse(defender) {
             Ok((product, result, _)) => Ok(lower_value(&product, &result)),
-            Err(error) if error.is_slow_mixing() => Ok(0.0),
+            Err(error) if error.is_slow_mixing() || error.is_unproved_optimum() => Ok(0.0),
             Err(error) => Err(error),
         }
     }
@@ -154,14 +154,16 @@ impl<'a> LowerBoundGradients<'a> {
     }
 }
 
-/// `L = 1 - sum p0 x`, `x` the optimal values of `!phi` on `product`.
+/// `L = 1 - sum p0 y`, `y >= x*` the proved upper bounds on the optimal
+/// values of `!phi` on `product` (the optimality certificate).
 fn lower_value(product: &Product, result: &Reachability) -> f64 {
     let not_phi: f64 = product
         .initial
         .iter()
-        .map(|&(m, p)| p * result.values[m])
+        .map(|&(m, p)| p * result.upper[m])
         .sum();
-    (1.0 - not_phi).clamp(0.0, 1.0)
+    let rounding = 2.0 * product.initial.len() as f64 * f64::EPSILON * not_phi;
+    (1.0 - not_phi - rounding).clamp(0.0, 1.0)
 }
 
 /// The lower bound and its gradient from the optimal values and strategy

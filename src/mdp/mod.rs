@@ -20,6 +20,7 @@
 //!   that meet `K_i`), with an optimal deterministic memoryless strategy.
 
 pub mod end_components;
+mod optimality;
 pub mod rabin;
 pub mod reachability;
 
@@ -53,6 +54,10 @@ pub enum MdpError {
     /// Policy iteration kept improving for too long (a numerical problem).
     #[error("policy iteration did not stabilise within {0} iterations")]
     NotConverged(usize),
+    /// The optimality of policy iteration's result could not be proved
+    /// (method.md section 6, the optimality certificate).
+    #[error("the optimum of the best response could not be proved: {0}")]
+    OptimalityUnproved(String),
 }
 
 /// A finite MDP in compressed form: the actions of state `s` are the global

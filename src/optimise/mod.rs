@@ -135,7 +135,7 @@ impl OptimiseError {
     pub fn is_numerical(&self) -> bool {
         match self {
             Self::Value(ValueError::Solver(_)) => true,
-            Self::Certify(error) => error.is_slow_mixing(),
+            Self::Certify(error) => error.is_slow_mixing() || error.is_unproved_optimum(),
             _ => false,
         }
     }
