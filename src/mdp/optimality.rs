@@ -48,13 +48,110 @@ const UNIT_ROUNDOFF: f64 = f64::EPSILON / 2.0;
 /// Policy-iteration rounds the potential may take to settle.
 const MAX_ROUNDS: usize = 100;
 
-/// An upper bound `y >= x*` on the maximum reachability probabilities of
-/// `mdp` from the values `values` of a policy (1 on the almost-sure states,
-/// 0 where the target is unreachable, exact there) and `times`, the
-/// policy's expected time in the maybe states (0 elsewhere), the start of
-/// the potential: `y = x + eps T` on `maybe`, rounded up, and `values`
-/// elsewhere (module documentation).
-pub(super) fn certified_upper(
+/// The graph-only parts of the certificate for one MDP graph and its maybe
+/// states (the end components, the quotient's nodes, moves and pattern,
+/// the solver's symbolic analysis), kept beside the policy systems so
+/// that the many results of one graph (a run's lower bounds of one
+/// support) analyse it once.
+pub(super) struct Certificate {
+    components: Components,
+    quotient: Quotient,
+    solver: LinearSolver,
+}
+
+impl Certificate {
+    /// The analysis of `mdp`'s graph with the maybe states `maybe`.
+    pub fn new(mdp: &Mdp, maybe: &[usize], settings: &SolverSettings) -> Result<Self, MdpError> {
+        let components = Components::of(mdp, maybe);
+        let quotient = Quotient::new(&components, mdp, maybe);
+        let solver = LinearSolver::new(quotient.pattern.clone(), settings).map_err(unsolved)?;
+        Ok(Self {
+            components,
+            quotient,
+            solver,
+        })
+    }
+
+    /// An upper bound `y >= x*` on the maximum reachability probabilities
+    /// of `mdp` (of the analysed graph) from the values `values` of a
+    /// policy (1 on the almost-sure states, 0 where the target is
+    /// unreachable, exact there): `y = x + eps T` on `maybe`, rounded up,
+    /// and `values` elsewhere (module documentation).
+    pub fn upper(
+        &mut self,
+        mdp: &Mdp,
+        maybe: &[usize],
+        values: &[f64],
+    ) -> Result<Vec<f64>, MdpError> {
+        let values = self.components.levelled(values);
+        let potential = self.potential(mdp, maybe, &values)?;
+        let mut eps = 0.0f64;
+        for &s in maybe {
+            for a in 0..mdp.num_actions(s) {
+                let (advantage, decrease) =
+                    self.components.widened(mdp, (s, a), &values, &potential);
+                if advantage <= 0.0 {
+                    continue;
+                }
+                if decrease <= 0.0 {
+                    return Err(MdpError::OptimalityUnproved(format!(
+                        "action {a} of state {s} may gain {advantage:e} without lowering the \
+                         potential (by {decrease:e})"
+                    )));
+                }
+                eps = eps.max(round_up(advantage / decrease));
+            }
+        }
+        let mut upper = values;
+        for &s in maybe {
+            upper[s] = round_up(upper[s] + eps * potential[s]).min(1.0);
+        }
+        Ok(upper)
+    }
+
+    /// A potential `T` on `maybe`, constant on each component, with
+    /// `T(s) >= 1 + E[T(u) | leaving s's component]` for every action of
+    /// `s` that leaves it (0 outside `maybe`): the maximum expected number
+    /// of moves between components before leaving `maybe`, by policy
+    /// iteration on the quotient (no end component remains there, so every
+    /// policy leaves surely and every evaluation is nonsingular), starting
+    /// from the move of each component whose expectation of `start` is
+    /// highest.
+    fn potential(
+        &mut self,
+        mdp: &Mdp,
+        maybe: &[usize],
+        start: &[f64],
+    ) -> Result<Vec<f64>, MdpError> {
+        let moves = self.quotient.moves(mdp);
+        let mut choice = self.quotient.best_moves(&moves, start);
+        for _ in 0..MAX_ROUNDS {
+            let times = self
+                .quotient
+                .evaluate(&mut self.solver, &moves, &choice)
+                .map_err(unsolved)?;
+            let mut potential = vec![0.0; mdp.num_states()];
+            for &s in maybe {
+                potential[s] = times[self.quotient.node_of[s]];
+            }
+            if !self.quotient.improve(&moves, &potential, &mut choice) {
+                return Ok(potential);
+            }
+        }
+        Err(MdpError::OptimalityUnproved(format!(
+            "the potential of the certificate did not settle within {MAX_ROUNDS} rounds"
+        )))
+    }
+}
+
+/// A solve of the potential that failed, as the certificate's failure.
+fn unsolved(error: SolverError) -> MdpError {
+    MdpError::OptimalityUnproved(format!("the potential of the certificate: {error}"))
+}
+
+/// [`Certificate::upper`] with a fresh analysis of `mdp`'s graph.
+#[cfg(test)]
+fn certified_upper(
     mdp: &Mdp,
     maybe: &[usize],
     values: &[f64],
@@ -63,30 +160,7 @@ pub(super) fn certified_upper(
     if maybe.is_empty() {
         return Ok(values.to_vec());
     }
-    let components = Components::of(mdp, maybe);
-    let values = components.levelled(values);
-    let potential = components.potential(mdp, maybe, &values, settings)?;
-    let mut eps = 0.0f64;
-    for &s in maybe {
-        for a in 0..mdp.num_actions(s) {
-            let (advantage, decrease) = components.widened(mdp, (s, a), &values, &potential);
-            if advantage <= 0.0 {
-                continue;
-            }
-            if decrease <= 0.0 {
-                return Err(MdpError::OptimalityUnproved(format!(
-                    "action {a} of state {s} may gain {advantage:e} without lowering the \
-                     potential (by {decrease:e})"
-                )));
-            }
-            eps = eps.max(round_up(advantage / decrease));
-        }
-    }
-    let mut upper = values;
-    for &s in maybe {
-        upper[s] = round_up(upper[s] + eps * potential[s]).min(1.0);
-    }
-    Ok(upper)
+    Certificate::new(mdp, maybe, settings)?.upper(mdp, maybe, values)
 }
 
 /// The maximal end components inside the maybe states: each state's
@@ -125,42 +199,6 @@ impl Components {
         x
     }
 
-    /// A potential `T` on `maybe`, constant on each component, with
-    /// `T(s) >= 1 + E[T(u) | leaving s's component]` for every action of
-    /// `s` that leaves it (0 outside `maybe`): the maximum expected number
-    /// of moves between components before leaving `maybe`, by policy
-    /// iteration on the quotient (no end component remains there, so every
-    /// policy leaves surely and every evaluation is nonsingular), starting
-    /// from the action of each component whose leaving expectation of
-    /// `start` is highest.
-    fn potential(
-        &self,
-        mdp: &Mdp,
-        maybe: &[usize],
-        start: &[f64],
-        settings: &SolverSettings,
-    ) -> Result<Vec<f64>, MdpError> {
-        let quotient = Quotient::new(self, mdp, maybe);
-        let mut choice = quotient.best_moves(start);
-        let unsolved = |error: SolverError| {
-            MdpError::OptimalityUnproved(format!("the potential of the certificate: {error}"))
-        };
-        let mut solver = LinearSolver::new(quotient.pattern.clone(), settings).map_err(unsolved)?;
-        for _ in 0..MAX_ROUNDS {
-            let times = quotient.evaluate(&mut solver, &choice).map_err(unsolved)?;
-            let mut potential = vec![0.0; mdp.num_states()];
-            for &s in maybe {
-                potential[s] = times[quotient.node_of[s]];
-            }
-            if !quotient.improve(&potential, &mut choice) {
-                return Ok(potential);
-            }
-        }
-        Err(MdpError::OptimalityUnproved(format!(
-            "the potential of the certificate did not settle within {MAX_ROUNDS} rounds"
-        )))
-    }
-
     /// The advantage `r_a(s)` rounded towards `+inf` and the potential's
     /// decrease `d_a(s)` rounded towards `-inf` (moves inside `s`'s
     /// component add exactly 0 to both and are skipped).
@@ -196,15 +234,19 @@ impl Components {
 
 /// The quotient of the maybe states by their maximal end components: one
 /// node per component, and for each node its moves, the actions of its
-/// states that leave it, as distributions over the other nodes conditioned
-/// on leaving (the rest leaves `maybe`).
+/// states that leave it (a property of the graph), whose distributions over
+/// the other nodes, conditioned on leaving, [`Quotient::moves`] reads from
+/// an MDP of the graph (the rest leaves `maybe`).
 struct Quotient {
     node_of: Vec<usize>,
-    /// Per node, its moves: `(other node, conditional probability)` lists.
-    moves: Vec<Vec<Vec<(usize, f64)>>>,
+    /// Per node, the `(state, action)` of each of its moves.
+    sources: Vec<Vec<(usize, usize)>>,
     /// The union of every move's edges, the diagonal included.
     pattern: SparsePattern,
 }
+
+/// Per node, its moves: `(other node, conditional probability)` lists.
+type Moves = Vec<Vec<Vec<(usize, f64)>>>;
 
 impl Quotient {
     fn new(components: &Components, mdp: &Mdp, maybe: &[usize]) -> Self {
@@ -218,41 +260,28 @@ impl Quotient {
             }
             node_of[s] = node_of[home];
         }
-        let mut moves = vec![Vec::new(); nodes];
+        let mut sources = vec![Vec::new(); nodes];
+        let mut rows = vec![Vec::new(); nodes];
         for &s in maybe {
             let home = node_of[s];
             for a in 0..mdp.num_actions(s) {
-                let leaving: f64 = mdp
-                    .distribution(s, a)
-                    .iter()
-                    .filter(|&&(u, _)| node_of[u] != home)
-                    .map(|&(_, p)| p)
-                    .sum();
-                if leaving == 0.0 {
+                let distribution = mdp.distribution(s, a);
+                if distribution.iter().all(|&(u, _)| node_of[u] == home) {
                     continue;
                 }
-                let mut terms: Vec<(usize, f64)> = Vec::new();
-                for &(u, p) in mdp.distribution(s, a) {
-                    let node = node_of[u];
-                    if node != home && node != usize::MAX {
-                        match terms.iter_mut().find(|(v, _)| *v == node) {
-                            Some((_, q)) => *q += p / leaving,
-                            None => terms.push((node, p / leaving)),
-                        }
-                    }
-                }
-                terms.sort_unstable_by_key(|&(v, _)| v);
-                moves[home].push(terms);
+                sources[home].push((s, a));
+                rows[home].extend(
+                    distribution
+                        .iter()
+                        .map(|&(u, _)| node_of[u])
+                        .filter(|&v| v != home && v != usize::MAX),
+                );
             }
         }
         let mut row_offsets = vec![0];
         let mut columns = Vec::new();
-        for (node, node_moves) in moves.iter().enumerate() {
-            let mut row: Vec<usize> = node_moves
-                .iter()
-                .flat_map(|terms| terms.iter().map(|&(v, _)| v))
-                .chain([node])
-                .collect();
+        for (node, mut row) in rows.into_iter().enumerate() {
+            row.push(node);
             row.sort_unstable();
             row.dedup();
             columns.extend(row);
@@ -265,20 +294,63 @@ impl Quotient {
         };
         Self {
             node_of,
-            moves,
+            sources,
             pattern,
         }
     }
 
-    /// Per node, the move whose expectation of `x` (per state) is highest.
-    fn best_moves(&self, x: &[f64]) -> Vec<usize> {
-        let mut at_node = vec![0.0; self.moves.len()];
+    /// The moves' distributions over the other nodes in `mdp`, conditioned
+    /// on leaving the node.
+    fn moves(&self, mdp: &Mdp) -> Moves {
+        self.sources
+            .iter()
+            .enumerate()
+            .map(|(home, node_sources)| {
+                node_sources
+                    .iter()
+                    .map(|&(s, a)| self.conditioned(mdp.distribution(s, a), home))
+                    .collect()
+            })
+            .collect()
+    }
+
+    /// A distribution over nodes other than `home`, conditioned on leaving
+    /// it, sorted by node.
+    fn conditioned(&self, distribution: &[(usize, f64)], home: usize) -> Vec<(usize, f64)> {
+        let leaving: f64 = distribution
+            .iter()
+            .filter(|&&(u, _)| self.node_of[u] != home)
+            .map(|&(_, p)| p)
+            .sum();
+        let mut terms: Vec<(usize, f64)> = Vec::new();
+        for &(u, p) in distribution {
+            let node = self.node_of[u];
+            if node != home && node != usize::MAX {
+                match terms.iter_mut().find(|(v, _)| *v == node) {
+                    Some((_, q)) => *q += p / leaving,
+                    None => terms.push((node, p / leaving)),
+                }
+            }
+        }
+        terms.sort_unstable_by_key(|&(v, _)| v);
+        terms
+    }
+
+    /// The values `x` (per state) per node.
+    fn at_nodes(&self, x: &[f64]) -> Vec<f64> {
+        let mut at_node = vec![0.0; self.sources.len()];
         for (s, &node) in self.node_of.iter().enumerate() {
             if node != usize::MAX {
                 at_node[node] = x[s];
             }
         }
-        self.moves
+        at_node
+    }
+
+    /// Per node, the move whose expectation of `x` (per state) is highest.
+    fn best_moves(&self, moves: &Moves, x: &[f64]) -> Vec<usize> {
+        let at_node = self.at_nodes(x);
+        moves
             .iter()
             .map(|node_moves| argmax(node_moves, |terms| expectation(terms, &at_node)))
             .collect()
@@ -289,13 +361,14 @@ impl Quotient {
     fn evaluate(
         &self,
         solver: &mut LinearSolver,
+        moves: &Moves,
         choice: &[usize],
     ) -> Result<Vec<f64>, SolverError> {
         let pattern = &self.pattern;
         solver.factorize_with(|values, exits| {
             values.fill(0.0);
             for (node, &chosen) in choice.iter().enumerate() {
-                let terms = &self.moves[node][chosen];
+                let terms = &moves[node][chosen];
                 let range = pattern.row_range(node);
                 let mut staying = 0.0;
                 for &(v, q) in terms {
@@ -322,15 +395,10 @@ impl Quotient {
 
     /// Switches each node to a move whose `1 + E[T]` beats its current one
     /// by more than the rounding; returns whether any switched.
-    fn improve(&self, potential: &[f64], choice: &mut [usize]) -> bool {
-        let mut at_node = vec![0.0; self.moves.len()];
-        for (s, &node) in self.node_of.iter().enumerate() {
-            if node != usize::MAX {
-                at_node[node] = potential[s];
-            }
-        }
+    fn improve(&self, moves: &Moves, potential: &[f64], choice: &mut [usize]) -> bool {
+        let at_node = self.at_nodes(potential);
         let mut switched = false;
-        for (node, node_moves) in self.moves.iter().enumerate() {
+        for (node, node_moves) in moves.iter().enumerate() {
             let current = expectation(&node_moves[choice[node]], &at_node);
             let best = argmax(node_moves, |terms| expectation(terms, &at_node));
             let gain = expectation(&node_moves[best], &at_node) - current;

@@ -61,7 +61,7 @@
 use crate::graph::backward_reachable;
 use crate::solver::{LinearSolver, SolverSettings, SparsePattern};
 
-use super::optimality::certified_upper;
+use super::optimality::Certificate;
 use super::{Mdp, MdpError, Predecessors};
 
 /// Policy iteration switches an action only if it improves the expected
@@ -161,7 +161,7 @@ pub fn max_reachability_with(
         };
         let (switched, gap) = improve(mdp, &values, &systems.maybe, &mut strategy, threshold);
         if !switched && proved {
-            let upper = certified_upper(mdp, &systems.maybe, &values, &systems.settings)?;
+            let upper = systems.certified_upper(mdp, &values)?;
             return Ok(Reachability {
                 values,
                 upper,
@@ -360,6 +360,9 @@ pub struct PolicySystems {
     qualitative: QualitativeReachability,
     pattern: Option<SparsePattern>,
     solver: Option<LinearSolver>,
+    /// The optimality certificate's analysis of the graph (at the first
+    /// result).
+    certificate: Option<Certificate>,
     settings: SolverSettings,
 }
 
@@ -460,6 +463,7 @@ impl PolicySystems {
             qualitative,
             pattern: Some(pattern),
             solver: None,
+            certificate: None,
             settings: *settings,
         })
     }
@@ -471,6 +475,19 @@ impl PolicySystems {
     }
 
     /// The solver, once a system was factorised.
+    /// The optimality certificate's upper bounds from `values`, a policy's
+    /// on `mdp` (of this graph), analysing the graph at the first call.
+    fn certified_upper(&mut self, mdp: &Mdp, values: &[f64]) -> Result<Vec<f64>, MdpError> {
+        if self.maybe.is_empty() {
+            return Ok(values.to_vec());
+        }
+        let certificate = match &mut self.certificate {
+            Some(certificate) => certificate,
+            empty => empty.insert(Certificate::new(mdp, &self.maybe, &self.settings)?),
+        };
+        certificate.upper(mdp, &self.maybe, values)
+    }
+
     fn solver(&mut self) -> Result<&mut LinearSolver, MdpError> {
         self.solver.as_mut().ok_or(MdpError::Malformed(
             "no policy system was factorised".into(),
