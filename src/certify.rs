@@ -528,12 +528,34 @@ struct Product {
     free_actions: Vec<Vec<usize>>,
 }
 
+/// Where the exploration of a [`Product`] starts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Seeds {
+    /// The support of `p0` only: the reachable product.
+    Initial,
+    /// Every node of the controller at each initial state as well (with
+    /// `p0` unchanged): the states a change of the controller towards an
+    /// unused node would reach are explored too.
+    EveryNode,
+}
+
 impl Product {
     /// Explores the product from `p0` breadth first; the free player's
     /// action `w` in `(s, q, g)`, one of those enabled in `s`, has the
     /// distribution of the module documentation (summed over duplicate
     /// successors by [`MdpBuilder`]).
     fn build(game: &Posg, dra: &Dra, controller: &Fsc, fixed: Role) -> Result<Self, CertifyError> {
+        Self::explore(game, dra, controller, fixed, Seeds::Initial)
+    }
+
+    /// [`Product::build`], its exploration starting from `seeds`.
+    fn explore(
+        game: &Posg,
+        dra: &Dra,
+        controller: &Fsc,
+        fixed: Role,
+        seeds: Seeds,
+    ) -> Result<Self, CertifyError> {
         check_fits(game, controller, fixed)?;
         let free_actions = free_actions(fixed.other().player(game), game.num_states());
         let letters = dra.state_letters(game);
@@ -549,6 +571,8 @@ impl Product {
             for (g, &p_node) in controller.initial().iter().enumerate() {
                 if p_node > 0.0 {
                     initial.push((state_id(&mut explorer, (s, q, g))?, p * p_node));
+                } else if seeds == Seeds::EveryNode {
+                    state_id(&mut explorer, (s, q, g))?;
                 }
             }
         }

@@ -612,3 +612,109 @@ fn lower_bounds_of_one_support_reuse_the_analysis_and_agree_with_fresh_ones() {
         "only {between} bounds strictly between 0 and 1"
     );
 }
+
+/// The gradient over every enabled pair (`LowerBoundGradients::at_over`,
+/// which ranks the local search's moves) gives the one-sided derivative of
+/// the bound when a defender starts playing a pair it never played, a move
+/// to its unused second node included: on random games and grids, with node 0 a
+/// random one-node controller and node 1 never entered,
+/// `d/de L((1 - e) mu_b + e pair)` at `e = 0+` against a Richardson
+/// difference of the bound. Points where the bound jumps or bends (the
+/// pair opens an end component, or the adversary's optimum switches) are
+/// skipped, and so are blocks played in decided states only, which the
+/// gradient leaves out.
+#[test]
+fn the_gradient_over_every_pair_gives_the_gain_of_a_pair_not_played() {
+    use posg_fsc::certify::gradient::LowerBoundGradients;
+    use posg_fsc::controller::{Choice, Support};
+    use posg_fsc::game::grid::GridSpec;
+    use posg_fsc::value::SolverSettings;
+    let (mut checked, mut to_unused_node) = (0, 0);
+    for seed in 0..120u64 {
+        let game = match seed % 3 {
+            0 => from_json_str(&common::random::game_json(seed), "random.posg.json").unwrap(),
+            1 => GridSpec::default().build().unwrap(),
+            _ => GridSpec::square(4).build().unwrap(),
+        };
+        let (_, not_phi) = automata(FORMULAS[seed as usize / 3 % FORMULAS.len()]);
+        let universe = Fsc::uniform_enabled(Role::Defender, 2, game.defender());
+        let support = Support::of(&universe);
+        let observations = universe.num_observations();
+        // Node 0 a random controller of its own, node 1 a copy never entered.
+        let node = common::random::controller_with_nodes(seed, &game, Role::Defender, 1);
+        let blocks: Vec<Vec<Choice>> = (0..2 * observations)
+            .map(|b| {
+                let next = b / observations;
+                let own = node.choices(0, b % observations).iter();
+                own.map(|&c| Choice { next, ..c }).collect()
+            })
+            .collect();
+        let defender = with_blocks(&universe, blocks.clone());
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let b = rng.random_range(0..observations);
+        let pairs = universe.choices(0, b);
+        let pair = pairs[rng.random_range(0..pairs.len())];
+        if blocks[b]
+            .iter()
+            .any(|c| (c.next, c.action) == (pair.next, pair.action))
+        {
+            continue;
+        }
+        let mut gradients = LowerBoundGradients::new(&game, &not_phi, SolverSettings::default());
+        let found = gradients.at_over(&defender, &support).unwrap();
+        let entry = |c: &Choice| {
+            let k = support
+                .block(0, b)
+                .find(|&k| support.entry(k) == (c.next, c.action));
+            found.entries[k.unwrap()]
+        };
+        let played: f64 = blocks[b].iter().map(|c| c.probability * entry(c)).sum();
+        let analytic = entry(&pair) - played;
+        let bound_at = |e: f64| {
+            let mut mixed = blocks.clone();
+            for c in &mut mixed[b] {
+                c.probability *= 1.0 - e;
+            }
+            mixed[b].push(Choice {
+                probability: e,
+                ..pair
+            });
+            lower_bound(&game, &not_phi, &with_blocks(&universe, mixed))
+                .unwrap()
+                .value
+        };
+        let here = lower_bound(&game, &not_phi, &defender).unwrap().value;
+        let e = 1e-4;
+        let (one, two) = (bound_at(e) - here, bound_at(2.0 * e) - here);
+        let richardson = (4.0 * one - two) / (2.0 * e);
+        // Exactly 0: the block is played in decided states only.
+        let bends = (one / e - richardson).abs() > 1e-2 * (1.0 + richardson.abs());
+        if !analytic.is_finite() || analytic == 0.0 || bends {
+            continue;
+        }
+        assert!(
+            (analytic - richardson).abs() < 1e-4 * (1.0 + richardson.abs()),
+            "seed {seed}: analytic {analytic} vs finite differences {richardson}"
+        );
+        checked += 1;
+        to_unused_node += usize::from(pair.next == 1);
+    }
+    assert!(
+        checked >= 15 && to_unused_node >= 8,
+        "only {checked} smooth moves, {to_unused_node} to node 1"
+    );
+}
+
+/// A two-node defender of `universe`'s shape starting in node 0, with
+/// `blocks`.
+fn with_blocks(universe: &Fsc, blocks: Vec<Vec<posg_fsc::controller::Choice>>) -> Fsc {
+    Fsc::new(
+        Role::Defender,
+        universe.num_nodes(),
+        universe.num_observations(),
+        universe.num_actions(),
+        vec![1.0, 0.0],
+        blocks,
+    )
+    .unwrap()
+}

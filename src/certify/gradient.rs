@@ -26,7 +26,7 @@
 
 use rustc_hash::FxHashMap;
 
-use super::{CertifyError, Product};
+use super::{CertifyError, Product, Seeds};
 use crate::automaton::Dra;
 use crate::controller::{Fsc, Role, Support};
 use crate::game::{AdversaryAction, DefenderAction, Posg};
@@ -103,34 +103,73 @@ impl<'a> LowerBoundGradients<'a> {
 
     /// The lower bound of `defender` and its gradient.
     pub fn at(&mut self, defender: &Fsc) -> Result<LowerBoundGradient, CertifyError> {
-        let (game, dra) = (self.game, self.dra_not_phi);
-        let (product, result, systems) = self.analyse(defender)?;
+        let (product, result, systems) = self.analyse(defender, Seeds::Initial)?;
         let y = systems.expected_visits(&product.initial)?;
         self.work += product.mdp.num_states() as f64;
-        gradient(game, dra, defender, &product, &result, &y)
+        let support = Support::of(defender);
+        gradient(
+            self.game,
+            self.dra_not_phi,
+            &support,
+            &product,
+            &result,
+            &y,
+            0.0,
+        )
+    }
+
+    /// The lower bound of `defender` and its gradient with respect to every
+    /// entry of `universe`, a support over `defender`'s nodes and
+    /// observations (usually every enabled pair), including the pairs
+    /// `defender` never plays: the first-order gain of moving a block
+    /// towards them, by which the local search ranks its moves. The
+    /// product is explored from every node at the initial states, so that
+    /// the values of the states a move towards an unused node reaches are
+    /// mostly known; an entry whose successors were not explored is NaN.
+    /// As everywhere here, the decided states contribute nothing: a pair
+    /// played from them first-order gains nothing, whatever it would
+    /// change there.
+    pub fn at_over(
+        &mut self,
+        defender: &Fsc,
+        universe: &Support,
+    ) -> Result<LowerBoundGradient, CertifyError> {
+        let (product, result, systems) = self.analyse(defender, Seeds::EveryNode)?;
+        let y = systems.expected_visits(&product.initial)?;
+        self.work += product.mdp.num_states() as f64;
+        gradient(
+            self.game,
+            self.dra_not_phi,
+            universe,
+            &product,
+            &result,
+            &y,
+            f64::NAN,
+        )
     }
 
     /// The lower bound of `defender` alone, or the trivial bound 0 where
     /// the product mixes too slowly to be solved to the tolerance (as
     /// [`super::lower_value_or_trivial`]).
     pub fn value_or_trivial(&mut self, defender: &Fsc) -> Result<f64, CertifyError> {
-        match self.analyse(defender) {
+        match self.analyse(defender, Seeds::Initial) {
             Ok((product, result, _)) => Ok(lower_value(&product, &result)),
             Err(error) if error.is_slow_mixing() || error.is_unproved_optimum() => Ok(0.0),
             Err(error) => Err(error),
         }
     }
 
-    /// The product of `defender` and its optimal values and strategy for
-    /// `!phi`, reusing the last graph analysis where the graph is the same;
-    /// and the policies' systems, holding the optimal strategy's
-    /// factorisation.
+    /// The product of `defender` explored from `seeds` and its optimal
+    /// values and strategy for `!phi`, reusing the last graph analysis where
+    /// the graph is the same; and the policies' systems, holding the
+    /// optimal strategy's factorisation.
     fn analyse(
         &mut self,
         defender: &Fsc,
+        seeds: Seeds,
     ) -> Result<(Product, Reachability, &mut PolicySystems), CertifyError> {
         let (game, dra) = (self.game, self.dra_not_phi);
-        let product = Product::build(game, dra, defender, Role::Defender)?;
+        let product = Product::explore(game, dra, defender, Role::Defender, seeds)?;
         let mut last = match self.last.take() {
             Some(last) if last.systems.fits(&product.mdp) => last,
             _ => {
@@ -166,15 +205,18 @@ fn lower_value(product: &Product, result: &Reachability) -> f64 {
     (1.0 - not_phi - rounding).clamp(0.0, 1.0)
 }
 
-/// The lower bound and its gradient from the optimal values and strategy
-/// `result` on `product` and the expected visits `y` (module documentation).
+/// The lower bound and its gradient with respect to the entries of
+/// `support` from the optimal values and strategy `result` on `product` and
+/// the expected visits `y` (module documentation); a successor outside
+/// `product` counts with the value `unexplored`.
 fn gradient(
     game: &Posg,
     dra_not_phi: &Dra,
-    defender: &Fsc,
+    support: &Support,
     product: &Product,
     result: &Reachability,
     y: &[f64],
+    unexplored: f64,
 ) -> Result<LowerBoundGradient, CertifyError> {
     let x = &result.values;
     let index: FxHashMap<(usize, usize, usize), usize> = product
@@ -183,9 +225,8 @@ fn gradient(
         .enumerate()
         .map(|(m, &key)| (key, m))
         .collect();
-    let value_at = |key: (usize, usize, usize)| index.get(&key).map_or(0.0, |&m| x[m]);
+    let value_at = |key: (usize, usize, usize)| index.get(&key).map_or(unexplored, |&m| x[m]);
     let letters = dra_not_phi.state_letters(game);
-    let support = Support::of(defender);
     let mut entries = vec![0.0; support.num_entries()];
     for (m, &(s, q, g)) in product.states.iter().enumerate() {
         if y[m] == 0.0 {
@@ -204,7 +245,7 @@ fn gradient(
             }
         }
     }
-    let mut initial = vec![0.0; defender.num_nodes()];
+    let mut initial = vec![0.0; support.num_nodes()];
     for &(s, p) in game.initial() {
         let q = dra_not_phi.successor(dra_not_phi.initial(), letters[s]);
         for (g, d) in initial.iter_mut().enumerate() {

@@ -10,7 +10,9 @@
 //! deterministic controller. This search starts at the best candidate and
 //! changes one block `(g, o)` at a time, dropping a choice or playing one
 //! enabled `(next node, action)` pair, keeping every change that raises the
-//! certified lower bound (first improvement). Where a sweep over all blocks
+//! certified lower bound (first improvement). The moves with the largest
+//! first-order gains by the bound's gradient are tried first (guided
+//! steps), the sweeps over every move only where those fail. Where a sweep over all blocks
 //! changes nothing and a node is unused, it tries memory: one choice is sent
 //! to a copy of its next node (a change of no value by itself), and sweeps
 //! climb from there. It stops when neither raises the bound, or when its
@@ -26,8 +28,9 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
 use crate::automaton::Dra;
+use crate::certify::gradient::LowerBoundGradients;
 use crate::certify::{CertifyError, lower_bound_within};
-use crate::controller::{Choice, Fsc, Role};
+use crate::controller::{Choice, Fsc, Role, Support};
 use crate::game::{AdversaryAction, DefenderAction, Posg};
 use crate::solver::SolverSettings;
 
@@ -63,12 +66,14 @@ pub struct Effort {
 }
 
 /// What one climb searches: the game, the automaton of `!phi`, every
-/// enabled `(next node, action)` pair of each block, and its effort (with
-/// the bounds it has evaluated so far and the product states they solved).
+/// enabled `(next node, action)` pair of each block (as blocks and as a
+/// support), and its effort (with the bounds it has evaluated so far and
+/// the product states they solved).
 struct Landscape<'a> {
     game: &'a Posg,
     not_phi: &'a Dra,
     pairs: &'a [Vec<Choice>],
+    universe: &'a Support,
     effort: Effort,
     evaluated: Cell<usize>,
     spent: Cell<usize>,
@@ -90,11 +95,7 @@ impl Landscape<'_> {
     /// point is certified in full afterwards.
     fn bound(&self, defender: &Fsc) -> Result<f64, CertifyError> {
         self.evaluated.set(self.evaluated.get() + 1);
-        let settings = SolverSettings {
-            exact_limit: 0,
-            ..SolverSettings::default()
-        };
-        let bound = lower_bound_within(self.game, self.not_phi, defender, &settings);
+        let bound = lower_bound_within(self.game, self.not_phi, defender, &ranking_settings());
         // A product that could not be proved counts as large as the game.
         let states = bound
             .as_ref()
@@ -105,6 +106,44 @@ impl Landscape<'_> {
             Err(error) if error.is_slow_mixing() => Ok(0.0),
             Err(error) => Err(error),
         }
+    }
+
+    /// The first-order gains of the moves of `current` (blocks in use
+    /// only) by the lower bound's gradient over every enabled pair
+    /// ([`LowerBoundGradients::at_over`]): `(gain, block, choices)` for
+    /// each move whose gain is known and above [`IMPROVEMENT`], the
+    /// largest first. Empty where the gradient cannot be computed (a
+    /// product too stiff for it): the sweeps go on without it.
+    fn promising_moves(
+        &self,
+        current: &Fsc,
+    ) -> Result<Vec<(f64, usize, Vec<Choice>)>, CertifyError> {
+        self.evaluated.set(self.evaluated.get() + 1);
+        let mut gradients = LowerBoundGradients::new(self.game, self.not_phi, ranking_settings());
+        let gradient = gradients.at_over(current, self.universe);
+        self.spent
+            .set(self.spent.get().saturating_add(gradients.work() as usize));
+        let entries = match gradient {
+            Ok(gradient) => gradient.entries,
+            Err(error) if error.is_slow_mixing() || error.is_unproved_optimum() => {
+                return Ok(Vec::new());
+            }
+            Err(error) => return Err(error),
+        };
+        let in_use = blocks_in_use(self.game, current);
+        let mut moves = Vec::new();
+        for b in (0..current.blocks.len()).filter(|&b| in_use[b]) {
+            let rate = |choices: &[Choice]| block_rate(self.universe, &entries, b, choices);
+            let now = rate(&current.blocks[b]);
+            for choices in block_moves(&current.blocks[b], &self.pairs[b]) {
+                let gain = rate(&choices) - now;
+                if gain > IMPROVEMENT {
+                    moves.push((gain, b, choices));
+                }
+            }
+        }
+        moves.sort_by(|a, b| b.0.total_cmp(&a.0));
+        Ok(moves)
     }
 
     /// The first of `candidates` that certifies more than `bound` by
@@ -130,27 +169,58 @@ impl Landscape<'_> {
     }
 }
 
+/// The solver settings of the climb's evaluations: without the exact
+/// rational solve, since the climb only ranks its candidates and its end
+/// point is certified in full afterwards.
+fn ranking_settings() -> SolverSettings {
+    SolverSettings {
+        exact_limit: 0,
+        ..SolverSettings::default()
+    }
+}
+
+/// `sum_k mu(k) dL/dmu(k)` over the `choices` of block `b`, each choice's
+/// entry found in `universe` (NaN where its derivative is unknown).
+fn block_rate(universe: &Support, entries: &[f64], b: usize, choices: &[Choice]) -> f64 {
+    choices
+        .iter()
+        .map(|choice| {
+            let entry = universe
+                .block_by_index(b)
+                .find(|&k| universe.entry(k) == (choice.next, choice.action));
+            choice.probability * entry.map_or(f64::NAN, |k| entries[k])
+        })
+        .sum()
+}
+
+/// The most moves a guided step ([`guided_step`]) evaluates.
+const GUIDED_CANDIDATES: usize = 8;
+
 /// Hill-climbs from the defender `start` on the certified lower bound (the
 /// trivial 0 where a product mixes too slowly to certify): the moves in a
 /// block `(g, o)` are dropping one of its choices (the others
 /// renormalised) and playing one enabled `(next node, action)` pair of
 /// `game`'s defender with probability 1; where no such move raises the
 /// bound and a node is unused, the splits of [`splits`] followed by such
-/// moves. `pairs` are those pairs per block (the blocks of
-/// [`Fsc::uniform_enabled`] with `start`'s nodes). Stops where no move
-/// raises the bound, or when `effort` is spent. Returns the end point and
-/// the work spent (the product states its evaluations solved).
+/// moves. `universe` holds those pairs in its blocks (it is
+/// [`Fsc::uniform_enabled`] with `start`'s nodes). Single-block moves are
+/// tried in the order of their first-order gains first ([`guided_step`]).
+/// Stops where no move raises the bound, or when `effort` is spent.
+/// Returns the end point and the work spent (the product states its
+/// evaluations solved).
 fn climb(
     game: &Posg,
     not_phi: &Dra,
-    pairs: &[Vec<Choice>],
+    universe: &Fsc,
     start: &Fsc,
     effort: Effort,
 ) -> Result<(Climbed, usize), CertifyError> {
+    let support = Support::of(universe);
     let landscape = Landscape {
         game,
         not_phi,
-        pairs,
+        pairs: &universe.blocks,
+        universe: &support,
         effort,
         evaluated: Cell::new(0),
         spent: Cell::new(0),
@@ -170,39 +240,80 @@ fn climb(
 
 /// The first split of `current` ([`splits`]) from which single-block
 /// moves climb above its bound, where they end; `None` when none does (or
-/// the effort is spent).
+/// the effort is spent). The splits where a guided step ([`guided_step`])
+/// finds a first move are climbed first: a split changes no value, and
+/// the first-order gains of its copy's moves show where the copy pays,
+/// for the cost of one gradient, where a sweep evaluates every move. The
+/// others are climbed by sweeps after them, since the gradient is blind
+/// to end components and vanishes where the adversary wins surely.
 fn first_improving_split(
     landscape: &Landscape<'_>,
     current: &Climbed,
 ) -> Result<Option<Climbed>, CertifyError> {
+    // The split changes no value: it starts where `current` is.
+    let from = |split| Climbed {
+        defender: split,
+        bound: current.bound,
+    };
+    let improves = |end: &Climbed| end.bound > current.bound + IMPROVEMENT;
+    for split in splits(landscape.game, &current.defender) {
+        if let Some(first) = guided_step(landscape, &from(split))? {
+            let end = climb_by_single_moves(landscape, first)?;
+            if improves(&end) {
+                return Ok(Some(end));
+            }
+        }
+    }
     for split in splits(landscape.game, &current.defender) {
         if landscape.exhausted() {
             break;
         }
-        // The split changes no value: it starts where `current` is.
-        let from = Climbed {
-            defender: split,
-            bound: current.bound,
-        };
-        let end = climb_by_single_moves(landscape, from)?;
-        if end.bound > current.bound + IMPROVEMENT {
+        let end = climb_by_single_moves(landscape, from(split))?;
+        if improves(&end) {
             return Ok(Some(end));
         }
     }
     Ok(None)
 }
 
-/// Sweeps of single-block moves ([`sweep`]) from `from` until one changes
-/// nothing.
+/// Single-block moves from `from` until none raises the bound: guided
+/// steps ([`guided_step`]) while they find one, then a sweep over every
+/// move ([`sweep`]), until a sweep changes nothing.
 fn climb_by_single_moves(
     landscape: &Landscape<'_>,
     from: Climbed,
 ) -> Result<Climbed, CertifyError> {
     let mut current = from;
-    while let Some(better) = sweep(landscape, &current)? {
-        current = better;
+    loop {
+        if let Some(better) = guided_step(landscape, &current)? {
+            current = better;
+        } else if let Some(better) = sweep(landscape, &current)? {
+            current = better;
+        } else {
+            return Ok(current);
+        }
     }
-    Ok(current)
+}
+
+/// The first of the [`GUIDED_CANDIDATES`] moves of `current` with the
+/// largest first-order gains ([`Landscape::promising_moves`]) that raises
+/// the bound; `None` when none does (or the effort is spent). A move's
+/// gain against the adversary's current best response is not its gain
+/// against the next one, nor does it see an end component the move makes
+/// or breaks, so the sweeps still judge every move where this finds none.
+fn guided_step(
+    landscape: &Landscape<'_>,
+    current: &Climbed,
+) -> Result<Option<Climbed>, CertifyError> {
+    if landscape.exhausted() {
+        return Ok(None);
+    }
+    let moves = landscape.promising_moves(&current.defender)?;
+    let candidates = moves
+        .into_iter()
+        .take(GUIDED_CANDIDATES)
+        .map(|(_, b, choices)| with_block(&current.defender, b, choices));
+    landscape.first_improvement(candidates, current.bound)
 }
 
 /// One sweep of single-block moves over the blocks in use, each block
@@ -216,7 +327,9 @@ fn sweep(landscape: &Landscape<'_>, from: &Climbed) -> Result<Option<Climbed>, C
         if !in_use[b] {
             continue;
         }
-        let moves = block_moves(&current.defender, b, &landscape.pairs[b]);
+        let defender = &current.defender;
+        let moves = block_moves(&defender.blocks[b], &landscape.pairs[b])
+            .map(|choices| with_block(defender, b, choices));
         if let Some(better) = landscape.first_improvement(moves, current.bound)? {
             current = better;
             changed = true;
@@ -265,37 +378,39 @@ fn split(fsc: &Fsc, b: usize, i: usize, spare: usize) -> Fsc {
     split
 }
 
-/// The controllers one move away from `fsc` in block `b`: each choice
-/// dropped (if the block has several), then each of `pairs` alone.
-fn block_moves<'a>(fsc: &'a Fsc, b: usize, pairs: &'a [Choice]) -> impl Iterator<Item = Fsc> + 'a {
-    let block = &fsc.blocks[b];
+/// The blocks one move away from `block`: each choice dropped (if the
+/// block has several), then each of `pairs` alone.
+fn block_moves<'a>(
+    block: &'a [Choice],
+    pairs: &'a [Choice],
+) -> impl Iterator<Item = Vec<Choice>> + 'a {
     let drops = (0..block.len())
         .filter(move |_| block.len() > 1)
         .map(move |dropped| {
             let kept = block.iter().enumerate().filter(|&(i, _)| i != dropped);
             let total: f64 = kept.clone().map(|(_, c)| c.probability).sum();
-            let renormalised = kept
-                .map(|(_, c)| Choice {
-                    probability: c.probability / total,
-                    logit: None,
-                    ..*c
-                })
-                .collect();
-            with_block(fsc, b, renormalised)
+            kept.map(|(_, c)| Choice {
+                probability: c.probability / total,
+                logit: None,
+                ..*c
+            })
+            .collect()
         });
-    drops.chain(single_moves(fsc, b, pairs))
+    drops.chain(single_moves(block, pairs))
 }
 
-/// `fsc` with block `b` playing one of `pairs` with probability 1, for
-/// each pair but the one the block already plays alone.
-fn single_moves<'a>(fsc: &'a Fsc, b: usize, pairs: &'a [Choice]) -> impl Iterator<Item = Fsc> + 'a {
-    let block = &fsc.blocks[b];
+/// `block` replaced by one of `pairs` with probability 1, for each pair but
+/// the one the block already plays alone.
+fn single_moves<'a>(
+    block: &'a [Choice],
+    pairs: &'a [Choice],
+) -> impl Iterator<Item = Vec<Choice>> + 'a {
     pairs
         .iter()
         .filter(move |pair| {
             !(block.len() == 1 && (block[0].next, block[0].action) == (pair.next, pair.action))
         })
-        .map(move |pair| with_block(fsc, b, vec![certain(pair)]))
+        .map(|pair| vec![certain(pair)])
 }
 
 /// `pair` played with probability 1.
@@ -346,7 +461,7 @@ pub fn climb_with_restarts(
         }
         let ends = std::mem::take(&mut froms)
             .par_iter()
-            .map(|from| climb(game, not_phi, &universe.blocks, from, effort))
+            .map(|from| climb(game, not_phi, &universe, from, effort))
             .collect::<Result<Vec<_>, _>>()?;
         for (end, work) in ends {
             spent = spent.saturating_add(work);
@@ -472,7 +587,7 @@ mod tests {
         let start = first_pairs(&game, 1);
         let before = lower_value_or_trivial(&game, &not_phi, &start).unwrap();
         let universe = Fsc::uniform_enabled(Role::Defender, 1, game.defender());
-        let found = climb(&game, &not_phi, &universe.blocks, &start, UNLIMITED)
+        let found = climb(&game, &not_phi, &universe, &start, UNLIMITED)
             .unwrap()
             .0;
         let reached = lower_value_or_trivial(&game, &not_phi, &found.defender).unwrap();
@@ -484,7 +599,8 @@ mod tests {
         assert!(reached > before + 0.1, "{before} -> {reached}");
         assert!(found.defender.blocks.iter().all(|block| block.len() == 1));
         for (b, pairs) in universe.blocks.iter().enumerate() {
-            for neighbour in block_moves(&found.defender, b, pairs) {
+            for choices in block_moves(&found.defender.blocks[b], pairs) {
+                let neighbour = with_block(&found.defender, b, choices);
                 let value = lower_value_or_trivial(&game, &not_phi, &neighbour).unwrap();
                 assert!(value <= reached + IMPROVEMENT, "block {b}: {value}");
             }
@@ -502,10 +618,12 @@ mod tests {
         let not_phi = not_phi("F goal");
         let start = first_pairs(&game, 2);
         let universe = Fsc::uniform_enabled(Role::Defender, 2, game.defender());
+        let support = Support::of(&universe);
         let landscape = Landscape {
             game: &game,
             not_phi: &not_phi,
             pairs: &universe.blocks,
+            universe: &support,
             effort: UNLIMITED,
             evaluated: Cell::new(0),
             spent: Cell::new(0),
@@ -516,7 +634,7 @@ mod tests {
         };
         assert_eq!(from.bound, 0.0);
         assert!(sweep(&landscape, &from).unwrap().is_none());
-        let found = climb(&game, &not_phi, &universe.blocks, &start, UNLIMITED)
+        let found = climb(&game, &not_phi, &universe, &start, UNLIMITED)
             .unwrap()
             .0;
         assert!((found.bound - 1.0).abs() < 1e-9, "{}", found.bound);
@@ -538,7 +656,7 @@ mod tests {
         let not_phi = not_phi("!unsafe U goal");
         let start = first_pairs(&game, 2);
         let universe = Fsc::uniform_enabled(Role::Defender, 2, game.defender());
-        let alone = climb(&game, &not_phi, &universe.blocks, &start, UNLIMITED)
+        let alone = climb(&game, &not_phi, &universe, &start, UNLIMITED)
             .unwrap()
             .0;
         let search = || {
