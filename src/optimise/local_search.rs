@@ -38,13 +38,15 @@ use crate::solver::SolverSettings;
 /// than this (bounds are accurate to the solver's tolerance, 1e-9).
 const IMPROVEMENT: f64 = 1e-8;
 
-/// A defender where a climb ended, with its certified lower bound.
+/// A defender where a climb ended, with its lower bound `L`.
 #[derive(Debug, Clone)]
 pub struct Climbed {
     /// The defender.
     pub defender: Fsc,
-    /// Its certified lower bound `L`, proved without the exact rational
-    /// solve (the trivial 0 where that is needed).
+    /// Its lower bound `L`: as the climbs rank it inside the search
+    /// ([`Landscape::bound`]); certified, without the exact rational solve
+    /// (the trivial 0 where that is needed), where [`climb_with_restarts`]
+    /// returns it.
     pub bound: f64,
 }
 
@@ -89,10 +91,10 @@ impl Landscape<'_> {
                 .is_some_and(|end| Instant::now() >= end)
     }
 
-    /// The certified lower bound of `defender`, proved without the exact
-    /// rational solve (the trivial 0 where double and extended precision
-    /// cannot prove it): the climb only ranks its candidates, and the end
-    /// point is certified in full afterwards.
+    /// The lower bound of `defender` as the climb ranks it: the value of
+    /// the adversary's best response found by policy iteration, without
+    /// the exact rational solve or the optimality certificate
+    /// ([`ranking_settings`]; 0 where the product mixes too slowly).
     fn bound(&self, defender: &Fsc) -> Result<f64, CertifyError> {
         self.evaluated.set(self.evaluated.get() + 1);
         let bound = lower_bound_within(self.game, self.not_phi, defender, &ranking_settings());
@@ -169,10 +171,21 @@ impl Landscape<'_> {
     }
 }
 
-/// The solver settings of the climb's evaluations: without the exact
-/// rational solve, since the climb only ranks its candidates and its end
-/// point is certified in full afterwards.
+/// The solver settings of the climbs' evaluations: without the exact
+/// rational solve and without the optimality certificate, since a climb
+/// only ranks its candidates; the search's end point is proved with
+/// [`proving_settings`], and certified in full afterwards as a candidate.
 fn ranking_settings() -> SolverSettings {
+    SolverSettings {
+        prove_optimum: false,
+        ..proving_settings()
+    }
+}
+
+/// The solver settings of the bound the search returns: proved, but
+/// without the exact rational solve (the trivial 0 where double and
+/// extended precision cannot prove it).
+fn proving_settings() -> SolverSettings {
     SolverSettings {
         exact_limit: 0,
         ..SolverSettings::default()
@@ -475,7 +488,21 @@ pub fn climb_with_restarts(
             break;
         }
     }
-    Ok(best.expect("the search climbs from the start"))
+    let best = best.expect("the search climbs from the start");
+    Ok(Climbed {
+        bound: proved_bound(game, not_phi, &best.defender)?,
+        defender: best.defender,
+    })
+}
+
+/// The certified lower bound of `defender` with [`proving_settings`], or
+/// the trivial 0 where it cannot be proved so.
+fn proved_bound(game: &Posg, not_phi: &Dra, defender: &Fsc) -> Result<f64, CertifyError> {
+    match lower_bound_within(game, not_phi, defender, &proving_settings()) {
+        Ok(bound) => Ok(bound.value),
+        Err(error) if error.is_slow_mixing() || error.is_unproved_optimum() => Ok(0.0),
+        Err(error) => Err(error),
+    }
 }
 
 /// `shape` (nodes, initial distribution) with each block `(g, o)` playing
@@ -649,7 +676,7 @@ mod tests {
     /// The restarts keep the best end point and are reproducible: on the
     /// 4x4 grid from the worst start they certify at least what the climb
     /// from that start reaches, the same defender for the same seed, and a
-    /// deterministic one.
+    /// deterministic one; the bound returned is certified.
     #[test]
     fn restarts_keep_the_best_end_point_and_are_reproducible() {
         let game = grid_4x4();
@@ -664,11 +691,21 @@ mod tests {
             climb_with_restarts(&game, &not_phi, &start, 3, &mut rng, UNLIMITED).unwrap()
         };
         let best = search();
+        // The returned bound is proved, the climb's only ranked: the proof
+        // may widen it by rounding.
         assert!(
-            best.bound >= alone.bound,
+            best.bound >= alone.bound - 1e-12,
             "{} below {}",
             best.bound,
             alone.bound
+        );
+        // It is the certified bound, not the climb's ranking above it.
+        let certified = crate::certify::lower_bound(&game, &not_phi, &best.defender).unwrap();
+        assert!(
+            best.bound <= certified.value,
+            "{} above {}",
+            best.bound,
+            certified.value
         );
         assert_eq!(best.defender, search().defender);
         assert!(best.defender.blocks.iter().all(|block| block.len() == 1));

@@ -219,6 +219,12 @@ pub struct SolverSettings {
     /// The most unknowns of a system solved exactly in rationals
     /// ([`exact`]) when double precision cannot prove its bound (0: never).
     pub exact_limit: usize,
+    /// Whether policy iteration proves its optimum (the optimality
+    /// certificate of `src/mdp/optimality.rs`, method.md section 6). Off
+    /// only where values merely rank candidates, whose winner is then
+    /// certified with it on (the local search): a result's proved upper
+    /// values are then the final policy's own.
+    pub prove_optimum: bool,
 }
 
 impl Default for SolverSettings {
@@ -230,6 +236,7 @@ impl Default for SolverSettings {
             lu_switch_limit: DEFAULT_LU_SWITCH_LIMIT,
             max_iterations: DEFAULT_MAX_ITERATIONS,
             exact_limit: exact::DEFAULT_EXACT_LIMIT,
+            prove_optimum: true,
         }
     }
 }
