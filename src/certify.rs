@@ -108,6 +108,14 @@ impl CertifyError {
         matches!(self, Self::Mdp(MdpError::OptimalityUnproved(_)))
     }
 
+    /// Whether the bound is unknown for numerical reasons, not wrong: the
+    /// product mixes too slowly ([`Self::is_slow_mixing`]) or the optimum
+    /// could not be proved ([`Self::is_unproved_optimum`]); the trivial
+    /// bound stays sound.
+    pub fn is_numerical(&self) -> bool {
+        self.is_slow_mixing() || self.is_unproved_optimum()
+    }
+
     /// Whether a policy evaluation could not be solved to the tolerance
     /// because the product mixes too slowly (method.md section 8): the
     /// bound is unknown, not wrong, and the trivial bound stays sound.
@@ -225,7 +233,9 @@ pub struct Bracket {
 /// The bracket for `defender` and the adversaries tried against it;
 /// `dra_phi` and `dra_not_phi` are deterministic automata for phi and !phi.
 /// An adversary whose product mixes too slowly to be solved to the
-/// tolerance contributes nothing (its trivial bound 1); the defender's lower
+/// tolerance, or whose best response's optimum cannot be proved
+/// ([`CertifyError::is_numerical`]), contributes nothing (its trivial bound
+/// 1); the defender's lower
 /// bound has no such fallback: it is the number reported, so its trouble is
 /// an error.
 pub fn bracket<'a>(
@@ -243,7 +253,7 @@ pub fn bracket<'a>(
                 check_consistent(&lower, &bound)?;
                 upper = upper.min(bound.value);
             }
-            Err(error) if error.is_slow_mixing() => {}
+            Err(error) if error.is_numerical() => {}
             Err(error) => return Err(error),
         }
     }
@@ -264,7 +274,7 @@ pub fn lower_value_or_trivial(
 ) -> Result<f64, CertifyError> {
     match lower_bound(game, dra_not_phi, defender) {
         Ok(bound) => Ok(bound.value),
-        Err(error) if error.is_slow_mixing() || error.is_unproved_optimum() => Ok(0.0),
+        Err(error) if error.is_numerical() => Ok(0.0),
         Err(error) => Err(error),
     }
 }
@@ -278,7 +288,7 @@ pub fn upper_value_or_trivial(
 ) -> Result<f64, CertifyError> {
     match upper_bound(game, dra_phi, adversary) {
         Ok(bound) => Ok(bound.value),
-        Err(error) if error.is_slow_mixing() || error.is_unproved_optimum() => Ok(1.0),
+        Err(error) if error.is_numerical() => Ok(1.0),
         Err(error) => Err(error),
     }
 }

@@ -154,7 +154,7 @@ impl<'a> LowerBoundGradients<'a> {
     pub fn value_or_trivial(&mut self, defender: &Fsc) -> Result<f64, CertifyError> {
         match self.analyse(defender, Seeds::Initial) {
             Ok((product, result, _)) => Ok(lower_value(&product, &result)),
-            Err(error) if error.is_slow_mixing() || error.is_unproved_optimum() => Ok(0.0),
+            Err(error) if error.is_numerical() => Ok(0.0),
             Err(error) => Err(error),
         }
     }

@@ -105,7 +105,7 @@ impl Landscape<'_> {
         self.spent.set(self.spent.get() + states);
         match bound {
             Ok(bound) => Ok(bound.value),
-            Err(error) if error.is_slow_mixing() => Ok(0.0),
+            Err(error) if error.is_numerical() => Ok(0.0),
             Err(error) => Err(error),
         }
     }
@@ -127,9 +127,7 @@ impl Landscape<'_> {
             .set(self.spent.get().saturating_add(gradients.work() as usize));
         let entries = match gradient {
             Ok(gradient) => gradient.entries,
-            Err(error) if error.is_slow_mixing() || error.is_unproved_optimum() => {
-                return Ok(Vec::new());
-            }
+            Err(error) if error.is_numerical() => return Ok(Vec::new()),
             Err(error) => return Err(error),
         };
         let in_use = blocks_in_use(self.game, current);
@@ -500,7 +498,7 @@ pub fn climb_with_restarts(
 fn proved_bound(game: &Posg, not_phi: &Dra, defender: &Fsc) -> Result<f64, CertifyError> {
     match lower_bound_within(game, not_phi, defender, &proving_settings()) {
         Ok(bound) => Ok(bound.value),
-        Err(error) if error.is_slow_mixing() || error.is_unproved_optimum() => Ok(0.0),
+        Err(error) if error.is_numerical() => Ok(0.0),
         Err(error) => Err(error),
     }
 }

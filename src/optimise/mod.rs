@@ -135,7 +135,7 @@ impl OptimiseError {
     pub fn is_numerical(&self) -> bool {
         match self {
             Self::Value(ValueError::Solver(_)) => true,
-            Self::Certify(error) => error.is_slow_mixing() || error.is_unproved_optimum(),
+            Self::Certify(error) => error.is_numerical(),
             _ => false,
         }
     }
@@ -924,7 +924,7 @@ fn finalise(
         chosen.certified_lower =
             match crate::certify::lower_bound(game, c.not_phi, &chosen.defender) {
                 Ok(bound) => Some(bound.value),
-                Err(error) if error.is_slow_mixing() => None,
+                Err(error) if error.is_numerical() => None,
                 Err(error) => return Err(error.into()),
             };
         chosen.upper_bound = Some(upper_value_or_trivial(game, c.phi, &chosen.adversary)?);

@@ -352,7 +352,7 @@ fn certify_best(
         adversaries,
     ) {
         Ok(bracket) => bracket,
-        Err(error) if error.is_slow_mixing() => return Ok((None, Some(error.to_string()))),
+        Err(error) if error.is_numerical() => return Ok((None, Some(error.to_string()))),
         Err(error) => return Err(error.into()),
     };
     let upper_bound = solution
