@@ -12,13 +12,14 @@
 //! enabled `(next node, action)` pair, keeping every change that raises the
 //! certified lower bound (first improvement). The moves with the largest
 //! first-order gains by the bound's gradient are tried first (guided
-//! steps), the sweeps over every move only where those fail. Where a sweep over all blocks
-//! changes nothing and a node is unused, it tries memory: one choice is sent
-//! to a copy of its next node (a change of no value by itself), and sweeps
-//! climb from there. It stops when neither raises the bound, or when its
-//! effort is spent. Restarts from seeded random memoryless defenders run
-//! in parallel rounds, more of them where climbs end early; the search is
-//! reproducible for a seed unless a deadline cuts it.
+//! steps), the sweeps over every move only where those fail. Where a sweep
+//! over all blocks changes nothing and a node is unused, it tries memory:
+//! one choice is sent to a copy of its next node (a change of no value by
+//! itself), and climbs go on from there. It stops when neither raises the
+//! bound, or when its effort is spent. Restarts from seeded random
+//! memoryless defenders run in parallel rounds, more of them where climbs
+//! end early; the search is reproducible for a seed unless a deadline cuts
+//! it.
 
 use std::cell::Cell;
 use std::time::Instant;
