@@ -235,9 +235,8 @@ pub struct Bracket {
 /// An adversary whose product mixes too slowly to be solved to the
 /// tolerance, or whose best response's optimum cannot be proved
 /// ([`CertifyError::is_numerical`]), contributes nothing (its trivial bound
-/// 1); the defender's lower
-/// bound has no such fallback: it is the number reported, so its trouble is
-/// an error.
+/// 1); the defender's lower bound has no such fallback: it is the number
+/// reported, so its trouble is an error.
 pub fn bracket<'a>(
     game: &Posg,
     dra_phi: &Dra,

@@ -103,19 +103,8 @@ impl<'a> LowerBoundGradients<'a> {
 
     /// The lower bound of `defender` and its gradient.
     pub fn at(&mut self, defender: &Fsc) -> Result<LowerBoundGradient, CertifyError> {
-        let (product, result, systems) = self.analyse(defender, Seeds::Initial)?;
-        let y = systems.expected_visits(&product.initial)?;
-        self.work += product.mdp.num_states() as f64;
         let support = Support::of(defender);
-        gradient(
-            self.game,
-            self.dra_not_phi,
-            &support,
-            &product,
-            &result,
-            &y,
-            0.0,
-        )
+        self.gradient_over(defender, Seeds::Initial, &support, 0.0)
     }
 
     /// The lower bound of `defender` and its gradient with respect to every
@@ -134,22 +123,28 @@ impl<'a> LowerBoundGradients<'a> {
         defender: &Fsc,
         universe: &Support,
     ) -> Result<LowerBoundGradient, CertifyError> {
-        let (product, result, systems) = self.analyse(defender, Seeds::EveryNode)?;
+        self.gradient_over(defender, Seeds::EveryNode, universe, f64::NAN)
+    }
+
+    /// The lower bound of `defender` on its product explored from `seeds`,
+    /// and its gradient with respect to the entries of `support` (a
+    /// successor outside the product counting as `unexplored`).
+    fn gradient_over(
+        &mut self,
+        defender: &Fsc,
+        seeds: Seeds,
+        support: &Support,
+        unexplored: f64,
+    ) -> Result<LowerBoundGradient, CertifyError> {
+        let (game, dra) = (self.game, self.dra_not_phi);
+        let (product, result, systems) = self.analyse(defender, seeds)?;
         let y = systems.expected_visits(&product.initial)?;
         self.work += product.mdp.num_states() as f64;
-        gradient(
-            self.game,
-            self.dra_not_phi,
-            universe,
-            &product,
-            &result,
-            &y,
-            f64::NAN,
-        )
+        gradient(game, dra, support, &product, &result, &y, unexplored)
     }
 
     /// The lower bound of `defender` alone, or the trivial bound 0 where
-    /// the product mixes too slowly to be solved to the tolerance (as
+    /// the product mixes too slowly or its optimum cannot be proved (as
     /// [`super::lower_value_or_trivial`]).
     pub fn value_or_trivial(&mut self, defender: &Fsc) -> Result<f64, CertifyError> {
         match self.analyse(defender, Seeds::Initial) {
