@@ -26,6 +26,7 @@ use argmin::solver::linesearch::MoreThuenteLineSearch;
 use argmin::solver::quasinewton::LBFGS;
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
 
 use super::objective::Objective;
 use super::reparam::Reparametrisation;
@@ -91,40 +92,79 @@ pub fn best_response(
     settings: &Settings,
     rng: &mut ChaCha8Rng,
 ) -> Result<BestResponse, OptimiseError> {
+    let points = start_points(&starts, settings, rng);
+    let found = points.into_iter().map(|(warm, start)| {
+        (warm || !starts.past_deadline())
+            .then(|| minimise_from(objective, defender, start, settings, starts.deadline))
+    });
+    lowest(found.collect())
+}
+
+/// [`best_response`] with the starts minimised in parallel (rayon), each on
+/// its own objective from `objective` (the same GMC): the same value for the
+/// same random stream, on as many cores as there are starts.
+pub fn best_response_in_parallel<F>(
+    objective: F,
+    defender: &[f64],
+    starts: Starts<'_>,
+    settings: &Settings,
+    rng: &mut ChaCha8Rng,
+) -> Result<BestResponse, OptimiseError>
+where
+    F: Fn() -> Result<Objective, OptimiseError> + Sync,
+{
+    let points = start_points(&starts, settings, rng);
+    let found = points
+        .into_par_iter()
+        .map(|(warm, start)| {
+            (warm || !starts.past_deadline()).then(|| {
+                minimise_from(&mut objective()?, defender, start, settings, starts.deadline)
+            })
+        })
+        .collect();
+    lowest(found)
+}
+
+/// The starts in the coordinates `z`, each marked whether it is warm: the
+/// warm ones first, then `starts.restarts` random ones drawn from `rng`.
+fn start_points(
+    starts: &Starts<'_>,
+    settings: &Settings,
+    rng: &mut ChaCha8Rng,
+) -> Vec<(bool, Vec<f64>)> {
     let map = Reparametrisation::new(settings.logit_bound);
+    let parameters = starts.at.first().map_or(0, |logits| logits.len());
+    let warm = starts.at.iter().map(|logits| (true, map.to_z(logits)));
+    let random: Vec<_> = (0..starts.restarts)
+        .map(|_| {
+            let z = (0..parameters)
+                .map(|_| rng.random_range(-START_RANGE..=START_RANGE))
+                .collect();
+            (false, z)
+        })
+        .collect();
+    warm.chain(random).collect()
+}
+
+/// The lowest of the starts' results, in order (`None`: a random start
+/// not run, past the deadline); a start whose system could not be solved
+/// to the tolerance is dropped, and its error returned only when every
+/// start is.
+fn lowest(
+    found: Vec<Option<Result<BestResponse, OptimiseError>>>,
+) -> Result<BestResponse, OptimiseError> {
     let mut best: Option<BestResponse> = None;
     let mut dropped = None;
-    let mut keep = |found: Result<BestResponse, OptimiseError>| match found {
-        Ok(found) => {
-            if best.as_ref().is_none_or(|b| found.value < b.value) {
-                best = Some(found);
+    for result in found.into_iter().flatten() {
+        match result {
+            Ok(found) => {
+                if best.as_ref().is_none_or(|b| found.value < b.value) {
+                    best = Some(found);
+                }
             }
-            Ok(())
+            Err(error @ OptimiseError::Value(ValueError::Solver(_))) => dropped = Some(error),
+            Err(error) => return Err(error),
         }
-        Err(error @ OptimiseError::Value(ValueError::Solver(_))) => {
-            dropped = Some(error);
-            Ok(())
-        }
-        Err(error) => Err(error),
-    };
-    let parameters = starts.at.first().map_or(0, |logits| logits.len());
-    let warm = starts.at.iter().map(|logits| map.to_z(logits));
-    // Every warm start runs; a random one is drawn only before the deadline.
-    let random = (0..starts.restarts)
-        .take_while(|_| !starts.past_deadline())
-        .map(|_| {
-            (0..parameters)
-                .map(|_| rng.random_range(-START_RANGE..=START_RANGE))
-                .collect()
-        });
-    for start in warm.chain(random) {
-        keep(minimise_from(
-            objective,
-            defender,
-            start,
-            settings,
-            starts.deadline,
-        ))?;
     }
     match (best, dropped) {
         (Some(best), _) => Ok(best),

@@ -57,7 +57,7 @@ mod softmax;
 mod structures;
 mod warm_start;
 
-pub(crate) use best_response::{Starts, best_response};
+pub(crate) use best_response::{Starts, best_response_in_parallel};
 pub use cancel::Cancel;
 pub use objective::{GmcSize, Objective, Point};
 pub use observer::{IterationRecord, Observer, ObserverError, SearchRecord};
@@ -75,7 +75,7 @@ use std::sync::{Mutex, PoisonError};
 use std::time::Instant;
 
 use race::{Racer, race};
-use rand::SeedableRng;
+use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use serde::Serialize;
@@ -495,7 +495,8 @@ pub fn optimise_structure(
         .collect();
     let floor = presolved.as_ref().map(|climbed| climbed.bound);
     let mut finished = race(racers, settings, floor);
-    settle(&mut finished, run_certifier.is_none(), (clock, floor))?;
+    let fresh = || structure_objective(game, dra, structure, settings);
+    settle(&mut finished, run_certifier.is_none(), (clock, floor), &fresh)?;
     let runs = finished
         .into_iter()
         .map(|result| {
@@ -607,11 +608,13 @@ pub fn optimise_structure(
 /// max-min starts: of the best-scoring start only, or of every start with
 /// `all` (without a certifier the score is the worst case itself, which
 /// settling can lower). `started` is when the structure's run began,
-/// `floor` the bound proved before the race.
+/// `floor` the bound proved before the race; `fresh` builds the
+/// structure's objective for each of a best response's parallel starts.
 fn settle(
     finished: &mut [Result<(Optimiser<'_>, RunOutcome), OptimiseError>],
     all: bool,
     (started, floor): (Instant, Option<f64>),
+    fresh: &FreshObjective<'_>,
 ) -> Result<(), OptimiseError> {
     let best = finished
         .iter()
@@ -624,7 +627,7 @@ fn settle(
         .enumerate()
         .filter(|(i, _)| all || Some(*i) == best)
         .try_for_each(|(_, result)| match result {
-            Ok((optimiser, outcome)) => optimiser.settle(outcome, started, floor),
+            Ok((optimiser, outcome)) => optimiser.settle(outcome, (started, floor), fresh),
             Err(_) => Ok(()),
         })
 }
@@ -715,6 +718,23 @@ struct Start {
     stream: u64,
 }
 
+/// Builds a structure's objective afresh (a GMC and its solver of its
+/// own), for work that runs beside the objective a start holds.
+pub(crate) type FreshObjective<'a> = dyn Fn() -> Result<Objective, OptimiseError> + Sync + 'a;
+
+/// The objective on `structure`: the value of its defender and adversary
+/// softmax maps with `settings`' solver.
+fn structure_objective(
+    game: &Posg,
+    dra: &Dra,
+    structure: &Structure,
+    settings: &Settings,
+) -> Result<Objective, OptimiseError> {
+    let defender = Softmax::new(&structure.defender, settings.optimise_initial);
+    let adversary = Softmax::new(&structure.adversary, settings.optimise_initial);
+    Ok(Objective::new(game, dra, defender, adversary, &settings.solver_settings())?)
+}
+
 /// A start's objective on `structure` and its seeded random stream.
 fn start_objective(
     game: &Posg,
@@ -722,11 +742,8 @@ fn start_objective(
     structure: &Structure,
     start: &Start,
 ) -> Result<(Objective, ChaCha8Rng), OptimiseError> {
-    let settings = &start.settings;
-    let defender = Softmax::new(&structure.defender, settings.optimise_initial);
-    let adversary = Softmax::new(&structure.adversary, settings.optimise_initial);
-    let objective = Objective::new(game, dra, defender, adversary, &settings.solver_settings())?;
-    let mut rng = ChaCha8Rng::seed_from_u64(settings.seed);
+    let objective = structure_objective(game, dra, structure, &start.settings)?;
+    let mut rng = ChaCha8Rng::seed_from_u64(start.settings.seed);
     rng.set_stream(start.stream);
     Ok((objective, rng))
 }
@@ -870,10 +887,8 @@ fn finalise(
         candidates.extend(searched.clone().map(|d| ("local-search".to_string(), d)));
         let mut search = certifier.filter(|_| settings.local_search);
         while !candidates.is_empty() {
-            for (name, candidate) in std::mem::take(&mut candidates) {
-                if let Some(scored) = judge.score(&candidate, &mut run.rng)? {
-                    chosen.consider(name, candidate, scored, &judge);
-                }
+            for (name, candidate, scored) in judge.score_all(std::mem::take(&mut candidates), &mut run.rng)? {
+                chosen.consider(name, candidate, scored, &judge);
             }
             // A bracket already closed leaves the search nothing to find,
             // and a climb's end point is where it would end again.
@@ -973,6 +988,26 @@ impl Judge<'_> {
         }
     }
 
+    /// The scores of `candidates` ([`Self::score`]) in parallel (rayon),
+    /// each with its own random stream seeded from `rng` in order, and in
+    /// their order; those too stiff to evaluate are left out.
+    fn score_all(
+        &self,
+        candidates: Vec<(String, Fsc)>,
+        rng: &mut ChaCha8Rng,
+    ) -> Result<Vec<(String, Fsc, Scored)>, OptimiseError> {
+        let streams: Vec<u64> = candidates.iter().map(|_| rng.random()).collect();
+        let scored = candidates
+            .into_par_iter()
+            .zip(streams)
+            .map(|((name, candidate), stream)| {
+                let scored = self.score(&candidate, &mut ChaCha8Rng::seed_from_u64(stream))?;
+                Ok(scored.map(|scored| (name, candidate, scored)))
+            })
+            .collect::<Result<Vec<_>, OptimiseError>>()?;
+        Ok(scored.into_iter().flatten().collect())
+    }
+
     /// The exact value against the adversary with the run's logits.
     fn value(&self, defender: &Fsc) -> Result<f64, OptimiseError> {
         let mut objective = self.objective(defender)?;
@@ -991,21 +1026,17 @@ impl Judge<'_> {
         restarts: usize,
         rng: &mut ChaCha8Rng,
     ) -> Result<(f64, Fsc), OptimiseError> {
-        let mut objective = self.objective(defender)?;
-        let logits = objective
-            .defender()
+        let logits = Softmax::new(defender, self.settings.optimise_initial)
             .logits_of_template(self.settings.logit_bound);
-        let found = best_response(
-            &mut objective,
+        let found = best_response_in_parallel(
+            || self.objective(defender),
             &logits,
             Starts::new(&[self.adversary_logits], restarts).until(self.deadline),
             self.settings,
             rng,
         )?;
-        Ok((
-            found.value,
-            objective.adversary().controller(&found.adversary)?,
-        ))
+        let adversary = Softmax::new(self.adversary, self.settings.optimise_initial);
+        Ok((found.value, adversary.controller(&found.adversary)?))
     }
 
     fn objective(&self, defender: &Fsc) -> Result<Objective, OptimiseError> {

@@ -35,7 +35,10 @@
 
 use std::time::Instant;
 
-use super::super::best_response::{BestResponse, Starts, best_response};
+use super::super::best_response::{
+    BestResponse, Starts, best_response, best_response_in_parallel,
+};
+use super::super::FreshObjective;
 use super::super::guarantee::{Guarantee, ascend};
 use super::super::play::{Iterate, PlayState};
 use super::super::rounding::truncated;
@@ -211,8 +214,8 @@ impl Optimiser<'_> {
     pub fn settle(
         &mut self,
         outcome: &mut RunOutcome,
-        started: Instant,
-        floor: Option<f64>,
+        (started, floor): (Instant, Option<f64>),
+        fresh: &FreshObjective<'_>,
     ) -> Result<(), OptimiseError> {
         if self.method == Method::Ascent {
             return Ok(());
@@ -232,7 +235,16 @@ impl Optimiser<'_> {
         let deadline = self.settings.final_deadline(started, Instant::now());
         let starts = Starts::new(&at, restarts).until(deadline);
         let defender = best.defender.clone();
-        let found = match self.respond(&defender, starts, &mut outcome.phases) {
+        let clock = Instant::now();
+        let found = best_response_in_parallel(
+            fresh,
+            &defender,
+            starts,
+            &self.settings,
+            &mut self.rng,
+        );
+        outcome.phases.best_responses += clock.elapsed().as_secs_f64();
+        let found = match found {
             Ok(found) => found,
             // Every start ran into a GMC too stiff to solve (a nearly
             // deterministic defender from the guarantee ascent can cause
