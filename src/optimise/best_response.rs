@@ -118,7 +118,13 @@ where
         .into_par_iter()
         .map(|(warm, start)| {
             (warm || !starts.past_deadline()).then(|| {
-                minimise_from(&mut objective()?, defender, start, settings, starts.deadline)
+                minimise_from(
+                    &mut objective()?,
+                    defender,
+                    start,
+                    settings,
+                    starts.deadline,
+                )
             })
         })
         .collect();
@@ -126,7 +132,9 @@ where
 }
 
 /// The starts in the coordinates `z`, each marked whether it is warm: the
-/// warm ones first, then `starts.restarts` random ones drawn from `rng`.
+/// warm ones first, then `starts.restarts` random ones drawn from `rng`
+/// (none after the deadline; a random start drawn is still skipped when
+/// the deadline has passed by the time it would run).
 fn start_points(
     starts: &Starts<'_>,
     settings: &Settings,
@@ -135,7 +143,9 @@ fn start_points(
     let map = Reparametrisation::new(settings.logit_bound);
     let parameters = starts.at.first().map_or(0, |logits| logits.len());
     let warm = starts.at.iter().map(|logits| (true, map.to_z(logits)));
+    // A random start is drawn only before the deadline.
     let random: Vec<_> = (0..starts.restarts)
+        .take_while(|_| !starts.past_deadline())
         .map(|_| {
             let z = (0..parameters)
                 .map(|_| rng.random_range(-START_RANGE..=START_RANGE))
@@ -269,8 +279,13 @@ mod tests {
     /// The paper's 3x2 grid with 1-node controllers on full supports, and
     /// the uniform logits of both.
     fn paper_grid() -> (Objective, Vec<f64>, Vec<f64>) {
+        paper_grid_for("GF goal & G !unsafe")
+    }
+
+    /// [`paper_grid`] for the objective `formula`.
+    fn paper_grid_for(formula: &str) -> (Objective, Vec<f64>, Vec<f64>) {
         let game = GridSpec::default().build().unwrap();
-        let dra = Automata::from_ltl("GF goal & G !unsafe").unwrap().phi;
+        let dra = Automata::from_ltl(formula).unwrap().phi;
         let settings = Settings::default();
         let softmax = |role, player| Softmax::new(&Fsc::uniform_enabled(role, 1, player), false);
         let objective = Objective::new(
@@ -288,6 +303,32 @@ mod tests {
             .adversary()
             .logits_of_template(settings.logit_bound);
         (objective, defender, adversary)
+    }
+
+    /// The parallel search minimises from the same starts as the
+    /// sequential one (the same stream drawn in the same order) and keeps
+    /// the same lowest start: the same value and adversary, below the warm
+    /// start's value.
+    #[test]
+    fn the_parallel_search_finds_what_the_sequential_one_finds() {
+        let formula = "!unsafe U goal";
+        let (mut objective, defender, adversary) = paper_grid_for(formula);
+        let settings = Settings::default();
+        let warm = [adversary.as_slice()];
+        let starts = Starts::new(&warm, 3);
+        let mut rng = ChaCha8Rng::seed_from_u64(7);
+        let sequential = best_response(&mut objective, &defender, starts, &settings, &mut rng);
+        let mut rng = ChaCha8Rng::seed_from_u64(7);
+        let fresh = || Ok(paper_grid_for(formula).0);
+        let parallel = best_response_in_parallel(fresh, &defender, starts, &settings, &mut rng);
+        let (sequential, parallel) = (sequential.unwrap(), parallel.unwrap());
+        assert_eq!(sequential, parallel);
+        let at_start = objective.value(&defender, &adversary).unwrap();
+        assert!(
+            parallel.value < at_start,
+            "{} not below {at_start}",
+            parallel.value
+        );
     }
 
     /// Past the deadline no random restart begins (the random stream is

@@ -496,7 +496,9 @@ pub fn optimise_structure(
     let floor = presolved.as_ref().map(|climbed| climbed.bound);
     let mut finished = race(racers, settings, floor);
     let fresh = || structure_objective(game, dra, structure, settings);
-    settle(&mut finished, run_certifier.is_none(), (clock, floor), &fresh)?;
+    if run_certifier.is_none() {
+        settle(&mut finished, clock, &fresh)?;
+    }
     let runs = finished
         .into_iter()
         .map(|result| {
@@ -604,32 +606,21 @@ pub fn optimise_structure(
     })
 }
 
-/// The full best responses ([`Optimiser::settle`]) of the finished
-/// max-min starts: of the best-scoring start only, or of every start with
-/// `all` (without a certifier the score is the worst case itself, which
-/// settling can lower). `started` is when the structure's run began,
-/// `floor` the bound proved before the race; `fresh` builds the
+/// The full best responses ([`Optimiser::settle`]) of every finished
+/// max-min start without a certifier: the score is then the worst case
+/// itself, which settling can lower, and ranks the starts. (With a
+/// certifier only the returned defender gets one, in [`finalise`].)
+/// `started` is when the structure's run began; `fresh` builds the
 /// structure's objective for each of a best response's parallel starts.
 fn settle(
     finished: &mut [Result<(Optimiser<'_>, RunOutcome), OptimiseError>],
-    all: bool,
-    (started, floor): (Instant, Option<f64>),
+    started: Instant,
     fresh: &FreshObjective<'_>,
 ) -> Result<(), OptimiseError> {
-    let best = finished
-        .iter()
-        .enumerate()
-        .filter_map(|(i, result)| Some((i, &result.as_ref().ok()?.1)))
-        .reduce(|b, c| if ranks_above(c.1, b.1) { c } else { b })
-        .map(|(i, _)| i);
-    finished
-        .par_iter_mut()
-        .enumerate()
-        .filter(|(i, _)| all || Some(*i) == best)
-        .try_for_each(|(_, result)| match result {
-            Ok((optimiser, outcome)) => optimiser.settle(outcome, (started, floor), fresh),
-            Err(_) => Ok(()),
-        })
+    finished.par_iter_mut().try_for_each(|result| match result {
+        Ok((optimiser, outcome)) => optimiser.settle(outcome, started, fresh),
+        Err(_) => Ok(()),
+    })
 }
 
 /// The local search on the supports (`local_search.rs`) before the
@@ -732,7 +723,13 @@ fn structure_objective(
 ) -> Result<Objective, OptimiseError> {
     let defender = Softmax::new(&structure.defender, settings.optimise_initial);
     let adversary = Softmax::new(&structure.adversary, settings.optimise_initial);
-    Ok(Objective::new(game, dra, defender, adversary, &settings.solver_settings())?)
+    Ok(Objective::new(
+        game,
+        dra,
+        defender,
+        adversary,
+        &settings.solver_settings(),
+    )?)
 }
 
 /// A start's objective on `structure` and its seeded random stream.
@@ -846,7 +843,8 @@ fn finalise(
 ) -> Result<Chosen, OptimiseError> {
     let best = &run.outcome.best;
     let objective = &run.objective;
-    let adversary_logits = best.adversary.clone();
+    let mut warm = vec![best.adversary.clone()];
+    warm.extend(run.outcome.last_response.clone());
     let mut chosen = Chosen {
         name: "unrounded".into(),
         defender: objective.defender().controller(&best.defender)?,
@@ -859,21 +857,24 @@ fn finalise(
             score: best.score(),
         }],
         score: best.score(),
-        worst_case_known: true,
+        // The single-player value is exact, and without a certifier every
+        // start was settled; a max-min run with a certifier settles the
+        // returned defender below.
+        worst_case_known: method == Method::Ascent || certifier.is_none(),
+    };
+    let judge = Judge {
+        game,
+        dra,
+        adversary: objective.adversary().template(),
+        warm: &warm,
+        settings,
+        deadline: settings.final_deadline(started, Instant::now()),
+        method,
+        certifier,
     };
     let clock = Instant::now();
     let mut climb_seconds = 0.0;
     if settings.round {
-        let judge = Judge {
-            game,
-            dra,
-            adversary: objective.adversary().template(),
-            adversary_logits: &adversary_logits,
-            settings,
-            deadline: settings.final_deadline(started, Instant::now()),
-            method,
-            certifier,
-        };
         // The rounded candidates and the end point of the search before
         // the race, then the local search from the best of them (with a
         // certifier; with restarts unless they ran before the race), scored
@@ -887,7 +888,9 @@ fn finalise(
         candidates.extend(searched.clone().map(|d| ("local-search".to_string(), d)));
         let mut search = certifier.filter(|_| settings.local_search);
         while !candidates.is_empty() {
-            for (name, candidate, scored) in judge.score_all(std::mem::take(&mut candidates), &mut run.rng)? {
+            for (name, candidate, scored) in
+                judge.score_all(std::mem::take(&mut candidates), &mut run.rng)?
+            {
                 chosen.consider(name, candidate, scored, &judge);
             }
             // A bracket already closed leaves the search nothing to find,
@@ -917,23 +920,20 @@ fn finalise(
                 }
             }
         }
-        if !chosen.worst_case_known {
-            let restarts = settings.final_restarts(chosen.bracket_closed(settings));
-            match judge.best_response(&chosen.defender, restarts, &mut run.rng) {
-                Ok((worst_case, adversary)) => {
-                    chosen.worst_case = worst_case;
-                    chosen.adversary = adversary;
-                }
-                // The rounded defender's GMC is too stiff for a best
-                // response: its certified lower bound is the estimate (the
-                // worst case is at least that).
-                Err(error) if error.is_numerical() => chosen.worst_case = chosen.score,
-                Err(error) => return Err(error),
-            }
-        }
     }
     phases.rounding += clock.elapsed().as_secs_f64() - climb_seconds;
     phases.local_search += climb_seconds;
+    if !chosen.worst_case_known {
+        let clock = Instant::now();
+        let responded = settle_chosen(&mut chosen, &judge, &mut run.rng)?;
+        phases.best_responses += clock.elapsed().as_secs_f64();
+        if let (true, Some(c)) = (responded, certifier) {
+            let clock = Instant::now();
+            let upper = upper_value_or_trivial(game, c.phi, &chosen.adversary)?;
+            chosen.upper_bound = Some(chosen.upper_bound.map_or(upper, |u| u.min(upper)));
+            phases.certification += clock.elapsed().as_secs_f64();
+        }
+    }
     if let (Method::Ascent, Some(c)) = (method, certifier) {
         let clock = Instant::now();
         chosen.certified_lower =
@@ -948,13 +948,46 @@ fn finalise(
     Ok(chosen)
 }
 
+/// The returned defender's full best response (its worst-case estimate,
+/// method.md section 4): from the run's adversaries and, unless the
+/// certified gap is closed, `restarts` random starts, in parallel; `false`
+/// where every start runs into a GMC too stiff to solve. Then the unrounded
+/// defender keeps the estimate the run gave it, and a rounded one gets its
+/// certified lower bound (the worst case is at least that).
+fn settle_chosen(
+    chosen: &mut Chosen,
+    judge: &Judge<'_>,
+    rng: &mut ChaCha8Rng,
+) -> Result<bool, OptimiseError> {
+    let restarts = judge
+        .settings
+        .final_restarts(chosen.bracket_closed(judge.settings));
+    match judge.best_response(&chosen.defender, restarts, rng) {
+        Ok((worst_case, adversary)) => {
+            chosen.worst_case = worst_case;
+            chosen.adversary = adversary;
+            Ok(true)
+        }
+        Err(error) if error.is_numerical() => {
+            if chosen.name != "unrounded" {
+                chosen.worst_case = chosen.score;
+            }
+            Ok(false)
+        }
+        Err(error) => Err(error),
+    }
+}
+
 /// Evaluates candidate defenders (with their own supports) against the
 /// structure's adversary support.
 struct Judge<'a> {
     game: &'a Posg,
     dra: &'a Dra,
     adversary: &'a Fsc,
-    adversary_logits: &'a [f64],
+    /// The run's adversaries (the best defender's, the last best response
+    /// found): the first is what candidates are valued against, all of
+    /// them warm-start best responses.
+    warm: &'a [Vec<f64>],
     settings: &'a Settings,
     /// When its best responses end (with a time budget).
     deadline: Option<Instant>,
@@ -1014,12 +1047,12 @@ impl Judge<'_> {
         let logits = objective
             .defender()
             .logits_of_template(self.settings.logit_bound);
-        Ok(objective.value(&logits, self.adversary_logits)?)
+        Ok(objective.value(&logits, &self.warm[0])?)
     }
 
-    /// The best-response value ([`best_response`], started from the run's
-    /// adversary and `restarts` random adversaries) and the adversary
-    /// reaching it.
+    /// The best-response value ([`best_response_in_parallel`], started
+    /// from the run's adversaries and `restarts` random ones) and the
+    /// adversary reaching it.
     fn best_response(
         &self,
         defender: &Fsc,
@@ -1028,10 +1061,11 @@ impl Judge<'_> {
     ) -> Result<(f64, Fsc), OptimiseError> {
         let logits = Softmax::new(defender, self.settings.optimise_initial)
             .logits_of_template(self.settings.logit_bound);
+        let at: Vec<&[f64]> = self.warm.iter().map(Vec::as_slice).collect();
         let found = best_response_in_parallel(
             || self.objective(defender),
             &logits,
-            Starts::new(&[self.adversary_logits], restarts).until(self.deadline),
+            Starts::new(&at, restarts).until(self.deadline),
             self.settings,
             rng,
         )?;

@@ -35,10 +35,8 @@
 
 use std::time::Instant;
 
-use super::super::best_response::{
-    BestResponse, Starts, best_response, best_response_in_parallel,
-};
 use super::super::FreshObjective;
+use super::super::best_response::{BestResponse, Starts, best_response, best_response_in_parallel};
 use super::super::guarantee::{Guarantee, ascend};
 use super::super::play::{Iterate, PlayState};
 use super::super::rounding::truncated;
@@ -200,49 +198,37 @@ impl Optimiser<'_> {
         Ok(Some(polished.bound))
     }
 
-    /// The incumbent's full best response, once the run has stopped
-    /// (`outcome`): from the adversary it was judged against, the last best
-    /// response found and `restarts` random starts (none once the certified
-    /// gap is closed, by the incumbent or by `floor`, a bound proved
-    /// outside the run: any response then lies within `gap_tolerance` of
-    /// the truth); its worst case and adversary become that response's,
-    /// which also tightens the game upper bound. With a time budget it ends
-    /// at [`Settings::final_deadline`] of the run that began at `started`.
+    /// The incumbent's full best response, once a run without a certifier
+    /// has stopped (`outcome`; its score is the worst case itself, which
+    /// this can lower): from the adversary it was judged against, the last
+    /// best response found and `restarts` random starts, in parallel, each
+    /// on an objective from `fresh`; its worst case and adversary become
+    /// that response's where it is lower. With a time budget it ends at
+    /// [`Settings::final_deadline`] of the run that began at `started`.
     /// Where every start runs into a system it cannot solve to the
     /// tolerance, the incumbent keeps its numbers; the single-player
-    /// ascent's incumbent has its exact worst case already.
+    /// ascent's incumbent has its exact worst case already. (With a
+    /// certifier, only the defender a structure returns gets its full best
+    /// response, after the rounding.)
     pub fn settle(
         &mut self,
         outcome: &mut RunOutcome,
-        (started, floor): (Instant, Option<f64>),
+        started: Instant,
         fresh: &FreshObjective<'_>,
     ) -> Result<(), OptimiseError> {
         if self.method == Method::Ascent {
             return Ok(());
         }
         let best = &outcome.best;
-        let lower = best
-            .certified_lower
-            .into_iter()
-            .chain(floor)
-            .reduce(f64::max);
-        let gap_closed = lower
-            .zip(outcome.upper_bound)
-            .is_some_and(|(lower, upper)| self.settings.gap_closed(lower, upper));
-        let restarts = self.settings.final_restarts(gap_closed);
+        let restarts = self.settings.final_restarts(false);
         let mut at: Vec<&[f64]> = vec![&best.adversary];
         at.extend(outcome.last_response.as_deref());
         let deadline = self.settings.final_deadline(started, Instant::now());
         let starts = Starts::new(&at, restarts).until(deadline);
         let defender = best.defender.clone();
         let clock = Instant::now();
-        let found = best_response_in_parallel(
-            fresh,
-            &defender,
-            starts,
-            &self.settings,
-            &mut self.rng,
-        );
+        let found =
+            best_response_in_parallel(fresh, &defender, starts, &self.settings, &mut self.rng);
         outcome.phases.best_responses += clock.elapsed().as_secs_f64();
         let found = match found {
             Ok(found) => found,
@@ -252,11 +238,6 @@ impl Optimiser<'_> {
             Err(error) if error.is_numerical() => return Ok(()),
             Err(error) => return Err(error),
         };
-        self.tighten_against(
-            &found.adversary,
-            &mut outcome.upper_bound,
-            &mut outcome.phases,
-        )?;
         let best = &mut outcome.best;
         if found.value <= best.worst_case {
             best.worst_case = found.value;
