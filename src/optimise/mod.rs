@@ -867,6 +867,7 @@ fn finalise(
         dra,
         adversary: objective.adversary().template(),
         warm: &warm,
+        gmc_states: objective.gmc_size().states,
         settings,
         deadline: settings.final_deadline(started, Instant::now()),
         method,
@@ -988,6 +989,9 @@ struct Judge<'a> {
     /// found): the first is what candidates are valued against, all of
     /// them warm-start best responses.
     warm: &'a [Vec<f64>],
+    /// The states of the structure's GMC (a candidate's own is at most
+    /// that), by which a final best response's iterations are capped.
+    gmc_states: usize,
     settings: &'a Settings,
     /// When its best responses end (with a time budget).
     deadline: Option<Instant>,
@@ -1062,11 +1066,18 @@ impl Judge<'_> {
         let logits = Softmax::new(defender, self.settings.optimise_initial)
             .logits_of_template(self.settings.logit_bound);
         let at: Vec<&[f64]> = self.warm.iter().map(Vec::as_slice).collect();
+        let starts = Starts::new(&at, restarts).until(self.deadline);
+        let settings = Settings {
+            best_response_iterations: self
+                .settings
+                .final_best_response_iterations(self.gmc_states, at.len() + restarts),
+            ..self.settings.clone()
+        };
         let found = best_response_in_parallel(
             || self.objective(defender),
             &logits,
-            Starts::new(&at, restarts).until(self.deadline),
-            self.settings,
+            starts,
+            &settings,
             rng,
         )?;
         let adversary = Softmax::new(self.adversary, self.settings.optimise_initial);

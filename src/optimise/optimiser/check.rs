@@ -226,9 +226,15 @@ impl Optimiser<'_> {
         let deadline = self.settings.final_deadline(started, Instant::now());
         let starts = Starts::new(&at, restarts).until(deadline);
         let defender = best.defender.clone();
+        let states = self.objective.gmc_size().states;
+        let settings = Settings {
+            best_response_iterations: self
+                .settings
+                .final_best_response_iterations(states, at.len() + restarts),
+            ..self.settings.clone()
+        };
         let clock = Instant::now();
-        let found =
-            best_response_in_parallel(fresh, &defender, starts, &self.settings, &mut self.rng);
+        let found = best_response_in_parallel(fresh, &defender, starts, &settings, &mut self.rng);
         outcome.phases.best_responses += clock.elapsed().as_secs_f64();
         let found = match found {
             Ok(found) => found,
