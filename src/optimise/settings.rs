@@ -116,11 +116,14 @@ pub struct Settings {
     /// is deep.
     #[arg(long, default_value_t = Settings::default().best_response_every)]
     pub best_response_every: usize,
-    /// Random restarts of the final best-response minimisation of the kept
-    /// defender (besides its warm starts), and of the rounded candidates'.
+    /// Random restarts of the final best-response minimisation of the
+    /// returned defender (besides its warm starts; of every start's best
+    /// defender without an automaton for `!phi`).
     #[arg(long, default_value_t = Settings::default().restarts)]
     pub restarts: usize,
-    /// L-BFGS iterations per best-response start.
+    /// L-BFGS iterations per best-response start (fewer in a final best
+    /// response on a GMC so large that its starts would spend more than
+    /// `max_work`: [`Settings::final_best_response_iterations`]).
     #[arg(long, default_value_t = Settings::default().best_response_iterations)]
     pub best_response_iterations: u64,
     /// L-BFGS memory `m`.
