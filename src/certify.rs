@@ -263,15 +263,27 @@ pub fn bracket<'a>(
 }
 
 /// [`lower_bound`]'s value, or the trivial bound 0 when the product mixes
-/// so slowly that its systems cannot be solved to the tolerance
-/// ([`CertifyError::is_slow_mixing`]). Sound either way; for choosing among
+/// so slowly that its systems cannot be solved to the tolerance or its
+/// optimum cannot be proved ([`CertifyError::is_numerical`]). Sound either
+/// way; for choosing among
 /// candidates, where one candidate's trouble must not stop the search.
 pub fn lower_value_or_trivial(
     game: &Posg,
     dra_not_phi: &Dra,
     defender: &Fsc,
 ) -> Result<f64, CertifyError> {
-    match lower_bound(game, dra_not_phi, defender) {
+    lower_value_or_trivial_within(game, dra_not_phi, defender, &SolverSettings::default())
+}
+
+/// [`lower_value_or_trivial`] with the policy evaluations solved by
+/// `settings` ([`lower_bound_within`]).
+pub fn lower_value_or_trivial_within(
+    game: &Posg,
+    dra_not_phi: &Dra,
+    defender: &Fsc,
+    settings: &SolverSettings,
+) -> Result<f64, CertifyError> {
+    match lower_bound_within(game, dra_not_phi, defender, settings) {
         Ok(bound) => Ok(bound.value),
         Err(error) if error.is_numerical() => Ok(0.0),
         Err(error) => Err(error),

@@ -97,13 +97,37 @@ pub fn best_response(
         (warm || !starts.past_deadline())
             .then(|| minimise_from(objective, defender, start, settings, starts.deadline))
     });
-    lowest(found.collect())
+    lowest(found)
+}
+
+/// A final best response (method.md section 4: the returned defender's, or
+/// every start's without a certifier): [`best_response_in_parallel`] on
+/// objectives from `objective`, a GMC of `gmc_states` states, with each
+/// start's L-BFGS iterations capped by
+/// [`Settings::final_best_response_iterations`].
+pub fn final_best_response<F>(
+    objective: F,
+    gmc_states: usize,
+    defender: &[f64],
+    starts: Starts<'_>,
+    settings: &Settings,
+    rng: &mut ChaCha8Rng,
+) -> Result<BestResponse, OptimiseError>
+where
+    F: Fn() -> Result<Objective, OptimiseError> + Sync,
+{
+    let count = starts.at.len() + starts.restarts;
+    let capped = Settings {
+        best_response_iterations: settings.final_best_response_iterations(gmc_states, count),
+        ..settings.clone()
+    };
+    best_response_in_parallel(objective, defender, starts, &capped, rng)
 }
 
 /// [`best_response`] with the starts minimised in parallel (rayon), each on
 /// its own objective from `objective` (the same GMC): the same value for the
 /// same random stream, on as many cores as there are starts.
-pub fn best_response_in_parallel<F>(
+fn best_response_in_parallel<F>(
     objective: F,
     defender: &[f64],
     starts: Starts<'_>,
@@ -127,7 +151,7 @@ where
                 )
             })
         })
-        .collect();
+        .collect::<Vec<_>>();
     lowest(found)
 }
 
@@ -159,9 +183,9 @@ fn start_points(
 /// The lowest of the starts' results, in order (`None`: a random start
 /// not run, past the deadline); a start whose system could not be solved
 /// to the tolerance is dropped, and its error returned only when every
-/// start is.
+/// start is; any other error ends the search there.
 fn lowest(
-    found: Vec<Option<Result<BestResponse, OptimiseError>>>,
+    found: impl IntoIterator<Item = Option<Result<BestResponse, OptimiseError>>>,
 ) -> Result<BestResponse, OptimiseError> {
     let mut best: Option<BestResponse> = None;
     let mut dropped = None;

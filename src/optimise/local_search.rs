@@ -30,7 +30,7 @@ use rayon::prelude::*;
 
 use crate::automaton::Dra;
 use crate::certify::gradient::LowerBoundGradients;
-use crate::certify::{CertifyError, lower_bound_within};
+use crate::certify::{CertifyError, lower_bound_within, lower_value_or_trivial_within};
 use crate::controller::{Choice, Fsc, Role, Support};
 use crate::game::{AdversaryAction, DefenderAction, Posg};
 use crate::solver::SolverSettings;
@@ -497,11 +497,7 @@ pub fn climb_with_restarts(
 /// The certified lower bound of `defender` with [`proving_settings`], or
 /// the trivial 0 where it cannot be proved so.
 fn proved_bound(game: &Posg, not_phi: &Dra, defender: &Fsc) -> Result<f64, CertifyError> {
-    match lower_bound_within(game, not_phi, defender, &proving_settings()) {
-        Ok(bound) => Ok(bound.value),
-        Err(error) if error.is_numerical() => Ok(0.0),
-        Err(error) => Err(error),
-    }
+    lower_value_or_trivial_within(game, not_phi, defender, &proving_settings())
 }
 
 /// `shape` (nodes, initial distribution) with each block `(g, o)` playing

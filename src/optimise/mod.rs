@@ -57,7 +57,7 @@ mod softmax;
 mod structures;
 mod warm_start;
 
-pub(crate) use best_response::{Starts, best_response_in_parallel};
+pub(crate) use best_response::{Starts, final_best_response};
 pub use cancel::Cancel;
 pub use objective::{GmcSize, Objective, Point};
 pub use observer::{IterationRecord, Observer, ObserverError, SearchRecord};
@@ -495,8 +495,8 @@ pub fn optimise_structure(
         .collect();
     let floor = presolved.as_ref().map(|climbed| climbed.bound);
     let mut finished = race(racers, settings, floor);
-    let fresh = || structure_objective(game, dra, structure, settings);
     if run_certifier.is_none() {
+        let fresh = || structure_objective(game, dra, structure, settings);
         settle(&mut finished, clock, &fresh)?;
     }
     let runs = finished
@@ -1054,7 +1054,7 @@ impl Judge<'_> {
         Ok(objective.value(&logits, &self.warm[0])?)
     }
 
-    /// The best-response value ([`best_response_in_parallel`], started
+    /// The final best-response value ([`final_best_response`], started
     /// from the run's adversaries and `restarts` random ones) and the
     /// adversary reaching it.
     fn best_response(
@@ -1066,18 +1066,12 @@ impl Judge<'_> {
         let logits = Softmax::new(defender, self.settings.optimise_initial)
             .logits_of_template(self.settings.logit_bound);
         let at: Vec<&[f64]> = self.warm.iter().map(Vec::as_slice).collect();
-        let starts = Starts::new(&at, restarts).until(self.deadline);
-        let settings = Settings {
-            best_response_iterations: self
-                .settings
-                .final_best_response_iterations(self.gmc_states, at.len() + restarts),
-            ..self.settings.clone()
-        };
-        let found = best_response_in_parallel(
+        let found = final_best_response(
             || self.objective(defender),
+            self.gmc_states,
             &logits,
-            starts,
-            &settings,
+            Starts::new(&at, restarts).until(self.deadline),
+            self.settings,
             rng,
         )?;
         let adversary = Softmax::new(self.adversary, self.settings.optimise_initial);

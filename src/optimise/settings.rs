@@ -323,7 +323,7 @@ impl Settings {
     /// [`EVALUATIONS_PER_ITERATION`] evaluations per iteration, each of
     /// `gmc_states`), and at least one. So the final estimate costs at most
     /// about one start's loop on a large GMC (PAYNT's dodge-8 with 3 nodes:
-    /// 24,384 states, 100 iterations from 6 starts took 40 s, 12 now).
+    /// 24,384 states: 100 iterations from 6 starts took 40 s; 11 now).
     pub fn final_best_response_iterations(&self, gmc_states: usize, starts: usize) -> u64 {
         if self.max_work <= 0.0 {
             return self.best_response_iterations;

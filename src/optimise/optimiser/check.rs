@@ -36,7 +36,7 @@
 use std::time::Instant;
 
 use super::super::FreshObjective;
-use super::super::best_response::{BestResponse, Starts, best_response, best_response_in_parallel};
+use super::super::best_response::{BestResponse, Starts, best_response, final_best_response};
 use super::super::guarantee::{Guarantee, ascend};
 use super::super::play::{Iterate, PlayState};
 use super::super::rounding::truncated;
@@ -201,8 +201,8 @@ impl Optimiser<'_> {
     /// The incumbent's full best response, once a run without a certifier
     /// has stopped (`outcome`; its score is the worst case itself, which
     /// this can lower): from the adversary it was judged against, the last
-    /// best response found and `restarts` random starts, in parallel, each
-    /// on an objective from `fresh`; its worst case and adversary become
+    /// best response found and `restarts` random starts
+    /// ([`final_best_response`], each start on an objective from `fresh`); its worst case and adversary become
     /// that response's where it is lower. With a time budget it ends at
     /// [`Settings::final_deadline`] of the run that began at `started`.
     /// Where every start runs into a system it cannot solve to the
@@ -227,14 +227,15 @@ impl Optimiser<'_> {
         let starts = Starts::new(&at, restarts).until(deadline);
         let defender = best.defender.clone();
         let states = self.objective.gmc_size().states;
-        let settings = Settings {
-            best_response_iterations: self
-                .settings
-                .final_best_response_iterations(states, at.len() + restarts),
-            ..self.settings.clone()
-        };
         let clock = Instant::now();
-        let found = best_response_in_parallel(fresh, &defender, starts, &settings, &mut self.rng);
+        let found = final_best_response(
+            fresh,
+            states,
+            &defender,
+            starts,
+            &self.settings,
+            &mut self.rng,
+        );
         outcome.phases.best_responses += clock.elapsed().as_secs_f64();
         let found = match found {
             Ok(found) => found,
