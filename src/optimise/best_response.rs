@@ -101,10 +101,12 @@ pub fn best_response(
 }
 
 /// A final best response (method.md section 4: the returned defender's, or
-/// every start's without a certifier): [`best_response_in_parallel`] on
-/// objectives from `objective`, a GMC of `gmc_states` states, with each
-/// start's L-BFGS iterations capped by
-/// [`Settings::final_best_response_iterations`].
+/// every start's without a certifier): [`best_response`] with the starts
+/// minimised in parallel (rayon), each on its own objective from
+/// `objective` (the same GMC, of `gmc_states` states), and each start's
+/// L-BFGS iterations capped by [`Settings::final_best_response_iterations`].
+/// Where the cap does not bind, the same value as [`best_response`] for
+/// the same random stream, on as many cores as there are starts.
 pub fn final_best_response<F>(
     objective: F,
     gmc_states: usize,
@@ -117,26 +119,10 @@ where
     F: Fn() -> Result<Objective, OptimiseError> + Sync,
 {
     let count = starts.at.len() + starts.restarts;
-    let capped = Settings {
+    let settings = &Settings {
         best_response_iterations: settings.final_best_response_iterations(gmc_states, count),
         ..settings.clone()
     };
-    best_response_in_parallel(objective, defender, starts, &capped, rng)
-}
-
-/// [`best_response`] with the starts minimised in parallel (rayon), each on
-/// its own objective from `objective` (the same GMC): the same value for the
-/// same random stream, on as many cores as there are starts.
-fn best_response_in_parallel<F>(
-    objective: F,
-    defender: &[f64],
-    starts: Starts<'_>,
-    settings: &Settings,
-    rng: &mut ChaCha8Rng,
-) -> Result<BestResponse, OptimiseError>
-where
-    F: Fn() -> Result<Objective, OptimiseError> + Sync,
-{
     let points = start_points(&starts, settings, rng);
     let found = points
         .into_par_iter()
@@ -329,10 +315,10 @@ mod tests {
         (objective, defender, adversary)
     }
 
-    /// The parallel search minimises from the same starts as the
-    /// sequential one (the same stream drawn in the same order) and keeps
-    /// the same lowest start: the same value and adversary, below the warm
-    /// start's value.
+    /// On a GMC too small for the cap, the final (parallel) search
+    /// minimises from the same starts as the sequential one (the same
+    /// stream drawn in the same order) and keeps the same lowest start: the
+    /// same value and adversary, below the warm start's value.
     #[test]
     fn the_parallel_search_finds_what_the_sequential_one_finds() {
         let formula = "!unsafe U goal";
@@ -344,7 +330,8 @@ mod tests {
         let sequential = best_response(&mut objective, &defender, starts, &settings, &mut rng);
         let mut rng = ChaCha8Rng::seed_from_u64(7);
         let fresh = || Ok(paper_grid_for(formula).0);
-        let parallel = best_response_in_parallel(fresh, &defender, starts, &settings, &mut rng);
+        let states = objective.gmc_size().states;
+        let parallel = final_best_response(fresh, states, &defender, starts, &settings, &mut rng);
         let (sequential, parallel) = (sequential.unwrap(), parallel.unwrap());
         assert_eq!(sequential, parallel);
         let at_start = objective.value(&defender, &adversary).unwrap();
