@@ -75,7 +75,14 @@ const BLIND_GUESS: &str = r#"{"posg": 1, "states": ["heads", "tails", "goal", "t
 
 #[test]
 fn a_gap_that_cannot_close_stops_on_stall_and_says_so() {
-    let outcome = solve(&game(BLIND_GUESS), "F goal", 1);
+    // Without the local search: with it, its bound (0.5, the optimum) is a
+    // floor that the starts' early probes only tie, and every start stops
+    // as outpaced at iteration 32 instead.
+    let settings = Settings {
+        local_search: false,
+        ..Settings::default()
+    };
+    let outcome = solve_with(&game(BLIND_GUESS), "F goal", 1, &settings);
     let report = &outcome.best().report;
     assert_eq!(report.status, Status::Stalled, "{report:?}");
     assert!(report.iterations < Settings::default().max_iterations);
@@ -260,5 +267,77 @@ fn the_search_before_the_race_is_reported_before_the_race_and_bounds_the_result(
     assert!(
         lower >= record.certified_lower - 1e-12,
         "{lower} < {record:?}"
+    );
+}
+
+/// `game` (a PAYNT model under tests/data/paynt) solved with defaults and
+/// `defender` nodes against `formula`, with what the local search before
+/// the race reported: its bound (the race's floor), and the kept
+/// structure's starts (iterations, status) and certified lower bound.
+fn solve_with_floor(
+    game: &Posg,
+    formula: &str,
+    defender: usize,
+) -> (f64, Vec<(usize, Status)>, f64) {
+    let log = Arc::new(Mutex::new(Vec::new()));
+    let automata = Automata::from_ltl(formula).unwrap();
+    let sizes = Sizes {
+        defender,
+        adversary: 1,
+    };
+    let settings = Settings {
+        structures: vec![posg_fsc::optimise::StructureSource::Full],
+        seed: 1,
+        ..Settings::default()
+    };
+    let outcome = pipeline::solve(game, &automata, sizes, &settings, |_| {
+        Box::new(SearchLog(log.clone(), 0))
+    })
+    .unwrap();
+    let floor = log.lock().unwrap()[0].0.certified_lower;
+    let starts = outcome
+        .best()
+        .report
+        .starts
+        .iter()
+        .map(|s| (s.iterations, s.status))
+        .collect();
+    (floor, starts, outcome.certified.unwrap().certified_lower)
+}
+
+fn paynt_game(name: &str) -> Posg {
+    let path = format!("tests/data/paynt/{name}.drn");
+    posg_fsc::game::drn::read(std::path::Path::new(&path))
+        .unwrap()
+        .game
+}
+
+/// The early probe against the local search's bound (method.md section 6):
+/// on PAYNT's attacker-one-defender with 1 node the search proves PAYNT's
+/// optimum 0.018760 and no start's guarantee ascent reaches it, so every
+/// start stops as outpaced long before the stall rule's first judgement
+/// (iteration 255), with the search's bound kept. On PAYNT's test-game the
+/// starts' ascents land above the search's deterministic 0.375 (randomising
+/// pays), so the race goes on and beats it.
+#[test]
+fn starts_that_cannot_beat_the_search_stop_early_and_those_that_can_race_on() {
+    let (floor, starts, lower) =
+        solve_with_floor(&paynt_game("attacker-one-defender"), "G !goal", 1);
+    assert!((floor - 0.018760).abs() < 1e-6, "{floor}");
+    let stopped_early = starts
+        .iter()
+        .filter(|&&(iterations, status)| status == Status::Outpaced && iterations < 128)
+        .count();
+    assert!(stopped_early * 2 >= starts.len(), "{starts:?}");
+    assert!((lower - floor).abs() < 1e-9, "{lower} against {floor}");
+    let (floor, starts, lower) = solve_with_floor(&paynt_game("test-game"), "F goal", 1);
+    assert!((floor - 0.375).abs() < 1e-9, "{floor}");
+    assert!(
+        lower > floor + 0.015,
+        "{lower} against the search's {floor}"
+    );
+    assert!(
+        starts.iter().any(|&(iterations, _)| iterations >= 255),
+        "{starts:?}"
     );
 }

@@ -188,7 +188,9 @@ pub enum Status {
     Cancelled,
     /// Another start of the portfolio (or the local search before the
     /// race) was ahead by more than this one gained over the second half of
-    /// its run, or closed the certified gap (`race.rs`).
+    /// its run, or closed the certified gap (`race.rs`); or the start's
+    /// early probe against the local search's bound found it out of reach
+    /// (`optimiser.rs`, `FLOOR_PROBE_CHECKS`).
     Outpaced,
 }
 
@@ -485,15 +487,19 @@ pub fn optimise_structure(
     // The single-player ascent is certified once, at the end (`finalise`):
     // its checks' value is exact already.
     let run_certifier = certifier.filter(|_| method == Method::MaxMin);
+    let floor = presolved.as_ref().map(|climbed| climbed.bound);
     let racers = (0..settings.starts)
         .into_par_iter()
         .map(|i| {
             let optimiser =
                 start_optimiser((game, dra), (method, run_certifier), structure, &start(i))?;
-            Racer::new(optimiser.with_cancel(cancel), live(i), clock)
+            Racer::new(
+                optimiser.with_cancel(cancel).with_floor(floor),
+                live(i),
+                clock,
+            )
         })
         .collect();
-    let floor = presolved.as_ref().map(|climbed| climbed.bound);
     let mut finished = race(racers, settings, floor);
     if run_certifier.is_none() {
         let fresh = || structure_objective(game, dra, structure, settings);

@@ -46,7 +46,10 @@
 //! saturated and gradients are informative) and widens only where
 //! determinism pays, while every supported choice keeps probability at least
 //! `exp(-2 logit_bound) / |block|`: the support, and the GMC graph, never
-//! change.
+//! change. A start of a race that has a floor (a bound the local search
+//! proved before it) is probed against it once, early
+//! ([`FLOOR_PROBE_CHECKS`]), and stops as outpaced where even its
+//! guarantee ascent cannot beat it.
 
 mod check;
 
@@ -111,6 +114,9 @@ pub struct Optimiser<'a> {
     rng: ChaCha8Rng,
     defender: Vec<f64>,
     adversary: Vec<f64>,
+    /// A certified lower bound proved outside the run (the local search's,
+    /// before the race), which the floor probe judges the start against.
+    floor: Option<f64>,
 }
 
 /// The best defender seen and its best response.
@@ -248,6 +254,24 @@ pub const NEAR_BOUND: f64 = 0.95;
 /// this), however large its relative climb.
 pub const STALL_MAGNITUDE_FLOOR: f64 = 1e-3;
 
+/// A start is probed against the floor (the local search's certified
+/// lower bound, proved before the race) at the first window end after this
+/// many checks where its best score, even repeating the window's gain,
+/// is below the floor: the guarantee ascent runs from its incumbent, and
+/// the start stops as outpaced when the floor still stays out of reach
+/// ([`Optimiser::sunk_below_floor`]). Otherwise the probe leaves the run
+/// as it was and the start is not probed again. At 8 checks the first
+/// probe comes at iteration 31 or 63 (every 5th iteration and the window
+/// ends are checked), not at the stall rule's 255: on PAYNT's
+/// dice-and-coin with 3 nodes the race ends at iteration 64, not 512,
+/// with the same certified value.
+pub const FLOOR_PROBE_CHECKS: usize = 8;
+
+/// A probe's ascent that ends within this relative distance of the floor
+/// has climbed to the floor's own optimum (PAYNT's dice-and-coin2: every
+/// start's ascent ends 3e-8 under the local search's bound).
+pub const FLOOR_TIE: f64 = 1e-6;
+
 /// What the driver keeps between iterations: the best defender seen, the
 /// smallest game upper bound, the best score after each check since the
 /// logit bound last widened, the suffix averages the checks rank, and the
@@ -263,6 +287,9 @@ struct Bookkeeping {
     adversary_average: SuffixAverage,
     /// The adversary of the last L-BFGS best response (a warm start).
     last_response: Option<Vec<f64>>,
+    /// Whether the start has been probed against the floor
+    /// ([`FLOOR_PROBE_CHECKS`]) and went on.
+    floor_probed: bool,
     /// When the checks tighten the game upper bound against the adversaries.
     upper_schedule: check::Backoff,
     /// The last argmax rounding certified, and its certified lower bound.
@@ -283,6 +310,7 @@ impl Bookkeeping {
             defender_average: SuffixAverage::new(defender_parameters),
             adversary_average: SuffixAverage::new(adversary_parameters),
             last_response: None,
+            floor_probed: false,
             upper_schedule: check::Backoff::new(upper_interval),
             last_rounding: None,
             checks: 0,
@@ -339,6 +367,7 @@ impl<'a> Optimiser<'a> {
             rng,
             defender,
             adversary,
+            floor: None,
         }
     }
 
@@ -360,6 +389,32 @@ impl<'a> Optimiser<'a> {
     pub fn with_cancel(mut self, cancel: &Cancel) -> Self {
         self.cancel = cancel.clone();
         self
+    }
+
+    /// The run with `floor`, a certified lower bound proved for a
+    /// defender outside the run (the local search's before the race).
+    pub fn with_floor(mut self, floor: Option<f64>) -> Self {
+        self.floor = floor;
+        self
+    }
+
+    /// Whether the score `score`, after gaining `gain` over the window that
+    /// ends here, stays below the floor even if it repeats that gain.
+    fn below_floor(&self, score: f64, gain: f64) -> bool {
+        self.floor.is_some_and(|floor| score + gain < floor)
+    }
+
+    /// The floor probe's verdict on a start whose guarantee ascent reached
+    /// `ascended` where its own iterates gained `gain` over the window:
+    /// sunk when even repeating that gain leaves it below the floor, or
+    /// when the ascent ends on the floor itself (within [`FLOOR_TIE`],
+    /// relative): it climbs to the optimum the local search has already
+    /// proved.
+    fn sunk_below_floor(&self, ascended: f64, gain: f64) -> bool {
+        let ties = self.floor.is_some_and(|floor| {
+            (ascended - floor).abs() <= FLOOR_TIE * floor.abs().max(STALL_MAGNITUDE_FLOOR)
+        });
+        ties || self.below_floor(ascended, gain)
     }
 
     /// The objective and the random stream where the run left them.
@@ -538,21 +593,42 @@ impl<'a> Optimiser<'a> {
                 "no best-response check ran".into(),
             ))?
             .score();
+        let iteration = iterate.iteration;
+        let window_start = books.window_ends.last().copied().unwrap_or(0.0);
+        let probes_floor = window_ends(iteration)
+            && !books.floor_probed
+            && books.history.len() + 1 >= FLOOR_PROBE_CHECKS
+            && self.below_floor(score, score - window_start);
         let stall_judged =
-            window_ends(iterate.iteration) && books.history.len() + 1 >= self.settings.stall_checks;
+            window_ends(iteration) && books.history.len() + 1 >= self.settings.stall_checks;
         let out_of_time = matches!(status, Some(Status::TimeBudget | Status::Cancelled));
-        if (stall_judged || status.is_some()) && !out_of_time {
+        // A probe alone must leave the run as it was where the start goes on.
+        let before_probe =
+            (probes_floor && !stall_judged && status.is_none()).then(|| books.best.clone());
+        if (stall_judged || probes_floor || status.is_some()) && !out_of_time {
             if let Some(ascended) = self.ascend_guarantee(iterate, books, seconds)? {
                 check.certified_lower = Some(ascended);
             }
         }
+        let ascended = books.best.as_ref().map_or(score, Incumbent::score);
+        let sunk = probes_floor && self.sunk_below_floor(ascended, score - window_start);
+        if probes_floor && !sunk {
+            books.floor_probed = true;
+            if let Some(before) = before_probe {
+                books.best = before;
+                check.certified_lower = None;
+            }
+        }
         let score = books.best.as_ref().map_or(score, Incumbent::score);
         books.history.push(score);
-        if window_ends(iterate.iteration) {
+        if window_ends(iteration) {
             books.window_ends.push(score);
         }
         if status.is_some() {
             return Ok(status);
+        }
+        if sunk {
+            return Ok(Some(Status::Outpaced));
         }
         if check.rounding_closes_gap {
             return Ok(Some(Status::GapClosed));
