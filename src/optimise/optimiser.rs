@@ -603,8 +603,8 @@ impl<'a> Optimiser<'a> {
             window_ends(iteration) && books.history.len() + 1 >= self.settings.stall_checks;
         let out_of_time = matches!(status, Some(Status::TimeBudget | Status::Cancelled));
         // A probe alone must leave the run as it was where the start goes on.
-        let before_probe =
-            (probes_floor && !stall_judged && status.is_none()).then(|| books.best.clone());
+        let before_probe = (probes_floor && !stall_judged && status.is_none())
+            .then(|| (books.best.clone(), check.certified_lower));
         if (stall_judged || probes_floor || status.is_some()) && !out_of_time {
             if let Some(ascended) = self.ascend_guarantee(iterate, books, seconds)? {
                 check.certified_lower = Some(ascended);
@@ -614,9 +614,9 @@ impl<'a> Optimiser<'a> {
         let sunk = probes_floor && self.sunk_below_floor(ascended, score - window_start);
         if probes_floor && !sunk {
             books.floor_probed = true;
-            if let Some(before) = before_probe {
-                books.best = before;
-                check.certified_lower = None;
+            if let Some((best, certified_lower)) = before_probe {
+                books.best = best;
+                check.certified_lower = certified_lower;
             }
         }
         let score = books.best.as_ref().map_or(score, Incumbent::score);
