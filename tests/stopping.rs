@@ -237,28 +237,42 @@ impl Observer for SearchLog {
     }
 }
 
+/// `game` solved with `defender` nodes against `formula` on the full
+/// support, defaults otherwise but `seed`: the local search's records
+/// (each with the number of race records before it) and the outcome.
+fn solve_logging_search(
+    game: &Posg,
+    formula: &str,
+    defender: usize,
+    seed: u64,
+) -> (Vec<(SearchRecord, usize)>, pipeline::Outcome) {
+    let log = Arc::new(Mutex::new(Vec::new()));
+    let automata = Automata::from_ltl(formula).unwrap();
+    let sizes = Sizes {
+        defender,
+        adversary: 1,
+    };
+    let settings = Settings {
+        structures: vec![posg_fsc::optimise::StructureSource::Full],
+        seed,
+        ..Settings::default()
+    };
+    let outcome = pipeline::solve(game, &automata, sizes, &settings, |_| {
+        Box::new(SearchLog(log.clone(), 0))
+    })
+    .unwrap();
+    let log = log.lock().unwrap().clone();
+    (log, outcome)
+}
+
 /// The local search before the race reports its bound to the observer as
 /// soon as it ends, before the race's first record, and the result is
 /// certified at least at that bound (it is the race's floor and a
 /// candidate of the final rounding).
 #[test]
 fn the_search_before_the_race_is_reported_before_the_race_and_bounds_the_result() {
-    let log = Arc::new(Mutex::new(Vec::new()));
-    let automata = Automata::from_ltl("!unsafe U goal").unwrap();
-    let sizes = Sizes {
-        defender: 2,
-        adversary: 1,
-    };
-    let settings = Settings {
-        structures: vec![posg_fsc::optimise::StructureSource::Full],
-        ..Settings::default()
-    };
     let grid = GridSpec::default().build().unwrap();
-    let outcome = pipeline::solve(&grid, &automata, sizes, &settings, |_| {
-        Box::new(SearchLog(log.clone(), 0))
-    })
-    .unwrap();
-    let log = log.lock().unwrap();
+    let (log, outcome) = solve_logging_search(&grid, "!unsafe U goal", 2, 0);
     assert_eq!(log.len(), 1, "{log:?}");
     let (record, records_before) = log[0];
     assert_eq!(records_before, 0, "reported before the race");
@@ -270,31 +284,15 @@ fn the_search_before_the_race_is_reported_before_the_race_and_bounds_the_result(
     );
 }
 
-/// `game` (a PAYNT model under tests/data/paynt) solved with defaults and
-/// `defender` nodes against `formula`, with what the local search before
-/// the race reported: its bound (the race's floor), and the kept
-/// structure's starts (iterations, status) and certified lower bound.
+/// `game` solved as [`solve_logging_search`] with seed 1: the local
+/// search's bound (the race's floor), the kept structure's starts
+/// (iterations, status) and its certified lower bound.
 fn solve_with_floor(
     game: &Posg,
     formula: &str,
     defender: usize,
 ) -> (f64, Vec<(usize, Status)>, f64) {
-    let log = Arc::new(Mutex::new(Vec::new()));
-    let automata = Automata::from_ltl(formula).unwrap();
-    let sizes = Sizes {
-        defender,
-        adversary: 1,
-    };
-    let settings = Settings {
-        structures: vec![posg_fsc::optimise::StructureSource::Full],
-        seed: 1,
-        ..Settings::default()
-    };
-    let outcome = pipeline::solve(game, &automata, sizes, &settings, |_| {
-        Box::new(SearchLog(log.clone(), 0))
-    })
-    .unwrap();
-    let floor = log.lock().unwrap()[0].0.certified_lower;
+    let (log, outcome) = solve_logging_search(game, formula, defender, 1);
     let starts = outcome
         .best()
         .report
@@ -302,7 +300,11 @@ fn solve_with_floor(
         .iter()
         .map(|s| (s.iterations, s.status))
         .collect();
-    (floor, starts, outcome.certified.unwrap().certified_lower)
+    (
+        log[0].0.certified_lower,
+        starts,
+        outcome.certified.unwrap().certified_lower,
+    )
 }
 
 fn paynt_game(name: &str) -> Posg {

@@ -937,7 +937,7 @@ fn finalise(
         if let (true, Some(c)) = (responded, certifier) {
             let clock = Instant::now();
             let upper = upper_value_or_trivial(game, c.phi, &chosen.adversary)?;
-            chosen.upper_bound = Some(chosen.upper_bound.map_or(upper, |u| u.min(upper)));
+            optimiser::tighten(&mut chosen.upper_bound, upper);
             phases.certification += clock.elapsed().as_secs_f64();
         }
     }

@@ -53,6 +53,8 @@
 
 mod check;
 
+pub(super) use check::tighten;
+
 use std::time::Instant;
 
 use rand_chacha::ChaCha8Rng;

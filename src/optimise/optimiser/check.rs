@@ -491,7 +491,7 @@ impl Backoff {
 }
 
 /// The game upper bound tightened with `candidate`: the smaller of the two.
-fn tighten(upper_bound: &mut Option<f64>, candidate: f64) {
+pub(in crate::optimise) fn tighten(upper_bound: &mut Option<f64>, candidate: f64) {
     *upper_bound = Some(upper_bound.map_or(candidate, |u| u.min(candidate)));
 }
 
