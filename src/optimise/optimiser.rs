@@ -47,9 +47,9 @@
 //! determinism pays, while every supported choice keeps probability at least
 //! `exp(-2 logit_bound) / |block|`: the support, and the GMC graph, never
 //! change. A start of a race that has a floor (a bound the local search
-//! proved before it) is probed against it once, early
-//! ([`FLOOR_PROBE_CHECKS`]), and stops as outpaced where even its
-//! guarantee ascent cannot beat it.
+//! proved before it) is probed against it early and at each window end
+//! after ([`FLOOR_PROBE_CHECKS`]), and stops as outpaced where even a
+//! short guarantee ascent cannot beat it.
 
 mod check;
 
@@ -257,17 +257,28 @@ pub const NEAR_BOUND: f64 = 0.95;
 pub const STALL_MAGNITUDE_FLOOR: f64 = 1e-3;
 
 /// A start is probed against the floor (the local search's certified
-/// lower bound, proved before the race) at the first window end after this
+/// lower bound, proved before the race) at each window end after this
 /// many checks where its best score, even repeating the window's gain,
-/// is below the floor: the guarantee ascent runs from its incumbent, and
-/// the start stops as outpaced when the floor still stays out of reach
-/// ([`Optimiser::sunk_below_floor`]). Otherwise the probe leaves the run
-/// as it was and the start is not probed again. At 8 checks the first
-/// probe comes at iteration 31 or 63 (every 5th iteration and the window
-/// ends are checked), not at the stall rule's 255: on PAYNT's
-/// dice-and-coin with 3 nodes the race ends at iteration 64, not 512,
-/// with the same certified value.
+/// is below the floor: a short guarantee ascent ([`FLOOR_PROBE_STEPS`])
+/// runs from its incumbent, and the start stops as outpaced when the floor
+/// still stays out of reach ([`Optimiser::sunk_below_floor`]). Otherwise
+/// the probe leaves the run as it was. At 8 checks the first probe comes
+/// at iteration 31 or 63 (every 5th iteration and the window ends are
+/// checked), not at the stall rule's 255: on PAYNT's dice-and-coin with 3
+/// nodes the race ends at iteration 64, not 512, with the same certified
+/// value. A start that passes a probe is probed again at the next window
+/// end (twice as many iterations on): on attacker-one-defender with 1 node
+/// one start passed the first probe and then crept below the floor until
+/// the stall rule stopped it at iteration 512.
 pub const FLOOR_PROBE_CHECKS: usize = 8;
+
+/// The L-BFGS steps of a probe's guarantee ascent. The probe asks whether
+/// the start's basin can reach the floor, not where its peak is: on
+/// attacker-one-defender with 3 nodes a full ascent took 56-114 steps and
+/// about 1 s per start to climb from 0.009 to 0.016-0.020, against a floor
+/// of 0.034. With 20 steps (and 40) every case of the time-to-quality
+/// benchmark and PAYNT's models certifies what it did with full ascents.
+pub const FLOOR_PROBE_STEPS: usize = 20;
 
 /// A probe's ascent that ends within this relative distance of the floor
 /// has climbed to the floor's own optimum (PAYNT's dice-and-coin2: every
@@ -289,9 +300,6 @@ struct Bookkeeping {
     adversary_average: SuffixAverage,
     /// The adversary of the last L-BFGS best response (a warm start).
     last_response: Option<Vec<f64>>,
-    /// Whether the start has been probed against the floor
-    /// ([`FLOOR_PROBE_CHECKS`]) and went on.
-    floor_probed: bool,
     /// When the checks tighten the game upper bound against the adversaries.
     upper_schedule: check::Backoff,
     /// The last argmax rounding certified, and its certified lower bound.
@@ -312,7 +320,6 @@ impl Bookkeeping {
             defender_average: SuffixAverage::new(defender_parameters),
             adversary_average: SuffixAverage::new(adversary_parameters),
             last_response: None,
-            floor_probed: false,
             upper_schedule: check::Backoff::new(upper_interval),
             last_rounding: None,
             checks: 0,
@@ -598,24 +605,23 @@ impl<'a> Optimiser<'a> {
         let iteration = iterate.iteration;
         let window_start = books.window_ends.last().copied().unwrap_or(0.0);
         let probes_floor = window_ends(iteration)
-            && !books.floor_probed
             && books.history.len() + 1 >= FLOOR_PROBE_CHECKS
             && self.below_floor(score, score - window_start);
         let stall_judged =
             window_ends(iteration) && books.history.len() + 1 >= self.settings.stall_checks;
         let out_of_time = matches!(status, Some(Status::TimeBudget | Status::Cancelled));
         // A probe alone must leave the run as it was where the start goes on.
-        let before_probe = (probes_floor && !stall_judged && status.is_none())
-            .then(|| (books.best.clone(), check.certified_lower));
+        let probe_alone = probes_floor && !stall_judged && status.is_none();
+        let before_probe = probe_alone.then(|| (books.best.clone(), check.certified_lower));
         if (stall_judged || probes_floor || status.is_some()) && !out_of_time {
-            if let Some(ascended) = self.ascend_guarantee(iterate, books, seconds)? {
+            let steps = probe_alone.then_some(FLOOR_PROBE_STEPS);
+            if let Some(ascended) = self.ascend_guarantee(iterate, books, seconds, steps)? {
                 check.certified_lower = Some(ascended);
             }
         }
         let ascended = books.best.as_ref().map_or(score, Incumbent::score);
         let sunk = probes_floor && self.sunk_below_floor(ascended, score - window_start);
         if probes_floor && !sunk {
-            books.floor_probed = true;
             if let Some((best, certified_lower)) = before_probe {
                 books.best = best;
                 check.certified_lower = certified_lower;

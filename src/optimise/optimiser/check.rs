@@ -134,14 +134,17 @@ impl Optimiser<'_> {
     /// start whose product cannot be solved to the tolerance is left as it
     /// is, and so is a better defender whose value against the current
     /// adversary cannot be solved to the tolerance (a nearly deterministic
-    /// defender can make the GMC too stiff). Does nothing without a
-    /// certifier or with `guarantee_ascent` off.
+    /// defender can make the GMC too stiff). At most `steps` L-BFGS steps
+    /// where given (a floor probe's short ascent), else the ascent's own
+    /// stopping rules. Does nothing without a certifier or with
+    /// `guarantee_ascent` off.
     /// Returns the new incumbent's bound when it replaced the incumbent.
     pub(super) fn ascend_guarantee(
         &mut self,
         iterate: &Iterate,
         books: &mut Bookkeeping,
         seconds: f64,
+        steps: Option<usize>,
     ) -> Result<Option<f64>, OptimiseError> {
         if !self.ascends_guarantee() {
             return Ok(None);
@@ -165,6 +168,7 @@ impl Optimiser<'_> {
             },
             logit_bound: (2.0 * iterate.bound).min(self.settings.logit_bound),
             max_work: self.settings.max_work * GUARANTEE_SHARE_OF_WORK,
+            max_iterations: steps.unwrap_or(self.settings.max_iterations),
             ..self.settings.clone()
         };
         let ascended = ascend(&mut guarantee, &best.defender, &settings, &self.cancel);
