@@ -277,7 +277,8 @@ pub const FLOOR_PROBE_CHECKS: usize = 8;
 /// attacker-one-defender with 3 nodes a full ascent took 56-114 steps and
 /// about 1 s per start to climb from 0.009 to 0.016-0.020, against a floor
 /// of 0.034. With 20 steps (and 40) every case of the time-to-quality
-/// benchmark and PAYNT's models certifies what it did with full ascents.
+/// benchmark and PAYNT's models under 400 states certifies what it did
+/// with full probe ascents.
 pub const FLOOR_PROBE_STEPS: usize = 20;
 
 /// A probe's ascent that ends within this relative distance of the floor
