@@ -66,12 +66,14 @@ pub(super) struct Certificate {
     /// The potential of the last certificate proved on this graph, tried
     /// first on the next ([`Certificate::upper`]).
     last_potential: Option<Vec<f64>>,
-    /// The most a reused potential may raise a value (the solver's
-    /// tolerance, within which the values are known anyway).
-    negligible: f64,
     /// The quotient's policy whose potential proved the last certificate
-    /// of this graph, where its policy iteration starts on the next.
+    /// of this graph, evaluated on the next one's numbers second.
     last_choice: Option<Vec<usize>>,
+    /// The most a reused potential or policy may raise a value (the
+    /// solver's tolerance, within which the values are known anyway).
+    reuse_slack: f64,
+    /// The potentials solved so far (each a linear solve on the quotient).
+    solves: usize,
 }
 
 impl Certificate {
@@ -85,8 +87,9 @@ impl Certificate {
             quotient,
             solver,
             last_potential: None,
-            negligible: settings.tolerance,
             last_choice: None,
+            reuse_slack: settings.tolerance,
+            solves: 0,
         })
     }
 
@@ -99,13 +102,16 @@ impl Certificate {
     /// first potential that proves `F(y) <= y`. Before them, what proved
     /// the last certificate of this graph is tried: its potential, then the
     /// potential of its policy on `mdp` (one solve). The check `F(y) <= y`
-    /// asks nothing of `T` but that it be nonnegative and level on each end
-    /// component, so a potential of an MDP of the same graph with other
-    /// probabilities proves as well where it passes (a run's bounds of one
-    /// support change little between checks); either is kept only where
-    /// it raises no value by more than the solver's tolerance, so that the
-    /// bound is the rounds' own within it. On PAYNT's dodge-8 with 1 node
-    /// this took 1.2 potential solves per certificate instead of 2.6.
+    /// asks nothing of `T` but that it be finite, level on each end
+    /// component and 0 outside `maybe` (its nonnegativity follows from the
+    /// check on maybe states), so a potential of an MDP of the same graph
+    /// with other probabilities proves as well where it passes (a run's
+    /// bounds of one support change little between checks); either is kept
+    /// only where it raises no value by more than the solver's tolerance,
+    /// so that the bound is the rounds' own within it (it depends on the
+    /// certificates before it on the graph by at most that much). On
+    /// PAYNT's dodge-8 with 1 node this took about 1 potential solve per
+    /// certificate instead of 2.6.
     pub fn upper(
         &mut self,
         mdp: &Mdp,
@@ -121,8 +127,13 @@ impl Certificate {
         }
         let moves = self.quotient.moves(mdp);
         if let Some(choice) = self.last_choice.take() {
-            let potential = self.potential(mdp, maybe, &moves, &choice)?;
-            if let Some(upper) = self.negligibly_raised(mdp, maybe, &values, &potential) {
+            // Where its solve fails, the rounds below may still succeed.
+            let potential = self.potential(mdp, maybe, &moves, &choice).ok();
+            let proved = potential.and_then(|potential| {
+                let upper = self.negligibly_raised(mdp, maybe, &values, &potential)?;
+                Some((potential, upper))
+            });
+            if let Some((potential, upper)) = proved {
                 self.last_potential = Some(potential);
                 self.last_choice = Some(choice);
                 return Ok(upper);
@@ -150,7 +161,8 @@ impl Certificate {
     }
 
     /// The expected moves of the quotient's policy `choice` on `mdp`, per
-    /// state of `maybe` (0 elsewhere).
+    /// state of `maybe` (0 elsewhere); an error where the solve does not
+    /// give finite times.
     fn potential(
         &mut self,
         mdp: &Mdp,
@@ -158,10 +170,17 @@ impl Certificate {
         moves: &Moves,
         choice: &[usize],
     ) -> Result<Vec<f64>, MdpError> {
+        self.solves += 1;
         let times = self
             .quotient
             .evaluate(&mut self.solver, moves, choice)
             .map_err(unsolved)?;
+        if let Some(node) = times.iter().position(|t| !t.is_finite()) {
+            return Err(MdpError::OptimalityUnproved(format!(
+                "the potential of the certificate is {} at node {node}",
+                times[node]
+            )));
+        }
         let mut potential = vec![0.0; mdp.num_states()];
         for &s in maybe {
             potential[s] = times[self.quotient.node_of[s]];
@@ -179,7 +198,9 @@ impl Certificate {
         potential: &[f64],
     ) -> Option<Vec<f64>> {
         let eps = self.admissible_eps(mdp, maybe, values, potential).ok()?;
-        let negligible = maybe.iter().all(|&s| eps * potential[s] <= self.negligible);
+        let negligible = maybe
+            .iter()
+            .all(|&s| eps * potential[s] <= self.reuse_slack);
         negligible.then(|| raised(values.to_vec(), maybe, eps, potential))
     }
 
@@ -201,6 +222,12 @@ impl Certificate {
         for &s in maybe {
             for a in 0..mdp.num_actions(s) {
                 let (advantage, decrease) = self.components.widened(mdp, (s, a), values, potential);
+                // A NaN would pass every comparison below unconstrained.
+                if !(advantage.is_finite() && decrease.is_finite()) {
+                    return Err(MdpError::OptimalityUnproved(format!(
+                        "action {a} of state {s}: advantage {advantage:e}, decrease {decrease:e}"
+                    )));
+                }
                 if advantage <= 0.0 {
                     if decrease < 0.0 {
                         most = most.min(round_down(advantage / decrease));
@@ -596,10 +623,12 @@ mod tests {
 
     /// One certificate serves MDPs of one graph in turn (the longer-route
     /// graph above, state 1 reaching the target with `q`), reusing its last
-    /// potential and policy: from the optimal values `(q, q)` and from the
-    /// first policy's `(1/2, q)` alike, every upper bound covers the
-    /// optimum `max(1/2, q)` and is within the tolerance of a fresh
-    /// certificate's.
+    /// potential: from the optimal values `(q, q)`, from values 3e-10 short
+    /// of them at state 0 (a gain the reused potential must cover, with
+    /// `eps > 0`) and from the first policy's `(1/2, q)`, every upper bound
+    /// covers the optimum `max(1/2, q)` and is within the tolerance of a
+    /// fresh certificate's; the near-optimal values reuse the potential
+    /// without a solve.
     #[test]
     fn one_certificate_serves_every_mdp_of_its_graph() {
         let route = |q: f64| {
@@ -615,7 +644,12 @@ mod tests {
         let mut reused = Certificate::new(&route(0.6), &maybe, &settings).unwrap();
         for q in [0.6, 0.55, 0.7, 0.52, 0.9, 0.6] {
             let m = route(q);
-            for values in [[q, q, 1.0, 0.0], [0.5, q, 1.0, 0.0]] {
+            for values in [
+                [q, q, 1.0, 0.0],
+                [q - 3e-10, q, 1.0, 0.0],
+                [0.5, q, 1.0, 0.0],
+            ] {
+                let solves = reused.solves;
                 let upper = reused.upper(&m, &maybe, &values).unwrap();
                 let fresh = certified_upper(&m, &maybe, &values, &settings).unwrap();
                 for s in 0..2 {
@@ -625,7 +659,65 @@ mod tests {
                         "q {q}, values {values:?}: {upper:?} against {fresh:?}"
                     );
                 }
+                if values[0] > 0.5 && solves > 0 {
+                    assert_eq!(reused.solves, solves, "q {q}, values {values:?}");
+                }
             }
+        }
+    }
+
+    /// Where state 1's return to state 0 (probability `a`) changes, so does
+    /// the potential: from values 3e-11 short of the optimum 0.8 at state
+    /// 1, the potential of `a = 0.5` no longer proves the bound for
+    /// `a = 0.9`, and its policy's potential on the new numbers does (one
+    /// solve); the bound covers the optimum.
+    #[test]
+    fn a_potential_that_no_longer_proves_gives_way_to_its_policy_on_the_new_numbers() {
+        let returning = |a: f64| {
+            mdp(&[
+                &[&[(2, 0.5), (3, 0.5)], &[(1, 1.0)]],
+                &[&[(0, a), (2, 0.8 * (1.0 - a)), (3, 0.2 * (1.0 - a))]],
+                &[&[(2, 1.0)]],
+                &[&[(3, 1.0)]],
+            ])
+        };
+        let settings = SolverSettings::default();
+        let maybe = [0, 1];
+        let values = [0.8, 0.8 - 3e-11, 1.0, 0.0];
+        let mut reused = Certificate::new(&returning(0.5), &maybe, &settings).unwrap();
+        let first = reused.upper(&returning(0.5), &maybe, &values).unwrap();
+        let solves = reused.solves;
+        let stale = reused.last_potential.clone().unwrap();
+        let m = returning(0.9);
+        assert!(reused.admissible_eps(&m, &maybe, &values, &stale).is_err());
+        let upper = reused.upper(&m, &maybe, &values).unwrap();
+        assert_eq!(reused.solves, solves + 1);
+        for y in first[..2].iter().chain(&upper[..2]) {
+            assert!((0.8..0.8 + 1e-9).contains(y), "{first:?} {upper:?}");
+        }
+    }
+
+    /// A potential that is not finite proves nothing: a NaN would pass
+    /// every comparison of the check (state 1's gain of 0.1 against a NaN
+    /// decrease).
+    #[test]
+    fn a_potential_that_is_not_finite_proves_nothing() {
+        let m = mdp(&[
+            &[&[(2, 0.5), (3, 0.5)], &[(1, 1.0)]],
+            &[&[(2, 0.6), (3, 0.4)]],
+            &[&[(2, 1.0)]],
+            &[&[(3, 1.0)]],
+        ]);
+        let maybe = [0, 1];
+        let certificate = Certificate::new(&m, &maybe, &SolverSettings::default()).unwrap();
+        let values = [0.5, 0.6, 1.0, 0.0];
+        for potential in [[1.0, f64::NAN, 0.0, 0.0], [f64::INFINITY, 1.0, 0.0, 0.0]] {
+            assert!(
+                certificate
+                    .admissible_eps(&m, &maybe, &values, &potential)
+                    .is_err(),
+                "{potential:?}"
+            );
         }
     }
 

@@ -262,7 +262,8 @@ pub const STALL_MAGNITUDE_FLOOR: f64 = 1e-3;
 /// is below the floor: a short guarantee ascent ([`FLOOR_PROBE_STEPS`])
 /// runs from its incumbent, and the start stops as outpaced when the floor
 /// still stays out of reach ([`Optimiser::sunk_below_floor`]). Otherwise
-/// the probe leaves the run as it was. At 8 checks the first probe comes
+/// the probe puts the incumbent back (the caches of the bounds' policy
+/// iteration and certificate keep what it computed). At 8 checks the first probe comes
 /// at iteration 31 or 63 (every 5th iteration and the window ends are
 /// checked), not at the stall rule's 255: on PAYNT's dice-and-coin with 3
 /// nodes the race ends at iteration 64, not 512, with the same certified
@@ -272,14 +273,14 @@ pub const STALL_MAGNITUDE_FLOOR: f64 = 1e-3;
 /// the stall rule stopped it at iteration 512.
 pub const FLOOR_PROBE_CHECKS: usize = 8;
 
-/// The L-BFGS steps of a probe's guarantee ascent. The probe asks whether
-/// the start's basin can reach the floor, not where its peak is: on
-/// attacker-one-defender with 3 nodes a full ascent took 56-114 steps and
-/// about 1 s per start to climb from 0.009 to 0.016-0.020, against a floor
-/// of 0.034. With 20 steps (and 40) every case of the time-to-quality
+/// The most L-BFGS steps of a probe's guarantee ascent. The probe asks
+/// whether the start's basin can reach the floor, not where its peak is:
+/// on attacker-one-defender with 3 nodes a full ascent took 56-114 steps
+/// and about 1 s per start to climb from 0.009 to 0.016-0.020, against a
+/// floor of 0.034. With 19 steps (and 39) every case of the time-to-quality
 /// benchmark and PAYNT's models under 400 states certifies what it did
 /// with full probe ascents.
-pub const FLOOR_PROBE_STEPS: usize = 20;
+pub const FLOOR_PROBE_STEPS: usize = 19;
 
 /// A probe's ascent that ends within this relative distance of the floor
 /// has climbed to the floor's own optimum (PAYNT's dice-and-coin2: every
@@ -611,7 +612,7 @@ impl<'a> Optimiser<'a> {
         let stall_judged =
             window_ends(iteration) && books.history.len() + 1 >= self.settings.stall_checks;
         let out_of_time = matches!(status, Some(Status::TimeBudget | Status::Cancelled));
-        // A probe alone must leave the run as it was where the start goes on.
+        // A probe alone puts the incumbent back where the start goes on.
         let probe_alone = probes_floor && !stall_judged && status.is_none();
         let before_probe = probe_alone.then(|| (books.best.clone(), check.certified_lower));
         if (stall_judged || probes_floor || status.is_some()) && !out_of_time {

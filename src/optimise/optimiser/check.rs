@@ -168,7 +168,11 @@ impl Optimiser<'_> {
             },
             logit_bound: (2.0 * iterate.bound).min(self.settings.logit_bound),
             max_work: self.settings.max_work * GUARANTEE_SHARE_OF_WORK,
-            max_iterations: steps.unwrap_or(self.settings.max_iterations),
+            // The ascent stops before its step `t` once `t + 1` reaches
+            // `max_iterations` (the driver's budget rule).
+            max_iterations: steps.map_or(self.settings.max_iterations, |steps| {
+                (steps + 1).min(self.settings.max_iterations)
+            }),
             ..self.settings.clone()
         };
         let ascended = ascend(&mut guarantee, &best.defender, &settings, &self.cancel);
