@@ -72,7 +72,8 @@ pub(super) struct Certificate {
     /// The most a reused potential or policy may raise a value (the
     /// solver's tolerance, within which the values are known anyway).
     reuse_slack: f64,
-    /// The potentials solved so far (each a linear solve on the quotient).
+    /// The potentials solved so far (each a linear solve on the quotient;
+    /// the tests read it to see which way a certificate went).
     solves: usize,
 }
 
@@ -596,6 +597,17 @@ mod tests {
         );
     }
 
+    /// State 0 goes to the target 2 with 1/2, else the sink 3 (action 0),
+    /// or to state 1 (action 1), which goes to the target with `q`.
+    fn longer_route(q: f64) -> Mdp {
+        mdp(&[
+            &[&[(2, 0.5), (3, 0.5)], &[(1, 1.0)]],
+            &[&[(2, q), (3, 1.0 - q)]],
+            &[&[(2, 1.0)]],
+            &[&[(3, 1.0)]],
+        ])
+    }
+
     /// A gain along a longer route: state 0 goes to the target with 1/2
     /// (action 0, the policy's) or to state 1 (action 1), which goes there
     /// with 0.6. The policy's times do not fall along action 1, the
@@ -603,14 +615,8 @@ mod tests {
     /// (`eps = 0.1`: 0.7 for both).
     #[test]
     fn a_gain_along_a_longer_route_is_covered() {
-        let m = mdp(&[
-            &[&[(2, 0.5), (3, 0.5)], &[(1, 1.0)]],
-            &[&[(2, 0.6), (3, 0.4)]],
-            &[&[(2, 1.0)]],
-            &[&[(3, 1.0)]],
-        ]);
         let upper = certified_upper(
-            &m,
+            &longer_route(0.6),
             &[0, 1],
             &[0.5, 0.6, 1.0, 0.0],
             &SolverSettings::default(),
@@ -631,19 +637,11 @@ mod tests {
     /// without a solve.
     #[test]
     fn one_certificate_serves_every_mdp_of_its_graph() {
-        let route = |q: f64| {
-            mdp(&[
-                &[&[(2, 0.5), (3, 0.5)], &[(1, 1.0)]],
-                &[&[(2, q), (3, 1.0 - q)]],
-                &[&[(2, 1.0)]],
-                &[&[(3, 1.0)]],
-            ])
-        };
         let settings = SolverSettings::default();
         let maybe = [0, 1];
-        let mut reused = Certificate::new(&route(0.6), &maybe, &settings).unwrap();
+        let mut reused = Certificate::new(&longer_route(0.6), &maybe, &settings).unwrap();
         for q in [0.6, 0.55, 0.7, 0.52, 0.9, 0.6] {
-            let m = route(q);
+            let m = longer_route(q);
             for values in [
                 [q, q, 1.0, 0.0],
                 [q - 3e-10, q, 1.0, 0.0],
@@ -702,12 +700,7 @@ mod tests {
     /// decrease).
     #[test]
     fn a_potential_that_is_not_finite_proves_nothing() {
-        let m = mdp(&[
-            &[&[(2, 0.5), (3, 0.5)], &[(1, 1.0)]],
-            &[&[(2, 0.6), (3, 0.4)]],
-            &[&[(2, 1.0)]],
-            &[&[(3, 1.0)]],
-        ]);
+        let m = longer_route(0.6);
         let maybe = [0, 1];
         let certificate = Certificate::new(&m, &maybe, &SolverSettings::default()).unwrap();
         let values = [0.5, 0.6, 1.0, 0.0];

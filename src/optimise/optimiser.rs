@@ -263,11 +263,11 @@ pub const STALL_MAGNITUDE_FLOOR: f64 = 1e-3;
 /// runs from its incumbent, and the start stops as outpaced when the floor
 /// still stays out of reach ([`Optimiser::sunk_below_floor`]). Otherwise
 /// the probe puts the incumbent back (the caches of the bounds' policy
-/// iteration and certificate keep what it computed). At 8 checks the first probe comes
-/// at iteration 31 or 63 (every 5th iteration and the window ends are
-/// checked), not at the stall rule's 255: on PAYNT's dice-and-coin with 3
-/// nodes the race ends at iteration 64, not 512, with the same certified
-/// value. A start that passes a probe is probed again at the next window
+/// iteration and certificate keep what it computed). At 8 checks the
+/// first probe comes at iteration 31 or 63 (every 5th iteration and the
+/// window ends are checked), not at the stall rule's 255: on PAYNT's
+/// dice-and-coin with 3 nodes the race ends at iteration 64, not 512, with
+/// the same certified value. A start that passes a probe is probed again at the next window
 /// end (twice as many iterations on): on attacker-one-defender with 1 node
 /// one start passed the first probe and then crept below the floor until
 /// the stall rule stopped it at iteration 512.
