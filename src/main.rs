@@ -5,6 +5,12 @@ mod cli;
 
 use std::process::ExitCode;
 
+/// mimalloc: about 30% less CPU than the system allocator on the local
+/// search, whose bound evaluations allocate and free many small graphs
+/// (Cargo.toml says where it was measured).
+#[global_allocator]
+static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 fn main() -> ExitCode {
     let args = cli::parse();
     match cli::run(args) {

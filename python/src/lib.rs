@@ -22,6 +22,11 @@ mod solve;
 
 use pyo3::prelude::*;
 
+/// mimalloc, as in the command line: the library's bound evaluations
+/// allocate and free many small graphs.
+#[global_allocator]
+static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 /// posg_fsc: finite-state controllers for partially observable stochastic
 /// games under LTL objectives (exact values, adjoint gradients, max-min
 /// optimisation against a worst-case adversary, certified bounds).
