@@ -476,7 +476,9 @@ impl Quotient {
     }
 
     /// The expected number of moves of the policy `choice` (one move per
-    /// node) before leaving: `(I - Q) T = 1`.
+    /// node) before leaving: `(I - Q) T = 1`, solved without an error
+    /// bound ([`LinearSolver::solve_unbounded`]): the certificate's check
+    /// holds or fails whatever the errors of `T`.
     fn evaluate(
         &self,
         solver: &mut LinearSolver,
@@ -508,7 +510,7 @@ impl Quotient {
         })?;
         let ones = vec![1.0; pattern.n];
         let mut times = vec![0.0; pattern.n];
-        solver.solve_trial(&ones, &mut times)?;
+        solver.solve_unbounded(&ones, &mut times)?;
         Ok(times)
     }
 

@@ -981,6 +981,33 @@ impl LinearSolver {
         })
     }
 
+    /// One solve of `A x = b` to the residual tolerance, with no bound on
+    /// the error of `x` (no expected times, no refinement): for a vector
+    /// whose accuracy nothing relies on, such as the optimality
+    /// certificate's potential, which its check proves or refuses
+    /// whatever its errors; a residual above the tolerance is reported, as
+    /// by [`Self::solve_trial`]. The caller must not report such an `x` as
+    /// a value.
+    pub fn solve_unbounded(
+        &mut self,
+        b: &[f64],
+        x: &mut [f64],
+    ) -> Result<SolveReport, SolverError> {
+        let probe_iterations = self.choose_by_trial(b, x, 1)?;
+        let mut report = match self.solve_in(Direction::Forward, b, x, None) {
+            // As for a trial: a residual above the tolerance is reported,
+            // not refused.
+            Err(SolverError::Inaccurate { residual, .. }) => SolveReport {
+                residual,
+                iterations: 0,
+                error_bound: None,
+            },
+            solved => solved?,
+        };
+        report.iterations += probe_iterations;
+        Ok(report)
+    }
+
     /// The exact fallback of [`Self::solve`]: `solved` unless it is an
     /// error of a bound or residual that double precision cannot prove;
     /// then the exact solution, or [`SolverError::TooLargeForExact`].
@@ -1609,6 +1636,42 @@ mod tests {
             let forced = SolverSettings { method, ..settings };
             assert_eq!(forced.method_for(5), method);
             assert_eq!(forced.method_for(500), method);
+        }
+    }
+
+    /// An unbounded solve meets the residual tolerance with one solve
+    /// (no refinement, no error bound) and lands near the bounded one.
+    #[test]
+    fn an_unbounded_solve_meets_the_residual_tolerance_without_a_bound() {
+        let (pattern, values) = random_chain(300, 4, 0.05, 7);
+        let ones = vec![1.0; 300];
+        for method in [SolverMethod::Lu, SolverMethod::Krylov] {
+            let settings = SolverSettings {
+                method,
+                ..SolverSettings::default()
+            };
+            let mut solver = LinearSolver::new(pattern.clone(), &settings).unwrap();
+            solver.factorize(&values).unwrap();
+            let mut rough = vec![0.0; 300];
+            let report = solver.solve_unbounded(&ones, &mut rough).unwrap();
+            assert_eq!(report.error_bound, None, "{method:?}");
+            let residual = pattern.chain_residual(&values, solver.exits(), &rough, &ones);
+            assert!(
+                residual <= settings.tolerance,
+                "{method:?}: residual {residual:e}"
+            );
+            let mut bounded = vec![0.0; 300];
+            let proved = solver.solve(&ones, &mut bounded).unwrap();
+            let largest = bounded.iter().copied().fold(0.0, f64::max);
+            let apart = (0..300)
+                .map(|i| (rough[i] - bounded[i]).abs())
+                .fold(0.0, f64::max);
+            // Within the residual times the expected times, plus the
+            // bounded solve's own error.
+            assert!(
+                apart <= settings.tolerance * largest + proved.error_bound.unwrap(),
+                "{method:?}: {apart:e} apart, times up to {largest}"
+            );
         }
     }
 
