@@ -163,7 +163,7 @@ impl Certificate {
 
     /// The expected moves of the quotient's policy `choice` on `mdp`, per
     /// state of `maybe` (0 elsewhere); an error where the solve does not
-    /// give finite times.
+    /// give finite, nonnegative times.
     fn potential(
         &mut self,
         mdp: &Mdp,
@@ -176,7 +176,9 @@ impl Certificate {
             .quotient
             .evaluate(&mut self.solver, moves, choice)
             .map_err(unsolved)?;
-        if let Some(node) = times.iter().position(|t| !t.is_finite()) {
+        // The expected moves are at least 1: a negative or non-finite time
+        // is a failed solve, and `raised` would round a cancelling sum.
+        if let Some(node) = times.iter().position(|t| !(t.is_finite() && *t >= 0.0)) {
             return Err(MdpError::OptimalityUnproved(format!(
                 "the potential of the certificate is {} at node {node}",
                 times[node]

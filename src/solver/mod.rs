@@ -985,9 +985,10 @@ impl LinearSolver {
     /// the error of `x` (no expected times, no refinement): for a vector
     /// whose accuracy nothing relies on, such as the optimality
     /// certificate's potential, which its check proves or refuses
-    /// whatever its errors; a residual above the tolerance is reported, as
-    /// by [`Self::solve_trial`]. The caller must not report such an `x` as
-    /// a value.
+    /// whatever its errors. As by [`Self::solve_trial`], LU's residual
+    /// above the tolerance is reported, not refused (BiCGSTAB that does not
+    /// reach it is an error). The caller must not report such an `x` as a
+    /// value.
     pub fn solve_unbounded(
         &mut self,
         b: &[f64],
@@ -1673,6 +1674,31 @@ mod tests {
                 "{method:?}: {apart:e} apart, times up to {largest}"
             );
         }
+    }
+
+    /// Where LU's residual is above a tolerance no double solve meets, the
+    /// unbounded solve still returns its `x` with that residual (as a
+    /// trial does), where a bounded solve refuses.
+    #[test]
+    fn an_unbounded_solve_reports_a_residual_above_the_tolerance() {
+        let (pattern, values) = random_chain(300, 4, 0.05, 7);
+        let ones = vec![1.0; 300];
+        let settings = SolverSettings {
+            method: SolverMethod::Lu,
+            tolerance: 1e-300,
+            exact_limit: 0,
+            ..SolverSettings::default()
+        };
+        let mut solver = LinearSolver::new(pattern.clone(), &settings).unwrap();
+        solver.factorize(&values).unwrap();
+        let mut rough = vec![0.0; 300];
+        let report = solver.solve_unbounded(&ones, &mut rough).unwrap();
+        assert!(report.residual > settings.tolerance);
+        assert_eq!(report.error_bound, None);
+        let residual = pattern.chain_residual(&values, solver.exits(), &rough, &ones);
+        assert_eq!(report.residual, residual);
+        assert!(residual < 1e-9, "still a solve: residual {residual:e}");
+        assert!(solver.solve(&ones, &mut vec![0.0; 300]).is_err());
     }
 
     #[test]
