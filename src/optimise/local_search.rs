@@ -441,19 +441,33 @@ const MAX_RESTART_ROUNDS: usize = 4;
 /// one round at full effort divided by this.
 const ROUNDS_BUDGET_DIVISOR: usize = 4;
 
+/// The climbs of one round of kicks ([`climb_with_restarts`]).
+const KICKS_PER_ROUND: usize = 4;
+
+/// A kick redraws one in this many of the blocks in use ([`kicked`]).
+const KICK_DIVISOR: usize = 8;
+
+/// A kick redraws at least this many blocks (where that many are in use).
+const MIN_KICKED_BLOCKS: usize = 2;
+
 /// [`climb`] from `start` and from random memoryless deterministic
 /// defenders (each block `(g, o)` one enabled pair `(g, u)`, `u` uniformly
 /// drawn from a stream seeded by `rng`; the climb adds memory), each until
-/// it ends or spends `effort`. The restarts run in rounds of `restarts`
+/// it ends or spends `effort`; then from kicks of the best end point
+/// (iterated local search). The restarts run in rounds of `restarts`
 /// climbs in parallel (the first also climbs from `start`); another round
 /// follows while the climbs so far have spent less than a
 /// [`ROUNDS_BUDGET_DIVISOR`]-th of one round at full effort (`restarts`
-/// times `effort.work`) and none reached `effort.enough`, up to
-/// [`MAX_RESTART_ROUNDS`] rounds and until the deadline: where climbs end
-/// early at local optima (small products), more of them run. Returns the end point with the
-/// highest certified lower bound (the first such, in the order `start`,
-/// then the restarts as drawn). The rounds depend on counts only, so the
-/// search is reproducible for a seed unless a deadline cuts it.
+/// times `effort.work`), up to [`MAX_RESTART_ROUNDS`] rounds: where climbs
+/// end early at local optima (small products), more of them run. The kicks
+/// run in rounds of [`KICKS_PER_ROUND`] climbs in parallel, each from the
+/// best end point so far with some of its blocks redrawn ([`kicked`]),
+/// until they have spent as much work as the restarts (none without
+/// restarts). Both end once a climb reaches `effort.enough`, and at the
+/// deadline. Returns the end point with the highest certified lower bound
+/// (the first such, in the order `start`, then the climbs as drawn). The
+/// rounds depend on counts and bounds only, so the search is reproducible
+/// for a seed unless a deadline cuts it.
 pub fn climb_with_restarts(
     game: &Posg,
     not_phi: &Dra,
@@ -463,35 +477,109 @@ pub fn climb_with_restarts(
     effort: Effort,
 ) -> Result<Climbed, CertifyError> {
     let universe = Fsc::uniform_enabled(Role::Defender, start.num_nodes(), game.defender());
+    let mut rounds = Rounds {
+        game,
+        not_phi,
+        universe: &universe,
+        effort,
+        best: None,
+        spent: 0,
+    };
     let budget = restarts.saturating_mul(effort.work) / ROUNDS_BUDGET_DIVISOR;
     let mut froms = vec![start.clone()];
-    let (mut best, mut spent): (Option<Climbed>, usize) = (None, 0);
     for _ in 0..MAX_RESTART_ROUNDS {
-        for _ in 0..restarts {
-            let mut stream = ChaCha8Rng::seed_from_u64(rng.random());
-            froms.push(random_memoryless(start, &universe, &mut stream));
-        }
-        let ends = std::mem::take(&mut froms)
-            .par_iter()
-            .map(|from| climb(game, not_phi, &universe, from, effort))
-            .collect::<Result<Vec<_>, _>>()?;
-        for (end, work) in ends {
-            spent = spent.saturating_add(work);
-            if best.as_ref().is_none_or(|b| end.bound > b.bound) {
-                best = Some(end);
-            }
-        }
-        let out_of_time = effort.deadline.is_some_and(|end| Instant::now() >= end);
-        let found_enough = best.as_ref().is_some_and(|b| b.bound >= effort.enough);
-        if restarts == 0 || spent >= budget || out_of_time || found_enough {
+        froms.extend(draws(restarts, rng, |stream| {
+            random_memoryless(start, &universe, stream)
+        }));
+        rounds.climb_from(std::mem::take(&mut froms))?;
+        if restarts == 0 || rounds.spent >= budget || rounds.finished() {
             break;
         }
     }
-    let best = best.expect("the search climbs from the start");
+    let restarts_spent = rounds.spent;
+    while restarts > 0 && rounds.spent - restarts_spent < restarts_spent && !rounds.finished() {
+        let best = rounds.best.clone().expect("the restarts climbed");
+        rounds.climb_from(draws(KICKS_PER_ROUND, rng, |stream| {
+            kicked(game, &best.defender, &universe, stream)
+        }))?;
+    }
+    let best = rounds.best.expect("the search climbs from the start");
     Ok(Climbed {
         bound: proved_bound(game, not_phi, &best.defender)?,
         defender: best.defender,
     })
+}
+
+/// `count` defenders made by `make`, each from its own stream seeded by
+/// `rng`.
+fn draws(count: usize, rng: &mut ChaCha8Rng, make: impl Fn(&mut ChaCha8Rng) -> Fsc) -> Vec<Fsc> {
+    (0..count)
+        .map(|_| make(&mut ChaCha8Rng::seed_from_u64(rng.random())))
+        .collect()
+}
+
+/// The rounds of parallel climbs of [`climb_with_restarts`]: the best end
+/// point so far and the work all climbs have spent.
+struct Rounds<'a> {
+    game: &'a Posg,
+    not_phi: &'a Dra,
+    universe: &'a Fsc,
+    effort: Effort,
+    best: Option<Climbed>,
+    spent: usize,
+}
+
+impl Rounds<'_> {
+    /// Climbs from each of `froms` in parallel, keeping the first end
+    /// point with the highest bound.
+    fn climb_from(&mut self, froms: Vec<Fsc>) -> Result<(), CertifyError> {
+        let ends = froms
+            .par_iter()
+            .map(|from| climb(self.game, self.not_phi, self.universe, from, self.effort))
+            .collect::<Result<Vec<_>, _>>()?;
+        for (end, work) in ends {
+            self.spent = self.spent.saturating_add(work);
+            if self.best.as_ref().is_none_or(|b| end.bound > b.bound) {
+                self.best = Some(end);
+            }
+        }
+        Ok(())
+    }
+
+    /// Whether the deadline has passed or a climb reached `effort.enough`.
+    fn finished(&self) -> bool {
+        let out_of_time = self
+            .effort
+            .deadline
+            .is_some_and(|end| Instant::now() >= end);
+        let found_enough = self
+            .best
+            .as_ref()
+            .is_some_and(|b| b.bound >= self.effort.enough);
+        out_of_time || found_enough
+    }
+}
+
+/// `fsc` with one in [`KICK_DIVISOR`] of its blocks in use (at least
+/// [`MIN_KICKED_BLOCKS`]), drawn from `rng` without repetition, each
+/// playing one of `universe`'s enabled pairs `(next node, action)` with
+/// probability 1, drawn uniformly: a jump out of a climb's end point's
+/// basin that keeps most of what the climb found.
+fn kicked(game: &Posg, fsc: &Fsc, universe: &Fsc, rng: &mut ChaCha8Rng) -> Fsc {
+    let in_use: Vec<usize> = blocks_in_use(game, fsc)
+        .iter()
+        .enumerate()
+        .filter_map(|(b, &used)| used.then_some(b))
+        .collect();
+    let count = (in_use.len() / KICK_DIVISOR)
+        .max(MIN_KICKED_BLOCKS)
+        .min(in_use.len());
+    let mut kicked = fsc.clone();
+    for i in rand::seq::index::sample(rng, in_use.len(), count) {
+        let pairs = &universe.blocks[in_use[i]];
+        kicked.blocks[in_use[i]] = vec![certain(&pairs[rng.random_range(0..pairs.len())])];
+    }
+    kicked
 }
 
 /// The certified lower bound of `defender` with [`proving_settings`], or
@@ -704,6 +792,44 @@ mod tests {
         );
         assert_eq!(best.defender, search().defender);
         assert!(best.defender.blocks.iter().all(|block| block.len() == 1));
+    }
+
+    /// A kick redraws a few blocks in use, each to one enabled pair played
+    /// surely, and leaves every other block as it was; different streams
+    /// kick differently, the same stream alike.
+    #[test]
+    fn a_kick_redraws_a_few_blocks_in_use_and_keeps_the_rest() {
+        let game = grid_4x4();
+        let universe = Fsc::uniform_enabled(Role::Defender, 2, game.defender());
+        let fsc = first_pairs(&game, 2);
+        let in_use = blocks_in_use(&game, &fsc);
+        let used = in_use.iter().filter(|&&u| u).count();
+        let most = (used / KICK_DIVISOR).max(MIN_KICKED_BLOCKS);
+        let kick = |seed| kicked(&game, &fsc, &universe, &mut ChaCha8Rng::seed_from_u64(seed));
+        let mut kicks = Vec::new();
+        for seed in 0..20 {
+            let kicked = kick(seed);
+            let changed: Vec<usize> = (0..fsc.blocks.len())
+                .filter(|&b| kicked.blocks[b] != fsc.blocks[b])
+                .collect();
+            assert!(changed.len() <= most, "{changed:?}");
+            for &b in &changed {
+                assert!(in_use[b], "block {b} is not in use");
+                let [choice] = kicked.blocks[b].as_slice() else {
+                    panic!("block {b}: {:?}", kicked.blocks[b]);
+                };
+                assert_eq!(choice.probability, 1.0);
+                assert!(
+                    universe.blocks[b]
+                        .iter()
+                        .any(|pair| { (pair.next, pair.action) == (choice.next, choice.action) })
+                );
+            }
+            assert_eq!(kicked, kick(seed));
+            kicks.push(kicked);
+        }
+        assert!(kicks.iter().any(|k| *k != fsc));
+        assert!(kicks.iter().any(|k| *k != kicks[0]));
     }
 
     /// The cue game of tests/stopping.rs.
