@@ -463,8 +463,9 @@ const MIN_KICKED_BLOCKS: usize = 2;
 /// run in rounds of [`KICKS_PER_ROUND`] climbs in parallel, each from the
 /// best end point so far with some of its blocks redrawn ([`kicked`]),
 /// until they have spent as much work as the restarts (none without
-/// restarts). Both end once a climb reaches `effort.enough`, and at the
-/// deadline. Returns the end point with the highest certified lower bound
+/// restarts, nor where the best bound is 0: a kick from a defender that
+/// certifies nothing is one more random start). Both end once a climb
+/// reaches `effort.enough`, and at the deadline. Returns the end point with the highest certified lower bound
 /// (the first such, in the order `start`, then the climbs as drawn). The
 /// rounds depend on counts and bounds only, so the search is reproducible
 /// for a seed unless a deadline cuts it.
@@ -497,8 +498,10 @@ pub fn climb_with_restarts(
         }
     }
     let restarts_spent = rounds.spent;
-    while restarts > 0 && rounds.spent - restarts_spent < restarts_spent && !rounds.finished() {
-        let best = rounds.best.clone().expect("the restarts climbed");
+    while let Some(best) = rounds.best.clone().filter(|best| {
+        let kicking = restarts > 0 && best.bound > 0.0;
+        kicking && rounds.spent - restarts_spent < restarts_spent && !rounds.finished()
+    }) {
         rounds.climb_from(draws(KICKS_PER_ROUND, rng, |stream| {
             kicked(game, &best.defender, &universe, stream)
         }))?;
