@@ -322,7 +322,7 @@ fn solve(props: &str, out: &Path) -> Value {
     solve_drn(PENNIES, props, 1, out)
 }
 
-/// `posg-fsc solve DRN --props PROPS --def-nodes 1 --seed 1` into `out`,
+/// `posg-fsc solve DRN --props PROPS --def-nodes NODES --seed 1` into `out`,
 /// defaults otherwise; the summary.
 fn solve_drn(drn: &str, props: &str, nodes: usize, out: &Path) -> Value {
     let output = Command::new(env!("CARGO_BIN_EXE_posg-fsc"))

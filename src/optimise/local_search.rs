@@ -18,8 +18,9 @@
 //! itself), and climbs go on from there. It stops when neither raises the
 //! bound, or when its effort is spent. Restarts from seeded random
 //! memoryless defenders run in parallel rounds, more of them where climbs
-//! end early; the search is reproducible for a seed unless a deadline cuts
-//! it.
+//! end early; then kicks (iterated local search) climb from the best end
+//! point with a few of its blocks redrawn. The search is reproducible for
+//! a seed unless a deadline cuts it.
 
 use std::cell::Cell;
 use std::time::Instant;
@@ -54,7 +55,7 @@ pub struct Climbed {
 /// How long the search goes on: each climb until its bound evaluations
 /// have solved products of `work` states in all (at least one evaluation
 /// beyond the start's), every climb until `deadline` (with a time budget),
-/// and the rounds of restarts until a climb reaches `enough`.
+/// and the rounds of restarts and kicks until a climb reaches `enough`.
 #[derive(Debug, Clone, Copy)]
 pub struct Effort {
     /// The product states (reachable, summed over evaluations) one climb
@@ -62,10 +63,17 @@ pub struct Effort {
     pub work: usize,
     /// When every climb ends, whatever it has evaluated.
     pub deadline: Option<Instant>,
-    /// A bound that ends the restarts: no defender certifies more than an
+    /// A bound that ends the restarts and the kicks: no defender certifies more than an
     /// upper bound, so one within the gap tolerance of it is enough
     /// (`f64::INFINITY`: none known).
     pub enough: f64,
+}
+
+impl Effort {
+    /// Whether the deadline (if any) has passed.
+    fn past_deadline(&self) -> bool {
+        self.deadline.is_some_and(|end| Instant::now() >= end)
+    }
 }
 
 /// What one climb searches: the game, the automaton of `!phi`, every
@@ -86,10 +94,7 @@ impl Landscape<'_> {
     /// Whether the climb has spent its effort.
     fn exhausted(&self) -> bool {
         (self.evaluated.get() >= 2 && self.spent.get() >= self.effort.work)
-            || self
-                .effort
-                .deadline
-                .is_some_and(|end| Instant::now() >= end)
+            || self.effort.past_deadline()
     }
 
     /// The lower bound of `defender` as the climb ranks it: the value of
@@ -463,10 +468,12 @@ const MIN_KICKED_BLOCKS: usize = 2;
 /// run in rounds of [`KICKS_PER_ROUND`] climbs in parallel, each from the
 /// best end point so far with some of its blocks redrawn ([`kicked`]),
 /// until they have spent as much work as the restarts (none without
-/// restarts, nor where the best bound is 0: a kick from a defender that
-/// certifies nothing is one more random start). Both end once a climb
-/// reaches `effort.enough`, and at the deadline. Returns the end point with the highest certified lower bound
-/// (the first such, in the order `start`, then the climbs as drawn). The
+/// restarts, nor where the best end point's bound is 0: a kick from a
+/// defender that certifies nothing is one more random start; the last
+/// round may overshoot). Both end once a climb reaches `effort.enough`,
+/// and at the deadline. Returns the end point with the highest bound (the
+/// first such, in the order `start`, then the climbs as drawn), with its
+/// certified lower bound. The
 /// rounds depend on counts and bounds only, so the search is reproducible
 /// for a seed unless a deadline cuts it.
 pub fn climb_with_restarts(
@@ -498,13 +505,21 @@ pub fn climb_with_restarts(
         }
     }
     let restarts_spent = rounds.spent;
-    while let Some(best) = rounds.best.clone().filter(|best| {
-        let kicking = restarts > 0 && best.bound > 0.0;
-        kicking && rounds.spent - restarts_spent < restarts_spent && !rounds.finished()
-    }) {
-        rounds.climb_from(draws(KICKS_PER_ROUND, rng, |stream| {
+    loop {
+        let Some(best) = rounds
+            .best
+            .as_ref()
+            .filter(|best| restarts > 0 && best.bound > 0.0)
+        else {
+            break;
+        };
+        if rounds.spent - restarts_spent >= restarts_spent || rounds.finished() {
+            break;
+        }
+        let kicks = draws(KICKS_PER_ROUND, rng, |stream| {
             kicked(game, &best.defender, &universe, stream)
-        }))?;
+        });
+        rounds.climb_from(kicks)?;
     }
     let best = rounds.best.expect("the search climbs from the start");
     Ok(Climbed {
@@ -551,15 +566,11 @@ impl Rounds<'_> {
 
     /// Whether the deadline has passed or a climb reached `effort.enough`.
     fn finished(&self) -> bool {
-        let out_of_time = self
-            .effort
-            .deadline
-            .is_some_and(|end| Instant::now() >= end);
         let found_enough = self
             .best
             .as_ref()
             .is_some_and(|b| b.bound >= self.effort.enough);
-        out_of_time || found_enough
+        self.effort.past_deadline() || found_enough
     }
 }
 
@@ -577,12 +588,12 @@ fn kicked(game: &Posg, fsc: &Fsc, universe: &Fsc, rng: &mut ChaCha8Rng) -> Fsc {
     let count = (in_use.len() / KICK_DIVISOR)
         .max(MIN_KICKED_BLOCKS)
         .min(in_use.len());
-    let mut kicked = fsc.clone();
+    let mut jumped = fsc.clone();
     for i in rand::seq::index::sample(rng, in_use.len(), count) {
         let pairs = &universe.blocks[in_use[i]];
-        kicked.blocks[in_use[i]] = vec![certain(&pairs[rng.random_range(0..pairs.len())])];
+        jumped.blocks[in_use[i]] = vec![certain(&pairs[rng.random_range(0..pairs.len())])];
     }
-    kicked
+    jumped
 }
 
 /// The certified lower bound of `defender` with [`proving_settings`], or
@@ -797,42 +808,69 @@ mod tests {
         assert!(best.defender.blocks.iter().all(|block| block.len() == 1));
     }
 
-    /// A kick redraws a few blocks in use, each to one enabled pair played
-    /// surely, and leaves every other block as it was; different streams
-    /// kick differently, the same stream alike.
+    /// A kick redraws `max(in use / 8, 2)` blocks in use, each to one
+    /// enabled pair played surely (a redraw may land on the pair the block
+    /// plays), and leaves every other block as it was; the same stream
+    /// kicks alike. On the 4x4 grid (16 observations) the least count, 2;
+    /// on PAYNT's attacker-one-defender with 2 nodes, one in 8.
     #[test]
-    fn a_kick_redraws_a_few_blocks_in_use_and_keeps_the_rest() {
-        let game = grid_4x4();
-        let universe = Fsc::uniform_enabled(Role::Defender, 2, game.defender());
-        let fsc = first_pairs(&game, 2);
-        let in_use = blocks_in_use(&game, &fsc);
-        let used = in_use.iter().filter(|&&u| u).count();
-        let most = (used / KICK_DIVISOR).max(MIN_KICKED_BLOCKS);
-        let kick = |seed| kicked(&game, &fsc, &universe, &mut ChaCha8Rng::seed_from_u64(seed));
-        let mut kicks = Vec::new();
-        for seed in 0..20 {
-            let kicked = kick(seed);
-            let changed: Vec<usize> = (0..fsc.blocks.len())
-                .filter(|&b| kicked.blocks[b] != fsc.blocks[b])
-                .collect();
-            assert!(changed.len() <= most, "{changed:?}");
-            for &b in &changed {
-                assert!(in_use[b], "block {b} is not in use");
-                let [choice] = kicked.blocks[b].as_slice() else {
-                    panic!("block {b}: {:?}", kicked.blocks[b]);
-                };
-                assert_eq!(choice.probability, 1.0);
-                assert!(
-                    universe.blocks[b]
-                        .iter()
-                        .any(|pair| { (pair.next, pair.action) == (choice.next, choice.action) })
-                );
+    fn a_kick_redraws_one_in_8_blocks_in_use_and_keeps_the_rest() {
+        let aod = crate::game::drn::read(std::path::Path::new(
+            "tests/data/paynt/attacker-one-defender.drn",
+        ))
+        .unwrap()
+        .game;
+        let aod_fsc = {
+            let universe = Fsc::uniform_enabled(Role::Defender, 2, aod.defender());
+            let mut rng = ChaCha8Rng::seed_from_u64(3);
+            let mut fsc = first_pairs(&aod, 2);
+            // Both nodes in use: node 0 moves to node 1 on every observation.
+            for block in fsc.blocks.iter_mut().take(fsc.num_observations) {
+                block[0].next = 1;
             }
-            assert_eq!(kicked, kick(seed));
-            kicks.push(kicked);
+            for b in fsc.num_observations..fsc.blocks.len() {
+                let pairs = &universe.blocks[b];
+                fsc.blocks[b] = vec![certain(&pairs[rng.random_range(0..pairs.len())])];
+            }
+            fsc
+        };
+        for (game, fsc, expected) in [
+            (grid_4x4(), first_pairs(&grid_4x4(), 2), 2),
+            (aod, aod_fsc, 4),
+        ] {
+            let universe = Fsc::uniform_enabled(Role::Defender, 2, game.defender());
+            let in_use = blocks_in_use(&game, &fsc);
+            let used = in_use.iter().filter(|&&u| u).count();
+            assert_eq!(
+                (used / KICK_DIVISOR).max(MIN_KICKED_BLOCKS),
+                expected,
+                "{used} in use"
+            );
+            let kick = |seed| kicked(&game, &fsc, &universe, &mut ChaCha8Rng::seed_from_u64(seed));
+            let mut most = 0;
+            for seed in 0..20 {
+                let jumped = kick(seed);
+                let changed: Vec<usize> = (0..fsc.blocks.len())
+                    .filter(|&b| jumped.blocks[b] != fsc.blocks[b])
+                    .collect();
+                assert!(changed.len() <= expected, "{changed:?}");
+                most = most.max(changed.len());
+                for &b in &changed {
+                    assert!(in_use[b], "block {b} is not in use");
+                    let [choice] = jumped.blocks[b].as_slice() else {
+                        panic!("block {b}: {:?}", jumped.blocks[b]);
+                    };
+                    assert_eq!(choice.probability, 1.0);
+                    assert!(
+                        universe.blocks[b].iter().any(|pair| {
+                            (pair.next, pair.action) == (choice.next, choice.action)
+                        })
+                    );
+                }
+                assert_eq!(jumped, kick(seed));
+            }
+            assert_eq!(most, expected);
         }
-        assert!(kicks.iter().any(|k| *k != fsc));
-        assert!(kicks.iter().any(|k| *k != kicks[0]));
     }
 
     /// The cue game of tests/stopping.rs.

@@ -635,7 +635,7 @@ fn settle(
 /// stream of its own (`stream + (2^32 - 1) 2^32`, apart from the starts'),
 /// each climb bounded by `local_search_work` and, with a time budget, by
 /// [`Settings::search_deadline`] of the run begun at `started` (a quarter
-/// of the budget); the restarts end once
+/// of the budget); the restarts and kicks end once
 /// a climb is within `gap_tolerance` of the upper bound against the
 /// structure's starting adversary. Its end point's
 /// bound is the race's floor ([`race`]) and the end point a candidate of

@@ -176,14 +176,19 @@ pub struct Settings {
     /// defenders (its bound is the race's floor: the race ends once an
     /// upper bound meets it), and once more after the race from the best
     /// rounded candidate; on one-player models after the ascent, from the
-    /// best rounded candidate and the restarts. The best end point is the
+    /// best rounded candidate and the restarts. After the restarts, kicks
+    /// climb from the best end point with one in 8 of its blocks in use
+    /// redrawn, 4 at a time, until they have spent as much work as the
+    /// restarts (iterated local search). The best end point is the
     /// candidate `local-search`. Each climb ends by itself, when it has
     /// spent `local_search_work`, or at the time budget's final deadline;
     /// off: `--no-local-search`.
     #[arg(long = "no-local-search", action = clap::ArgAction::SetFalse)]
     pub local_search: bool,
     /// How many random memoryless starts the local search climbs from
-    /// besides the best candidate (in parallel; seeded from `seed`).
+    /// besides the best candidate, per round (in parallel; seeded from
+    /// `seed`; up to 4 rounds where climbs end early); 0 also turns its
+    /// kicks off.
     #[arg(long, default_value_t = Settings::default().local_search_restarts)]
     pub local_search_restarts: usize,
     /// The most work one climb of the local search spends, counted as the
