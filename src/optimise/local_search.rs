@@ -63,9 +63,9 @@ pub struct Effort {
     pub work: usize,
     /// When every climb ends, whatever it has evaluated.
     pub deadline: Option<Instant>,
-    /// A bound that ends the restarts and the kicks: no defender certifies more than an
-    /// upper bound, so one within the gap tolerance of it is enough
-    /// (`f64::INFINITY`: none known).
+    /// A bound that ends the restarts and the kicks: no defender certifies
+    /// more than an upper bound, so one within the gap tolerance of it is
+    /// enough (`f64::INFINITY`: none known).
     pub enough: f64,
 }
 
@@ -473,9 +473,8 @@ const MIN_KICKED_BLOCKS: usize = 2;
 /// round may overshoot). Both end once a climb reaches `effort.enough`,
 /// and at the deadline. Returns the end point with the highest bound (the
 /// first such, in the order `start`, then the climbs as drawn), with its
-/// certified lower bound. The
-/// rounds depend on counts and bounds only, so the search is reproducible
-/// for a seed unless a deadline cuts it.
+/// certified lower bound. The rounds depend on counts and bounds only, so
+/// the search is reproducible for a seed unless a deadline cuts it.
 pub fn climb_with_restarts(
     game: &Posg,
     not_phi: &Dra,
