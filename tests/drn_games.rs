@@ -278,19 +278,17 @@ fn paynts_optimum_on_attacker_one_defender_is_certified_and_reached_by_solve() {
         (paynt - ATTACKER_ONE_DEFENDER_PAYNT_1_VALUE).abs() < 1e-9,
         "{paynt}"
     );
-    let dir = temp_dir("attacker-one-defender");
-    let summary = solve_drn(&format!("{data}.drn"), &format!("{data}.props"), 1, &dir);
-    let lower = summary["certified"]["certified_lower"].as_f64().unwrap();
+    let lower = certified_by_solve("attacker-one-defender", 1);
     assert!(
         lower >= paynt - 1e-9,
         "solve certified {lower}, PAYNT {paynt}"
     );
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// PAYNT 0.5.0's optimum on attacker-one-defender with 2 memory nodes
-/// (`--fsc-memory-size 2`: 0.968029 for `Pmin [F goal]`), its controller's
-/// exact value `1 - 39423767/1233225000` (results/README.md).
+/// (`--fsc-memory-size 2`: 0.968029 for `Pmin [F goal]`): its controller's
+/// exact defender value, 1 - P(F goal) = 39423767/1233225000
+/// (results/README.md).
 const ATTACKER_ONE_DEFENDER_PAYNT_2_VALUE: f64 = 39_423_767.0 / 1_233_225_000.0;
 
 /// With 2 nodes the restarts of the local search end at most at 0.0226 on
@@ -299,15 +297,26 @@ const ATTACKER_ONE_DEFENDER_PAYNT_2_VALUE: f64 = 39_423_767.0 / 1_233_225_000.0;
 /// optimum.
 #[test]
 fn solve_reaches_paynts_two_node_optimum_on_attacker_one_defender() {
-    let data = "tests/data/paynt/attacker-one-defender";
-    let dir = temp_dir("attacker-one-defender-2");
-    let summary = solve_drn(&format!("{data}.drn"), &format!("{data}.props"), 2, &dir);
-    let lower = summary["certified"]["certified_lower"].as_f64().unwrap();
+    let lower = certified_by_solve("attacker-one-defender", 2);
     assert!(
         lower >= ATTACKER_ONE_DEFENDER_PAYNT_2_VALUE - 1e-9,
         "solve certified {lower}, PAYNT {ATTACKER_ONE_DEFENDER_PAYNT_2_VALUE}"
     );
+}
+
+/// The certified lower bound `posg-fsc solve` reports on PAYNT's model
+/// `name` (tests/data/paynt) with `nodes` defender nodes ([`solve_drn`]).
+fn certified_by_solve(name: &str, nodes: usize) -> f64 {
+    let data = format!("tests/data/paynt/{name}");
+    let dir = temp_dir(&format!("{name}-{nodes}"));
+    let summary = solve_drn(
+        &format!("{data}.drn"),
+        &format!("{data}.props"),
+        nodes,
+        &dir,
+    );
     std::fs::remove_dir_all(&dir).unwrap();
+    summary["certified"]["certified_lower"].as_f64().unwrap()
 }
 
 fn temp_dir(name: &str) -> PathBuf {

@@ -504,19 +504,13 @@ pub fn climb_with_restarts(
         }
     }
     let restarts_spent = rounds.spent;
-    loop {
-        let Some(best) = rounds
-            .best
-            .as_ref()
-            .filter(|best| restarts > 0 && best.bound > 0.0)
-        else {
+    while restarts > 0 && rounds.spent - restarts_spent < restarts_spent && !rounds.finished() {
+        let Some(best) = rounds.best.as_ref().filter(|best| best.bound > 0.0) else {
             break;
         };
-        if rounds.spent - restarts_spent >= restarts_spent || rounds.finished() {
-            break;
-        }
+        let in_use = blocks_in_use(game, &best.defender);
         let kicks = draws(KICKS_PER_ROUND, rng, |stream| {
-            kicked(game, &best.defender, &universe, stream)
+            kicked(&best.defender, &in_use, &universe, stream)
         });
         rounds.climb_from(kicks)?;
     }
@@ -573,13 +567,13 @@ impl Rounds<'_> {
     }
 }
 
-/// `fsc` with one in [`KICK_DIVISOR`] of its blocks in use (at least
-/// [`MIN_KICKED_BLOCKS`]), drawn from `rng` without repetition, each
-/// playing one of `universe`'s enabled pairs `(next node, action)` with
-/// probability 1, drawn uniformly: a jump out of a climb's end point's
-/// basin that keeps most of what the climb found.
-fn kicked(game: &Posg, fsc: &Fsc, universe: &Fsc, rng: &mut ChaCha8Rng) -> Fsc {
-    let in_use: Vec<usize> = blocks_in_use(game, fsc)
+/// `fsc` with one in [`KICK_DIVISOR`] of its blocks in use (`in_use`, by
+/// [`blocks_in_use`]; at least [`MIN_KICKED_BLOCKS`]), drawn from `rng`
+/// without repetition, each playing one of `universe`'s enabled pairs
+/// `(next node, action)` with probability 1, drawn uniformly: a jump out
+/// of a climb's end point's basin that keeps most of what the climb found.
+fn kicked(fsc: &Fsc, in_use: &[bool], universe: &Fsc, rng: &mut ChaCha8Rng) -> Fsc {
+    let in_use: Vec<usize> = in_use
         .iter()
         .enumerate()
         .filter_map(|(b, &used)| used.then_some(b))
@@ -845,7 +839,14 @@ mod tests {
                 expected,
                 "{used} in use"
             );
-            let kick = |seed| kicked(&game, &fsc, &universe, &mut ChaCha8Rng::seed_from_u64(seed));
+            let kick = |seed| {
+                kicked(
+                    &fsc,
+                    &in_use,
+                    &universe,
+                    &mut ChaCha8Rng::seed_from_u64(seed),
+                )
+            };
             let mut most = 0;
             for seed in 0..20 {
                 let jumped = kick(seed);
