@@ -172,9 +172,10 @@ impl<'a> LowerBoundGradients<'a> {
                 let accepting = accepting_end_components(&product.mdp, &pairs)?;
                 let target = accepting_union(&product.mdp, &accepting);
                 let qualitative = qualitative_reachability(&product.mdp, &target)?;
+                let systems = PolicySystems::new(&product.mdp, qualitative, &self.settings)?;
                 LastAnalysis {
-                    strategy: qualitative.strategy.clone(),
-                    systems: PolicySystems::new(&product.mdp, qualitative, &self.settings)?,
+                    strategy: systems.greedy_start(&product.mdp),
+                    systems,
                 }
             }
         };

@@ -18,7 +18,14 @@
 //!    every state of `M` reaches `B` with positive probability: the chain
 //!    restricted to `M` is transient and `I - Q` is nonsingular, even when
 //!    `M` contains end components (where an arbitrary policy could stay
-//!    forever and make the system singular).
+//!    forever and make the system singular). A cold start improves on it
+//!    first ([`PolicySystems::greedy_start`]): greedy for a few sweeps of
+//!    value iteration, with the proper actions back wherever that greedy
+//!    policy would no longer reach `B`. On PAYNT's dodge-8 with a uniform
+//!    3-node defender (23,814 maybe states) policy iteration then took 1
+//!    evaluation instead of 8, and 1.2 s instead of 13 s: the proper start
+//!    mixes so slowly that BiCGSTAB stalls on it and every evaluation fell
+//!    to a sparse LU.
 //! 3. **Evaluation.** `(I - Q_sigma) x = b_sigma` on `M`, with `Q_sigma =
 //!    P_sigma` restricted to `M x M` and `b_sigma(s) = P_sigma(B | s)`, by
 //!    sparse LU or, above [`crate::solver::DEFAULT_LU_LIMIT`] unknowns,
@@ -58,7 +65,7 @@
 //! point, and `upper` is what a reported bound uses. The proper start keeps
 //! every evaluation nonsingular.
 
-use crate::graph::backward_reachable;
+use crate::graph::{CsrGraph, backward_reachable, reverse_csr};
 use crate::solver::{LinearSolver, SolverSettings, SparsePattern};
 
 use super::optimality::Certificate;
@@ -67,6 +74,10 @@ use super::{Mdp, MdpError, Predecessors};
 /// Policy iteration switches an action only if it improves the expected
 /// value by more than this (values are probabilities in `[0, 1]`).
 pub const IMPROVEMENT_THRESHOLD: f64 = 1e-12;
+
+/// The most Gauss-Seidel sweeps of value iteration that
+/// [`PolicySystems::greedy_start`] runs before policy iteration.
+pub const START_SWEEPS: usize = 100;
 
 /// Policy iteration gives up (as a numerical failure) after this many
 /// evaluations; in exact arithmetic it stops after finitely many.
@@ -115,9 +126,9 @@ pub fn max_reachability(
     settings: &SolverSettings,
 ) -> Result<Reachability, MdpError> {
     let qualitative = qualitative_reachability(mdp, target)?;
-    let start = qualitative.strategy.clone();
-    let mut systems = PolicySystems::new(mdp, qualitative, settings)?;
-    max_reachability_with(mdp, &start, &mut systems)
+    let systems = PolicySystems::new(mdp, qualitative, settings)?;
+    let start = systems.greedy_start(mdp);
+    max_reachability_with(mdp, &start, &mut { systems })
 }
 
 /// [`max_reachability`] on `systems`, built by [`PolicySystems::new`] for
@@ -489,6 +500,82 @@ impl PolicySystems {
         certificate.upper(mdp, &self.maybe, values)
     }
 
+    /// A proper strategy for policy iteration to start from, better than
+    /// the qualitative step's (module documentation, step 2): greedy for the
+    /// values of at most [`START_SWEEPS`] Gauss-Seidel sweeps of value
+    /// iteration from below, then, in every maybe state from which that
+    /// policy no longer reaches the almost-sure set, the proper start's
+    /// action again. The repaired policy is proper: a reverted state's action
+    /// leads to a state found earlier by the backward search, which either
+    /// reached the set under the greedy policy (along states that all kept
+    /// their actions) or was reverted too. Where the proper start makes the
+    /// chain mix slowly, this saves most of the policy evaluations.
+    pub fn greedy_start(&self, mdp: &Mdp) -> Vec<usize> {
+        let mut values: Vec<f64> = self
+            .qualitative
+            .almost_sure
+            .iter()
+            .map(|&t| f64::from(t))
+            .collect();
+        for _ in 0..START_SWEEPS {
+            let mut change: f64 = 0.0;
+            for &s in &self.maybe {
+                let best = (0..mdp.num_actions(s))
+                    .map(|a| leaving_expectation(mdp, s, a, &values))
+                    .fold(0.0, f64::max);
+                change = change.max(best - values[s]);
+                values[s] = best;
+            }
+            if change <= IMPROVEMENT_THRESHOLD {
+                break;
+            }
+        }
+        let mut strategy = self.qualitative.strategy.clone();
+        improve(
+            mdp,
+            &values,
+            &self.maybe,
+            &mut strategy,
+            IMPROVEMENT_THRESHOLD,
+        );
+        self.restore_proper(mdp, &mut strategy);
+        strategy
+    }
+
+    /// Gives every maybe state from which `strategy` does not reach the
+    /// almost-sure set the proper start's action back (see
+    /// [`Self::greedy_start`]).
+    fn restore_proper(&self, mdp: &Mdp, strategy: &mut [usize]) {
+        let n = mdp.num_states();
+        let mut is_maybe = vec![false; n];
+        for &s in &self.maybe {
+            is_maybe[s] = true;
+        }
+        let mut offsets = Vec::with_capacity(n + 1);
+        let mut successors = Vec::new();
+        offsets.push(0);
+        for s in 0..n {
+            if is_maybe[s] {
+                let moves = mdp.distribution(s, strategy[s]).iter();
+                successors.extend(moves.filter(|&&(t, _)| t != s).map(|&(t, _)| t as u32));
+            }
+            offsets.push(successors.len());
+        }
+        let chain = CsrGraph {
+            offsets: &offsets,
+            targets: &successors,
+        };
+        let (reverse_offsets, predecessors) = reverse_csr(&chain);
+        let reverse = CsrGraph {
+            offsets: &reverse_offsets,
+            targets: &predecessors,
+        };
+        let reaches = backward_reachable(&reverse, &self.qualitative.almost_sure);
+        for &s in self.maybe.iter().filter(|&&s| !reaches[s]) {
+            strategy[s] = self.qualitative.strategy[s];
+        }
+    }
+
     /// The solver, once a system was factorised.
     fn solver(&mut self) -> Result<&mut LinearSolver, MdpError> {
         self.solver.as_mut().ok_or(MdpError::Malformed(
@@ -631,6 +718,7 @@ mod tests {
     use super::super::MdpBuilder;
     use super::super::tests::mdp;
     use super::*;
+    use proptest::prelude::*;
 
     /// Target 3, sink 4. State 0 may stay forever (action 0) or gamble
     /// (action 1: 1 or 4, half each); 1 and 2 form an end component through
@@ -712,17 +800,29 @@ mod tests {
         assert!(matches!(error, MdpError::OptimalityUnproved(_)), "{error}");
     }
 
+    /// From the proper start (which policy iteration must improve) and
+    /// from the greedy start alike.
     #[test]
     fn values_derived_on_paper_with_end_components_in_the_maybe_states() {
         let target = [false, false, false, true, false];
-        let result = max_reachability(&gamble(), &target, &SolverSettings::default()).unwrap();
+        let qualitative = qualitative_reachability(&gamble(), &target).unwrap();
+        let mut systems =
+            PolicySystems::new(&gamble(), qualitative.clone(), &SolverSettings::default()).unwrap();
+        let from_proper =
+            max_reachability_with(&gamble(), &qualitative.strategy, &mut systems).unwrap();
+        assert!(
+            from_proper.iterations >= 2,
+            "the start policy is not optimal"
+        );
+        let greedy = max_reachability(&gamble(), &target, &SolverSettings::default()).unwrap();
         let expected = [0.3, 0.6, 0.6, 1.0, 0.0];
-        for (x, e) in result.values.iter().zip(expected) {
-            assert!((x - e).abs() < 1e-14, "{:?}", result.values);
+        for result in [from_proper, greedy] {
+            for (x, e) in result.values.iter().zip(expected) {
+                assert!((x - e).abs() < 1e-14, "{:?}", result.values);
+            }
+            assert_eq!(&result.strategy[..3], &[1, 1, 0]);
+            assert!(result.residual < 1e-12);
         }
-        assert_eq!(&result.strategy[..3], &[1, 1, 0]);
-        assert!(result.residual < 1e-12);
-        assert!(result.iterations >= 2, "the start policy is not optimal");
     }
 
     /// `gamble` with other probabilities, the same graph. On paper: x2 =
@@ -834,5 +934,133 @@ mod tests {
             max_reachability(&gamble(), &[true], &SolverSettings::default()),
             Err(MdpError::Malformed(_))
         ));
+    }
+
+    /// State 0 may try for the target 2 directly (action 0: 0.1, else the
+    /// sink 3) or move to 1 (action 1), which reaches 2 with 0.9. The
+    /// backward search finds 0 through its direct edge to 2, so policy
+    /// iteration from the proper start evaluates twice; value iteration
+    /// sees 0.9 behind action 1 and the greedy start evaluates once.
+    #[test]
+    fn the_greedy_start_saves_the_evaluation_of_a_poor_proper_start() {
+        let m = mdp(&[
+            &[&[(2, 0.1), (3, 0.9)], &[(1, 1.0)]],
+            &[&[(2, 0.9), (3, 0.1)]],
+            &[&[(2, 1.0)]],
+            &[&[(3, 1.0)]],
+        ]);
+        let target = [false, false, true, false];
+        let qualitative = qualitative_reachability(&m, &target).unwrap();
+        assert_eq!(qualitative.strategy[0], 0);
+        let mut systems =
+            PolicySystems::new(&m, qualitative.clone(), &SolverSettings::default()).unwrap();
+        let from_proper = max_reachability_with(&m, &qualitative.strategy, &mut systems).unwrap();
+        let greedy = max_reachability(&m, &target, &SolverSettings::default()).unwrap();
+        assert_eq!((from_proper.iterations, greedy.iterations), (2, 1));
+        assert_eq!(greedy.strategy[0], 1);
+        assert!((greedy.values[0] - 0.9).abs() < 1e-12);
+    }
+
+    /// Whether `strategy` reaches the almost-sure set of `systems` from the
+    /// maybe state `s` (a forward search).
+    fn proper_from(m: &Mdp, systems: &PolicySystems, strategy: &[usize], s: usize) -> bool {
+        let mut seen = vec![false; m.num_states()];
+        let mut stack = vec![s];
+        while let Some(u) = stack.pop() {
+            if systems.qualitative.almost_sure[u] {
+                return true;
+            }
+            if !seen[u] && systems.maybe.contains(&u) {
+                seen[u] = true;
+                stack.extend(m.distribution(u, strategy[u]).iter().map(|&(t, _)| t));
+            }
+        }
+        false
+    }
+
+    /// States 0 and 1 move to each other (0 by action 1, 1 by action 0);
+    /// 0 may also try for the target 2 with 0.7, 1 with 0.3 (action 1) or
+    /// 0.8 (action 2). The proper start plays 0 -> 2 and 1's action 1; value
+    /// iteration gives both 0.8, and the greedy step sends 0 to 1 (0.8 >
+    /// 0.7) and 1 to 0 (its first action worth 0.8 > 0.3): a cycle that
+    /// never reaches the target, which the repair must undo.
+    #[test]
+    fn a_greedy_cycle_is_given_the_proper_actions_back() {
+        let m = mdp(&[
+            &[&[(2, 0.7), (3, 0.3)], &[(1, 1.0)]],
+            &[&[(0, 1.0)], &[(2, 0.3), (3, 0.7)], &[(2, 0.8), (3, 0.2)]],
+            &[&[(2, 1.0)]],
+            &[&[(3, 1.0)]],
+        ]);
+        let target = [false, false, true, false];
+        let qualitative = qualitative_reachability(&m, &target).unwrap();
+        let systems = PolicySystems::new(&m, qualitative, &SolverSettings::default()).unwrap();
+        let start = systems.greedy_start(&m);
+        assert!(proper_from(&m, &systems, &start, 0) && proper_from(&m, &systems, &start, 1));
+        let result = max_reachability(&m, &target, &SolverSettings::default()).unwrap();
+        assert!(
+            (result.values[0] - 0.8).abs() < 1e-12,
+            "{:?}",
+            result.values
+        );
+        assert_eq!(&result.strategy[..2], &[1, 2]);
+    }
+
+    /// Random MDPs with up to 7 states, 1-3 actions each, and 1-3
+    /// successors per action with weights 1-4.
+    fn arbitrary_mdp() -> impl Strategy<Value = Mdp> {
+        (1usize..8).prop_flat_map(|n| {
+            let successor = (0..n, 1u32..5);
+            let action = proptest::collection::vec(successor, 1..4);
+            proptest::collection::vec(proptest::collection::vec(action, 1..4), n).prop_map(
+                |states| {
+                    let mut builder = MdpBuilder::new();
+                    for actions in states {
+                        for successors in actions {
+                            let total: u32 = successors.iter().map(|&(_, w)| w).sum();
+                            let terms = successors.into_iter();
+                            builder.add_action(
+                                terms.map(|(t, w)| (t, f64::from(w) / f64::from(total))),
+                            );
+                        }
+                        builder.end_state();
+                    }
+                    builder.build().unwrap()
+                },
+            )
+        })
+    }
+
+    proptest! {
+        /// The greedy start is proper (every maybe state reaches the
+        /// almost-sure set under it, checked by a forward search), and
+        /// policy iteration from it ends at the values it reaches from the
+        /// proper start.
+        #[test]
+        fn the_greedy_start_is_proper_and_changes_no_value(
+            (m, target) in arbitrary_mdp().prop_flat_map(|m| {
+                let n = m.num_states();
+                (Just(m), proptest::collection::vec(any::<bool>(), n))
+            })
+        ) {
+            let qualitative = qualitative_reachability(&m, &target).unwrap();
+            let systems =
+                PolicySystems::new(&m, qualitative.clone(), &SolverSettings::default()).unwrap();
+            let start = systems.greedy_start(&m);
+            for &s in &systems.maybe {
+                prop_assert!(
+                    proper_from(&m, &systems, &start, s),
+                    "maybe state {s} does not reach the target under {start:?}"
+                );
+            }
+            let mut from_proper_systems =
+                PolicySystems::new(&m, qualitative.clone(), &SolverSettings::default()).unwrap();
+            let from_proper =
+                max_reachability_with(&m, &qualitative.strategy, &mut from_proper_systems).unwrap();
+            let greedy = max_reachability(&m, &target, &SolverSettings::default()).unwrap();
+            for (a, b) in greedy.values.iter().zip(&from_proper.values) {
+                prop_assert!((a - b).abs() < 1e-9, "{:?} against {:?}", greedy.values, from_proper.values);
+            }
+        }
     }
 }
