@@ -80,8 +80,10 @@ pub(super) struct Certificate {
     /// Where BiCGSTAB solves the potentials first: the settings of the LU
     /// that takes over where it fails.
     fallback: Option<SolverSettings>,
-    /// The expected moves (per quotient node) of the last potential
-    /// solved, where the next solve by BiCGSTAB starts.
+    /// While BiCGSTAB solves the potentials: the expected moves (per
+    /// quotient node) of the last one, where the next solve starts (a
+    /// potential then depends on the ones before it on the graph by at
+    /// most the solve's residual, which the check makes harmless).
     last_times: Option<Vec<f64>>,
     /// The potential of the last certificate proved on this graph, tried
     /// first on the next ([`Certificate::upper`]).
@@ -100,13 +102,15 @@ pub(super) struct Certificate {
 impl Certificate {
     /// The analysis of `mdp`'s graph with the maybe states `maybe`.
     /// The potentials are solved by BiCGSTAB where `settings` choose
-    /// `auto` and the quotient has at least [`KRYLOV_FIRST_UNKNOWNS`]
-    /// nodes, with LU where that fails ([`Self::potential`]).
+    /// `auto` and the quotient has from [`KRYLOV_FIRST_UNKNOWNS`] nodes up
+    /// to the LU limit (where `auto` would take LU or try BiCGSTAB first),
+    /// with LU where that fails ([`Self::potential`]).
     pub fn new(mdp: &Mdp, maybe: &[usize], settings: &SolverSettings) -> Result<Self, MdpError> {
         let components = Components::of(mdp, maybe);
         let quotient = Quotient::new(&components, mdp, maybe);
-        let krylov_first =
-            settings.method == SolverMethod::Auto && quotient.pattern.n >= KRYLOV_FIRST_UNKNOWNS;
+        let n = quotient.pattern.n;
+        let krylov_first = settings.method == SolverMethod::Auto
+            && (KRYLOV_FIRST_UNKNOWNS..=settings.lu_limit).contains(&n);
         let first = if krylov_first {
             SolverSettings {
                 method: SolverMethod::Krylov,
@@ -220,36 +224,51 @@ impl Certificate {
     ) -> Result<Vec<f64>, MdpError> {
         self.solves += 1;
         let start = self.last_times.take();
-        let times = match self
-            .quotient
-            .evaluate(&mut self.solver, moves, choice, start)
-        {
+        let times = match self.expected_moves(moves, choice, start) {
             Ok(times) => times,
-            Err(error) => {
+            Err(failed) => {
                 let Some(lu) = self.fallback.take() else {
-                    return Err(unsolved(error));
+                    return Err(failed);
                 };
                 self.solver =
                     LinearSolver::new(self.quotient.pattern.clone(), &lu).map_err(unsolved)?;
-                self.quotient
-                    .evaluate(&mut self.solver, moves, choice, None)
-                    .map_err(unsolved)?
+                self.expected_moves(moves, choice, None).map_err(|error| {
+                    MdpError::OptimalityUnproved(format!("{error} (BiCGSTAB before it: {failed})"))
+                })?
             }
         };
-        self.last_times = Some(times.clone());
-        // The expected moves are at least 1: a negative or non-finite time
-        // is a failed solve, and `raised` would round a cancelling sum.
-        if let Some(node) = times.iter().position(|t| !(t.is_finite() && *t >= 0.0)) {
-            return Err(MdpError::OptimalityUnproved(format!(
-                "the potential of the certificate is {} at node {node}",
-                times[node]
-            )));
+        if self.fallback.is_some() {
+            self.last_times = Some(times.clone());
         }
         let mut potential = vec![0.0; mdp.num_states()];
         for &s in maybe {
             potential[s] = times[self.quotient.node_of[s]];
         }
         Ok(potential)
+    }
+
+    /// The quotient's expected moves under `choice` by the solver in use,
+    /// an iterative solve starting from `start`; an error where the solve
+    /// fails or gives a time that is negative or not finite (the expected
+    /// moves are at least 1: such a time is a failed solve, and `raised`
+    /// would round a cancelling sum).
+    fn expected_moves(
+        &mut self,
+        moves: &Moves,
+        choice: &[usize],
+        start: Option<Vec<f64>>,
+    ) -> Result<Vec<f64>, MdpError> {
+        let times = self
+            .quotient
+            .evaluate(&mut self.solver, moves, choice, start)
+            .map_err(unsolved)?;
+        match times.iter().position(|t| !(t.is_finite() && *t >= 0.0)) {
+            Some(node) => Err(MdpError::OptimalityUnproved(format!(
+                "the potential of the certificate is {} at node {node}",
+                times[node]
+            ))),
+            None => Ok(times),
+        }
     }
 
     /// `y = x + eps T` where `potential` proves `F(y) <= y` and raises no
@@ -806,72 +825,80 @@ mod tests {
         );
     }
 
-    /// States 0 and 1 swap and leave with probabilities of 1e-25: no
-    /// potential fits in double precision, so the certificate refuses.
-    /// A walk on 6,000 states that moves up (0.5), down (0.3), jumps far
-    /// (0.19) or dies (0.01), the top reaching the target, with a gamble
-    /// (0.3) beside it
-    /// in every state: a quotient above [`KRYLOV_FIRST_UNKNOWNS`]. Under
-    /// `auto` its potentials are solved by BiCGSTAB, and by LU where
+    /// A walk on 6,000 states that moves up, down, jumps far (0.19) or
+    /// dies (0.01), the top reaching the target, with a gamble (0.3) beside
+    /// it in every state: a quotient above [`KRYLOV_FIRST_UNKNOWNS`]. Under
+    /// `auto` its potentials are solved by BiCGSTAB (for two MDPs of the
+    /// graph, the second from the first's potential), and by LU where
     /// BiCGSTAB fails (forced here by allowing it one iteration); either
-    /// proves the bounds an LU certificate proves.
+    /// proves the bounds a fresh LU certificate proves.
     #[test]
     fn a_large_quotient_solves_its_potentials_by_bicgstab_and_by_lu_where_that_fails() {
         let n = 6_000;
-        let mut builder = MdpBuilder::new();
-        for i in 0..n {
-            let down = if i == 0 { n + 1 } else { i - 1 };
-            let jump = i * 7_919 % n;
-            builder.add_action([(i + 1, 0.5), (down, 0.3), (jump, 0.19), (n + 1, 0.01)]);
-            builder.add_action([(n, 0.3), (n + 1, 0.7)]);
-            builder.end_state();
-        }
-        for absorbing in [n, n + 1] {
-            builder.add_action([(absorbing, 1.0)]);
-            builder.end_state();
-        }
-        let m = builder.build().unwrap();
+        let walk = |up: f64| {
+            let mut builder = MdpBuilder::new();
+            for i in 0..n {
+                let down = if i == 0 { n + 1 } else { i - 1 };
+                let jump = i * 7_919 % n;
+                let moves = [(i + 1, up), (down, 0.8 - up), (jump, 0.19), (n + 1, 0.01)];
+                builder.add_action(moves);
+                builder.add_action([(n, 0.3), (n + 1, 0.7)]);
+                builder.end_state();
+            }
+            for absorbing in [n, n + 1] {
+                builder.add_action([(absorbing, 1.0)]);
+                builder.end_state();
+            }
+            builder.build().unwrap()
+        };
+        let walks = [walk(0.5), walk(0.45)];
         let mut target = vec![false; n + 2];
         target[n] = true;
         let lu = SolverSettings {
             method: SolverMethod::Lu,
             ..SolverSettings::default()
         };
-        let values = super::super::max_reachability(&m, &target, &lu)
-            .unwrap()
-            .values;
+        let values: Vec<Vec<f64>> = walks
+            .iter()
+            .map(|m| {
+                super::super::max_reachability(m, &target, &lu)
+                    .unwrap()
+                    .values
+            })
+            .collect();
         let maybe: Vec<usize> = (0..n).collect();
-        let bound = |settings: &SolverSettings| {
-            let mut certificate = Certificate::new(&m, &maybe, settings).unwrap();
-            let upper = certificate.upper(&m, &maybe, &values).unwrap();
-            (upper, certificate.solver.method())
-        };
-        let (by_lu, _) = bound(&lu);
-        let (by_krylov, krylov) = bound(&SolverSettings::default());
+        let fresh: Vec<Vec<f64>> = walks
+            .iter()
+            .zip(&values)
+            .map(|(m, x)| certified_upper(m, &maybe, x, &lu).unwrap())
+            .collect();
         let stalled = SolverSettings {
             max_iterations: 1,
             ..SolverSettings::default()
         };
-        let (by_fallback, fallback) = bound(&stalled);
-        assert_eq!((krylov, fallback), (SolverMethod::Krylov, SolverMethod::Lu));
-        for upper in [&by_krylov, &by_fallback] {
-            for s in 0..n {
-                assert!(
-                    upper[s] >= values[s],
-                    "state {s}: {} < {}",
-                    upper[s],
-                    values[s]
-                );
-                assert!(
-                    (upper[s] - by_lu[s]).abs() < 1e-9,
-                    "state {s}: {} against {}",
-                    upper[s],
-                    by_lu[s]
-                );
+        for (settings, falls_back) in [(SolverSettings::default(), false), (stalled, true)] {
+            let mut certificate = Certificate::new(&walks[0], &maybe, &settings).unwrap();
+            for ((m, x), by_lu) in walks.iter().zip(&values).zip(&fresh) {
+                let upper = certificate.upper(m, &maybe, x).unwrap();
+                for s in 0..n {
+                    assert!(upper[s] >= x[s], "state {s}: {} < {}", upper[s], x[s]);
+                    let (y, z) = (upper[s], by_lu[s]);
+                    assert!((y - z).abs() < 1e-9, "state {s}: {y} against {z}");
+                }
             }
+            let method = certificate.solver.method();
+            assert_eq!(certificate.fallback.is_none(), falls_back);
+            let expected = if falls_back {
+                SolverMethod::Lu
+            } else {
+                SolverMethod::Krylov
+            };
+            assert_eq!(method, expected);
         }
     }
 
+    /// States 0 and 1 swap and leave with probabilities of 1e-25: no
+    /// potential fits in double precision, so the certificate refuses.
     #[test]
     fn a_chain_that_leaves_below_the_precision_is_refused() {
         let m = mdp(&[

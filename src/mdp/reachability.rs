@@ -18,19 +18,21 @@
 //!    every state of `M` reaches `B` with positive probability: the chain
 //!    restricted to `M` is transient and `I - Q` is nonsingular, even when
 //!    `M` contains end components (where an arbitrary policy could stay
-//!    forever and make the system singular). A cold start improves on it
-//!    first ([`PolicySystems::greedy_start`]): greedy for a few sweeps of
-//!    value iteration, with the proper actions back wherever that greedy
-//!    policy would no longer reach `B`. On PAYNT's dodge-8 with a uniform
+//!    forever and make the system singular). A cold start usually improves
+//!    on it first ([`PolicySystems::greedy_start`]): greedy for a few
+//!    sweeps of value iteration, with the proper actions back wherever
+//!    that greedy policy would no longer reach `B`. On PAYNT's dodge-8 with a uniform
 //!    3-node defender (23,814 maybe states) policy iteration then took
 //!    1.3 s instead of 13 s: the proper start mixes so slowly that
 //!    BiCGSTAB stalls on it, and each of its 8 evaluations fell to a sparse
 //!    LU.
 //! 3. **Evaluation.** `(I - Q_sigma) x = b_sigma` on `M`, with `Q_sigma =
 //!    P_sigma` restricted to `M x M` and `b_sigma(s) = P_sigma(B | s)`, by
-//!    sparse LU or, above [`crate::solver::DEFAULT_LU_LIMIT`] unknowns,
-//!    BiCGSTAB warm-started from the previous policy's values
-//!    ([`crate::solver::LinearSolver`]: residual checked, error bounded).
+//!    sparse LU or BiCGSTAB warm-started from the previous policy's values,
+//!    as [`crate::solver::LinearSolver`] chooses (with `auto`: LU unless
+//!    its analysis predicts a costly factorisation, where a short BiCGSTAB
+//!    trial decides, and BiCGSTAB above [`crate::solver::DEFAULT_LU_LIMIT`]
+//!    unknowns; residual checked, error bounded).
 //!    The policies passed through are evaluated in double precision and
 //!    their bound may exceed the tolerance (it raises the improvement
 //!    threshold of step 4); the policy whose values are returned must meet
@@ -65,7 +67,7 @@
 //! point, and `upper` is what a reported bound uses. The proper start keeps
 //! every evaluation nonsingular.
 
-use crate::graph::{CsrGraph, backward_reachable, reverse_csr};
+use crate::graph::backward_reachable;
 use crate::solver::{LinearSolver, SolverSettings, SparsePattern};
 
 use super::optimality::Certificate;
@@ -132,9 +134,9 @@ pub fn max_reachability(
     settings: &SolverSettings,
 ) -> Result<Reachability, MdpError> {
     let qualitative = qualitative_reachability(mdp, target)?;
-    let systems = PolicySystems::new(mdp, qualitative, settings)?;
+    let mut systems = PolicySystems::new(mdp, qualitative, settings)?;
     let start = systems.greedy_start(mdp);
-    max_reachability_with(mdp, &start, &mut { systems })
+    max_reachability_with(mdp, &start, &mut systems)
 }
 
 /// [`max_reachability`] on `systems`, built by [`PolicySystems::new`] for
@@ -142,8 +144,9 @@ pub fn max_reachability(
 /// step (steps 1 and 2, which depend on the graph alone), so that MDPs of
 /// one graph (a controller's products as its probabilities change) share
 /// the graph analysis and one symbolic analysis; policy iteration starts
-/// from `start` on the maybe states: the qualitative strategy, or the
-/// strategy of an earlier result on the same graph. Either is proper
+/// from `start` on the maybe states: the qualitative strategy, its
+/// [`PolicySystems::greedy_start`], or the strategy of an earlier result
+/// on the same graph. Each is proper
 /// (every maybe state reaches the target with positive probability under
 /// it, a property of the graph), so every evaluation stays nonsingular. On
 /// return the systems hold the factorisation of the returned strategy.
@@ -506,16 +509,19 @@ impl PolicySystems {
         certificate.upper(mdp, &self.maybe, values)
     }
 
-    /// A proper strategy for policy iteration to start from, better than
-    /// the qualitative step's (module documentation, step 2): greedy for the
-    /// values of at most [`START_SWEEPS`] Gauss-Seidel sweeps of value
-    /// iteration from below, then, in every maybe state from which that
-    /// policy no longer reaches the almost-sure set, the proper start's
-    /// action again. The repaired policy is proper: a reverted state's action
-    /// leads to a state found earlier by the backward search, which either
-    /// reached the set under the greedy policy (along states that all kept
-    /// their actions) or was reverted too. Where the proper start makes the
-    /// chain mix slowly, this saves most of the policy evaluations.
+    /// A proper strategy for policy iteration to start from, usually
+    /// better than the qualitative step's (module documentation, step 2):
+    /// greedy for the values of at most [`START_SWEEPS`] Gauss-Seidel
+    /// sweeps of value iteration from below, then, in every maybe state
+    /// from which that policy no longer reaches the almost-sure set, the
+    /// proper start's action again. The repaired policy is proper, by
+    /// induction on the order in which the qualitative step's backward
+    /// search found the states: a reverted state's action has an edge of
+    /// positive probability to a state found earlier, which either reached
+    /// the set under the greedy policy (along states that all reach it, so
+    /// all kept their actions) or was reverted too. Where the proper start
+    /// makes the chain mix slowly, this saves most of the policy
+    /// evaluations.
     pub fn greedy_start(&self, mdp: &Mdp) -> Vec<usize> {
         let mut values: Vec<f64> = self
             .qualitative
@@ -550,35 +556,27 @@ impl PolicySystems {
 
     /// Gives every maybe state from which `strategy` does not reach the
     /// almost-sure set the proper start's action back (see
-    /// [`Self::greedy_start`]).
+    /// [`Self::greedy_start`]): a backward search from the set along the
+    /// edges of `strategy`.
     fn restore_proper(&self, mdp: &Mdp, strategy: &mut [usize]) {
-        let n = mdp.num_states();
-        let mut is_maybe = vec![false; n];
-        for &s in &self.maybe {
-            is_maybe[s] = true;
-        }
-        let mut offsets = Vec::with_capacity(n + 1);
-        let mut successors = Vec::new();
-        offsets.push(0);
-        for s in 0..n {
-            if is_maybe[s] {
-                let moves = mdp.distribution(s, strategy[s]).iter();
-                successors.extend(moves.filter(|&&(t, _)| t != s).map(|&(t, _)| t as u32));
+        let QualitativeReachability {
+            possible,
+            almost_sure,
+            strategy: proper,
+        } = &self.qualitative;
+        let predecessors = mdp.predecessors();
+        let mut reaches = almost_sure.clone();
+        let mut frontier: Vec<usize> = (0..reaches.len()).filter(|&t| reaches[t]).collect();
+        while let Some(t) = frontier.pop() {
+            for &(s, a) in predecessors.of(t) {
+                if possible[s] && !reaches[s] && a == strategy[s] {
+                    reaches[s] = true;
+                    frontier.push(s);
+                }
             }
-            offsets.push(successors.len());
         }
-        let chain = CsrGraph {
-            offsets: &offsets,
-            targets: &successors,
-        };
-        let (reverse_offsets, predecessors) = reverse_csr(&chain);
-        let reverse = CsrGraph {
-            offsets: &reverse_offsets,
-            targets: &predecessors,
-        };
-        let reaches = backward_reachable(&reverse, &self.qualitative.almost_sure);
         for &s in self.maybe.iter().filter(|&&s| !reaches[s]) {
-            strategy[s] = self.qualitative.strategy[s];
+            strategy[s] = proper[s];
         }
     }
 
