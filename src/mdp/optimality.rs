@@ -237,12 +237,12 @@ impl Certificate {
                 })?
             }
         };
-        if self.fallback.is_some() {
-            self.last_times = Some(times.clone());
-        }
         let mut potential = vec![0.0; mdp.num_states()];
         for &s in maybe {
             potential[s] = times[self.quotient.node_of[s]];
+        }
+        if self.fallback.is_some() {
+            self.last_times = Some(times);
         }
         Ok(potential)
     }

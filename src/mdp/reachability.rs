@@ -21,11 +21,11 @@
 //!    forever and make the system singular). A cold start usually improves
 //!    on it first ([`PolicySystems::greedy_start`]): greedy for a few
 //!    sweeps of value iteration, with the proper actions back wherever
-//!    that greedy policy would no longer reach `B`. On PAYNT's dodge-8 with a uniform
-//!    3-node defender (23,814 maybe states) policy iteration then took
-//!    1.3 s instead of 13 s: the proper start mixes so slowly that
-//!    BiCGSTAB stalls on it, and each of its 8 evaluations fell to a sparse
-//!    LU.
+//!    that greedy policy would no longer reach `B`. On PAYNT's dodge-8
+//!    with a uniform 3-node defender (23,814 maybe states) policy
+//!    iteration then took 1.3 s instead of 13 s: the proper start mixes so
+//!    slowly that BiCGSTAB stalls on it, and each of its 8 evaluations
+//!    fell to a sparse LU.
 //! 3. **Evaluation.** `(I - Q_sigma) x = b_sigma` on `M`, with `Q_sigma =
 //!    P_sigma` restricted to `M x M` and `b_sigma(s) = P_sigma(B | s)`, by
 //!    sparse LU or BiCGSTAB warm-started from the previous policy's values,
@@ -543,14 +543,11 @@ impl PolicySystems {
             }
         }
         let mut strategy = self.qualitative.strategy.clone();
-        improve(
-            mdp,
-            &values,
-            &self.maybe,
-            &mut strategy,
-            IMPROVEMENT_THRESHOLD,
-        );
-        self.restore_proper(mdp, &mut strategy);
+        let threshold = IMPROVEMENT_THRESHOLD;
+        let (switched, _) = improve(mdp, &values, &self.maybe, &mut strategy, threshold);
+        if switched {
+            self.restore_proper(mdp, &mut strategy);
+        }
         strategy
     }
 
