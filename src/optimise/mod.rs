@@ -468,13 +468,13 @@ pub fn optimise_structure(
         settings: settings.for_start(start),
         stream: stream + ((start as u64) << 32),
     };
-    let presolved = match (method, certifier) {
-        (Method::MaxMin, Some(c)) if settings.round && settings.local_search => {
-            search_supports(game, c, structure, settings, stream, clock)?
-        }
-        _ => None,
+    let (presolved, presolve_seconds) = match (method, certifier) {
+        (Method::MaxMin, Some(c)) if settings.round && settings.local_search => (
+            search_supports(game, c, structure, settings, stream, clock)?,
+            clock.elapsed().as_secs_f64(),
+        ),
+        _ => (None, 0.0),
     };
-    let presolve_seconds = clock.elapsed().as_secs_f64();
     if let Some(climbed) = &presolved {
         shared
             .lock()
@@ -879,6 +879,14 @@ fn finalise(
         method,
         certifier,
     };
+    if let (Method::Ascent, Some(c)) = (method, certifier) {
+        // The single player's upper bound (its fully informed value) first:
+        // where the run's value already meets it, rounding and the local
+        // search have nothing to find.
+        let clock = Instant::now();
+        chosen.upper_bound = Some(upper_value_or_trivial(game, c.phi, &chosen.adversary)?);
+        phases.certification += clock.elapsed().as_secs_f64();
+    }
     let clock = Instant::now();
     let mut climb_seconds = 0.0;
     if settings.round {
@@ -949,7 +957,6 @@ fn finalise(
                 Err(error) if error.is_numerical() => None,
                 Err(error) => return Err(error.into()),
             };
-        chosen.upper_bound = Some(upper_value_or_trivial(game, c.phi, &chosen.adversary)?);
         phases.certification += clock.elapsed().as_secs_f64();
     }
     Ok(chosen)
