@@ -35,6 +35,13 @@ For each model and k, one tool at a time:
   comes close; where the first run met its bound, a second run towards
   `best + 1e-4` (`storm-gd>best`, --beat-timeout) asks whether GD beats both.
 
+* Storm's belief MDP (`verify_with_belief_unfolding`, no clipping,
+  exploration stopped after --timeout s): where its exploration completes,
+  its value is the POMDP's optimum over all observation-based controllers
+  of any memory size, an upper bound for every tool and every k. A value
+  above it (by more than 1e-4) cannot be the value of a controller of
+  the POMDP: it is marked, and it does not count as best.
+
 Properties: probabilities only (posg-fsc computes probabilities); the
 models' formulas name labels that are added to the PRISM text where the
 original uses a formula or an expression (see MODELS). For a `Pmin`
@@ -283,6 +290,44 @@ def gd_worker(directory, k, bound):
     print("RESULT " + json.dumps(record), flush=True)
 
 
+def run_belief(directory, limit):
+    """Storm's belief-MDP unfolding in a child process (this script with
+    --belief-worker), exploration stopped after `limit` seconds."""
+    command = [sys.executable, os.path.abspath(__file__), "--belief-worker", directory,
+               str(limit)]
+    log, code, wall, cpu = timed(command, limit + 120)
+    record = {"command": f"stormpy verify_with_belief_unfolding, max_exploration_time={limit}",
+              "wall_seconds": wall, "cpu_seconds": cpu, "value": None, "completed": False}
+    result = re.search(r"^RESULT (.*)$", log or "", re.M)
+    if result is None:
+        record.update(status="timeout (killed)" if log is None else "error",
+                      log_tail=(log or "")[-1500:])
+        return record
+    record.update(json.loads(result.group(1)))
+    record["status"] = "optimum" if record["completed"] else "incomplete"
+    return record
+
+
+def belief_worker(directory, limit):
+    """Unfolds the belief MDP of the POMDP (no clipping) for at most `limit`
+    seconds; prints one line `RESULT {json}`: its value (1 - p for Pmin)
+    and whether the exploration completed (then the value is the POMDP's
+    optimum over all observation-based controllers)."""
+    import stormpy
+    import stormpy.pomdp
+    prop = prop_of(directory)
+    pomdp = build_pomdp(directory)
+    result = stormpy.pomdp.verify_with_belief_unfolding(
+        pomdp, stormpy.parse_properties(prop)[0], max_exploration_time=limit)
+    print("RESULT " + json.dumps({"value": complement(float(result.value), prop),
+                                  "completed": bool(result.completed_exploration)}), flush=True)
+
+
+def pomdp_optimum(belief):
+    """The POMDP's optimum where the belief exploration completed, else None."""
+    return belief["value"] if belief.get("completed") else None
+
+
 def cached(path, compute):
     if os.path.exists(path):
         with open(path) as handle:
@@ -328,6 +373,10 @@ def main():
     records, rows = [], []
     for name in args.models:
         directory = os.path.join(models_dir, name)
+        belief = cached(os.path.join(directory, f"belief-t{args.timeout}.json"),
+                        lambda: run_belief(directory, args.timeout))
+        records.append({"model": name, "k": None, "tool": "storm-belief", **belief})
+        optimum = pomdp_optimum(belief)
         for k in NODES:
             posg = cached(os.path.join(directory, f"posg-{k}.json"),
                           lambda: run_posg(directory, k, args.posg_timeout))
@@ -352,7 +401,7 @@ def main():
                 print(f"{name} k={k} {tool}: {record['status']} {record['value']} "
                       f"({record['cpu_seconds']:.1f} s CPU)", flush=True)
                 records.append({"model": name, "k": k, "tool": tool, **record})
-            best = best_tools(case)
+            best = best_tools(case, optimum)
             ratio = (posg["cpu_seconds"] / gd["cpu_seconds"]) if gd["cpu_seconds"] > 0 else None
             for tool, record in case.items():
                 rows.append({
@@ -360,7 +409,10 @@ def main():
                     "value": None if record["value"] is None else round(record["value"], 6),
                     "cpu_seconds": round(record["cpu_seconds"], 2),
                     "wall_seconds": round(record["wall_seconds"], 2),
-                    "status": record["status"], "best": best,
+                    "status": record["status"],
+                    "above_pomdp_optimum": above_optimum(record["value"], optimum),
+                    "pomdp_optimum": None if optimum is None else round(optimum, 6),
+                    "best": best,
                     "posg_cpu_over_gd_cpu": None if ratio is None else round(ratio, 4),
                 })
     write(args, rows, records)
@@ -385,9 +437,19 @@ def seed_peer_runs(args, models_dir):
                 json.dump(record, handle, indent=1)
 
 
-def best_tools(case):
-    """The tools within TOLERANCE of the best value found in the case."""
-    values = {tool: r["value"] for tool, r in case.items() if r["value"] is not None}
+def above_optimum(value, optimum):
+    """Whether `value` exceeds the POMDP's optimum by more than TOLERANCE
+    (no controller of the POMDP has it); None where either is unknown."""
+    if value is None or optimum is None:
+        return None
+    return value > optimum + TOLERANCE
+
+
+def best_tools(case, optimum):
+    """The tools within TOLERANCE of the best value found in the case,
+    among the values not above the POMDP's optimum."""
+    values = {tool: r["value"] for tool, r in case.items()
+              if r["value"] is not None and not above_optimum(r["value"], optimum)}
     if not values:
         return "none"
     top = max(values.values())
@@ -410,6 +472,10 @@ def write(args, rows, records):
         "storm-gd>best": "the same GD towards P>=max(posg-fsc, PAYNT)+"
                          f"{TOLERANCE}, run only where the first GD run met its bound, "
                          f"SIGINT after {args.beat_timeout} s",
+        "storm-belief": "verify_with_belief_unfolding (no clipping), "
+                        f"max_exploration_time={args.timeout}: where the exploration completes, "
+                        "the POMDP's optimum (pomdp_optimum); above_pomdp_optimum marks values "
+                        f"above it by more than {TOLERANCE}",
         "versions": versions(),
         "peers_from": args.peers_from,
         "values": "probability of the property's path formula (1 - p for Pmin)",
@@ -429,9 +495,10 @@ def write(args, rows, records):
 def markdown(rows):
     """The README's table: one line per model and k."""
     show = lambda r: "-" if r is None or r["value"] is None else f"{r['value']:.4f}"
-    lines = ["| model | states | k | posg-fsc | CPU s | PAYNT | CPU s | Storm GD | CPU s "
-             "| GD > best + 1e-4? | best | posg-fsc CPU / GD CPU |",
-             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    lines = ["| model | states | k | POMDP optimum | posg-fsc | CPU s | PAYNT | CPU s | Storm GD "
+             "| CPU s | GD > best + 1e-4? | best | posg-fsc CPU / GD CPU |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    above = lambda r: " (above the optimum)" if r.get("above_pomdp_optimum") else ""
     cases = {}
     for r in rows:
         cases.setdefault((r["model"], r["states"], r["k"]), {})[r["tool"]] = r
@@ -445,9 +512,11 @@ def markdown(rows):
             gd_text += (f"; within 1e-2: {show(near)}" if near["status"] == "reached-bound" else
                         f"; not within 1e-2 ({near['status']})")
         beat_text = ("-" if beat is None else
-                     f"yes: {show(beat)}" if beat["status"] == "reached-bound" else
+                     f"yes: {show(beat)}{above(beat)}" if beat["status"] == "reached-bound" else
                      f"no ({beat['status']})")
-        lines.append(f"| {model} | {states} | {k} | {show(posg)} | {posg['cpu_seconds']} | "
+        optimum = "-" if posg["pomdp_optimum"] is None else f"{posg['pomdp_optimum']:.4f}"
+        lines.append(f"| {model} | {states} | {k} | {optimum} | {show(posg)} | "
+                     f"{posg['cpu_seconds']} | "
                      f"{paynt_text} | {paynt['cpu_seconds']} | {gd_text} | {gd['cpu_seconds']} | "
                      f"{beat_text} | {posg['best']} | {posg['posg_cpu_over_gd_cpu']} |")
     return "\n".join(lines)
@@ -456,5 +525,7 @@ def markdown(rows):
 if __name__ == "__main__":
     if len(sys.argv) == 5 and sys.argv[1] == "--gd-worker":
         gd_worker(sys.argv[2], int(sys.argv[3]), float(sys.argv[4]))
+    elif len(sys.argv) == 4 and sys.argv[1] == "--belief-worker":
+        belief_worker(sys.argv[2], int(sys.argv[3]))
     else:
         main()
