@@ -348,10 +348,10 @@ fn starts_that_cannot_beat_the_search_stop_early_and_those_that_can_race_on() {
 
 /// A single-player game (the adversary has one action) whose defender sees
 /// the state: the fully informed value, the upper bound, is 1 (retry `b`
-/// until the goal), and the ascent reaches it. The upper bound is known
-/// before the rounding, so the closed bracket skips the local search (on
-/// PRISM's grid-simple POMDPs it had cost 0.1-0.9 s after the ascent had
-/// already met the bound).
+/// until the goal), and the ascent or its rounding reaches it. The upper
+/// bound is known before the rounding, so the closed bracket skips the
+/// local search (on PRISM's grid-simple POMDPs it had cost 0.05-0.9 s per
+/// structure after the ascent had already met the bound).
 const RETRY_UNTIL_GOAL: &str = r#"{"posg": 1, "states": ["start", "goal", "trap"],
     "initial": {"start": 1.0},
     "labels": {"goal": ["goal"]},

@@ -353,7 +353,8 @@ def main():
     parser.add_argument("--repo", required=True, help="git directory of randriu/synthesis")
     parser.add_argument("--work", default=os.path.join(ROOT, "target", "pomdp-peers"))
     parser.add_argument("--timeout", type=int, default=120,
-                        help="per-run limit (s): PAYNT's --timeout, GD's interrupt, posg-fsc's kill")
+                        help="per-run limit (s): PAYNT's --timeout, GD's interrupt, the belief "
+                             "MDP's exploration")
     parser.add_argument("--posg-timeout", type=int, default=120,
                         help="posg-fsc runs are killed after this many seconds")
     parser.add_argument("--beat-timeout", type=int, default=30,

@@ -468,12 +468,25 @@ pub fn optimise_structure(
         settings: settings.for_start(start),
         stream: stream + ((start as u64) << 32),
     };
-    let (presolved, presolve_seconds) = match (method, certifier) {
-        (Method::MaxMin, Some(c)) if settings.round && settings.local_search => (
-            search_supports(game, c, structure, settings, stream, clock)?,
-            clock.elapsed().as_secs_f64(),
-        ),
-        _ => (None, 0.0),
+    let search =
+        certifier.filter(|_| method == Method::MaxMin && settings.round && settings.local_search);
+    let presolved = match search {
+        Some(c) => search_supports(game, c, structure, settings, stream, clock)?,
+        None => None,
+    };
+    // The search's seconds; where it was asked but not run, those of the
+    // bounds that showed it had nothing to find are certification.
+    let presolve_seconds = clock.elapsed().as_secs_f64();
+    let presolve = match (&search, &presolved) {
+        (_, Some(_)) => PhaseSeconds {
+            local_search: presolve_seconds,
+            ..PhaseSeconds::default()
+        },
+        (Some(_), None) => PhaseSeconds {
+            certification: presolve_seconds,
+            ..PhaseSeconds::default()
+        },
+        (None, None) => PhaseSeconds::default(),
     };
     if let Some(climbed) = &presolved {
         shared
@@ -546,10 +559,7 @@ pub fn optimise_structure(
             field: "starts",
             problem: "must be at least 1".into(),
         })?;
-    let mut phases = PhaseSeconds {
-        local_search: presolve_seconds,
-        ..PhaseSeconds::default()
-    };
+    let mut phases = presolve;
     for run in &runs {
         phases.add(&run.outcome.phases);
     }
