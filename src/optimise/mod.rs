@@ -891,8 +891,8 @@ fn finalise(
     };
     if let (Method::Ascent, Some(c)) = (method, certifier) {
         // The single player's upper bound (its fully informed value) first:
-        // where the run's value already meets it, rounding and the local
-        // search have nothing to find.
+        // where the run's value or a rounding already meets it, the local
+        // search has nothing to find, and where it runs it stops there.
         let clock = Instant::now();
         chosen.upper_bound = Some(upper_value_or_trivial(game, c.phi, &chosen.adversary)?);
         phases.certification += clock.elapsed().as_secs_f64();
