@@ -477,16 +477,15 @@ pub fn optimise_structure(
     // The search's seconds; where it was asked but not run, those of the
     // bounds that showed it had nothing to find are certification.
     let presolve_seconds = clock.elapsed().as_secs_f64();
-    let presolve = match (&search, &presolved) {
-        (_, Some(_)) => PhaseSeconds {
-            local_search: presolve_seconds,
-            ..PhaseSeconds::default()
+    let searched = presolved.is_some();
+    let presolve = PhaseSeconds {
+        local_search: if searched { presolve_seconds } else { 0.0 },
+        certification: if search.is_some() && !searched {
+            presolve_seconds
+        } else {
+            0.0
         },
-        (Some(_), None) => PhaseSeconds {
-            certification: presolve_seconds,
-            ..PhaseSeconds::default()
-        },
-        (None, None) => PhaseSeconds::default(),
+        ..PhaseSeconds::default()
     };
     if let Some(climbed) = &presolved {
         shared
