@@ -118,7 +118,12 @@ impl EvaluationKey {
     fn of(game: &Posg, defender: &Fsc) -> Self {
         let in_use = blocks_in_use(game, defender);
         let mut key = Vec::new();
-        for (b, block) in defender.blocks.iter().enumerate().filter(|&(b, _)| in_use[b]) {
+        for (b, block) in defender
+            .blocks
+            .iter()
+            .enumerate()
+            .filter(|&(b, _)| in_use[b])
+        {
             key.push(b as u64);
             for choice in block {
                 key.push(((choice.next as u64) << 32) | choice.action as u64);
@@ -844,6 +849,32 @@ mod tests {
                     .unwrap();
             assert!((searched.bound - 1.0).abs() < 1e-9, "{}", searched.bound);
         }
+    }
+
+    /// Defenders that differ only in blocks out of use share their memo
+    /// key (their products are the same); a change in a block in use
+    /// makes another.
+    #[test]
+    fn the_memo_keys_defenders_by_their_blocks_in_use() {
+        let game = grid_4x4();
+        let start = first_pairs(&game, 2);
+        let universe = Fsc::uniform_enabled(Role::Defender, 2, game.defender());
+        let in_use = blocks_in_use(&game, &start);
+        let observations = start.num_observations();
+        let (unused, used) = (observations, 0);
+        assert!(!in_use[unused] && in_use[used]);
+        let other_pair = |b: usize| {
+            let pair = universe.blocks[b]
+                .iter()
+                .find(|p| {
+                    (p.next, p.action) != (start.blocks[b][0].next, start.blocks[b][0].action)
+                })
+                .expect("a block with a second pair");
+            vec![certain(pair)]
+        };
+        let key = |fsc: &Fsc| EvaluationKey::of(&game, fsc);
+        assert!(key(&with_block(&start, unused, other_pair(unused))) == key(&start));
+        assert!(key(&with_block(&start, used, other_pair(used))) != key(&start));
     }
 
     /// The restarts keep the best end point and are reproducible: on the
