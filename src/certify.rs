@@ -342,6 +342,41 @@ pub fn lower_bound_within(
     Ok(bound)
 }
 
+/// The blocks `(g, o)` of `defender` (in its order `g * O + o`) that the
+/// adversary's best response to it can meet, and the states of the
+/// product: those of the product states `(s, q, g)`, `o` an observation
+/// of `s`, reachable from the initial states under the adversary's optimal
+/// memoryless strategy (which stays in the accepting end components it
+/// reaches), leaving out the states from which it cannot win. A change of
+/// `defender` in any other block leaves that strategy's play as it is, so
+/// the adversary still wins as much: the lower bound ([`lower_bound`])
+/// cannot rise, up to the solver's tolerance.
+pub(crate) fn blocks_the_adversary_meets(
+    game: &Posg,
+    dra_not_phi: &Dra,
+    defender: &Fsc,
+    settings: &SolverSettings,
+) -> Result<(Vec<bool>, usize), CertifyError> {
+    let analysis = analyse(game, dra_not_phi, defender, Role::Defender, settings)?;
+    let result = &analysis.result;
+    let observations = defender.num_observations();
+    let mut met = vec![false; defender.blocks.len()];
+    let mut seen = vec![false; analysis.states.len()];
+    let mut stack: Vec<usize> = analysis.initial.iter().map(|&(m, _)| m).collect();
+    while let Some(m) = stack.pop() {
+        if std::mem::replace(&mut seen[m], true) || !result.possible[m] {
+            continue;
+        }
+        let (s, _, g) = analysis.states[m];
+        for &(o, _) in game.defender().observation_distribution(s) {
+            met[g * observations + o] = true;
+        }
+        let moves = analysis.mdp.distribution(m, result.strategy[m]);
+        stack.extend(moves.iter().map(|&(next, _)| next));
+    }
+    Ok((met, analysis.states.len()))
+}
+
 /// The best probability of `phi` any defender achieves against `adversary`:
 /// `max P(phi)` on the product with `dra_phi`, an automaton for `phi`
 /// (module documentation).

@@ -168,11 +168,11 @@ def storm_full_value(directory):
     return float(result.get_value(smg.initial_states[0])), mdp.nr_states, player
 
 
-def run_posg(directory, k, limit, budget):
-    out = os.path.join(directory, f"posg-fsc-{k}")
+def run_posg(directory, k, limit, budget, seed=1):
+    out = os.path.join(directory, f"posg-fsc-{k}" + ("" if seed == 1 else f"-seed{seed}"))
     command = [BINARY, "solve", os.path.join(directory, "sketch.templ"), "--props",
                os.path.join(directory, "sketch.props"), "--def-nodes", str(k), "--out", out,
-               "--force", "--seed", "1", "--quiet"]
+               "--force", "--seed", str(seed), "--quiet"]
     if budget:
         command += ["--time-budget", str(budget)]
     done, wall, cpu = timed(command, limit)

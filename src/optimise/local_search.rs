@@ -33,7 +33,9 @@ use rayon::prelude::*;
 
 use crate::automaton::Dra;
 use crate::certify::gradient::LowerBoundGradients;
-use crate::certify::{CertifyError, lower_bound_within, lower_value_or_trivial_within};
+use crate::certify::{
+    CertifyError, blocks_the_adversary_meets, lower_bound_within, lower_value_or_trivial_within,
+};
 use crate::controller::{Choice, Fsc, Role, Support};
 use crate::game::{AdversaryAction, DefenderAction, Posg};
 use crate::solver::SolverSettings;
@@ -165,6 +167,13 @@ impl<'a> Search<'a> {
     }
 }
 
+/// The blocks the adversary's best response to a defender meets
+/// ([`blocks_the_adversary_meets`]) and the states of its product.
+struct Met {
+    blocks: Vec<bool>,
+    states: usize,
+}
+
 /// One climb of a [`Search`]: the bounds it has evaluated so far and the
 /// product states they solved.
 struct Landscape<'a> {
@@ -212,6 +221,30 @@ impl Landscape<'_> {
             Err(error) if error.is_numerical() => Ok((0.0, game.num_states())),
             Err(error) => Err(error),
         }
+    }
+
+    /// The blocks of `defender` the adversary's best response meets
+    /// ([`blocks_the_adversary_meets`], with [`ranking_settings`]): the
+    /// only blocks where a move can raise the bound; every block where the
+    /// product mixes too slowly to say.
+    fn blocks_met(&self, defender: &Fsc) -> Result<Met, CertifyError> {
+        self.evaluated.set(self.evaluated.get() + 1);
+        let Search { game, not_phi, .. } = *self.search;
+        let (blocks, states) =
+            match blocks_the_adversary_meets(game, not_phi, defender, &ranking_settings()) {
+                Ok(met) => met,
+                Err(error) if error.is_numerical() => {
+                    (vec![true; defender.blocks.len()], game.num_states())
+                }
+                Err(error) => return Err(error),
+            };
+        self.spent.set(self.spent.get() + states);
+        Ok(Met { blocks, states })
+    }
+
+    /// Counts `work` as spent on moves passed over unjudged.
+    fn pass_over(&self, work: usize) {
+        self.spent.set(self.spent.get().saturating_add(work));
     }
 
     /// The first-order gains of the moves of `current` (blocks in use
@@ -423,11 +456,18 @@ fn guided_step(
 
 /// One sweep of single-block moves over the blocks in use, each block
 /// taking its first improving move; `None` when no block changed (or the
-/// effort was spent before any did).
+/// effort was spent before any did). Only the blocks the adversary's best
+/// response meets ([`Landscape::blocks_met`]) are judged: a move in any
+/// other leaves that response's play as it is, so cannot raise the bound.
+/// Each move passed over counts as the work of judging it (the states of
+/// `current`'s product), so that the climb goes as it would judging every
+/// move, in less time.
 fn sweep(landscape: &Landscape<'_>, from: &Climbed) -> Result<Option<Climbed>, CertifyError> {
+    let game = landscape.search.game;
     let mut current = from.clone();
     let mut changed = false;
-    let mut in_use = blocks_in_use(landscape.search.game, &current.defender);
+    let mut in_use = blocks_in_use(game, &current.defender);
+    let mut met = landscape.blocks_met(&current.defender)?;
     for b in 0..current.defender.blocks.len() {
         if !in_use[b] {
             continue;
@@ -435,10 +475,15 @@ fn sweep(landscape: &Landscape<'_>, from: &Climbed) -> Result<Option<Climbed>, C
         let defender = &current.defender;
         let moves = block_moves(&defender.blocks[b], landscape.search.pairs(b))
             .map(|choices| with_block(defender, b, choices));
+        if !met.blocks[b] {
+            landscape.pass_over(moves.count() * met.states);
+            continue;
+        }
         if let Some(better) = landscape.first_improvement(moves, current.bound)? {
             current = better;
             changed = true;
-            in_use = blocks_in_use(landscape.search.game, &current.defender);
+            in_use = blocks_in_use(game, &current.defender);
+            met = landscape.blocks_met(&current.defender)?;
         }
         if landscape.exhausted() {
             break;
@@ -875,6 +920,58 @@ mod tests {
         let key = |fsc: &Fsc| EvaluationKey::of(&game, fsc);
         assert!(key(&with_block(&start, unused, other_pair(unused))) == key(&start));
         assert!(key(&with_block(&start, used, other_pair(used))) != key(&start));
+    }
+
+    /// The sweeps judge only the blocks the adversary's best response
+    /// meets: on PAYNT's attacker-one-defender with 2 nodes, from the
+    /// uniform defender with some blocks made deterministic (a kick),
+    /// some blocks in use are not met, no move in them raises the lower
+    /// bound, and some move in a block met does.
+    #[test]
+    fn no_move_in_a_block_the_adversary_does_not_meet_raises_the_bound() {
+        let game = crate::game::drn::read(std::path::Path::new(
+            "tests/data/paynt/attacker-one-defender.drn",
+        ))
+        .unwrap()
+        .game;
+        // Player 0 keeps the attacker from the goal (`Pmin=? [F "goal"]`).
+        let not_phi = not_phi("G !goal");
+        let universe = Fsc::uniform_enabled(Role::Defender, 2, game.defender());
+        let settings = ranking_settings();
+        let bound = |fsc: &Fsc| {
+            lower_bound_within(&game, &not_phi, fsc, &settings)
+                .unwrap()
+                .value
+        };
+        let (mut unmet_moves, mut raised_where_met) = (0, 0);
+        for seed in 0..3 {
+            let in_use = blocks_in_use(&game, &universe);
+            let mut rng = ChaCha8Rng::seed_from_u64(seed);
+            let defender = kicked(&universe, &in_use, &universe, &mut rng);
+            let before = bound(&defender);
+            let (met, _) =
+                blocks_the_adversary_meets(&game, &not_phi, &defender, &settings).unwrap();
+            let in_use = blocks_in_use(&game, &defender);
+            assert!(met.iter().zip(&in_use).all(|(&m, &u)| !m || u));
+            for b in (0..met.len()).filter(|&b| in_use[b]) {
+                for choices in block_moves(&defender.blocks[b], &universe.blocks[b]) {
+                    let after = bound(&with_block(&defender, b, choices));
+                    if met[b] {
+                        raised_where_met += usize::from(after > before + IMPROVEMENT);
+                    } else {
+                        assert!(
+                            after <= before + 1e-9,
+                            "seed {seed} block {b}: {before} -> {after}"
+                        );
+                        unmet_moves += 1;
+                    }
+                }
+            }
+        }
+        assert!(
+            unmet_moves > 0 && raised_where_met > 0,
+            "{unmet_moves} {raised_where_met}"
+        );
     }
 
     /// The restarts keep the best end point and are reproducible: on the
