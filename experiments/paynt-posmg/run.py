@@ -168,8 +168,8 @@ def storm_full_value(directory):
     return float(result.get_value(smg.initial_states[0])), mdp.nr_states, player
 
 
-def run_posg(directory, k, limit, budget, seed=1):
-    out = os.path.join(directory, f"posg-fsc-{k}" + ("" if seed == 1 else f"-seed{seed}"))
+def run_posg(directory, k, limit, budget, seed=1, out=None):
+    out = out or os.path.join(directory, f"posg-fsc-{k}")
     command = [BINARY, "solve", os.path.join(directory, "sketch.templ"), "--props",
                os.path.join(directory, "sketch.props"), "--def-nodes", str(k), "--out", out,
                "--force", "--seed", str(seed), "--quiet"]

@@ -34,7 +34,8 @@ use rayon::prelude::*;
 use crate::automaton::Dra;
 use crate::certify::gradient::LowerBoundGradients;
 use crate::certify::{
-    CertifyError, blocks_the_adversary_meets, lower_bound_within, lower_value_or_trivial_within,
+    BlocksMet, CertifyError, blocks_the_adversary_meets, lower_bound_within,
+    lower_value_or_trivial_within,
 };
 use crate::controller::{Choice, Fsc, Role, Support};
 use crate::game::{AdversaryAction, DefenderAction, Posg};
@@ -104,19 +105,24 @@ impl Evaluations {
         self.lock().insert(key, evaluated);
     }
 
+    /// The map, whether or not a climb panicked while holding it (its
+    /// entries are complete: each is inserted whole).
     fn lock(&self) -> MutexGuard<'_, HashMap<EvaluationKey, (f64, usize)>> {
         self.known.lock().unwrap_or_else(PoisonError::into_inner)
     }
 }
 
-/// What determines a defender's bound: its blocks in use
-/// ([`blocks_in_use`]), each as its index and its choices (next node,
-/// action, the probability's bits). Blocks out of use are never played,
-/// so defenders that differ only there have the same product.
+/// What determines a defender's bound among the defenders of one search
+/// (which all have the start's nodes and initial distribution): its
+/// blocks in use ([`blocks_in_use`]), each as its index, its number of
+/// choices and its choices (next node, action, the probability's bits).
+/// Blocks out of use are never played, so defenders that differ only
+/// there have the same product.
 #[derive(PartialEq, Eq, Hash)]
 struct EvaluationKey(Vec<u64>);
 
 impl EvaluationKey {
+    /// The key of `defender` in `game`.
     fn of(game: &Posg, defender: &Fsc) -> Self {
         let in_use = blocks_in_use(game, defender);
         let mut key = Vec::new();
@@ -126,7 +132,7 @@ impl EvaluationKey {
             .enumerate()
             .filter(|&(b, _)| in_use[b])
         {
-            key.push(b as u64);
+            key.extend([b as u64, block.len() as u64]);
             for choice in block {
                 key.push(((choice.next as u64) << 32) | choice.action as u64);
                 key.push(choice.probability.to_bits());
@@ -150,6 +156,8 @@ struct Search<'a> {
 }
 
 impl<'a> Search<'a> {
+    /// The search over the defenders whose blocks play `universe`'s
+    /// pairs, each climb with `effort`, nothing evaluated yet.
     fn new(game: &'a Posg, not_phi: &'a Dra, universe: &'a Fsc, effort: Effort) -> Self {
         Self {
             game,
@@ -165,13 +173,6 @@ impl<'a> Search<'a> {
     fn pairs(&self, b: usize) -> &[Choice] {
         &self.universe.blocks[b]
     }
-}
-
-/// The blocks the adversary's best response to a defender meets
-/// ([`blocks_the_adversary_meets`]) and the states of its product.
-struct Met {
-    blocks: Vec<bool>,
-    states: usize,
 }
 
 /// One climb of a [`Search`]: the bounds it has evaluated so far and the
@@ -227,24 +228,27 @@ impl Landscape<'_> {
     /// ([`blocks_the_adversary_meets`], with [`ranking_settings`]): the
     /// only blocks where a move can raise the bound; every block where the
     /// product mixes too slowly to say.
-    fn blocks_met(&self, defender: &Fsc) -> Result<Met, CertifyError> {
+    fn blocks_met(&self, defender: &Fsc) -> Result<BlocksMet, CertifyError> {
         self.evaluated.set(self.evaluated.get() + 1);
         let Search { game, not_phi, .. } = *self.search;
-        let (blocks, states) =
-            match blocks_the_adversary_meets(game, not_phi, defender, &ranking_settings()) {
-                Ok(met) => met,
-                Err(error) if error.is_numerical() => {
-                    (vec![true; defender.blocks.len()], game.num_states())
-                }
-                Err(error) => return Err(error),
-            };
-        self.spent.set(self.spent.get() + states);
-        Ok(Met { blocks, states })
+        let met = match blocks_the_adversary_meets(game, not_phi, defender, &ranking_settings()) {
+            Ok(met) => met,
+            Err(error) if error.is_numerical() => BlocksMet {
+                blocks: vec![true; defender.blocks.len()],
+                mdp_states: game.num_states(),
+            },
+            Err(error) => return Err(error),
+        };
+        self.spent.set(self.spent.get() + met.mdp_states);
+        Ok(met)
     }
 
-    /// Counts `work` as spent on moves passed over unjudged.
-    fn pass_over(&self, work: usize) {
-        self.spent.set(self.spent.get().saturating_add(work));
+    /// Counts `moves` moves passed over unjudged as the work of judging
+    /// them, `states` each, up to what the climb has left to spend.
+    fn pass_over(&self, moves: usize, states: usize) {
+        let left = self.search.effort.work.saturating_sub(self.spent.get());
+        self.spent
+            .set(self.spent.get() + moves.saturating_mul(states).min(left));
     }
 
     /// The first-order gains of the moves of `current` (blocks in use
@@ -458,11 +462,14 @@ fn guided_step(
 /// taking its first improving move; `None` when no block changed (or the
 /// effort was spent before any did). Only the blocks the adversary's best
 /// response meets ([`Landscape::blocks_met`]) are judged: a move in any
-/// other leaves that response's play as it is, so cannot raise the bound.
-/// Each move passed over counts as the work of judging it (the states of
-/// `current`'s product), so that the climb goes as it would judging every
-/// move, in less time.
+/// other leaves that response's play as it is, so cannot raise the bound
+/// (beyond the error of the ranked values). Each move passed over counts
+/// as the work of judging it (the states of the current product), so that
+/// a climb's effort buys about as many moves as with every move judged.
 fn sweep(landscape: &Landscape<'_>, from: &Climbed) -> Result<Option<Climbed>, CertifyError> {
+    if landscape.exhausted() {
+        return Ok(None);
+    }
     let game = landscape.search.game;
     let mut current = from.clone();
     let mut changed = false;
@@ -472,18 +479,20 @@ fn sweep(landscape: &Landscape<'_>, from: &Climbed) -> Result<Option<Climbed>, C
         if !in_use[b] {
             continue;
         }
-        let defender = &current.defender;
-        let moves = block_moves(&defender.blocks[b], landscape.search.pairs(b))
-            .map(|choices| with_block(defender, b, choices));
-        if !met.blocks[b] {
-            landscape.pass_over(moves.count() * met.states);
-            continue;
-        }
-        if let Some(better) = landscape.first_improvement(moves, current.bound)? {
-            current = better;
-            changed = true;
-            in_use = blocks_in_use(game, &current.defender);
-            met = landscape.blocks_met(&current.defender)?;
+        let pairs = landscape.search.pairs(b);
+        if met.blocks[b] {
+            let defender = &current.defender;
+            let moves = block_moves(&defender.blocks[b], pairs)
+                .map(|choices| with_block(defender, b, choices));
+            if let Some(better) = landscape.first_improvement(moves, current.bound)? {
+                current = better;
+                changed = true;
+                in_use = blocks_in_use(game, &current.defender);
+                met = landscape.blocks_met(&current.defender)?;
+            }
+        } else {
+            let moves = block_moves(&current.defender.blocks[b], pairs).count();
+            landscape.pass_over(moves, met.mdp_states);
         }
         if landscape.exhausted() {
             break;
@@ -944,13 +953,14 @@ mod tests {
                 .value
         };
         let (mut unmet_moves, mut raised_where_met) = (0, 0);
+        let uniform_in_use = blocks_in_use(&game, &universe);
         for seed in 0..3 {
-            let in_use = blocks_in_use(&game, &universe);
             let mut rng = ChaCha8Rng::seed_from_u64(seed);
-            let defender = kicked(&universe, &in_use, &universe, &mut rng);
+            let defender = kicked(&universe, &uniform_in_use, &universe, &mut rng);
             let before = bound(&defender);
-            let (met, _) =
-                blocks_the_adversary_meets(&game, &not_phi, &defender, &settings).unwrap();
+            let met = blocks_the_adversary_meets(&game, &not_phi, &defender, &settings)
+                .unwrap()
+                .blocks;
             let in_use = blocks_in_use(&game, &defender);
             assert!(met.iter().zip(&in_use).all(|(&m, &u)| !m || u));
             for b in (0..met.len()).filter(|&b| in_use[b]) {
