@@ -342,55 +342,6 @@ pub fn lower_bound_within(
     Ok(bound)
 }
 
-/// The blocks of a defender that the adversary's best response to it
-/// meets ([`blocks_the_adversary_meets`]).
-pub(crate) struct BlocksMet {
-    /// Per block `(g, o)`, in the defender's order `g * O + o`, whether
-    /// the best response meets it.
-    pub blocks: Vec<bool>,
-    /// The reachable states of the product MDP analysed.
-    pub mdp_states: usize,
-}
-
-/// The blocks `(g, o)` of `defender` that the adversary's best response
-/// meets: the blocks of the product states `(s, q, g)` (`o` each
-/// observation of `s`) that its optimal memoryless strategy reaches from
-/// the initial states (the strategy stays in the accepting end components
-/// it enters), leaving out the states from which it cannot win. A change
-/// of `defender` in any other block leaves that strategy's play as it
-/// is, so the adversary still wins as much: the lower bound
-/// ([`lower_bound`]) cannot rise beyond the error of the two computed
-/// values (the policy iterations' optimality gaps where the optimum is
-/// not proved).
-pub(crate) fn blocks_the_adversary_meets(
-    game: &Posg,
-    dra_not_phi: &Dra,
-    defender: &Fsc,
-    settings: &SolverSettings,
-) -> Result<BlocksMet, CertifyError> {
-    let analysis = analyse(game, dra_not_phi, defender, Role::Defender, settings)?;
-    let result = &analysis.result;
-    let observations = defender.num_observations();
-    let mut blocks = vec![false; defender.blocks.len()];
-    let mut seen = vec![false; analysis.states.len()];
-    let mut stack: Vec<usize> = analysis.initial.iter().map(|&(m, _)| m).collect();
-    while let Some(m) = stack.pop() {
-        if std::mem::replace(&mut seen[m], true) || !result.possible[m] {
-            continue;
-        }
-        let (s, _, g) = analysis.states[m];
-        for &(o, _) in game.defender().observation_distribution(s) {
-            blocks[g * observations + o] = true;
-        }
-        let moves = analysis.mdp.distribution(m, result.strategy[m]);
-        stack.extend(moves.iter().map(|&(next, _)| next));
-    }
-    Ok(BlocksMet {
-        blocks,
-        mdp_states: analysis.states.len(),
-    })
-}
-
 /// The best probability of `phi` any defender achieves against `adversary`:
 /// `max P(phi)` on the product with `dra_phi`, an automaton for `phi`
 /// (module documentation).

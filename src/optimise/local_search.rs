@@ -33,10 +33,7 @@ use rayon::prelude::*;
 
 use crate::automaton::Dra;
 use crate::certify::gradient::LowerBoundGradients;
-use crate::certify::{
-    BlocksMet, CertifyError, blocks_the_adversary_meets, lower_bound_within,
-    lower_value_or_trivial_within,
-};
+use crate::certify::{CertifyError, lower_bound_within, lower_value_or_trivial_within};
 use crate::controller::{Choice, Fsc, Role, Support};
 use crate::game::{AdversaryAction, DefenderAction, Posg};
 use crate::solver::SolverSettings;
@@ -222,33 +219,6 @@ impl Landscape<'_> {
             Err(error) if error.is_numerical() => Ok((0.0, game.num_states())),
             Err(error) => Err(error),
         }
-    }
-
-    /// The blocks of `defender` the adversary's best response meets
-    /// ([`blocks_the_adversary_meets`], with [`ranking_settings`]): the
-    /// only blocks where a move can raise the bound; every block where the
-    /// product mixes too slowly to say.
-    fn blocks_met(&self, defender: &Fsc) -> Result<BlocksMet, CertifyError> {
-        self.evaluated.set(self.evaluated.get() + 1);
-        let Search { game, not_phi, .. } = *self.search;
-        let met = match blocks_the_adversary_meets(game, not_phi, defender, &ranking_settings()) {
-            Ok(met) => met,
-            Err(error) if error.is_numerical() => BlocksMet {
-                blocks: vec![true; defender.blocks.len()],
-                mdp_states: game.num_states(),
-            },
-            Err(error) => return Err(error),
-        };
-        self.spent.set(self.spent.get() + met.mdp_states);
-        Ok(met)
-    }
-
-    /// Counts `moves` moves passed over unjudged as the work of judging
-    /// them, `states` each, up to what the climb has left to spend.
-    fn pass_over(&self, moves: usize, states: usize) {
-        let left = self.search.effort.work.saturating_sub(self.spent.get());
-        self.spent
-            .set(self.spent.get() + moves.saturating_mul(states).min(left));
     }
 
     /// The first-order gains of the moves of `current` (blocks in use
@@ -460,39 +430,22 @@ fn guided_step(
 
 /// One sweep of single-block moves over the blocks in use, each block
 /// taking its first improving move; `None` when no block changed (or the
-/// effort was spent before any did). Only the blocks the adversary's best
-/// response meets ([`Landscape::blocks_met`]) are judged: a move in any
-/// other leaves that response's play as it is, so cannot raise the bound
-/// (beyond the error of the ranked values). Each move passed over counts
-/// as the work of judging it (the states of the current product), so that
-/// a climb's effort buys about as many moves as with every move judged.
+/// effort was spent before any did).
 fn sweep(landscape: &Landscape<'_>, from: &Climbed) -> Result<Option<Climbed>, CertifyError> {
-    if landscape.exhausted() {
-        return Ok(None);
-    }
-    let game = landscape.search.game;
     let mut current = from.clone();
     let mut changed = false;
-    let mut in_use = blocks_in_use(game, &current.defender);
-    let mut met = landscape.blocks_met(&current.defender)?;
+    let mut in_use = blocks_in_use(landscape.search.game, &current.defender);
     for b in 0..current.defender.blocks.len() {
         if !in_use[b] {
             continue;
         }
-        let pairs = landscape.search.pairs(b);
-        if met.blocks[b] {
-            let defender = &current.defender;
-            let moves = block_moves(&defender.blocks[b], pairs)
-                .map(|choices| with_block(defender, b, choices));
-            if let Some(better) = landscape.first_improvement(moves, current.bound)? {
-                current = better;
-                changed = true;
-                in_use = blocks_in_use(game, &current.defender);
-                met = landscape.blocks_met(&current.defender)?;
-            }
-        } else {
-            let moves = block_moves(&current.defender.blocks[b], pairs).count();
-            landscape.pass_over(moves, met.mdp_states);
+        let defender = &current.defender;
+        let moves = block_moves(&defender.blocks[b], landscape.search.pairs(b))
+            .map(|choices| with_block(defender, b, choices));
+        if let Some(better) = landscape.first_improvement(moves, current.bound)? {
+            current = better;
+            changed = true;
+            in_use = blocks_in_use(landscape.search.game, &current.defender);
         }
         if landscape.exhausted() {
             break;
@@ -929,59 +882,6 @@ mod tests {
         let key = |fsc: &Fsc| EvaluationKey::of(&game, fsc);
         assert!(key(&with_block(&start, unused, other_pair(unused))) == key(&start));
         assert!(key(&with_block(&start, used, other_pair(used))) != key(&start));
-    }
-
-    /// The sweeps judge only the blocks the adversary's best response
-    /// meets: on PAYNT's attacker-one-defender with 2 nodes, from the
-    /// uniform defender with some blocks made deterministic (a kick),
-    /// some blocks in use are not met, no move in them raises the lower
-    /// bound, and some move in a block met does.
-    #[test]
-    fn no_move_in_a_block_the_adversary_does_not_meet_raises_the_bound() {
-        let game = crate::game::drn::read(std::path::Path::new(
-            "tests/data/paynt/attacker-one-defender.drn",
-        ))
-        .unwrap()
-        .game;
-        // Player 0 keeps the attacker from the goal (`Pmin=? [F "goal"]`).
-        let not_phi = not_phi("G !goal");
-        let universe = Fsc::uniform_enabled(Role::Defender, 2, game.defender());
-        let settings = ranking_settings();
-        let bound = |fsc: &Fsc| {
-            lower_bound_within(&game, &not_phi, fsc, &settings)
-                .unwrap()
-                .value
-        };
-        let (mut unmet_moves, mut raised_where_met) = (0, 0);
-        let uniform_in_use = blocks_in_use(&game, &universe);
-        for seed in 0..3 {
-            let mut rng = ChaCha8Rng::seed_from_u64(seed);
-            let defender = kicked(&universe, &uniform_in_use, &universe, &mut rng);
-            let before = bound(&defender);
-            let met = blocks_the_adversary_meets(&game, &not_phi, &defender, &settings)
-                .unwrap()
-                .blocks;
-            let in_use = blocks_in_use(&game, &defender);
-            assert!(met.iter().zip(&in_use).all(|(&m, &u)| !m || u));
-            for b in (0..met.len()).filter(|&b| in_use[b]) {
-                for choices in block_moves(&defender.blocks[b], &universe.blocks[b]) {
-                    let after = bound(&with_block(&defender, b, choices));
-                    if met[b] {
-                        raised_where_met += usize::from(after > before + IMPROVEMENT);
-                    } else {
-                        assert!(
-                            after <= before + 1e-9,
-                            "seed {seed} block {b}: {before} -> {after}"
-                        );
-                        unmet_moves += 1;
-                    }
-                }
-            }
-        }
-        assert!(
-            unmet_moves > 0 && raised_where_met > 0,
-            "{unmet_moves} {raised_where_met}"
-        );
     }
 
     /// The restarts keep the best end point and are reproducible: on the
