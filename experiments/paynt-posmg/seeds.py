@@ -69,7 +69,11 @@ def main():
         directory = os.path.join(models_dir, name)
         _, direction, _ = prop_of(directory)
         for k in NODES:
-            with open(os.path.join(directory, f"paynt-{k}-t{args.timeout}.json")) as handle:
+            paynt_record = os.path.join(directory, f"paynt-{k}-t{args.timeout}.json")
+            if not os.path.exists(paynt_record):
+                parser.error(f"no PAYNT record {paynt_record}: run run.py first or pass "
+                             "--peers-from")
+            with open(paynt_record) as handle:
                 paynt = json.load(handle)
             theirs = defender(paynt["value"], direction)
             for seed in args.seeds:

@@ -97,9 +97,11 @@ impl Evaluations {
         self.lock().get(key).copied()
     }
 
-    /// Records the bound and product states of `key`.
+    /// Records the bound and product states of `key` (two climbs may
+    /// evaluate the same key at once: they find the same numbers).
     fn insert(&self, key: EvaluationKey, evaluated: (f64, usize)) {
-        self.lock().insert(key, evaluated);
+        let before = self.lock().insert(key, evaluated);
+        debug_assert!(before.is_none_or(|b| b.0.to_bits() == evaluated.0.to_bits()));
     }
 
     /// The map, whether or not a climb panicked while holding it (its
@@ -115,7 +117,7 @@ impl Evaluations {
 /// choices and its choices (next node, action, the probability's bits).
 /// Blocks out of use are never played, so defenders that differ only
 /// there have the same product.
-#[derive(PartialEq, Eq, Hash)]
+#[derive(Debug, PartialEq, Eq, Hash)]
 struct EvaluationKey(Vec<u64>);
 
 impl EvaluationKey {
@@ -326,9 +328,9 @@ const GUIDED_CANDIDATES: usize = 8;
 /// renormalised) and playing one enabled `(next node, action)` pair of
 /// the game's defender with probability 1; where no such move raises the
 /// bound and a node is unused, the splits of [`splits`] followed by such
-/// moves. Single-block moves are tried in the
-/// order of their first-order gains first ([`guided_step`]). Stops where
-/// no move raises the bound, or when the search's effort is spent.
+/// moves. Single-block moves are tried in the order of their first-order
+/// gains first ([`guided_step`]). Stops where no move raises the bound,
+/// or when the climb has spent its effort (the search's, per climb).
 /// Returns the end point and the work spent (the product states its
 /// evaluations solved).
 fn climb(search: &Search<'_>, start: &Fsc) -> Result<(Climbed, usize), CertifyError> {
@@ -822,7 +824,8 @@ mod tests {
     /// cue once and must later answer L after A, R after B. From two nodes
     /// that both answer L, with node 1 unused, no single-block change
     /// raises the bound 0 (a second node in use still answers L); the
-    /// memory move (after B, a copy of node 0 that answers R) wins surely.
+    /// memory move (after B, a copy of node 0 that answers R) wins surely,
+    /// and the search with 0 and 2 restarts reaches it too.
     #[test]
     fn memory_moves_add_the_memory_a_single_change_cannot() {
         let game = from_json_str(REMEMBER_THE_CUE, "cue.posg.json").unwrap();
@@ -880,8 +883,36 @@ mod tests {
             vec![certain(pair)]
         };
         let key = |fsc: &Fsc| EvaluationKey::of(&game, fsc);
-        assert!(key(&with_block(&start, unused, other_pair(unused))) == key(&start));
-        assert!(key(&with_block(&start, used, other_pair(used))) != key(&start));
+        assert_eq!(
+            key(&with_block(&start, unused, other_pair(unused))),
+            key(&start)
+        );
+        assert_ne!(
+            key(&with_block(&start, used, other_pair(used))),
+            key(&start)
+        );
+    }
+
+    /// A climb that finds every bound in the memo goes as the climb that
+    /// filled it: the same end point, bound and work.
+    #[test]
+    fn a_climb_through_the_memo_goes_as_the_first() {
+        let game = grid_4x4();
+        let not_phi = not_phi("!unsafe U goal");
+        let start = first_pairs(&game, 2);
+        let universe = Fsc::uniform_enabled(Role::Defender, 2, game.defender());
+        let search = Search::new(&game, &not_phi, &universe, UNLIMITED);
+        let (first, first_work) = climb(&search, &start).unwrap();
+        let known = search.known.lock().len();
+        let (again, again_work) = climb(&search, &start).unwrap();
+        assert_eq!(
+            search.known.lock().len(),
+            known,
+            "the second climb solved something"
+        );
+        assert_eq!(again.defender, first.defender);
+        assert_eq!(again.bound.to_bits(), first.bound.to_bits());
+        assert_eq!(again_work, first_work);
     }
 
     /// The restarts keep the best end point and are reproducible: on the
@@ -896,11 +927,11 @@ mod tests {
         let universe = Fsc::uniform_enabled(Role::Defender, 2, game.defender());
         let search = Search::new(&game, &not_phi, &universe, UNLIMITED);
         let alone = climb(&search, &start).unwrap().0;
-        let search = || {
+        let restarted = || {
             let mut rng = ChaCha8Rng::seed_from_u64(5);
             climb_with_restarts(&game, &not_phi, &start, 3, &mut rng, UNLIMITED).unwrap()
         };
-        let best = search();
+        let best = restarted();
         // The returned bound is proved, the climb's only ranked: the proof
         // may widen it by rounding.
         assert!(
@@ -917,7 +948,7 @@ mod tests {
             best.bound,
             certified.value
         );
-        assert_eq!(best.defender, search().defender);
+        assert_eq!(best.defender, restarted().defender);
         assert!(best.defender.blocks.iter().all(|block| block.len() == 1));
     }
 
