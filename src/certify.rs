@@ -342,6 +342,111 @@ pub fn lower_bound_within(
     Ok(bound)
 }
 
+/// [`lower_bound_within`]'s value and product size, without the
+/// adversary's strategy as rules, together with the blocks of `defender`
+/// that strategy meets ([`BlocksMet`]): what the local search on the
+/// supports ranks a defender by and prunes its moves with.
+pub(crate) fn lower_bound_meeting(
+    game: &Posg,
+    dra_not_phi: &Dra,
+    defender: &Fsc,
+    settings: &SolverSettings,
+) -> Result<BlocksMet, CertifyError> {
+    let analysis = analyse(game, dra_not_phi, defender, Role::Defender, settings)?;
+    let value = (1.0 - proved_optimum(&analysis).value.clamp(0.0, 1.0)).clamp(0.0, 1.0);
+    Ok(BlocksMet {
+        value,
+        mdp_states: analysis.states.len(),
+        blocks: blocks_met(game, defender, &analysis),
+    })
+}
+
+/// The reachable states of the product MDP of `game`, `dra` and
+/// `controller` playing for `fixed`, built but not analysed.
+pub(crate) fn product_states(
+    game: &Posg,
+    dra: &Dra,
+    controller: &Fsc,
+    fixed: Role,
+) -> Result<usize, CertifyError> {
+    Ok(Product::build(game, dra, controller, fixed)?.states.len())
+}
+
+/// A defender's certified lower bound (as [`lower_bound_within`] ranks
+/// it) and the blocks `(g, o)` of the defender that the adversary's best
+/// response meets.
+pub(crate) struct BlocksMet {
+    /// The lower bound.
+    pub value: f64,
+    /// The reachable states of the product MDP.
+    pub mdp_states: usize,
+    /// Per block, in the defender's order `g * O + o`, whether the
+    /// adversary's optimal strategy meets it ([`blocks_met`]).
+    pub blocks: Vec<bool>,
+}
+
+/// The blocks `(g, o)` of `defender` at the product states `(s, q, g)`
+/// (`o` each observation of `s`) that the adversary's optimal memoryless
+/// strategy of `analysis` (which stays in the accepting end components it
+/// enters, `mdp/rabin.rs`) reaches from the initial states, leaving out
+/// the states from which it cannot win. A defender that differs in any
+/// other block leaves that strategy's play as it is up to the first state
+/// left out, from which the adversary wins nothing anyway: it wins at
+/// least as much against the changed defender, whose lower bound is then
+/// no higher (up to the errors of the two computed values).
+fn blocks_met(game: &Posg, defender: &Fsc, analysis: &Analysis) -> Vec<bool> {
+    let result = &analysis.result;
+    let observations = defender.num_observations();
+    let mut blocks = vec![false; defender.blocks.len()];
+    let mut seen = vec![false; analysis.states.len()];
+    let mut stack: Vec<usize> = analysis.initial.iter().map(|&(m, _)| m).collect();
+    while let Some(m) = stack.pop() {
+        if std::mem::replace(&mut seen[m], true) || !result.possible[m] {
+            continue;
+        }
+        let (s, _, g) = analysis.states[m];
+        for &(o, _) in game.defender().observation_distribution(s) {
+            blocks[g * observations + o] = true;
+        }
+        let moves = analysis.mdp.distribution(m, result.strategy[m]);
+        stack.extend(moves.iter().map(|&(next, _)| next));
+    }
+    blocks
+}
+
+/// The free player's optimum of `analysis` at the initial distribution:
+/// its proved side, widened by the rounding of the sum over the initial
+/// states, and the strategy's own value (method.md section 6).
+struct ProvedOptimum {
+    /// The proved side, rounded up (not clamped).
+    value: f64,
+    /// The optimality certificate's bound at the initial distribution.
+    proved: f64,
+    /// The strategy's value at the initial distribution.
+    attained: f64,
+    /// The rounding added to `proved`.
+    rounding: f64,
+}
+
+/// [`ProvedOptimum`] of `analysis`.
+fn proved_optimum(analysis: &Analysis) -> ProvedOptimum {
+    let result = &analysis.result;
+    let at_initial = |x: &[f64]| -> f64 { analysis.initial.iter().map(|&(m, p)| p * x[m]).sum() };
+    // The free player's optimum is proved below `proved` (the optimality
+    // certificate) and above the strategy's value `attained` less its
+    // error bound: the bound reported is the proved side.
+    let (attained, proved) = (at_initial(&result.values), at_initial(&result.upper));
+    // The sums of nonnegative terms are exact where every term is 0, and
+    // within a relative `n eps` otherwise.
+    let rounding = 2.0 * analysis.initial.len() as f64 * f64::EPSILON * proved;
+    ProvedOptimum {
+        value: proved + rounding,
+        proved,
+        attained,
+        rounding,
+    }
+}
+
 /// The best probability of `phi` any defender achieves against `adversary`:
 /// `max P(phi)` on the product with `dra_phi`, an automaton for `phi`
 /// (module documentation).
@@ -387,15 +492,12 @@ fn best_response(
     let start = Instant::now();
     let analysis = analyse(game, dra, controller, fixed, settings)?;
     let result = &analysis.result;
-    let at_initial = |x: &[f64]| -> f64 { analysis.initial.iter().map(|&(m, p)| p * x[m]).sum() };
-    // The free player's optimum is proved below `proved` (the optimality
-    // certificate) and above the strategy's value `attained` less its
-    // error bound: the bound reported is the proved side.
-    let (attained, proved) = (at_initial(&result.values), at_initial(&result.upper));
-    // The sums of nonnegative terms are exact where every term is 0, and
-    // within a relative `n eps` otherwise.
-    let rounding = 2.0 * analysis.initial.len() as f64 * f64::EPSILON * proved;
-    let value = proved + rounding;
+    let ProvedOptimum {
+        value,
+        proved,
+        attained,
+        rounding,
+    } = proved_optimum(&analysis);
     let qualitative = if analysis.initial.iter().all(|&(m, _)| !result.possible[m]) {
         Qualitative::Zero
     } else if analysis.initial.iter().all(|&(m, _)| result.almost_sure[m]) {

@@ -24,7 +24,7 @@
 
 use std::cell::Cell;
 use std::collections::HashMap;
-use std::sync::{Mutex, MutexGuard, PoisonError};
+use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
 use std::time::Instant;
 
 use rand::{Rng, SeedableRng};
@@ -33,7 +33,9 @@ use rayon::prelude::*;
 
 use crate::automaton::Dra;
 use crate::certify::gradient::LowerBoundGradients;
-use crate::certify::{CertifyError, lower_bound_within, lower_value_or_trivial_within};
+use crate::certify::{
+    CertifyError, lower_bound_meeting, lower_value_or_trivial_within, product_states,
+};
 use crate::controller::{Choice, Fsc, Role, Support};
 use crate::game::{AdversaryAction, DefenderAction, Posg};
 use crate::solver::SolverSettings;
@@ -78,37 +80,61 @@ impl Effort {
     }
 }
 
-/// The ranked bounds ([`Landscape::bound`]) of the defenders the climbs
-/// of one search have evaluated, with the states of their products,
-/// shared by the climbs that run in parallel. The climbs come back to
-/// defenders judged before: a kick that climbs back to the end point it
-/// left sweeps that point's moves again, and a move that overrides a
-/// split's redirected choice gives a defender one move from the split's
-/// origin. With 2 nodes, 97% of the evaluations were repeats on PAYNT's
-/// dice-and-coin, 29% on grid-walls, 12% on attacker-one-defender.
+/// A defender's ranked bound ([`Landscape::bound`]), the states of its
+/// product, and the blocks its adversary's best response meets (every
+/// block where the product mixes too slowly to say).
+#[derive(Debug, Clone)]
+struct Judged {
+    bound: f64,
+    states: usize,
+    met: Arc<[bool]>,
+}
+
+/// The defenders the climbs of one search have judged
+/// ([`Landscape::judge`]), and the product sizes of those they passed over
+/// ([`Landscape::pass_over`]), shared by the climbs that run in parallel.
+/// The climbs come back to defenders judged before: a kick that climbs
+/// back to the end point it left sweeps that point's moves again, and a
+/// move that overrides a split's redirected choice gives a defender one
+/// move from the split's origin. With 2 nodes, 97% of the evaluations
+/// were repeats on PAYNT's dice-and-coin, 29% on grid-walls, 12% on
+/// attacker-one-defender.
 #[derive(Default)]
 struct Evaluations {
-    known: Mutex<HashMap<EvaluationKey, (f64, usize)>>,
+    known: Mutex<HashMap<EvaluationKey, Judged>>,
+    sizes: Mutex<HashMap<EvaluationKey, usize>>,
 }
 
 impl Evaluations {
-    /// The bound and product states recorded for `key`, if any.
-    fn get(&self, key: &EvaluationKey) -> Option<(f64, usize)> {
-        self.lock().get(key).copied()
+    /// What was recorded for `key`, if it was judged.
+    fn get(&self, key: &EvaluationKey) -> Option<Judged> {
+        lock(&self.known).get(key).cloned()
     }
 
-    /// Records the bound and product states of `key` (two climbs may
-    /// evaluate the same key at once: they find the same numbers).
-    fn insert(&self, key: EvaluationKey, evaluated: (f64, usize)) {
-        let before = self.lock().insert(key, evaluated);
-        debug_assert!(before.is_none_or(|b| b.0.to_bits() == evaluated.0.to_bits()));
+    /// Records what `key` was judged (two climbs may judge the same key at
+    /// once: they find the same numbers).
+    fn insert(&self, key: EvaluationKey, judged: Judged) {
+        let bits = judged.bound.to_bits();
+        let before = lock(&self.known).insert(key, judged);
+        debug_assert!(before.is_none_or(|b| b.bound.to_bits() == bits));
     }
 
-    /// The map, whether or not a climb panicked while holding it (its
-    /// entries are complete: each is inserted whole).
-    fn lock(&self) -> MutexGuard<'_, HashMap<EvaluationKey, (f64, usize)>> {
-        self.known.lock().unwrap_or_else(PoisonError::into_inner)
+    /// The states of `key`'s product, where it was judged or passed over.
+    fn states(&self, key: &EvaluationKey) -> Option<usize> {
+        let judged = lock(&self.known).get(key).map(|judged| judged.states);
+        judged.or_else(|| lock(&self.sizes).get(key).copied())
     }
+
+    /// Records the states of a passed-over defender's product.
+    fn insert_states(&self, key: EvaluationKey, states: usize) {
+        lock(&self.sizes).insert(key, states);
+    }
+}
+
+/// A map of [`Evaluations`], whether or not a climb panicked while holding
+/// it (its entries are complete: each is inserted whole).
+fn lock<T>(map: &Mutex<T>) -> MutexGuard<'_, T> {
+    map.lock().unwrap_or_else(PoisonError::into_inner)
 }
 
 /// What determines a defender's bound among the defenders of one search
@@ -198,29 +224,68 @@ impl Landscape<'_> {
     /// that the climbs go as they would without the memo.
     fn bound(&self, defender: &Fsc) -> Result<f64, CertifyError> {
         self.evaluated.set(self.evaluated.get() + 1);
-        let key = EvaluationKey::of(self.search.game, defender);
-        let (value, states) = match self.search.known.get(&key) {
-            Some(known) => known,
-            None => {
-                let evaluated = self.evaluate(defender)?;
-                self.search.known.insert(key, evaluated);
-                evaluated
-            }
-        };
-        self.spent.set(self.spent.get() + states);
-        Ok(value)
+        let judged = self.judge(defender)?;
+        self.spent.set(self.spent.get() + judged.states);
+        Ok(judged.bound)
     }
 
-    /// [`Self::bound`] solved: the ranked bound of `defender` and the
-    /// states of its product (a product that could not be proved counts
-    /// as large as the game).
-    fn evaluate(&self, defender: &Fsc) -> Result<(f64, usize), CertifyError> {
+    /// What the search knows of `defender` ([`Judged`]), solved where it
+    /// has not judged it before; not counted as the climb's work.
+    fn judge(&self, defender: &Fsc) -> Result<Judged, CertifyError> {
+        let key = EvaluationKey::of(self.search.game, defender);
+        if let Some(known) = self.search.known.get(&key) {
+            return Ok(known);
+        }
+        let judged = self.evaluate(defender)?;
+        self.search.known.insert(key, judged.clone());
+        Ok(judged)
+    }
+
+    /// [`Self::judge`] solved: the ranked bound of `defender` with its
+    /// product's states and the blocks the adversary's best response meets
+    /// ([`lower_bound_meeting`]); a product that could not be proved
+    /// counts as large as the game, with every block met.
+    fn evaluate(&self, defender: &Fsc) -> Result<Judged, CertifyError> {
         let Search { game, not_phi, .. } = *self.search;
-        match lower_bound_within(game, not_phi, defender, &ranking_settings()) {
-            Ok(bound) => Ok((bound.value, bound.mdp_states)),
-            Err(error) if error.is_numerical() => Ok((0.0, game.num_states())),
+        match lower_bound_meeting(game, not_phi, defender, &ranking_settings()) {
+            Ok(met) => Ok(Judged {
+                bound: met.value,
+                states: met.mdp_states,
+                met: met.blocks.into(),
+            }),
+            Err(error) if error.is_numerical() => Ok(Judged {
+                bound: 0.0,
+                states: game.num_states(),
+                met: vec![true; defender.blocks.len()].into(),
+            }),
             Err(error) => Err(error),
         }
+    }
+
+    /// Counts `candidates` as judged by [`Self::first_improvement`] without
+    /// solving them, each as the work of its product's states (built, not
+    /// analysed, where the search has not met it before), until the
+    /// effort is spent: for moves that cannot raise the bound, so that the
+    /// climb spends its effort, and goes on, as where it judges them.
+    fn pass_over(&self, candidates: impl Iterator<Item = Fsc>) -> Result<(), CertifyError> {
+        let Search { game, not_phi, .. } = *self.search;
+        for candidate in candidates {
+            if self.exhausted() {
+                return Ok(());
+            }
+            self.evaluated.set(self.evaluated.get() + 1);
+            let key = EvaluationKey::of(game, &candidate);
+            let states = match self.search.known.states(&key) {
+                Some(states) => states,
+                None => {
+                    let states = product_states(game, not_phi, &candidate, Role::Defender)?;
+                    self.search.known.insert_states(key, states);
+                    states
+                }
+            };
+            self.spent.set(self.spent.get() + states);
+        }
+        Ok(())
     }
 
     /// The first-order gains of the moves of `current` (blocks in use
@@ -432,11 +497,16 @@ fn guided_step(
 
 /// One sweep of single-block moves over the blocks in use, each block
 /// taking its first improving move; `None` when no block changed (or the
-/// effort was spent before any did).
+/// effort was spent before any did). The moves in a block the adversary's
+/// best response to the current defender does not meet
+/// ([`crate::certify::lower_bound_meeting`]) cannot raise the bound, and
+/// are passed over ([`Landscape::pass_over`]): counted as judged, not
+/// solved, so that the climb goes as where it judges them.
 fn sweep(landscape: &Landscape<'_>, from: &Climbed) -> Result<Option<Climbed>, CertifyError> {
     let mut current = from.clone();
     let mut changed = false;
     let mut in_use = blocks_in_use(landscape.search.game, &current.defender);
+    let mut met = landscape.judge(&current.defender)?.met;
     for b in 0..current.defender.blocks.len() {
         if !in_use[b] {
             continue;
@@ -444,10 +514,13 @@ fn sweep(landscape: &Landscape<'_>, from: &Climbed) -> Result<Option<Climbed>, C
         let defender = &current.defender;
         let moves = block_moves(&defender.blocks[b], landscape.search.pairs(b))
             .map(|choices| with_block(defender, b, choices));
-        if let Some(better) = landscape.first_improvement(moves, current.bound)? {
+        if !met[b] {
+            landscape.pass_over(moves)?;
+        } else if let Some(better) = landscape.first_improvement(moves, current.bound)? {
             current = better;
             changed = true;
             in_use = blocks_in_use(landscape.search.game, &current.defender);
+            met = landscape.judge(&current.defender)?.met;
         }
         if landscape.exhausted() {
             break;
