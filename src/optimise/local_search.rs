@@ -178,6 +178,10 @@ struct Search<'a> {
     support: Support,
     effort: Effort,
     known: Evaluations,
+    /// Whether the sweeps pass over the moves the adversary's best
+    /// response does not meet ([`sweep`]); off only where a test judges
+    /// every move to compare.
+    pass_over_unmet: bool,
 }
 
 impl<'a> Search<'a> {
@@ -191,6 +195,7 @@ impl<'a> Search<'a> {
             support: Support::of(universe),
             effort,
             known: Evaluations::default(),
+            pass_over_unmet: true,
         }
     }
 
@@ -514,7 +519,7 @@ fn sweep(landscape: &Landscape<'_>, from: &Climbed) -> Result<Option<Climbed>, C
         let defender = &current.defender;
         let moves = block_moves(&defender.blocks[b], landscape.search.pairs(b))
             .map(|choices| with_block(defender, b, choices));
-        if !met[b] {
+        if !met[b] && landscape.search.pass_over_unmet {
             landscape.pass_over(moves)?;
         } else if let Some(better) = landscape.first_improvement(moves, current.bound)? {
             current = better;
@@ -976,16 +981,108 @@ mod tests {
         let universe = Fsc::uniform_enabled(Role::Defender, 2, game.defender());
         let search = Search::new(&game, &not_phi, &universe, UNLIMITED);
         let (first, first_work) = climb(&search, &start).unwrap();
-        let known = search.known.lock().len();
+        let known = lock(&search.known.known).len();
         let (again, again_work) = climb(&search, &start).unwrap();
         assert_eq!(
-            search.known.lock().len(),
+            lock(&search.known.known).len(),
             known,
             "the second climb solved something"
         );
         assert_eq!(again.defender, first.defender);
         assert_eq!(again.bound.to_bits(), first.bound.to_bits());
         assert_eq!(again_work, first_work);
+    }
+
+    /// PAYNT's attacker-one-defender (player 0 keeps the attacker from
+    /// the goal, `Pmin=? [F "goal"]`), its universe with `nodes` nodes,
+    /// and `!phi`.
+    fn attacker_one_defender(nodes: usize) -> (Posg, Fsc, Dra) {
+        let game = crate::game::drn::read(std::path::Path::new(
+            "tests/data/paynt/attacker-one-defender.drn",
+        ))
+        .unwrap()
+        .game;
+        let universe = Fsc::uniform_enabled(Role::Defender, nodes, game.defender());
+        (game, universe, not_phi("G !goal"))
+    }
+
+    /// No move in a block the adversary's best response does not meet
+    /// raises the lower bound: on PAYNT's attacker-one-defender with 2
+    /// nodes, from kicks of the uniform defender, some blocks in use are
+    /// not met, every move there is judged and none rises above the bound
+    /// (beyond the ranking's error), and some move in a block met does.
+    #[test]
+    fn no_move_in_a_block_the_adversary_does_not_meet_raises_the_bound() {
+        let (game, universe, not_phi) = attacker_one_defender(2);
+        let settings = ranking_settings();
+        let judged = |fsc: &Fsc| lower_bound_meeting(&game, &not_phi, fsc, &settings).unwrap();
+        let (mut unmet_moves, mut raised_where_met) = (0, 0);
+        let uniform_in_use = blocks_in_use(&game, &universe);
+        for seed in 0..3 {
+            let mut rng = ChaCha8Rng::seed_from_u64(seed);
+            let defender = kicked(&universe, &uniform_in_use, &universe, &mut rng);
+            let before = judged(&defender);
+            let in_use = blocks_in_use(&game, &defender);
+            assert!(before.blocks.iter().zip(&in_use).all(|(&m, &u)| !m || u));
+            for b in (0..in_use.len()).filter(|&b| in_use[b]) {
+                for choices in block_moves(&defender.blocks[b], &universe.blocks[b]) {
+                    let after = judged(&with_block(&defender, b, choices)).value;
+                    if before.blocks[b] {
+                        raised_where_met += usize::from(after > before.value + IMPROVEMENT);
+                    } else {
+                        assert!(
+                            after <= before.value + 1e-9,
+                            "seed {seed} block {b}: {} -> {after}",
+                            before.value
+                        );
+                        unmet_moves += 1;
+                    }
+                }
+            }
+        }
+        assert!(
+            unmet_moves > 0 && raised_where_met > 0,
+            "{unmet_moves} {raised_where_met}"
+        );
+    }
+
+    /// Passing over the moves the adversary does not meet changes no
+    /// climb: on PAYNT's attacker-one-defender with 2 nodes, from random
+    /// memoryless starts and with a work budget that ends some climbs
+    /// early, the climbs end at the same defenders with the same bounds
+    /// and the same work as climbs that judge every move, solving fewer
+    /// products.
+    #[test]
+    fn passing_over_unmet_moves_changes_no_climb() {
+        let (game, universe, not_phi) = attacker_one_defender(2);
+        let start = first_pairs(&game, 2);
+        let effort = Effort {
+            work: 20_000,
+            ..UNLIMITED
+        };
+        let passing = Search::new(&game, &not_phi, &universe, effort);
+        let judging = Search {
+            pass_over_unmet: false,
+            ..Search::new(&game, &not_phi, &universe, effort)
+        };
+        let mut ended_early = 0;
+        for seed in 0..4 {
+            let from = random_memoryless(&start, &universe, &mut ChaCha8Rng::seed_from_u64(seed));
+            let (passed, passed_work) = climb(&passing, &from).unwrap();
+            let (judged, judged_work) = climb(&judging, &from).unwrap();
+            assert_eq!(passed.defender, judged.defender, "seed {seed}");
+            assert_eq!(passed.bound.to_bits(), judged.bound.to_bits(), "seed {seed}");
+            assert_eq!(passed_work, judged_work, "seed {seed}");
+            ended_early += usize::from(judged_work >= effort.work);
+        }
+        assert!(ended_early > 0, "no climb spent its effort");
+        let solved = |search: &Search<'_>| lock(&search.known.known).len();
+        assert!(
+            solved(&passing) < solved(&judging),
+            "{} products solved against {}",
+            solved(&passing),
+            solved(&judging)
+        );
     }
 
     /// The restarts keep the best end point and are reproducible: on the
@@ -1032,13 +1129,8 @@ mod tests {
     /// on PAYNT's attacker-one-defender with 2 nodes, one in 8.
     #[test]
     fn a_kick_redraws_one_in_8_blocks_in_use_and_keeps_the_rest() {
-        let aod = crate::game::drn::read(std::path::Path::new(
-            "tests/data/paynt/attacker-one-defender.drn",
-        ))
-        .unwrap()
-        .game;
+        let (aod, universe, _) = attacker_one_defender(2);
         let aod_fsc = {
-            let universe = Fsc::uniform_enabled(Role::Defender, 2, aod.defender());
             let mut rng = ChaCha8Rng::seed_from_u64(3);
             let mut fsc = first_pairs(&aod, 2);
             // Both nodes in use: node 0 moves to node 1 on every observation.
