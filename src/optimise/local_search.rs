@@ -12,7 +12,9 @@
 //! enabled `(next node, action)` pair, keeping every change that raises the
 //! certified lower bound (first improvement). The moves with the largest
 //! first-order gains by the bound's gradient are tried first (guided
-//! steps), the sweeps over every move only where those fail. Where a sweep
+//! steps), the sweeps over every move only where those fail (passing over,
+//! unsolved, the moves in blocks the adversary's best response does not
+//! meet, which cannot raise the bound). Where a sweep
 //! over all blocks changes nothing and a node is unused, it tries memory:
 //! one choice is sent to a copy of its next node (a change of no value by
 //! itself), and climbs go on from there. It stops when neither raises the
