@@ -337,24 +337,31 @@ pub fn lower_bound_within(
     settings: &SolverSettings,
 ) -> Result<Bound, CertifyError> {
     let mut bound = best_response(game, dra_not_phi, defender, Role::Defender, settings)?;
-    bound.value = (1.0 - bound.value).clamp(0.0, 1.0);
+    bound.value = complement(bound.value);
     bound.qualitative = bound.qualitative.complement();
     Ok(bound)
 }
 
+/// `1 - p`, clamped to `[0, 1]`: the defender's lower bound from the
+/// adversary's proved optimum `p` of `!phi`.
+fn complement(p: f64) -> f64 {
+    (1.0 - p).clamp(0.0, 1.0)
+}
+
 /// [`lower_bound_within`]'s value and product size, without the
 /// adversary's strategy as rules, together with the blocks of `defender`
-/// that strategy meets ([`BlocksMet`]): what the local search on the
-/// supports ranks a defender by and prunes its moves with.
-pub(crate) fn lower_bound_meeting(
+/// that strategy meets ([`RankedBound`]): what the local search on the
+/// supports ranks a defender by and prunes its moves with (the same bits
+/// as [`lower_bound_within`]'s value for the same settings).
+pub(crate) fn ranked_lower_bound(
     game: &Posg,
     dra_not_phi: &Dra,
     defender: &Fsc,
     settings: &SolverSettings,
-) -> Result<BlocksMet, CertifyError> {
+) -> Result<RankedBound, CertifyError> {
     let analysis = analyse(game, dra_not_phi, defender, Role::Defender, settings)?;
-    let value = (1.0 - proved_optimum(&analysis).value.clamp(0.0, 1.0)).clamp(0.0, 1.0);
-    Ok(BlocksMet {
+    let value = complement(proved_optimum(&analysis).value.clamp(0.0, 1.0));
+    Ok(RankedBound {
         value,
         mdp_states: analysis.states.len(),
         blocks: blocks_met(game, defender, &analysis),
@@ -375,7 +382,7 @@ pub(crate) fn product_states(
 /// A defender's certified lower bound (as [`lower_bound_within`] ranks
 /// it) and the blocks `(g, o)` of the defender that the adversary's best
 /// response meets.
-pub(crate) struct BlocksMet {
+pub(crate) struct RankedBound {
     /// The lower bound.
     pub value: f64,
     /// The reachable states of the product MDP.

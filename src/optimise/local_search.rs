@@ -36,7 +36,7 @@ use rayon::prelude::*;
 use crate::automaton::Dra;
 use crate::certify::gradient::LowerBoundGradients;
 use crate::certify::{
-    CertifyError, lower_bound_meeting, lower_value_or_trivial_within, product_states,
+    CertifyError, ranked_lower_bound, lower_value_or_trivial_within, product_states,
 };
 use crate::controller::{Choice, Fsc, Role, Support};
 use crate::game::{AdversaryAction, DefenderAction, Posg};
@@ -87,8 +87,11 @@ impl Effort {
 /// block where the product mixes too slowly to say).
 #[derive(Debug, Clone)]
 struct Judged {
+    /// The ranked bound.
     bound: f64,
+    /// The reachable states of the product (the work of judging it).
     states: usize,
+    /// Per block, whether the adversary's best response meets it.
     met: Arc<[bool]>,
 }
 
@@ -100,10 +103,12 @@ struct Judged {
 /// move that overrides a split's redirected choice gives a defender one
 /// move from the split's origin. With 2 nodes, 97% of the evaluations
 /// were repeats on PAYNT's dice-and-coin, 29% on grid-walls, 12% on
-/// attacker-one-defender.
+/// attacker-one-defender (stop 45, every move judged).
 #[derive(Default)]
 struct Evaluations {
+    /// The defenders judged.
     known: Mutex<HashMap<EvaluationKey, Judged>>,
+    /// The product states of the defenders passed over and not judged.
     sizes: Mutex<HashMap<EvaluationKey, usize>>,
 }
 
@@ -250,11 +255,11 @@ impl Landscape<'_> {
 
     /// [`Self::judge`] solved: the ranked bound of `defender` with its
     /// product's states and the blocks the adversary's best response meets
-    /// ([`lower_bound_meeting`]); a product that could not be proved
+    /// ([`ranked_lower_bound`]); a product that could not be proved
     /// counts as large as the game, with every block met.
     fn evaluate(&self, defender: &Fsc) -> Result<Judged, CertifyError> {
         let Search { game, not_phi, .. } = *self.search;
-        match lower_bound_meeting(game, not_phi, defender, &ranking_settings()) {
+        match ranked_lower_bound(game, not_phi, defender, &ranking_settings()) {
             Ok(met) => Ok(Judged {
                 bound: met.value,
                 states: met.mdp_states,
@@ -506,10 +511,16 @@ fn guided_step(
 /// taking its first improving move; `None` when no block changed (or the
 /// effort was spent before any did). The moves in a block the adversary's
 /// best response to the current defender does not meet
-/// ([`crate::certify::lower_bound_meeting`]) cannot raise the bound, and
-/// are passed over ([`Landscape::pass_over`]): counted as judged, not
-/// solved, so that the climb goes as where it judges them.
+/// ([`crate::certify::ranked_lower_bound`]) cannot raise the bound
+/// (beyond the ranking's numerical error), and are passed over
+/// ([`Landscape::pass_over`]): counted as judged, not solved, so that the
+/// climb goes as where it judges them (unless a judged move would have
+/// crossed [`IMPROVEMENT`] by that error, or failed to solve and been
+/// charged as large as the game).
 fn sweep(landscape: &Landscape<'_>, from: &Climbed) -> Result<Option<Climbed>, CertifyError> {
+    if landscape.exhausted() {
+        return Ok(None);
+    }
     let mut current = from.clone();
     let mut changed = false;
     let mut in_use = blocks_in_use(landscape.search.game, &current.defender);
@@ -1017,7 +1028,7 @@ mod tests {
     fn no_move_in_a_block_the_adversary_does_not_meet_raises_the_bound() {
         let (game, universe, not_phi) = attacker_one_defender(2);
         let settings = ranking_settings();
-        let judged = |fsc: &Fsc| lower_bound_meeting(&game, &not_phi, fsc, &settings).unwrap();
+        let judged = |fsc: &Fsc| ranked_lower_bound(&game, &not_phi, fsc, &settings).unwrap();
         let (mut unmet_moves, mut raised_where_met) = (0, 0);
         let uniform_in_use = blocks_in_use(&game, &universe);
         for seed in 0..3 {
@@ -1046,6 +1057,54 @@ mod tests {
             unmet_moves > 0 && raised_where_met > 0,
             "{unmet_moves} {raised_where_met}"
         );
+    }
+
+    /// The blocks met are those of the adversary's optimal play while it
+    /// can still win: from s0 it goes left (to `a`, where `bad` follows
+    /// with 0.9) rather than right (to `b`, 0.5); `a` shows either of two
+    /// observations, both met; `b` (off the optimal play) and `safe`
+    /// (reached, but the adversary wins nothing from it) are not met;
+    /// `bad` (the accepting end component) is.
+    #[test]
+    fn the_blocks_met_are_those_of_the_adversarys_optimal_play_while_it_can_win() {
+        let game = from_json_str(
+            r#"{"posg": 1, "states": ["s0", "a", "b", "safe", "bad"], "initial": {"s0": 1.0},
+                "labels": {"bad": ["bad"]},
+                "defender": {"actions": ["go", "dash"],
+                    "observations": ["o0", "oa", "ox", "ob", "os", "obad"], "observe": {
+                    "s0": {"o0": 1.0}, "a": {"oa": 0.5, "ox": 0.5}, "b": {"ob": 1.0},
+                    "safe": {"os": 1.0}, "bad": {"obad": 1.0}}},
+                "adversary": {"actions": ["left", "right"], "observe": "full"},
+                "transitions": [
+                    {"state": "s0", "defender": "*", "adversary": "left", "next": {"a": 1.0}},
+                    {"state": "s0", "defender": "*", "adversary": "right", "next": {"b": 1.0}},
+                    {"state": "a", "defender": "*", "adversary": "*",
+                     "next": {"bad": 0.9, "safe": 0.1}},
+                    {"state": "b", "defender": "*", "adversary": "*",
+                     "next": {"bad": 0.5, "safe": 0.5}},
+                    {"state": "safe", "defender": "*", "adversary": "*", "next": {"safe": 1.0}},
+                    {"state": "bad", "defender": "*", "adversary": "*", "next": {"bad": 1.0}}
+                ]}"#,
+            "blocks-met.posg.json",
+        )
+        .unwrap();
+        let not_phi = not_phi("G !bad");
+        let defender = Fsc::uniform_enabled(Role::Defender, 1, game.defender());
+        let ranked = ranked_lower_bound(&game, &not_phi, &defender, &ranking_settings()).unwrap();
+        assert!((ranked.value - 0.1).abs() < 1e-12, "{}", ranked.value);
+        let state = |name: &str| game.states().iter().position(|s| s == name).unwrap();
+        let met_at = |name: &str| -> Vec<bool> {
+            game.defender()
+                .observation_distribution(state(name))
+                .iter()
+                .map(|&(o, _)| ranked.blocks[o])
+                .collect()
+        };
+        for (name, met) in [("s0", true), ("a", true), ("b", false), ("safe", false), ("bad", true)] {
+            let at = met_at(name);
+            assert!(!at.is_empty() && at.iter().all(|&m| m == met), "{name}: {at:?}");
+        }
+        assert_eq!(met_at("a").len(), 2);
     }
 
     /// Passing over the moves the adversary does not meet changes no
