@@ -368,17 +368,6 @@ pub(crate) fn ranked_lower_bound(
     })
 }
 
-/// The reachable states of the product MDP of `game`, `dra` and
-/// `controller` playing for `fixed`, built but not analysed.
-pub(crate) fn product_states(
-    game: &Posg,
-    dra: &Dra,
-    controller: &Fsc,
-    fixed: Role,
-) -> Result<usize, CertifyError> {
-    Ok(Product::build(game, dra, controller, fixed)?.states.len())
-}
-
 /// A defender's certified lower bound (as [`lower_bound_within`] ranks
 /// it) and the blocks `(g, o)` of the defender that the adversary's best
 /// response meets.

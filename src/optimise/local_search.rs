@@ -36,7 +36,7 @@ use rayon::prelude::*;
 use crate::automaton::Dra;
 use crate::certify::gradient::LowerBoundGradients;
 use crate::certify::{
-    CertifyError, ranked_lower_bound, lower_value_or_trivial_within, product_states,
+    CertifyError, lower_value_or_trivial_within, product_mdp, ranked_lower_bound,
 };
 use crate::controller::{Choice, Fsc, Role, Support};
 use crate::game::{AdversaryAction, DefenderAction, Posg};
@@ -59,13 +59,14 @@ pub struct Climbed {
 }
 
 /// How long the search goes on: each climb until its bound evaluations
-/// have solved products of `work` states in all (at least one evaluation
-/// beyond the start's), every climb until `deadline` (with a time budget),
-/// and the rounds of restarts and kicks until a climb reaches `enough`.
+/// have counted products of `work` states in all (at least one evaluation
+/// beyond the start's; a move passed over counts as evaluated), every
+/// climb until `deadline` (with a time budget), and the rounds of restarts
+/// and kicks until a climb reaches `enough`.
 #[derive(Debug, Clone, Copy)]
 pub struct Effort {
     /// The product states (reachable, summed over evaluations) one climb
-    /// may solve.
+    /// may count.
     pub work: usize,
     /// When every climb ends, whatever it has evaluated.
     pub deadline: Option<Instant>,
@@ -138,8 +139,9 @@ impl Evaluations {
     }
 }
 
-/// A map of [`Evaluations`], whether or not a climb panicked while holding
-/// it (its entries are complete: each is inserted whole).
+/// One of the maps of [`Evaluations`], locked, whether or not a climb
+/// panicked while holding it (its entries are complete: each is inserted
+/// whole).
 fn lock<T>(map: &Mutex<T>) -> MutexGuard<'_, T> {
     map.lock().unwrap_or_else(PoisonError::into_inner)
 }
@@ -260,10 +262,10 @@ impl Landscape<'_> {
     fn evaluate(&self, defender: &Fsc) -> Result<Judged, CertifyError> {
         let Search { game, not_phi, .. } = *self.search;
         match ranked_lower_bound(game, not_phi, defender, &ranking_settings()) {
-            Ok(met) => Ok(Judged {
-                bound: met.value,
-                states: met.mdp_states,
-                met: met.blocks.into(),
+            Ok(ranked) => Ok(Judged {
+                bound: ranked.value,
+                states: ranked.mdp_states,
+                met: ranked.blocks.into(),
             }),
             Err(error) if error.is_numerical() => Ok(Judged {
                 bound: 0.0,
@@ -290,7 +292,8 @@ impl Landscape<'_> {
             let states = match self.search.known.states(&key) {
                 Some(states) => states,
                 None => {
-                    let states = product_states(game, not_phi, &candidate, Role::Defender)?;
+                    let (states, _, _) = product_mdp(game, not_phi, &candidate, Role::Defender)?;
+                    let states = states.len();
                     self.search.known.insert_states(key, states);
                     states
                 }
@@ -408,8 +411,8 @@ const GUIDED_CANDIDATES: usize = 8;
 /// moves. Single-block moves are tried in the order of their first-order
 /// gains first ([`guided_step`]). Stops where no move raises the bound,
 /// or when the climb has spent its effort (the search's, per climb).
-/// Returns the end point and the work spent (the product states its
-/// evaluations solved).
+/// Returns the end point and the work spent (the product states of its
+/// evaluations, solved or passed over).
 fn climb(search: &Search<'_>, start: &Fsc) -> Result<(Climbed, usize), CertifyError> {
     let landscape = Landscape {
         search,
@@ -469,7 +472,8 @@ fn first_improving_split(
 
 /// Single-block moves from `from` until none raises the bound: guided
 /// steps ([`guided_step`]) while they find one, then a sweep over every
-/// move ([`sweep`]), until a sweep changes nothing.
+/// move ([`sweep`], which passes over those that cannot raise the bound),
+/// until a sweep changes nothing.
 fn climb_by_single_moves(
     landscape: &Landscape<'_>,
     from: Climbed,
@@ -491,7 +495,8 @@ fn climb_by_single_moves(
 /// the bound; `None` when none does (or the effort is spent). A move's
 /// gain against the adversary's current best response is not its gain
 /// against the next one, nor does it see an end component the move makes
-/// or breaks, so the sweeps still judge every move where this finds none.
+/// or breaks, so the sweeps still judge every move that can raise the
+/// bound where this finds none.
 fn guided_step(
     landscape: &Landscape<'_>,
     current: &Climbed,
@@ -516,7 +521,10 @@ fn guided_step(
 /// ([`Landscape::pass_over`]): counted as judged, not solved, so that the
 /// climb goes as where it judges them (unless a judged move would have
 /// crossed [`IMPROVEMENT`] by that error, or failed to solve and been
-/// charged as large as the game).
+/// charged as large as the game). The current defender's blocks met come
+/// from its judgment ([`Landscape::judge`]), a solve that counts no work
+/// where the climb has not judged it (a split, whose value is its
+/// origin's).
 fn sweep(landscape: &Landscape<'_>, from: &Climbed) -> Result<Option<Climbed>, CertifyError> {
     if landscape.exhausted() {
         return Ok(None);
@@ -1100,9 +1108,18 @@ mod tests {
                 .map(|&(o, _)| ranked.blocks[o])
                 .collect()
         };
-        for (name, met) in [("s0", true), ("a", true), ("b", false), ("safe", false), ("bad", true)] {
+        for (name, met) in [
+            ("s0", true),
+            ("a", true),
+            ("b", false),
+            ("safe", false),
+            ("bad", true),
+        ] {
             let at = met_at(name);
-            assert!(!at.is_empty() && at.iter().all(|&m| m == met), "{name}: {at:?}");
+            assert!(
+                !at.is_empty() && at.iter().all(|&m| m == met),
+                "{name}: {at:?}"
+            );
         }
         assert_eq!(met_at("a").len(), 2);
     }
@@ -1132,7 +1149,11 @@ mod tests {
             let (passed, passed_work) = climb(&passing, &from).unwrap();
             let (judged, judged_work) = climb(&judging, &from).unwrap();
             assert_eq!(passed.defender, judged.defender, "seed {seed}");
-            assert_eq!(passed.bound.to_bits(), judged.bound.to_bits(), "seed {seed}");
+            assert_eq!(
+                passed.bound.to_bits(),
+                judged.bound.to_bits(),
+                "seed {seed}"
+            );
             assert_eq!(passed_work, judged_work, "seed {seed}");
             ended_early += usize::from(judged_work >= effort.work);
         }
