@@ -192,10 +192,12 @@ pub struct Settings {
     #[arg(long, default_value_t = Settings::default().local_search_restarts)]
     pub local_search_restarts: usize,
     /// The most work one climb of the local search spends, counted as the
-    /// reachable product states its bound evaluations solve, summed:
-    /// 120,000 is 300 evaluations on a 400-state product, 30 on a
-    /// 4,000-state one. A count, not seconds, so a seed gives the same
-    /// search on every machine.
+    /// reachable product states of its bound evaluations, summed (a move
+    /// that cannot raise the bound, in a block the adversary's best
+    /// response does not meet, counts without being solved): 120,000 is
+    /// 300 evaluations on a 400-state product, 30 on a 4,000-state one. A
+    /// count, not seconds, so a seed gives the same search on every
+    /// machine.
     #[arg(long, default_value_t = Settings::default().local_search_work)]
     pub local_search_work: usize,
     /// On games with a certified lower bound, wherever the max-min loop's
