@@ -360,7 +360,7 @@ pub(crate) fn ranked_lower_bound(
     settings: &SolverSettings,
 ) -> Result<RankedBound, CertifyError> {
     let analysis = analyse(game, dra_not_phi, defender, Role::Defender, settings)?;
-    let value = complement(proved_optimum(&analysis).value.clamp(0.0, 1.0));
+    let value = complement(proved_optimum(&analysis).value().clamp(0.0, 1.0));
     Ok(RankedBound {
         value,
         mdp_states: analysis.states.len(),
@@ -414,8 +414,6 @@ fn blocks_met(game: &Posg, defender: &Fsc, analysis: &Analysis) -> Vec<bool> {
 /// its proved side, widened by the rounding of the sum over the initial
 /// states, and the strategy's own value (method.md section 6).
 struct ProvedOptimum {
-    /// The proved side, rounded up (not clamped).
-    value: f64,
     /// The optimality certificate's bound at the initial distribution.
     proved: f64,
     /// The strategy's value at the initial distribution.
@@ -436,10 +434,16 @@ fn proved_optimum(analysis: &Analysis) -> ProvedOptimum {
     // within a relative `n eps` otherwise.
     let rounding = 2.0 * analysis.initial.len() as f64 * f64::EPSILON * proved;
     ProvedOptimum {
-        value: proved + rounding,
         proved,
         attained,
         rounding,
+    }
+}
+
+impl ProvedOptimum {
+    /// The proved side, rounded up (not clamped).
+    fn value(&self) -> f64 {
+        self.proved + self.rounding
     }
 }
 
@@ -488,12 +492,13 @@ fn best_response(
     let start = Instant::now();
     let analysis = analyse(game, dra, controller, fixed, settings)?;
     let result = &analysis.result;
+    let optimum = proved_optimum(&analysis);
+    let value = optimum.value();
     let ProvedOptimum {
-        value,
         proved,
         attained,
         rounding,
-    } = proved_optimum(&analysis);
+    } = optimum;
     let qualitative = if analysis.initial.iter().all(|&(m, _)| !result.possible[m]) {
         Qualitative::Zero
     } else if analysis.initial.iter().all(|&(m, _)| result.almost_sure[m]) {
