@@ -63,6 +63,7 @@ use crate::solver::{SolverError, SolverSettings};
 
 pub use crate::mdp::MdpError;
 pub mod gradient;
+pub(crate) mod refutation;
 pub mod strategy;
 
 /// Why a bound could not be computed.

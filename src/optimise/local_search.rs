@@ -35,6 +35,7 @@ use rayon::prelude::*;
 
 use crate::automaton::Dra;
 use crate::certify::gradient::LowerBoundGradients;
+use crate::certify::refutation::Refuter;
 use crate::certify::{
     CertifyError, lower_value_or_trivial_within, product_mdp, ranked_lower_bound,
 };
@@ -139,6 +140,15 @@ impl Evaluations {
     }
 }
 
+/// What the local searches on one game and automaton have evaluated
+/// ([`climb_with_restarts`]): the structures of one run share it, so that
+/// a climb one search made costs another no solve (the searches' universe,
+/// every enabled pair of the game's defender, is the same for every
+/// structure with the same number of nodes). Sharing changes no search:
+/// a defender found in it is charged as where it is solved.
+#[derive(Default, Clone)]
+pub struct SearchMemo(Arc<Evaluations>);
+
 /// One of the maps of [`Evaluations`], locked, whether or not a climb
 /// panicked while holding it (its entries are complete: each is inserted
 /// whole).
@@ -146,8 +156,9 @@ fn lock<T>(map: &Mutex<T>) -> MutexGuard<'_, T> {
     map.lock().unwrap_or_else(PoisonError::into_inner)
 }
 
-/// What determines a defender's bound among the defenders of one search
-/// (which all have the start's nodes and initial distribution): its
+/// What determines a defender's bound among the defenders of the searches
+/// sharing a [`SearchMemo`] (on one game and automaton): its number of
+/// nodes, its initial distribution (the probabilities' bits) and its
 /// blocks in use ([`blocks_in_use`]), each as its index, its number of
 /// choices and its choices (next node, action, the probability's bits).
 /// Blocks out of use are never played, so defenders that differ only
@@ -159,7 +170,8 @@ impl EvaluationKey {
     /// The key of `defender` in `game`.
     fn of(game: &Posg, defender: &Fsc) -> Self {
         let in_use = blocks_in_use(game, defender);
-        let mut key = Vec::new();
+        let mut key = vec![defender.num_nodes() as u64];
+        key.extend(defender.initial().iter().map(|p| p.to_bits()));
         for (b, block) in defender
             .blocks
             .iter()
@@ -186,25 +198,41 @@ struct Search<'a> {
     universe: &'a Fsc,
     support: Support,
     effort: Effort,
-    known: Evaluations,
+    known: Arc<Evaluations>,
     /// Whether the sweeps pass over the moves the adversary's best
     /// response does not meet ([`sweep`]); off only where a test judges
     /// every move to compare.
     pass_over_unmet: bool,
+    /// Whether the sweeps pass over the moves a [`Refuter`] refutes
+    /// ([`sweep`]); off only where a test judges every move to compare.
+    pass_over_refuted: bool,
 }
 
 impl<'a> Search<'a> {
     /// The search over the defenders whose blocks play `universe`'s
     /// pairs, each climb with `effort`, nothing evaluated yet.
+    #[cfg(test)]
     fn new(game: &'a Posg, not_phi: &'a Dra, universe: &'a Fsc, effort: Effort) -> Self {
+        Self::sharing(game, not_phi, universe, effort, &SearchMemo::default())
+    }
+
+    /// [`Self::new`], knowing what the searches sharing `memo` evaluated.
+    fn sharing(
+        game: &'a Posg,
+        not_phi: &'a Dra,
+        universe: &'a Fsc,
+        effort: Effort,
+        memo: &SearchMemo,
+    ) -> Self {
         Self {
             game,
             not_phi,
             universe,
             support: Support::of(universe),
             effort,
-            known: Evaluations::default(),
+            known: Arc::clone(&memo.0),
             pass_over_unmet: true,
+            pass_over_refuted: true,
         }
     }
 
@@ -237,8 +265,13 @@ impl Landscape<'_> {
     /// solve, but counts its product's states as spent all the same, so
     /// that the climbs go as they would without the memo.
     fn bound(&self, defender: &Fsc) -> Result<f64, CertifyError> {
+        self.bound_keyed(EvaluationKey::of(self.search.game, defender), defender)
+    }
+
+    /// [`Self::bound`] of `defender`, whose key is `key`.
+    fn bound_keyed(&self, key: EvaluationKey, defender: &Fsc) -> Result<f64, CertifyError> {
         self.evaluated.set(self.evaluated.get() + 1);
-        let judged = self.judge(defender)?;
+        let judged = self.judge_keyed(key, defender)?;
         self.spent.set(self.spent.get() + judged.states);
         Ok(judged.bound)
     }
@@ -246,13 +279,32 @@ impl Landscape<'_> {
     /// What the search knows of `defender` ([`Judged`]), solved where it
     /// has not judged it before; not counted as the climb's work.
     fn judge(&self, defender: &Fsc) -> Result<Judged, CertifyError> {
-        let key = EvaluationKey::of(self.search.game, defender);
+        self.judge_keyed(EvaluationKey::of(self.search.game, defender), defender)
+    }
+
+    /// [`Self::judge`] of `defender`, whose key is `key`.
+    fn judge_keyed(&self, key: EvaluationKey, defender: &Fsc) -> Result<Judged, CertifyError> {
         if let Some(known) = self.search.known.get(&key) {
             return Ok(known);
         }
         let judged = self.evaluate(defender)?;
         self.search.known.insert(key, judged.clone());
         Ok(judged)
+    }
+
+    /// A [`Refuter`] of the moves of `defender`, where the search refutes
+    /// moves and the product can be analysed (`None` where it mixes too
+    /// slowly: its moves are judged); not counted as the climb's work.
+    fn refuter(&self, defender: &Fsc) -> Result<Option<Refuter<'_>>, CertifyError> {
+        let Search { game, not_phi, .. } = *self.search;
+        if !self.search.pass_over_refuted {
+            return Ok(None);
+        }
+        match Refuter::new(game, not_phi, defender, &ranking_settings()) {
+            Ok(refuter) => Ok(Some(refuter)),
+            Err(error) if error.is_numerical() => Ok(None),
+            Err(error) => Err(error),
+        }
     }
 
     /// [`Self::judge`] solved: the ranked bound of `defender` with its
@@ -282,24 +334,30 @@ impl Landscape<'_> {
     /// effort is spent: for moves that cannot raise the bound, so that the
     /// climb spends its effort, and goes on, as where it judges them.
     fn pass_over(&self, candidates: impl Iterator<Item = Fsc>) -> Result<(), CertifyError> {
-        let Search { game, not_phi, .. } = *self.search;
         for candidate in candidates {
             if self.exhausted() {
                 return Ok(());
             }
-            self.evaluated.set(self.evaluated.get() + 1);
-            let key = EvaluationKey::of(game, &candidate);
-            let states = match self.search.known.states(&key) {
-                Some(states) => states,
-                None => {
-                    let (states, _, _) = product_mdp(game, not_phi, &candidate, Role::Defender)?;
-                    let states = states.len();
-                    self.search.known.insert_states(key, states);
-                    states
-                }
-            };
-            self.spent.set(self.spent.get() + states);
+            self.pass_over_one(EvaluationKey::of(self.search.game, &candidate), &candidate)?;
         }
+        Ok(())
+    }
+
+    /// Counts `candidate`, whose key is `key`, as judged without solving
+    /// it ([`Self::pass_over`]).
+    fn pass_over_one(&self, key: EvaluationKey, candidate: &Fsc) -> Result<(), CertifyError> {
+        let Search { game, not_phi, .. } = *self.search;
+        self.evaluated.set(self.evaluated.get() + 1);
+        let states = match self.search.known.states(&key) {
+            Some(states) => states,
+            None => {
+                let (states, _, _) = product_mdp(game, not_phi, candidate, Role::Defender)?;
+                let states = states.len();
+                self.search.known.insert_states(key, states);
+                states
+            }
+        };
+        self.spent.set(self.spent.get() + states);
         Ok(())
     }
 
@@ -342,17 +400,25 @@ impl Landscape<'_> {
     }
 
     /// The first of `candidates` that certifies more than `bound` by
-    /// [`IMPROVEMENT`]; `None` when none does or the effort is spent.
+    /// [`IMPROVEMENT`]; `None` when none does or the effort is spent. A
+    /// candidate the search has not judged and `refuted` says cannot
+    /// raise the bound is passed over ([`Self::pass_over`]).
     fn first_improvement(
         &self,
         candidates: impl Iterator<Item = Fsc>,
         bound: f64,
+        refuted: impl Fn(&Fsc) -> bool,
     ) -> Result<Option<Climbed>, CertifyError> {
         for candidate in candidates {
             if self.exhausted() {
                 return Ok(None);
             }
-            let value = self.bound(&candidate)?;
+            let key = EvaluationKey::of(self.search.game, &candidate);
+            if self.search.known.get(&key).is_none() && refuted(&candidate) {
+                self.pass_over_one(key, &candidate)?;
+                continue;
+            }
+            let value = self.bound_keyed(key, &candidate)?;
             if value > bound + IMPROVEMENT {
                 return Ok(Some(Climbed {
                     defender: candidate,
@@ -509,7 +575,7 @@ fn guided_step(
         .into_iter()
         .take(GUIDED_CANDIDATES)
         .map(|(_, b, choices)| with_block(&current.defender, b, choices));
-    landscape.first_improvement(candidates, current.bound)
+    landscape.first_improvement(candidates, current.bound, |_| false)
 }
 
 /// One sweep of single-block moves over the blocks in use, each block
@@ -533,6 +599,7 @@ fn sweep(landscape: &Landscape<'_>, from: &Climbed) -> Result<Option<Climbed>, C
     let mut changed = false;
     let mut in_use = blocks_in_use(landscape.search.game, &current.defender);
     let mut met = landscape.judge(&current.defender)?.met;
+    let mut refuter = landscape.refuter(&current.defender)?;
     for b in 0..current.defender.blocks.len() {
         if !in_use[b] {
             continue;
@@ -540,13 +607,15 @@ fn sweep(landscape: &Landscape<'_>, from: &Climbed) -> Result<Option<Climbed>, C
         let defender = &current.defender;
         let moves = block_moves(&defender.blocks[b], landscape.search.pairs(b))
             .map(|choices| with_block(defender, b, choices));
+        let refuted = |candidate: &Fsc| refuter.as_ref().is_some_and(|r| r.refutes(candidate, b));
         if !met[b] && landscape.search.pass_over_unmet {
             landscape.pass_over(moves)?;
-        } else if let Some(better) = landscape.first_improvement(moves, current.bound)? {
+        } else if let Some(better) = landscape.first_improvement(moves, current.bound, refuted)? {
             current = better;
             changed = true;
             in_use = blocks_in_use(landscape.search.game, &current.defender);
             met = landscape.judge(&current.defender)?.met;
+            refuter = landscape.refuter(&current.defender)?;
         }
         if landscape.exhausted() {
             break;
@@ -670,7 +739,8 @@ const MIN_KICKED_BLOCKS: usize = 2;
 /// and at the deadline. Returns the end point with the highest bound (the
 /// first such, in the order `start`, then the climbs as drawn), with its
 /// certified lower bound. The rounds depend on counts and bounds only, so
-/// the search is reproducible for a seed unless a deadline cuts it.
+/// the search is reproducible for a seed unless a deadline cuts it; what
+/// the searches sharing `memo` evaluated costs it no solve.
 pub fn climb_with_restarts(
     game: &Posg,
     not_phi: &Dra,
@@ -678,10 +748,11 @@ pub fn climb_with_restarts(
     restarts: usize,
     rng: &mut ChaCha8Rng,
     effort: Effort,
+    memo: &SearchMemo,
 ) -> Result<Climbed, CertifyError> {
     let universe = Fsc::uniform_enabled(Role::Defender, start.num_nodes(), game.defender());
     let mut rounds = Rounds {
-        search: Search::new(game, not_phi, &universe, effort),
+        search: Search::sharing(game, not_phi, &universe, effort, memo),
         best: None,
         spent: 0,
     };
@@ -953,9 +1024,16 @@ mod tests {
         );
         for restarts in [0, 2] {
             let mut rng = ChaCha8Rng::seed_from_u64(1);
-            let searched =
-                climb_with_restarts(&game, &not_phi, &start, restarts, &mut rng, UNLIMITED)
-                    .unwrap();
+            let searched = climb_with_restarts(
+                &game,
+                &not_phi,
+                &start,
+                restarts,
+                &mut rng,
+                UNLIMITED,
+                &SearchMemo::default(),
+            )
+            .unwrap();
             assert!((searched.bound - 1.0).abs() < 1e-9, "{}", searched.bound);
         }
     }
@@ -1124,46 +1202,86 @@ mod tests {
         assert_eq!(met_at("a").len(), 2);
     }
 
-    /// Passing over the moves the adversary does not meet changes no
-    /// climb: on PAYNT's attacker-one-defender with 2 nodes, from random
-    /// memoryless starts and with a work budget that ends some climbs
-    /// early, the climbs end at the same defenders with the same bounds
-    /// and the same work as climbs that judge every move, solving fewer
-    /// products.
+    /// Passing over moves changes no climb: on PAYNT's
+    /// attacker-one-defender with 2 nodes, from random memoryless starts
+    /// and with a work budget that ends some climbs early, climbs that
+    /// pass over the moves the adversary does not meet, and those that
+    /// also pass over the moves a refuter refutes, end at the same
+    /// defenders with the same bounds and the same work as climbs that
+    /// judge every move, each solving fewer products.
     #[test]
-    fn passing_over_unmet_moves_changes_no_climb() {
+    fn passing_over_moves_changes_no_climb() {
         let (game, universe, not_phi) = attacker_one_defender(2);
         let start = first_pairs(&game, 2);
         let effort = Effort {
             work: 20_000,
             ..UNLIMITED
         };
-        let passing = Search::new(&game, &not_phi, &universe, effort);
-        let judging = Search {
-            pass_over_unmet: false,
+        let search = |unmet: bool, refuted: bool| Search {
+            pass_over_unmet: unmet,
+            pass_over_refuted: refuted,
             ..Search::new(&game, &not_phi, &universe, effort)
         };
+        let searches = [
+            search(true, true),
+            search(true, false),
+            search(false, false),
+        ];
         let mut ended_early = 0;
         for seed in 0..4 {
             let from = random_memoryless(&start, &universe, &mut ChaCha8Rng::seed_from_u64(seed));
-            let (passed, passed_work) = climb(&passing, &from).unwrap();
-            let (judged, judged_work) = climb(&judging, &from).unwrap();
-            assert_eq!(passed.defender, judged.defender, "seed {seed}");
-            assert_eq!(
-                passed.bound.to_bits(),
-                judged.bound.to_bits(),
-                "seed {seed}"
-            );
-            assert_eq!(passed_work, judged_work, "seed {seed}");
-            ended_early += usize::from(judged_work >= effort.work);
+            let climbs: Vec<_> = searches.iter().map(|s| climb(s, &from).unwrap()).collect();
+            let (judged, judged_work) = &climbs[2];
+            for (passed, passed_work) in &climbs[..2] {
+                assert_eq!(passed.defender, judged.defender, "seed {seed}");
+                assert_eq!(
+                    passed.bound.to_bits(),
+                    judged.bound.to_bits(),
+                    "seed {seed}"
+                );
+                assert_eq!(passed_work, judged_work, "seed {seed}");
+            }
+            ended_early += usize::from(*judged_work >= effort.work);
         }
         assert!(ended_early > 0, "no climb spent its effort");
-        let solved = |search: &Search<'_>| lock(&search.known.known).len();
+        let solved = searches
+            .each_ref()
+            .map(|search| lock(&search.known.known).len());
         assert!(
-            solved(&passing) < solved(&judging),
-            "{} products solved against {}",
-            solved(&passing),
-            solved(&judging)
+            solved[0] < solved[1] && solved[1] < solved[2],
+            "products solved: {solved:?}"
+        );
+    }
+
+    /// Searches sharing a memo go as they go alone: on the 4x4 grid, a
+    /// search from another start after one that filled the memo ends
+    /// where it ends with a memo of its own, with the same bound, solving
+    /// fewer products.
+    #[test]
+    fn a_search_sharing_a_memo_goes_as_alone() {
+        let game = grid_4x4();
+        let not_phi = not_phi("!unsafe U goal");
+        let first = first_pairs(&game, 2);
+        let universe = Fsc::uniform_enabled(Role::Defender, 2, game.defender());
+        let other = random_memoryless(&first, &universe, &mut ChaCha8Rng::seed_from_u64(9));
+        let search = |start: &Fsc, memo: &SearchMemo| {
+            let mut rng = ChaCha8Rng::seed_from_u64(5);
+            climb_with_restarts(&game, &not_phi, start, 3, &mut rng, UNLIMITED, memo).unwrap()
+        };
+        let solved = |memo: &SearchMemo| lock(&memo.0.known).len();
+        let shared = SearchMemo::default();
+        search(&first, &shared);
+        let before = solved(&shared);
+        let sharing = search(&other, &shared);
+        let own = SearchMemo::default();
+        let alone = search(&other, &own);
+        assert_eq!(sharing.defender, alone.defender);
+        assert_eq!(sharing.bound.to_bits(), alone.bound.to_bits());
+        assert!(
+            solved(&shared) - before < solved(&own),
+            "{} solved sharing, {} alone",
+            solved(&shared) - before,
+            solved(&own)
         );
     }
 
@@ -1181,7 +1299,16 @@ mod tests {
         let alone = climb(&search, &start).unwrap().0;
         let restarted = || {
             let mut rng = ChaCha8Rng::seed_from_u64(5);
-            climb_with_restarts(&game, &not_phi, &start, 3, &mut rng, UNLIMITED).unwrap()
+            climb_with_restarts(
+                &game,
+                &not_phi,
+                &start,
+                3,
+                &mut rng,
+                UNLIMITED,
+                &SearchMemo::default(),
+            )
+            .unwrap()
         };
         let best = restarted();
         // The returned bound is proved, the climb's only ranked: the proof

@@ -386,21 +386,31 @@ where
     F: Fn(usize, &Structure) -> Box<dyn Observer + Send> + Sync,
 {
     settings.validate()?;
-    let outcomes = structures
-        .par_iter()
+    let run = StructuresRun {
+        game,
+        dra,
+        negated,
+        settings,
+        cancel,
+        started: Instant::now(),
+        memo: local_search::SearchMemo::default(),
+        search_stream: search_stream(0),
+    };
+    let mut watchers: Vec<_> = (structures.iter().enumerate())
+        .map(|(index, structure)| observer(index, structure))
+        .collect();
+    // The searches before the races one structure after another, each
+    // with the machine to itself: they search one universe from the same
+    // random restarts, so each after the first finds most of its climbs in
+    // the memo.
+    let presolved: Vec<_> = (structures.iter().zip(&mut watchers))
+        .map(|(structure, watcher)| run.presolve(structure, watcher.as_mut()))
+        .collect();
+    let outcomes = (structures.par_iter().zip(watchers.par_iter_mut()))
+        .zip(presolved)
         .enumerate()
-        .map(|(index, structure)| {
-            let mut watcher = observer(index, structure);
-            optimise_structure(
-                game,
-                dra,
-                negated,
-                structure,
-                settings,
-                index as u64,
-                watcher.as_mut(),
-                cancel,
-            )
+        .map(|(index, ((structure, watcher), presolved))| {
+            run.race(structure, index as u64, watcher.as_mut(), presolved?)
         })
         .collect::<Vec<_>>();
     if outcomes.is_empty() {
@@ -448,177 +458,264 @@ pub fn optimise_structure(
     cancel: &Cancel,
 ) -> Result<StructureOutcome, OptimiseError> {
     settings.validate()?;
-    let clock = Instant::now();
-    let method = if settings.single_player_ascent && game.adversary().num_actions() == 1 {
-        Method::Ascent
-    } else {
-        Method::MaxMin
-    };
-    let certifier = negated.map(|not_phi| Certifier {
-        game,
-        phi: dra,
-        not_phi,
-    });
-    let shared = Mutex::new(observer);
-    let live = |start| Live {
-        start,
-        shared: &shared,
-    };
-    let start = |start: usize| Start {
-        settings: settings.for_start(start),
-        stream: stream + ((start as u64) << 32),
-    };
-    let search =
-        certifier.filter(|_| method == Method::MaxMin && settings.round && settings.local_search);
-    let presolved = match search {
-        Some(c) => search_supports(game, c, structure, settings, stream, clock)?,
-        None => None,
-    };
-    // The search's seconds; where it was asked but not run, those of the
-    // bounds that showed it had nothing to find are certification.
-    let presolve_seconds = clock.elapsed().as_secs_f64();
-    let searched = presolved.is_some();
-    let presolve = PhaseSeconds {
-        local_search: if searched { presolve_seconds } else { 0.0 },
-        certification: if search.is_some() && !searched {
-            presolve_seconds
-        } else {
-            0.0
-        },
-        ..PhaseSeconds::default()
-    };
-    if let Some(climbed) = &presolved {
-        shared
-            .lock()
-            .unwrap_or_else(PoisonError::into_inner)
-            .searched(&SearchRecord {
-                seconds: presolve_seconds,
-                certified_lower: climbed.bound,
-            });
-    }
-    // The single-player ascent is certified once, at the end (`finalise`):
-    // its checks' value is exact already.
-    let run_certifier = certifier.filter(|_| method == Method::MaxMin);
-    let floor = presolved.as_ref().map(|climbed| climbed.bound);
-    let racers = (0..settings.starts)
-        .into_par_iter()
-        .map(|i| {
-            let optimiser =
-                start_optimiser((game, dra), (method, run_certifier), structure, &start(i))?;
-            Racer::new(
-                optimiser.with_cancel(cancel).with_floor(floor),
-                live(i),
-                clock,
-            )
-        })
-        .collect();
-    let mut finished = race(racers, settings, floor);
-    if run_certifier.is_none() {
-        let fresh = || structure_objective(game, dra, structure, settings);
-        settle(&mut finished, clock, &fresh)?;
-    }
-    let runs = finished
-        .into_iter()
-        .map(|result| {
-            let (optimiser, outcome) = result?;
-            let (objective, rng) = optimiser.into_parts();
-            Ok(StartRun {
-                outcome,
-                objective,
-                rng,
-            })
-        })
-        .collect::<Vec<_>>();
-    let observer = shared.into_inner().unwrap_or_else(PoisonError::into_inner);
-    let (runs, failed_starts) = keep_solved(runs)?;
-    let (indices, mut runs): (Vec<usize>, Vec<StartRun>) = runs.into_iter().unzip();
-    let starts: Vec<StartReport> = runs
-        .iter()
-        .zip(&indices)
-        .map(|(run, &start)| StartReport {
-            start,
-            stream: stream + ((start as u64) << 32),
-            worst_case: run.outcome.best.worst_case,
-            certified_lower: run.outcome.best.certified_lower,
-            iterations: run.outcome.iterations,
-            status: run.outcome.status,
-            seconds: run.outcome.seconds,
-            logit_bound: run.outcome.logit_bound,
-        })
-        .collect();
-    let best_start = (0..runs.len())
-        .reduce(|b, i| {
-            if ranks_above(&runs[i].outcome, &runs[b].outcome) {
-                i
-            } else {
-                b
-            }
-        })
-        .ok_or(OptimiseError::Settings {
-            field: "starts",
-            problem: "must be at least 1".into(),
-        })?;
-    let mut phases = presolve;
-    for run in &runs {
-        phases.add(&run.outcome.phases);
-    }
-    let upper_bound = runs
-        .iter()
-        .filter_map(|r| r.outcome.upper_bound)
-        .reduce(f64::min);
-    let mut run = runs.swap_remove(best_start);
-    observer.finish().map_err(OptimiseError::Observer)?;
-    let chosen = finalise(
+    let run = StructuresRun {
         game,
         dra,
-        certifier,
-        &mut run,
-        (upper_bound, presolved),
+        negated,
         settings,
-        (method, clock),
-        &mut phases,
-    )?;
-    // Whichever candidate closed it, a closed bracket is why the run ended.
-    let status = if chosen.bracket_closed(settings) {
-        Status::GapClosed
-    } else {
-        run.outcome.status
+        cancel,
+        started: Instant::now(),
+        memo: local_search::SearchMemo::default(),
+        search_stream: search_stream(stream),
     };
-    let objective = &run.objective;
-    let outcome = &run.outcome;
-    Ok(StructureOutcome {
-        report: StructureReport {
-            name: structure.name.clone(),
-            gmc: objective.gmc_size(),
-            defender_parameters: objective.defender().num_parameters(),
-            adversary_parameters: objective.adversary().num_parameters(),
-            seed: settings.seed,
-            worst_case: chosen.worst_case,
-            best_iteration: outcome.best.iteration,
-            last_value: outcome.last_value,
-            error_bound: objective.largest_error_bound(),
-            iterations: outcome.iterations,
-            checks: outcome.checks,
-            status,
-            seconds: clock.elapsed().as_secs_f64(),
-            certified_lower: chosen.certified_lower,
-            upper_bound: chosen.upper_bound,
-            method,
-            rounding: chosen.name,
-            candidates: chosen.candidates,
-            starts,
-            best_start: indices[best_start],
-            failed_starts: failed_starts
-                .into_iter()
-                .map(|(start, error)| format!("start {start}: {error}"))
-                .collect(),
-            logit_bound: outcome.logit_bound,
-            max_residual: outcome.max_residual,
-            phases,
-        },
-        defender: chosen.defender,
-        adversary: chosen.adversary,
-    })
+    let presolved = run.presolve(structure, observer)?;
+    run.race(structure, stream, observer, presolved)
+}
+
+/// The random stream of the local search before the race of the structure
+/// with random stream `stream` (`stream + (2^32 - 1) 2^32`, apart from its
+/// starts'); [`optimise_structures`] gives every structure the first's.
+fn search_stream(stream: u64) -> u64 {
+    stream.wrapping_add(u64::from(u32::MAX) << 32)
+}
+
+/// What the structures of one run share: the game, the automata of phi and
+/// (with a certifier) of !phi, the settings, the cancellation, when the
+/// run began, and the memo and random stream of the local searches before
+/// the races ([`search_supports`]).
+struct StructuresRun<'a> {
+    game: &'a Posg,
+    dra: &'a Dra,
+    negated: Option<&'a Dra>,
+    settings: &'a Settings,
+    cancel: &'a Cancel,
+    started: Instant,
+    memo: local_search::SearchMemo,
+    search_stream: u64,
+}
+
+/// The local search before a structure's race ([`search_supports`]): its
+/// end point, if it ran, and its seconds.
+struct Presolved {
+    climbed: Option<local_search::Climbed>,
+    phases: PhaseSeconds,
+}
+
+impl StructuresRun<'_> {
+    /// The single-player ascent where the adversary has one action and
+    /// the settings ask for it, else the max-min loop.
+    fn method(&self) -> Method {
+        if self.settings.single_player_ascent && self.game.adversary().num_actions() == 1 {
+            Method::Ascent
+        } else {
+            Method::MaxMin
+        }
+    }
+
+    /// The certifier, where there is an automaton for !phi.
+    fn certifier(&self) -> Option<Certifier<'_>> {
+        self.negated.map(|not_phi| Certifier {
+            game: self.game,
+            phi: self.dra,
+            not_phi,
+        })
+    }
+
+    /// The local search on the supports before `structure`'s race, where
+    /// the max-min loop runs with a certifier, rounding and the search;
+    /// `observer` gets its end point as it ends.
+    fn presolve(
+        &self,
+        structure: &Structure,
+        observer: &mut (dyn Observer + Send),
+    ) -> Result<Presolved, OptimiseError> {
+        let settings = self.settings;
+        let clock = Instant::now();
+        let search = self
+            .certifier()
+            .filter(|_| self.method() == Method::MaxMin && settings.round && settings.local_search);
+        let climbed = match search {
+            Some(c) => search_supports(c, structure, self)?,
+            None => None,
+        };
+        // The search's seconds; where it was asked but not run, those of
+        // the bounds that showed it had nothing to find are certification.
+        let seconds = clock.elapsed().as_secs_f64();
+        let searched = climbed.is_some();
+        let phases = PhaseSeconds {
+            local_search: if searched { seconds } else { 0.0 },
+            certification: if search.is_some() && !searched {
+                seconds
+            } else {
+                0.0
+            },
+            ..PhaseSeconds::default()
+        };
+        if let Some(climbed) = &climbed {
+            observer.searched(&SearchRecord {
+                seconds: self.started.elapsed().as_secs_f64(),
+                certified_lower: climbed.bound,
+            });
+        }
+        Ok(Presolved { climbed, phases })
+    }
+
+    /// `structure`'s race after its search `presolved`, with random stream
+    /// `stream` ([`optimise_structure`]).
+    fn race(
+        &self,
+        structure: &Structure,
+        stream: u64,
+        observer: &mut (dyn Observer + Send),
+        presolved: Presolved,
+    ) -> Result<StructureOutcome, OptimiseError> {
+        let StructuresRun {
+            game,
+            dra,
+            settings,
+            cancel,
+            started: clock,
+            ..
+        } = *self;
+        let method = self.method();
+        let certifier = self.certifier();
+        let Presolved {
+            climbed: presolved,
+            phases: presolve,
+        } = presolved;
+        let shared = Mutex::new(observer);
+        let live = |start| Live {
+            start,
+            shared: &shared,
+        };
+        let start = |start: usize| Start {
+            settings: settings.for_start(start),
+            stream: stream + ((start as u64) << 32),
+        };
+        // The single-player ascent is certified once, at the end (`finalise`):
+        // its checks' value is exact already.
+        let run_certifier = certifier.filter(|_| method == Method::MaxMin);
+        let floor = presolved.as_ref().map(|climbed| climbed.bound);
+        let racers = (0..settings.starts)
+            .into_par_iter()
+            .map(|i| {
+                let optimiser =
+                    start_optimiser((game, dra), (method, run_certifier), structure, &start(i))?;
+                Racer::new(
+                    optimiser.with_cancel(cancel).with_floor(floor),
+                    live(i),
+                    clock,
+                )
+            })
+            .collect();
+        let mut finished = race(racers, settings, floor);
+        if run_certifier.is_none() {
+            let fresh = || structure_objective(game, dra, structure, settings);
+            settle(&mut finished, clock, &fresh)?;
+        }
+        let runs = finished
+            .into_iter()
+            .map(|result| {
+                let (optimiser, outcome) = result?;
+                let (objective, rng) = optimiser.into_parts();
+                Ok(StartRun {
+                    outcome,
+                    objective,
+                    rng,
+                })
+            })
+            .collect::<Vec<_>>();
+        let observer = shared.into_inner().unwrap_or_else(PoisonError::into_inner);
+        let (runs, failed_starts) = keep_solved(runs)?;
+        let (indices, mut runs): (Vec<usize>, Vec<StartRun>) = runs.into_iter().unzip();
+        let starts: Vec<StartReport> = runs
+            .iter()
+            .zip(&indices)
+            .map(|(run, &start)| StartReport {
+                start,
+                stream: stream + ((start as u64) << 32),
+                worst_case: run.outcome.best.worst_case,
+                certified_lower: run.outcome.best.certified_lower,
+                iterations: run.outcome.iterations,
+                status: run.outcome.status,
+                seconds: run.outcome.seconds,
+                logit_bound: run.outcome.logit_bound,
+            })
+            .collect();
+        let best_start = (0..runs.len())
+            .reduce(|b, i| {
+                if ranks_above(&runs[i].outcome, &runs[b].outcome) {
+                    i
+                } else {
+                    b
+                }
+            })
+            .ok_or(OptimiseError::Settings {
+                field: "starts",
+                problem: "must be at least 1".into(),
+            })?;
+        let mut phases = presolve;
+        for run in &runs {
+            phases.add(&run.outcome.phases);
+        }
+        let upper_bound = runs
+            .iter()
+            .filter_map(|r| r.outcome.upper_bound)
+            .reduce(f64::min);
+        let mut run = runs.swap_remove(best_start);
+        observer.finish().map_err(OptimiseError::Observer)?;
+        let chosen = finalise(
+            game,
+            dra,
+            certifier,
+            &mut run,
+            (upper_bound, presolved),
+            settings,
+            (method, clock, &self.memo),
+            &mut phases,
+        )?;
+        // Whichever candidate closed it, a closed bracket is why the run ended.
+        let status = if chosen.bracket_closed(settings) {
+            Status::GapClosed
+        } else {
+            run.outcome.status
+        };
+        let objective = &run.objective;
+        let outcome = &run.outcome;
+        Ok(StructureOutcome {
+            report: StructureReport {
+                name: structure.name.clone(),
+                gmc: objective.gmc_size(),
+                defender_parameters: objective.defender().num_parameters(),
+                adversary_parameters: objective.adversary().num_parameters(),
+                seed: settings.seed,
+                worst_case: chosen.worst_case,
+                best_iteration: outcome.best.iteration,
+                last_value: outcome.last_value,
+                error_bound: objective.largest_error_bound(),
+                iterations: outcome.iterations,
+                checks: outcome.checks,
+                status,
+                seconds: clock.elapsed().as_secs_f64(),
+                certified_lower: chosen.certified_lower,
+                upper_bound: chosen.upper_bound,
+                method,
+                rounding: chosen.name,
+                candidates: chosen.candidates,
+                starts,
+                best_start: indices[best_start],
+                failed_starts: failed_starts
+                    .into_iter()
+                    .map(|(start, error)| format!("start {start}: {error}"))
+                    .collect(),
+                logit_bound: outcome.logit_bound,
+                max_residual: outcome.max_residual,
+                phases,
+            },
+            defender: chosen.defender,
+            adversary: chosen.adversary,
+        })
+    }
 }
 
 /// The full best responses ([`Optimiser::settle`]) of every finished
@@ -640,11 +737,11 @@ fn settle(
 
 /// The local search on the supports (`local_search.rs`) before the
 /// max-min race: from the argmax rounding of the structure's defender and
-/// `local_search_restarts` seeded random memoryless ones, on a random
-/// stream of its own (`stream + (2^32 - 1) 2^32`, apart from the starts'),
-/// each climb bounded by `local_search_work` and, with a time budget, by
-/// [`Settings::search_deadline`] of the run begun at `started` (a quarter
-/// of the budget); the restarts and kicks end once
+/// `local_search_restarts` seeded random memoryless ones, on the run's
+/// search stream ([`search_stream`]), sharing the run's memo, each climb
+/// bounded by `local_search_work` and, with a time budget, by
+/// [`Settings::search_deadline`] of the run (a quarter of the budget);
+/// the restarts and kicks end once
 /// a climb is within `gap_tolerance` of the upper bound against the
 /// structure's starting adversary. Its end point's
 /// bound is the race's floor ([`race`]) and the end point a candidate of
@@ -653,13 +750,11 @@ fn settle(
 /// ends at its first check; on PAYNT's pursuit-evasion only randomised
 /// defenders win, and the search cost 17 s there).
 fn search_supports(
-    game: &Posg,
     certifier: Certifier<'_>,
     structure: &Structure,
-    settings: &Settings,
-    stream: u64,
-    started: Instant,
+    run: &StructuresRun<'_>,
 ) -> Result<Option<local_search::Climbed>, OptimiseError> {
+    let (game, settings) = (run.game, run.settings);
     let upper = upper_value_or_trivial(game, certifier.phi, &structure.adversary)?;
     let lower = lower_value_or_trivial(game, certifier.not_phi, &structure.defender)?;
     if settings.gap_closed(lower, upper) {
@@ -667,7 +762,7 @@ fn search_supports(
     }
     let start = rounding::truncated(&structure.defender, f64::INFINITY)?;
     let mut rng = ChaCha8Rng::seed_from_u64(settings.seed);
-    rng.set_stream(stream.wrapping_add(u64::from(u32::MAX) << 32));
+    rng.set_stream(run.search_stream);
     Ok(Some(local_search::climb_with_restarts(
         game,
         certifier.not_phi,
@@ -676,9 +771,10 @@ fn search_supports(
         &mut rng,
         local_search::Effort {
             work: settings.local_search_work,
-            deadline: settings.search_deadline(started),
+            deadline: settings.search_deadline(run.started),
             enough: upper - settings.gap_tolerance,
         },
+        &run.memo,
     )?))
 }
 
@@ -853,7 +949,7 @@ fn finalise(
     run: &mut StartRun,
     (upper_bound, presolved): (Option<f64>, Option<local_search::Climbed>),
     settings: &Settings,
-    (method, started): (Method, Instant),
+    (method, started, memo): (Method, Instant, &local_search::SearchMemo),
     phases: &mut PhaseSeconds,
 ) -> Result<Chosen, OptimiseError> {
     let best = &run.outcome.best;
@@ -936,6 +1032,7 @@ fn finalise(
                             .upper_bound
                             .map_or(f64::INFINITY, |u| u - settings.gap_tolerance),
                     },
+                    memo,
                 )?
                 .defender;
                 climb_seconds += climbing.elapsed().as_secs_f64();
