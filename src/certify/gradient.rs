@@ -64,7 +64,7 @@ pub fn lower_bound_gradient(
 
 /// [`lower_bound_gradient`] for many controllers, usually of one support:
 /// where the product MDP has the graph of the previous one
-/// ([`Mdp::same_graph`]), its graph analysis (accepting end components,
+/// (`Mdp::same_graph`), its graph analysis (accepting end components,
 /// qualitative reachability) is reused and policy iteration starts from the
 /// previous optimal strategy, which is proper on that graph.
 pub struct LowerBoundGradients<'a> {

@@ -14,22 +14,32 @@
 //! product lacks gets `W = 0`, every other state `W = V`. The adversary
 //! plays `sigma` except at the changed states with `V > 0`, where it
 //! plays the action whose changed row has the largest expected `W`.
-//! In the Markov chain this makes of the changed product, if
+//! In the Markov chain this makes of the changed product, stopped where it
+//! first meets a state with `W = 0` (a new state, or one from which the
+//! adversary could not win), consider the states it reaches from the
+//! initial ones through states with `W > 0`. If among them
 //!
 //! 1. `W <= P W` at every state (only the changed states need checking:
 //!    elsewhere the rows are `sigma`'s and `V = P V`), and
-//! 2. every bottom strongly connected component with `W > 0` is
-//!    accepting for some Rabin pair (avoids its `fin` states, meets its
-//!    `inf` states; only the components through a changed state need
-//!    checking: the others are bottom components of `sigma`'s chain),
+//! 2. every bottom strongly connected component is accepting for some
+//!    Rabin pair (avoids its `fin` states, meets its `inf` states; only
+//!    the components through a changed state need checking: the others
+//!    are closed classes of `sigma`'s chain with `V > 0`, which stay in
+//!    accepting end components and meet their pair's `inf` states),
 //!
-//! then `W(X_n)` is a bounded submartingale, the chain enters a bottom
-//! component almost surely, and `W <= P(reach an accepting bottom
-//! component)`, a probability of the adversary's winning: at the initial
-//! states the adversary wins at least the old value. The first condition
-//! is checked up to [`SLACK`] per state, so a change is refuted when its
-//! bound rises by at most that slack times the expected visits to the
-//! changed states, far below the improvement a local search counts.
+//! then `W(X_n)` is a bounded submartingale up to the stopping time, the
+//! chain stops or enters a bottom component almost surely, and
+//! `W <= P(reach an accepting bottom component)`, a probability of the
+//! adversary's winning: at the initial states the adversary wins at least
+//! the old value. In doubles, `V = P V` holds to the old solve's residual
+//! and the first condition is checked up to [`SLACK`] per state, so a
+//! refuted change raises the bound at most by those errors times the
+//! expected visits to the changed states before the chain stops or enters
+//! a bottom component, and by the error bounds of the two solves: a few
+//! times their tolerance on the products the local search meets, below
+//! the `1e-8` by which it counts an improvement (a product that mixes
+//! slowly can make the visits many; a wrongly refuted move only changes
+//! which defender the search reaches, never a number it certifies).
 
 use rustc_hash::FxHashMap;
 
@@ -94,13 +104,15 @@ impl<'a> Refuter<'a> {
     /// Whether the module's proof shows that `changed`, the analysed
     /// defender with only block `block` (`g |O| + o`) changed, lets the
     /// adversary win at least as much (its lower bound no higher, up to
-    /// [`SLACK`]). `false` says nothing: the change must be solved.
+    /// the errors of the module documentation). `false` says nothing: the
+    /// change must be solved.
     pub(crate) fn refutes(&self, changed: &Fsc, block: usize) -> bool {
         let observations = changed.num_observations();
         let (node, observation) = (block / observations, block % observations);
         let result = &self.analysis.result;
         let mut rows: FxHashMap<usize, Row> = FxHashMap::default();
-        let mut short = Vec::new();
+        // The changed states where condition 1 fails.
+        let mut falling_short = Vec::new();
         for &m in &self.by_node[node] {
             let s = self.analysis.states[m].0;
             let observed = self.game.defender().observation_distribution(s);
@@ -109,7 +121,7 @@ impl<'a> Refuter<'a> {
             }
             let (row, value) = self.best_row(changed, m);
             if value < result.values[m] - SLACK {
-                short.push(m);
+                falling_short.push(m);
             }
             rows.insert(m, row);
         }
@@ -121,10 +133,11 @@ impl<'a> Refuter<'a> {
         for &(m, _) in &self.analysis.initial {
             initial[m] = result.possible[m];
         }
-        // The chain's states with `W > 0` reachable from the initial states
-        // (the graph searched backwards is the chain's reverse).
+        // The chain's states reached from the initial states through states
+        // with `W > 0`: a backward search on the chain's reverse, given the
+        // chain itself, searches forwards.
         let reached = backward_reachable(&chain, &initial);
-        !short.iter().any(|&m| reached[m]) && chain.bottom_components_accept(&reached)
+        !falling_short.iter().any(|&m| reached[m]) && chain.bottom_components_accept(&reached)
     }
 
     /// `W` of a successor (0 where the product lacks it or the adversary
@@ -158,7 +171,8 @@ impl<'a> Refuter<'a> {
 
     /// The row of product state `m` under its MDP action `a` with the
     /// defender `changed` (the product's distribution, `crate::certify`'s
-    /// module documentation, its successors by index).
+    /// module documentation, its successors by index), without the terms
+    /// of probability 0, which the product has no edge for.
     fn changed_row(&self, changed: &Fsc, m: usize, a: usize) -> Row {
         let (s, q, g) = self.analysis.states[m];
         let adversary = AdversaryAction(self.analysis.free_actions[s][a]);
@@ -167,9 +181,13 @@ impl<'a> Refuter<'a> {
             for choice in changed.choices(g, o) {
                 let defender = DefenderAction(choice.action);
                 for &(t, p) in self.game.transition(s, defender, adversary) {
+                    let probability = p_o * choice.probability * p;
+                    if probability == 0.0 {
+                        continue;
+                    }
                     let key = (t, self.dra.successor(q, self.letters[t]), choice.next);
                     let next = self.index.get(&key).copied().unwrap_or(UNKNOWN);
-                    row.push((next, p_o * choice.probability * p));
+                    row.push((next, probability));
                 }
             }
         }

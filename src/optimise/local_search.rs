@@ -14,7 +14,8 @@
 //! first-order gains by the bound's gradient are tried first (guided
 //! steps), the sweeps over every move only where those fail (passing over,
 //! unsolved, the moves in blocks the adversary's best response does not
-//! meet, which cannot raise the bound). Where a sweep
+//! meet and the moves the analysis of the current defender refutes, which
+//! cannot raise the bound). Where a sweep
 //! over all blocks changes nothing and a node is unused, it tries memory:
 //! one choice is sent to a copy of its next node (a change of no value by
 //! itself), and climbs go on from there. It stops when neither raises the
@@ -24,7 +25,7 @@
 //! point with a few of its blocks redrawn. The search is reproducible for
 //! a seed unless a deadline cuts it.
 
-use std::cell::Cell;
+use std::cell::{Cell, OnceCell};
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
 use std::time::Instant;
@@ -97,9 +98,10 @@ struct Judged {
     met: Arc<[bool]>,
 }
 
-/// The defenders the climbs of one search have judged
-/// ([`Landscape::judge`]), and the product sizes of those they passed over
-/// ([`Landscape::pass_over`]), shared by the climbs that run in parallel.
+/// The defenders the climbs of the searches sharing a [`SearchMemo`] have
+/// judged ([`Landscape::judge`]), and the product sizes of those they
+/// passed over ([`Landscape::pass_over`]), shared by the climbs that run
+/// in parallel.
 /// The climbs come back to defenders judged before: a kick that climbs
 /// back to the end point it left sweeps that point's moves again, and a
 /// move that overrides a split's redirected choice gives a defender one
@@ -145,7 +147,11 @@ impl Evaluations {
 /// a climb one search made costs another no solve (the searches' universe,
 /// every enabled pair of the game's defender, is the same for every
 /// structure with the same number of nodes). Sharing changes no search:
-/// a defender found in it is charged as where it is solved.
+/// a defender found in it is charged as where it is solved (up to the
+/// corner cases of [`sweep`]: whether a move is passed over or judged
+/// then depends on what the other searches judged first, and the two
+/// differ where a judgment fails to solve or crosses [`IMPROVEMENT`] by
+/// numerical error alone).
 #[derive(Default, Clone)]
 pub struct SearchMemo(Arc<Evaluations>);
 
@@ -216,7 +222,9 @@ impl<'a> Search<'a> {
         Self::sharing(game, not_phi, universe, effort, &SearchMemo::default())
     }
 
-    /// [`Self::new`], knowing what the searches sharing `memo` evaluated.
+    /// The search over the defenders whose blocks play `universe`'s pairs,
+    /// each climb with `effort`, knowing what the searches sharing `memo`
+    /// evaluated.
     fn sharing(
         game: &'a Posg,
         not_phi: &'a Dra,
@@ -293,18 +301,15 @@ impl Landscape<'_> {
     }
 
     /// A [`Refuter`] of the moves of `defender`, where the search refutes
-    /// moves and the product can be analysed (`None` where it mixes too
-    /// slowly: its moves are judged); not counted as the climb's work.
-    fn refuter(&self, defender: &Fsc) -> Result<Option<Refuter<'_>>, CertifyError> {
+    /// moves and the product can be analysed (`None` where it cannot: its
+    /// moves are judged, and a judgment reports a failure that is not
+    /// numerical); not counted as the climb's work.
+    fn refuter(&self, defender: &Fsc) -> Option<Refuter<'_>> {
         let Search { game, not_phi, .. } = *self.search;
-        if !self.search.pass_over_refuted {
-            return Ok(None);
-        }
-        match Refuter::new(game, not_phi, defender, &ranking_settings()) {
-            Ok(refuter) => Ok(Some(refuter)),
-            Err(error) if error.is_numerical() => Ok(None),
-            Err(error) => Err(error),
-        }
+        let refuting = self.search.pass_over_refuted;
+        refuting
+            .then(|| Refuter::new(game, not_phi, defender, &ranking_settings()).ok())
+            .flatten()
     }
 
     /// [`Self::judge`] solved: the ranked bound of `defender` with its
@@ -582,8 +587,10 @@ fn guided_step(
 /// taking its first improving move; `None` when no block changed (or the
 /// effort was spent before any did). The moves in a block the adversary's
 /// best response to the current defender does not meet
-/// ([`crate::certify::ranked_lower_bound`]) cannot raise the bound
-/// (beyond the ranking's numerical error), and are passed over
+/// ([`crate::certify::ranked_lower_bound`]), and the moves the analysis of
+/// the current defender refutes ([`Refuter`], built when a move first
+/// asks), cannot raise the bound (beyond the ranking's numerical error),
+/// and are passed over
 /// ([`Landscape::pass_over`]): counted as judged, not solved, so that the
 /// climb goes as where it judges them (unless a judged move would have
 /// crossed [`IMPROVEMENT`] by that error, or failed to solve and been
@@ -599,7 +606,8 @@ fn sweep(landscape: &Landscape<'_>, from: &Climbed) -> Result<Option<Climbed>, C
     let mut changed = false;
     let mut in_use = blocks_in_use(landscape.search.game, &current.defender);
     let mut met = landscape.judge(&current.defender)?.met;
-    let mut refuter = landscape.refuter(&current.defender)?;
+    // Built when a move first asks, once per current defender.
+    let mut refuter = OnceCell::new();
     for b in 0..current.defender.blocks.len() {
         if !in_use[b] {
             continue;
@@ -607,7 +615,10 @@ fn sweep(landscape: &Landscape<'_>, from: &Climbed) -> Result<Option<Climbed>, C
         let defender = &current.defender;
         let moves = block_moves(&defender.blocks[b], landscape.search.pairs(b))
             .map(|choices| with_block(defender, b, choices));
-        let refuted = |candidate: &Fsc| refuter.as_ref().is_some_and(|r| r.refutes(candidate, b));
+        let refuted = |candidate: &Fsc| {
+            let refuter = refuter.get_or_init(|| landscape.refuter(&current.defender));
+            refuter.as_ref().is_some_and(|r| r.refutes(candidate, b))
+        };
         if !met[b] && landscape.search.pass_over_unmet {
             landscape.pass_over(moves)?;
         } else if let Some(better) = landscape.first_improvement(moves, current.bound, refuted)? {
@@ -615,7 +626,7 @@ fn sweep(landscape: &Landscape<'_>, from: &Climbed) -> Result<Option<Climbed>, C
             changed = true;
             in_use = blocks_in_use(landscape.search.game, &current.defender);
             met = landscape.judge(&current.defender)?.met;
-            refuter = landscape.refuter(&current.defender)?;
+            refuter = OnceCell::new();
         }
         if landscape.exhausted() {
             break;
@@ -1040,7 +1051,9 @@ mod tests {
 
     /// Defenders that differ only in blocks out of use share their memo
     /// key (their products are the same); a change in a block in use
-    /// makes another.
+    /// makes another, and so does another number of nodes with the same
+    /// blocks in use (the structures of a run may differ in it, and share
+    /// the memo).
     #[test]
     fn the_memo_keys_defenders_by_their_blocks_in_use() {
         let game = grid_4x4();
@@ -1068,6 +1081,12 @@ mod tests {
             key(&with_block(&start, used, other_pair(used))),
             key(&start)
         );
+        let one_node = first_pairs(&game, 1);
+        assert_eq!(
+            one_node.blocks[..observations],
+            start.blocks[..observations]
+        );
+        assert_ne!(key(&one_node), key(&start));
     }
 
     /// A climb that finds every bound in the memo goes as the climb that

@@ -28,8 +28,9 @@
 //!   each scored exactly on its own support;
 //! * [`optimise_structure`]: parallel seeded starts on one structure, the
 //!   best certified kept, then rounded; [`optimise_structures`] does it on
-//!   several structures in parallel (rayon), the best certified lower bound
-//!   chosen; `candidate_structures` gathers the structures of the sources
+//!   several structures (their local searches before the races one after
+//!   another, sharing what they judged; the races in parallel, rayon), the
+//!   best certified lower bound chosen; `candidate_structures` gathers the structures of the sources
 //!   asked for (the starting structure, support synthesis by SAT, the
 //!   paper's pruning; identical structures once); [`crate::pipeline`]
 //!   does both from the full support structure of given sizes;
@@ -364,9 +365,14 @@ impl Solution {
     }
 }
 
-/// Optimises on every structure in parallel (rayon), each with its own
-/// [`Objective`] and random stream (`settings.seed`, stream = its index),
-/// each reporting to the observer `observer(index, structure)` makes;
+/// Optimises on every structure, each with its own [`Objective`] and
+/// random stream (`settings.seed`, stream = its index), each reporting to
+/// the observer `observer(index, structure)` makes: first the local
+/// searches before the races (`search_supports`), one structure after
+/// another, all on the first structure's search stream and sharing one
+/// memo (each search then has both cores, and a later one finds most of
+/// its climbs judged); then the races in parallel (rayon), timed from the
+/// run's start;
 /// returns every outcome and the best by certified lower bound
 /// (`best_by_certified_lower`). A structure whose linear systems cannot
 /// be solved to the tolerance is dropped and named in
@@ -522,8 +528,9 @@ impl StructuresRun<'_> {
     }
 
     /// The local search on the supports before `structure`'s race, where
-    /// the max-min loop runs with a certifier, rounding and the search;
-    /// `observer` gets its end point as it ends.
+    /// the max-min loop runs with a certifier, rounding and the search,
+    /// unless the run is cancelled; `observer` gets its end point as it
+    /// ends.
     fn presolve(
         &self,
         structure: &Structure,
@@ -533,7 +540,8 @@ impl StructuresRun<'_> {
         let clock = Instant::now();
         let search = self
             .certifier()
-            .filter(|_| self.method() == Method::MaxMin && settings.round && settings.local_search);
+            .filter(|_| self.method() == Method::MaxMin && settings.round && settings.local_search)
+            .filter(|_| !self.cancel.is_cancelled());
         let climbed = match search {
             Some(c) => search_supports(c, structure, self)?,
             None => None,
@@ -940,7 +948,8 @@ type Scored = (f64, Option<(f64, Fsc)>);
 /// without), keeps the best (the unrounded defender wins ties), and
 /// completes its numbers: worst-case estimate, certified lower bound and
 /// the smallest game upper bound. Its best responses end at the
-/// [`Settings::final_deadline`] of the structure's run, begun at `started`.
+/// [`Settings::final_deadline`] of the run, begun at `started`; its local
+/// search shares the run's `memo`.
 #[allow(clippy::too_many_arguments)]
 fn finalise(
     game: &Posg,

@@ -47,8 +47,9 @@ pub struct IterationRecord {
 /// race found (method.md section 6): the race's floor.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct SearchRecord {
-    /// Wall-clock seconds since the structure's optimisation started, when
-    /// the search ended.
+    /// Wall-clock seconds since the run started (the structures' searches
+    /// run one after another, [`super::optimise_structures`]), when the
+    /// search ended.
     pub seconds: f64,
     /// The certified lower bound of the search's best end point.
     pub certified_lower: f64,

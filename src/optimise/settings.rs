@@ -327,7 +327,7 @@ impl Settings {
     /// The L-BFGS iterations of each of a final best response's `starts`
     /// on a GMC of `gmc_states` states: `best_response_iterations`, fewer
     /// where the starts together would spend more than `max_work` (counting
-    /// [`EVALUATIONS_PER_ITERATION`] evaluations per iteration, each of
+    /// `EVALUATIONS_PER_ITERATION` evaluations per iteration, each of
     /// `gmc_states`), and at least one. So the final estimate costs at most
     /// about one start's loop on a large GMC (PAYNT's dodge-8 with 3 nodes:
     /// 24,384 states: 100 iterations from 6 starts took 40 s; 11 now).
@@ -347,9 +347,11 @@ impl Settings {
         if gap_closed { 0 } else { self.restarts }
     }
 
-    /// With a time budget, when the local search before a structure's
-    /// max-min race, begun at `started`, must end: after a quarter of the
-    /// budget, so that the race keeps the rest (`None` without a budget).
+    /// With a time budget, when the local searches before the structures'
+    /// max-min races, the run begun at `started`, must end: after a
+    /// quarter of the budget, which the structures' searches share (they
+    /// run one after another), so that the races keep the rest (`None`
+    /// without a budget).
     pub fn search_deadline(&self, started: Instant) -> Option<Instant> {
         (self.time_budget > 0.0)
             .then(|| started + Duration::from_secs_f64(self.time_budget * SEARCH_SHARE_OF_BUDGET))

@@ -188,7 +188,7 @@ impl LuSolver {
 
     /// Floating-point operations of one numeric factorisation, from the
     /// symbolic analysis: what decides whether LU or BiCGSTAB costs less
-    /// (see [`super::LinearSolver::new`]).
+    /// (see `LinearSolver::new`).
     pub fn factorisation_flops(&self) -> f64 {
         self.system.lu.factorisation_flops()
     }
