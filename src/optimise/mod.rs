@@ -392,16 +392,7 @@ where
     F: Fn(usize, &Structure) -> Box<dyn Observer + Send> + Sync,
 {
     settings.validate()?;
-    let run = StructuresRun {
-        game,
-        dra,
-        negated,
-        settings,
-        cancel,
-        started: Instant::now(),
-        memo: local_search::SearchMemo::default(),
-        search_stream: search_stream(0),
-    };
+    let run = StructuresRun::new((game, dra, negated), settings, cancel, search_stream(0));
     let mut watchers: Vec<_> = (structures.iter().enumerate())
         .map(|(index, structure)| observer(index, structure))
         .collect();
@@ -464,16 +455,12 @@ pub fn optimise_structure(
     cancel: &Cancel,
 ) -> Result<StructureOutcome, OptimiseError> {
     settings.validate()?;
-    let run = StructuresRun {
-        game,
-        dra,
-        negated,
+    let run = StructuresRun::new(
+        (game, dra, negated),
         settings,
         cancel,
-        started: Instant::now(),
-        memo: local_search::SearchMemo::default(),
-        search_stream: search_stream(stream),
-    };
+        search_stream(stream),
+    );
     let presolved = run.presolve(structure, observer)?;
     run.race(structure, stream, observer, presolved)
 }
@@ -507,7 +494,28 @@ struct Presolved {
     phases: PhaseSeconds,
 }
 
-impl StructuresRun<'_> {
+impl<'a> StructuresRun<'a> {
+    /// A run on `game` with the automata of phi and (with a certifier)
+    /// of !phi, beginning now, nothing searched yet, its searches on
+    /// random stream `search_stream`.
+    fn new(
+        (game, dra, negated): (&'a Posg, &'a Dra, Option<&'a Dra>),
+        settings: &'a Settings,
+        cancel: &'a Cancel,
+        search_stream: u64,
+    ) -> Self {
+        Self {
+            game,
+            dra,
+            negated,
+            settings,
+            cancel,
+            started: Instant::now(),
+            memo: local_search::SearchMemo::default(),
+            search_stream,
+        }
+    }
+
     /// The single-player ascent where the adversary has one action and
     /// the settings ask for it, else the max-min loop.
     fn method(&self) -> Method {
