@@ -30,10 +30,11 @@
 //!   best certified kept, then rounded; [`optimise_structures`] does it on
 //!   several structures (their local searches before the races one after
 //!   another, sharing what they judged; the races in parallel, rayon), the
-//!   best certified lower bound chosen; `candidate_structures` gathers the structures of the sources
-//!   asked for (the starting structure, support synthesis by SAT, the
-//!   paper's pruning; identical structures once); [`crate::pipeline`]
-//!   does both from the full support structure of given sizes;
+//!   best certified lower bound chosen; `candidate_structures` gathers the
+//!   structures of the sources asked for (the starting structure, support
+//!   synthesis by SAT, the paper's pruning; identical structures once);
+//!   [`crate::pipeline`] does both from the full support structure of
+//!   given sizes;
 //! * [`embed`], [`pad`], [`warm_started`], [`keep_better`]: warm starts
 //!   across defender sizes, results monotone in size by construction.
 //!
