@@ -14,8 +14,8 @@ use posg_fsc::controller::{Choice, Fsc, Role, Support};
 use posg_fsc::game::Posg;
 use posg_fsc::game::file::from_json_str;
 use posg_fsc::optimise::{
-    Cancel, IterationRecord, Method, Observer, Settings, Status, Structure, embed, keep_better,
-    optimise_structure, pad, rounded_candidates, score, truncated, warm_started,
+    Cancel, IterationRecord, Method, Observer, SearchRecord, Settings, Status, Structure, embed,
+    keep_better, optimise_structure, pad, rounded_candidates, score, truncated, warm_started,
 };
 use posg_fsc::value::SolverSettings;
 use posg_fsc::value::evaluate_controllers;
@@ -463,5 +463,78 @@ fn the_sweep_command_is_monotone_and_says_so() {
             .collect();
         assert_eq!(lowers.len(), 3);
         assert!(lowers.windows(2).all(|w| w[1] >= w[0]), "{lowers:?}");
+    }
+}
+
+/// The local searches' end points before the races, with the index of the
+/// structure whose observer got each, in the order they arrived.
+#[derive(Clone, Default)]
+struct Searches(std::sync::Arc<std::sync::Mutex<Vec<(usize, f64)>>>, usize);
+
+impl Observer for Searches {
+    fn observe(&mut self, _record: &IterationRecord) {}
+
+    fn searched(&mut self, record: &SearchRecord) {
+        let bound = record.certified_lower;
+        self.0.lock().unwrap().push((self.1, bound));
+    }
+}
+
+/// The structures of a run search before their races one after another,
+/// on the first structure's random stream, sharing what they judged: the
+/// same structure given twice finds the end point of a run on it alone
+/// (stream 0) twice, each reported to its own structure's observer, in
+/// the structures' order.
+#[test]
+fn the_structures_of_a_run_search_one_after_another_alike() {
+    let g = posg_fsc::game::grid::GridSpec {
+        width: 4,
+        height: 4,
+        unsafe_cells: vec![5, 10],
+        goal_cells: vec![15],
+        ..Default::default()
+    }
+    .build()
+    .unwrap();
+    let (phi, not_phi) = automata("!unsafe U goal");
+    let settings = Settings {
+        max_iterations: 20,
+        restarts: 1,
+        local_search_restarts: 3,
+        ..Settings::default()
+    };
+    let structure = Structure::full(&g, 2, 1, false);
+    let alone = Searches::default();
+    optimise_structure(
+        &g,
+        &phi,
+        Some(&not_phi),
+        &structure,
+        &settings,
+        0,
+        &mut alone.clone(),
+        &Cancel::new(),
+    )
+    .unwrap();
+    let both = Searches::default();
+    posg_fsc::optimise::optimise_structures(
+        &g,
+        &phi,
+        Some(&not_phi),
+        &[structure.clone(), structure],
+        &settings,
+        |index, _| Box::new(Searches(both.0.clone(), index)),
+        &Cancel::new(),
+    )
+    .unwrap();
+    let alone = alone.0.lock().unwrap().clone();
+    let both = both.0.lock().unwrap().clone();
+    assert_eq!(alone.len(), 1, "{alone:?}");
+    assert_eq!(
+        both.iter().map(|&(index, _)| index).collect::<Vec<_>>(),
+        [0, 1]
+    );
+    for (_, bound) in &both {
+        assert_eq!(bound.to_bits(), alone[0].1.to_bits(), "{both:?} {alone:?}");
     }
 }
