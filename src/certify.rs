@@ -63,7 +63,7 @@ use crate::solver::{SolverError, SolverSettings};
 
 pub use crate::mdp::MdpError;
 pub mod gradient;
-pub(crate) mod refutation;
+pub mod refutation;
 pub mod strategy;
 
 /// Why a bound could not be computed.
@@ -349,11 +349,11 @@ fn complement(p: f64) -> f64 {
     (1.0 - p).clamp(0.0, 1.0)
 }
 
-/// [`lower_bound_within`]'s value and product size, without the
-/// adversary's strategy as rules, together with the blocks of `defender`
-/// that strategy meets ([`RankedBound`]): what the local search on the
-/// supports ranks a defender by and prunes its moves with (the same bits
-/// as [`lower_bound_within`]'s value for the same settings).
+/// [`lower_bound_within`]'s value, without the adversary's strategy as
+/// rules, together with the blocks of `defender` that strategy meets and
+/// the analysis it came from ([`RankedBound`]): what the local search on
+/// the supports ranks a defender by and prunes its moves with (the same
+/// bits as [`lower_bound_within`]'s value for the same settings).
 pub(crate) fn ranked_lower_bound(
     game: &Posg,
     dra_not_phi: &Dra,
@@ -364,22 +364,24 @@ pub(crate) fn ranked_lower_bound(
     let value = complement(proved_optimum(&analysis).value().clamp(0.0, 1.0));
     Ok(RankedBound {
         value,
-        mdp_states: analysis.states.len(),
         blocks: blocks_met(game, defender, &analysis),
+        analysis,
     })
 }
 
 /// A defender's certified lower bound (as [`lower_bound_within`] ranks
-/// it) and the blocks `(g, o)` of the defender that the adversary's best
-/// response meets.
+/// it), the blocks `(g, o)` of the defender that the adversary's best
+/// response meets, and the analysis of its product.
 pub(crate) struct RankedBound {
     /// The lower bound.
     pub value: f64,
-    /// The reachable states of the product MDP.
-    pub mdp_states: usize,
     /// Per block, in the defender's order `g * O + o`, whether the
     /// adversary's optimal strategy meets it ([`blocks_met`]).
     pub blocks: Vec<bool>,
+    /// The product MDP analysed for the adversary (its reachable states
+    /// are the work of judging the defender; a [`refutation::Refuter`]
+    /// of the defender's moves can start from it).
+    pub analysis: Analysis,
 }
 
 /// The blocks `(g, o)` of `defender` at the product states `(s, q, g)`

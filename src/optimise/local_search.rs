@@ -25,7 +25,7 @@
 //! point with a few of its blocks redrawn. The search is reproducible for
 //! a seed unless a deadline cuts it.
 
-use std::cell::{Cell, OnceCell};
+use std::cell::{Cell, OnceCell, RefCell};
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
 use std::time::Instant;
@@ -38,7 +38,7 @@ use crate::automaton::Dra;
 use crate::certify::gradient::LowerBoundGradients;
 use crate::certify::refutation::Refuter;
 use crate::certify::{
-    CertifyError, lower_value_or_trivial_within, product_mdp, ranked_lower_bound,
+    Analysis, CertifyError, lower_value_or_trivial_within, product_mdp, ranked_lower_bound,
 };
 use crate::controller::{Choice, Fsc, Role, Support};
 use crate::game::{AdversaryAction, DefenderAction, Posg};
@@ -169,7 +169,7 @@ fn lock<T>(map: &Mutex<T>) -> MutexGuard<'_, T> {
 /// choices and its choices (next node, action, the probability's bits).
 /// Blocks out of use are never played, so defenders that differ only
 /// there have the same product.
-#[derive(Debug, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, PartialEq, Eq, Hash)]
 struct EvaluationKey(Vec<u64>);
 
 impl EvaluationKey {
@@ -256,9 +256,23 @@ struct Landscape<'a> {
     search: &'a Search<'a>,
     evaluated: Cell<usize>,
     spent: Cell<usize>,
+    /// The analysis of the defender the climb solved last, with its key:
+    /// after an improving move, the new current defender's, from which
+    /// its [`Refuter`] starts without solving it again.
+    last_solved: RefCell<Option<(EvaluationKey, Analysis)>>,
 }
 
-impl Landscape<'_> {
+impl<'a> Landscape<'a> {
+    /// A climb of `search` that has evaluated nothing yet.
+    fn new(search: &'a Search<'a>) -> Self {
+        Self {
+            search,
+            evaluated: Cell::new(0),
+            spent: Cell::new(0),
+            last_solved: RefCell::new(None),
+        }
+    }
+
     /// Whether the climb has spent its effort.
     fn exhausted(&self) -> bool {
         let effort = &self.search.effort;
@@ -295,7 +309,7 @@ impl Landscape<'_> {
         if let Some(known) = self.search.known.get(&key) {
             return Ok(known);
         }
-        let judged = self.evaluate(defender)?;
+        let judged = self.evaluate(&key, defender)?;
         self.search.known.insert(key, judged.clone());
         Ok(judged)
     }
@@ -306,24 +320,35 @@ impl Landscape<'_> {
     /// numerical); not counted as the climb's work.
     fn refuter(&self, defender: &Fsc) -> Option<Refuter<'_>> {
         let Search { game, not_phi, .. } = *self.search;
-        let refuting = self.search.pass_over_refuted;
-        refuting
-            .then(|| Refuter::new(game, not_phi, defender, &ranking_settings()).ok())
-            .flatten()
+        if !self.search.pass_over_refuted {
+            return None;
+        }
+        let key = EvaluationKey::of(game, defender);
+        match self.last_solved.take() {
+            Some((solved, analysis)) if solved == key => {
+                Some(Refuter::from_analysis(game, not_phi, analysis))
+            }
+            _ => Refuter::new(game, not_phi, defender, &ranking_settings()).ok(),
+        }
     }
 
     /// [`Self::judge`] solved: the ranked bound of `defender` with its
     /// product's states and the blocks the adversary's best response meets
     /// ([`ranked_lower_bound`]); a product that could not be proved
     /// counts as large as the game, with every block met.
-    fn evaluate(&self, defender: &Fsc) -> Result<Judged, CertifyError> {
+    fn evaluate(&self, key: &EvaluationKey, defender: &Fsc) -> Result<Judged, CertifyError> {
         let Search { game, not_phi, .. } = *self.search;
         match ranked_lower_bound(game, not_phi, defender, &ranking_settings()) {
-            Ok(ranked) => Ok(Judged {
-                bound: ranked.value,
-                states: ranked.mdp_states,
-                met: ranked.blocks.into(),
-            }),
+            Ok(ranked) => {
+                let judged = Judged {
+                    bound: ranked.value,
+                    states: ranked.analysis.states.len(),
+                    met: ranked.blocks.into(),
+                };
+                let solved = (key.clone(), ranked.analysis);
+                self.last_solved.replace(Some(solved));
+                Ok(judged)
+            }
             Err(error) if error.is_numerical() => Ok(Judged {
                 bound: 0.0,
                 states: game.num_states(),
@@ -485,11 +510,7 @@ const GUIDED_CANDIDATES: usize = 8;
 /// Returns the end point and the work spent (the product states of its
 /// evaluations, solved or passed over).
 fn climb(search: &Search<'_>, start: &Fsc) -> Result<(Climbed, usize), CertifyError> {
-    let landscape = Landscape {
-        search,
-        evaluated: Cell::new(0),
-        spent: Cell::new(0),
-    };
+    let landscape = Landscape::new(search);
     let mut current = climb_by_single_moves(
         &landscape,
         Climbed {
@@ -1014,11 +1035,7 @@ mod tests {
         let start = first_pairs(&game, 2);
         let universe = Fsc::uniform_enabled(Role::Defender, 2, game.defender());
         let search = Search::new(&game, &not_phi, &universe, UNLIMITED);
-        let landscape = Landscape {
-            search: &search,
-            evaluated: Cell::new(0),
-            spent: Cell::new(0),
-        };
+        let landscape = Landscape::new(&search);
         let from = Climbed {
             bound: landscape.bound(&start).unwrap(),
             defender: start.clone(),
