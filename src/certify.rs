@@ -38,7 +38,7 @@
 //! **Enabled actions** (formats.md section 6). The fixed player's controller
 //! must play only actions enabled under its observations. The free player,
 //! who sees the state, may play in `s` every action that *some* observation
-//! `o` with `O(o | s) > 0` enables ([`Player::action_enabled_in_state`]).
+//! `o` with `O(o | s) > 0` enables ([`crate::game::Player::action_enabled_in_state`]).
 //! An FSC that observes `o` plays only actions enabled under `o`, so it has
 //! no more options than that, and both bounds stay sound. They are also exact
 //! for the free player's enabled sets when all observations of each state
@@ -52,17 +52,18 @@ use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use crate::automaton::{Dra, RabinPair};
-use crate::controller::{Fsc, Mixture, Role};
-use crate::game::{AdversaryAction, DefenderAction, Player, Posg};
-use crate::interner::{Interner, TooManyKeys};
+use crate::controller::{Fsc, Role};
+use crate::game::Posg;
 use crate::mdp::{
-    AcceptingComponent, Mdp, MdpBuilder, QualitativeReachability, Reachability, max_rabin_analysis,
+    AcceptingComponent, Mdp, QualitativeReachability, Reachability, max_rabin_analysis,
     max_rabin_qualitative,
 };
 use crate::solver::{SolverError, SolverSettings};
 
 pub use crate::mdp::MdpError;
 pub mod gradient;
+mod product;
+use product::Product;
 pub mod refutation;
 pub mod strategy;
 
@@ -569,8 +570,8 @@ pub(crate) fn product_mdp(
     controller: &Fsc,
     fixed: Role,
 ) -> Result<ProductMdp, CertifyError> {
-    let product = Product::build(game, dra, controller, fixed)?;
-    Ok((product.states, product.mdp, product.initial))
+    let (states, mdp, initial, _) = Product::build(game, dra, controller, fixed)?.into_parts();
+    Ok((states, mdp, initial))
 }
 
 /// Builds the product with `controller` playing for `fixed` and decides,
@@ -610,159 +611,13 @@ fn analyse_with<R>(
     let product = Product::build(game, dra, controller, fixed)?;
     let pairs = product.lift(dra.pairs());
     let (result, accepting) = solve(&product.mdp, &pairs)?;
+    let (states, mdp, initial, free_actions) = product.into_parts();
     Ok(Analysis {
-        states: product.states,
-        mdp: product.mdp,
-        initial: product.initial,
+        states,
+        mdp,
+        initial,
         result,
         accepting,
-        free_actions: product.free_actions,
+        free_actions,
     })
-}
-
-/// Checks that `controller` is `role`'s and fits that player of `game`
-/// (sizes and enabled actions, [`Fsc::check_fits`]).
-fn check_fits(game: &Posg, controller: &Fsc, role: Role) -> Result<(), CertifyError> {
-    let problem = if controller.role() != role {
-        Err(format!("it is a {:?} controller", controller.role()))
-    } else {
-        controller.check_fits(role.player(game))
-    };
-    problem.map_err(|problem| CertifyError::Mismatch { role, problem })
-}
-
-/// The free player's actions in each state `s`: those some observation of
-/// `s` enables ([`Player::action_enabled_in_state`]), in increasing order.
-fn free_actions(player: &Player, num_states: usize) -> Vec<Vec<usize>> {
-    (0..num_states)
-        .map(|s| {
-            (0..player.num_actions())
-                .filter(|&w| player.action_enabled_in_state(s, w))
-                .collect()
-        })
-        .collect()
-}
-
-/// The reachable product MDP of a game, an automaton and one player's controller.
-struct Product {
-    mdp: Mdp,
-    /// `(s, q, node)` of each MDP state, in exploration order.
-    states: Vec<(usize, usize, usize)>,
-    /// `p0` as `(MDP state, probability)`.
-    initial: Vec<(usize, f64)>,
-    /// The free player's actions per game state: MDP action `a` in
-    /// `(s, q, node)` is the free player's action `free_actions[s][a]`.
-    free_actions: Vec<Vec<usize>>,
-}
-
-/// Where the exploration of a [`Product`] starts.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Seeds {
-    /// The support of `p0` only: the reachable product.
-    Initial,
-    /// Every node of the controller at each initial state as well (with
-    /// `p0` unchanged): the states a change of the controller towards an
-    /// unused node would reach are explored too.
-    EveryNode,
-}
-
-impl Product {
-    /// Explores the product from `p0` breadth first; the free player's
-    /// action `w` in `(s, q, g)`, one of those enabled in `s`, has the
-    /// distribution of the module documentation (summed over duplicate
-    /// successors by [`MdpBuilder`]).
-    fn build(game: &Posg, dra: &Dra, controller: &Fsc, fixed: Role) -> Result<Self, CertifyError> {
-        Self::explore(game, dra, controller, fixed, Seeds::Initial)
-    }
-
-    /// [`Product::build`], its exploration starting from `seeds`.
-    fn explore(
-        game: &Posg,
-        dra: &Dra,
-        controller: &Fsc,
-        fixed: Role,
-        seeds: Seeds,
-    ) -> Result<Self, CertifyError> {
-        check_fits(game, controller, fixed)?;
-        let free_actions = free_actions(fixed.other().player(game), game.num_states());
-        let letters = dra.state_letters(game);
-        let mixture = Mixture::of(fixed.player(game), controller, game.num_states());
-        let transition = |s: usize, f: usize, w: usize| match fixed {
-            Role::Defender => game.transition(s, DefenderAction(f), AdversaryAction(w)),
-            Role::Adversary => game.transition(s, DefenderAction(w), AdversaryAction(f)),
-        };
-        let mut explorer: Interner<(usize, usize, usize)> = Interner::default();
-        let mut initial = Vec::new();
-        for &(s, p) in game.initial() {
-            let q = dra.successor(dra.initial(), letters[s]);
-            for (g, &p_node) in controller.initial().iter().enumerate() {
-                if p_node > 0.0 {
-                    initial.push((state_id(&mut explorer, (s, q, g))?, p * p_node));
-                } else if seeds == Seeds::EveryNode {
-                    state_id(&mut explorer, (s, q, g))?;
-                }
-            }
-        }
-        let mut builder = MdpBuilder::new();
-        let mut terms = Vec::new();
-        let mut action = Vec::new();
-        let mut total_terms = 0u128;
-        while builder.num_states() < explorer.len() {
-            let (s, q, g) = explorer.keys()[builder.num_states()];
-            for &w in &free_actions[s] {
-                terms.clear();
-                for j in mixture.at(s, g) {
-                    let (next, f) = mixture.entry(j);
-                    let a = mixture.values()[j];
-                    for &(s2, t) in transition(s, f as usize, w) {
-                        terms.push(((s2, dra.successor(q, letters[s2]), next as usize), a * t));
-                    }
-                }
-                total_terms += terms.len() as u128;
-                if let Some(message) = crate::limits::exceeded(
-                    "the certification product MDP",
-                    total_terms,
-                    crate::limits::MAX_CHAIN_TRANSITIONS,
-                    "transitions or more",
-                    "MAX_CHAIN_TRANSITIONS",
-                ) {
-                    return Err(CertifyError::Budget(message));
-                }
-                action.clear();
-                for &(key, p) in &terms {
-                    action.push((state_id(&mut explorer, key)?, p));
-                }
-                builder.add_action(action.iter().copied());
-            }
-            builder.end_state();
-        }
-        Ok(Self {
-            mdp: builder.build()?,
-            states: explorer.into_keys(),
-            initial,
-            free_actions,
-        })
-    }
-
-    /// The automaton's Rabin pairs read on product states through their `q`.
-    fn lift(&self, pairs: &[RabinPair]) -> Vec<RabinPair> {
-        pairs
-            .iter()
-            .map(|pair| RabinPair {
-                fin: self.states.iter().map(|&(_, q, _)| pair.fin[q]).collect(),
-                inf: self.states.iter().map(|&(_, q, _)| pair.inf[q]).collect(),
-            })
-            .collect()
-    }
-}
-
-/// The index of product state `(s, q, node)`, numbered in order of discovery.
-fn state_id(
-    explorer: &mut Interner<(usize, usize, usize)>,
-    key: (usize, usize, usize),
-) -> Result<usize, CertifyError> {
-    let id = explorer.intern(key).map_err(|TooManyKeys| {
-        CertifyError::Budget("the certification product MDP exceeds 2^32 - 1 states".into())
-    })?;
-    Ok(id as usize)
 }

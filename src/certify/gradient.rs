@@ -24,9 +24,8 @@
 //! supports) contribute nothing: their values do not move while the
 //! supports stay fixed.
 
-use rustc_hash::FxHashMap;
-
-use super::{CertifyError, Product, Seeds};
+use super::CertifyError;
+use super::product::{Product, Recipe, Seeds};
 use crate::automaton::Dra;
 use crate::controller::{Fsc, Role, Support};
 use crate::game::{AdversaryAction, DefenderAction, Posg};
@@ -75,11 +74,32 @@ pub struct LowerBoundGradients<'a> {
     work: f64,
 }
 
-/// The graph analysis of the last product (in its policies' linear
-/// systems: one symbolic analysis for the graph) and its optimal strategy.
+/// The last product, its recipe (where it has one), its graph analysis (in
+/// its policies' linear systems: one symbolic analysis for the graph) and
+/// its optimal strategy.
 struct LastAnalysis {
+    product: Product,
+    recipe: Option<Recipe>,
     systems: PolicySystems,
     strategy: Vec<usize>,
+}
+
+impl LastAnalysis {
+    /// Whether `defender`'s product explored from `seeds` is the last one
+    /// refilled (the recipe fits and refilled it).
+    fn refilled(
+        &mut self,
+        game: &Posg,
+        defender: &Fsc,
+        seeds: Seeds,
+    ) -> Result<bool, CertifyError> {
+        match &mut self.recipe {
+            Some(recipe) if recipe.fits(defender, seeds) => {
+                recipe.refill(game, &mut self.product, defender, Role::Defender)
+            }
+            _ => Ok(false),
+        }
+    }
 }
 
 impl<'a> LowerBoundGradients<'a> {
@@ -139,8 +159,10 @@ impl<'a> LowerBoundGradients<'a> {
         let (game, dra) = (self.game, self.dra_not_phi);
         let (product, result, systems) = self.analyse(defender, seeds)?;
         let y = systems.expected_visits(&product.initial)?;
-        self.work += product.mdp.num_states() as f64;
-        gradient(game, dra, support, &product, &result, &y, unexplored)
+        let states = product.mdp.num_states() as f64;
+        let found = gradient(game, dra, support, product, &result, &y, unexplored);
+        self.work += states;
+        found
     }
 
     /// The lower bound of `defender` alone, or the trivial bound 0 where
@@ -148,44 +170,72 @@ impl<'a> LowerBoundGradients<'a> {
     /// [`super::lower_value_or_trivial`]).
     pub fn value_or_trivial(&mut self, defender: &Fsc) -> Result<f64, CertifyError> {
         match self.analyse(defender, Seeds::Initial) {
-            Ok((product, result, _)) => Ok(lower_value(&product, &result)),
+            Ok((product, result, _)) => Ok(lower_value(product, &result)),
             Err(error) if error.is_numerical() => Ok(0.0),
             Err(error) => Err(error),
         }
     }
 
-    /// The product of `defender` explored from `seeds` and its optimal
-    /// values and strategy for `!phi`, reusing the last graph analysis where
-    /// the graph is the same; and the policies' systems, holding the
-    /// optimal strategy's factorisation.
+    /// The product of `defender` explored from `seeds` (refilled by the
+    /// last product's recipe where it fits) and its optimal values and
+    /// strategy for `!phi`, reusing the last graph analysis where the graph
+    /// is the same; and the policies' systems, holding the optimal
+    /// strategy's factorisation.
     fn analyse(
         &mut self,
         defender: &Fsc,
         seeds: Seeds,
-    ) -> Result<(Product, Reachability, &mut PolicySystems), CertifyError> {
+    ) -> Result<(&Product, Reachability, &mut PolicySystems), CertifyError> {
         let (game, dra) = (self.game, self.dra_not_phi);
-        let product = Product::explore(game, dra, defender, Role::Defender, seeds)?;
+        let refilled = match &mut self.last {
+            Some(last) => last.refilled(game, defender, seeds)?,
+            None => false,
+        };
         let mut last = match self.last.take() {
-            Some(last) if last.systems.fits(&product.mdp) => last,
-            _ => {
-                let pairs = product.lift(dra.pairs());
-                let accepting = accepting_end_components(&product.mdp, &pairs)?;
-                let target = accepting_union(&product.mdp, &accepting);
-                let qualitative = qualitative_reachability(&product.mdp, &target)?;
-                let systems = PolicySystems::new(&product.mdp, qualitative, &self.settings)?;
-                LastAnalysis {
-                    strategy: systems.greedy_start(&product.mdp),
-                    systems,
+            Some(last) if refilled => last,
+            last => {
+                let (product, recipe) =
+                    Product::explore(game, dra, defender, Role::Defender, seeds)?;
+                match last {
+                    Some(last) if last.systems.fits(&product.mdp) => LastAnalysis {
+                        product,
+                        recipe,
+                        ..last
+                    },
+                    _ => self.analyse_graph(product, recipe)?,
                 }
             }
         };
-        let result = max_reachability_with(&product.mdp, &last.strategy, &mut last.systems);
+        let result = max_reachability_with(&last.product.mdp, &last.strategy, &mut last.systems);
         if let Ok(result) = &result {
             last.strategy.clone_from(&result.strategy);
-            self.work += (product.mdp.num_states() * result.iterations) as f64;
+            self.work += (last.product.mdp.num_states() * result.iterations) as f64;
         }
-        let last = self.last.insert(last);
-        Ok((product, result?, &mut last.systems))
+        let LastAnalysis {
+            product, systems, ..
+        } = self.last.insert(last);
+        Ok((product, result?, systems))
+    }
+
+    /// The graph analysis of a new `product`: its accepting end components,
+    /// qualitative reachability and policy systems, starting from the
+    /// greedy strategy.
+    fn analyse_graph(
+        &self,
+        product: Product,
+        recipe: Option<Recipe>,
+    ) -> Result<LastAnalysis, CertifyError> {
+        let pairs = product.lift(self.dra_not_phi.pairs());
+        let accepting = accepting_end_components(&product.mdp, &pairs)?;
+        let target = accepting_union(&product.mdp, &accepting);
+        let qualitative = qualitative_reachability(&product.mdp, &target)?;
+        let systems = PolicySystems::new(&product.mdp, qualitative, &self.settings)?;
+        Ok(LastAnalysis {
+            strategy: systems.greedy_start(&product.mdp),
+            systems,
+            product,
+            recipe,
+        })
     }
 }
 
@@ -215,16 +265,10 @@ fn gradient(
     unexplored: f64,
 ) -> Result<LowerBoundGradient, CertifyError> {
     let x = &result.values;
-    let index: FxHashMap<(usize, usize, usize), usize> = product
-        .states
-        .iter()
-        .enumerate()
-        .map(|(m, &key)| (key, m))
-        .collect();
-    let value_at = |key: (usize, usize, usize)| index.get(&key).map_or(unexplored, |&m| x[m]);
+    let value_at = |key: (usize, usize, usize)| product.state(key).map_or(unexplored, |m| x[m]);
     let letters = dra_not_phi.state_letters(game);
     let mut entries = vec![0.0; support.num_entries()];
-    for (m, &(s, q, g)) in product.states.iter().enumerate() {
+    for (m, &(s, q, g)) in product.states().iter().enumerate() {
         if y[m] == 0.0 {
             continue;
         }

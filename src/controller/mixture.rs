@@ -9,7 +9,7 @@
 //! to node `g'` and plays `u`. The global Markov chain ([`crate::product`])
 //! and the certification products ([`crate::certify`]) are built from it.
 
-use super::{Fsc, Support};
+use super::Support;
 use crate::game::Player;
 
 /// The mixture on a fixed support: for each `(s, g)` the distinct supported
@@ -121,14 +121,6 @@ impl Mixture {
             .sum()
     }
 
-    /// The mixture of `controller` for `player`: [`Mixture::build`] on its
-    /// support, refilled with its probabilities.
-    pub(crate) fn of(player: &Player, controller: &Fsc, num_states: usize) -> Self {
-        let mut mixture = Self::build(player, &Support::of(controller), num_states);
-        mixture.refill(&Support::probabilities_of(controller).entries);
-        mixture
-    }
-
     /// Writes every entry's value, the sum of its terms `O(o | s) mu[k]`
     /// in the order met, for the probabilities `mu` (aligned with the
     /// support).
@@ -197,7 +189,7 @@ impl Mixture {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::controller::Role;
+    use crate::controller::{Fsc, Role};
     use crate::game::grid::GridSpec;
 
     /// The grid's players observe their cell with noise: several

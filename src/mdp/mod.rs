@@ -106,6 +106,18 @@ impl Mdp {
                 .all(|(a, b)| a.0 == b.0)
     }
 
+    /// Overwrites the probabilities, entry after entry in the order of
+    /// [`Mdp::distribution`] over states and actions, keeping the graph:
+    /// `probabilities` has one positive value per entry, each action's
+    /// summing to 1 (the caller's promise: the values of another controller
+    /// on the support the MDP was built for).
+    pub(crate) fn set_probabilities(&mut self, probabilities: &[f64]) {
+        debug_assert_eq!(probabilities.len(), self.entries.len());
+        for (entry, &p) in self.entries.iter_mut().zip(probabilities) {
+            entry.1 = p;
+        }
+    }
+
     fn global_distribution(&self, action: usize) -> &[(usize, f64)] {
         &self.entries[self.entry_offsets[action]..self.entry_offsets[action + 1]]
     }

@@ -16,7 +16,9 @@ pub struct IterationRecord {
     pub start: usize,
     /// The outer iteration `t`, from 0.
     pub iteration: usize,
-    /// Wall-clock seconds since the structure's optimisation started.
+    /// Wall-clock seconds since the structure's optimisation started, when
+    /// the record was made (after iteration `t`'s check, so that a certified
+    /// number carries the time it was known).
     pub seconds: f64,
     /// `V(phi_def(t), phi_adv)` after the adversary's steps of iteration `t`.
     pub value: f64,

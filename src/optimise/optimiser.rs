@@ -558,6 +558,7 @@ impl<'a> Optimiser<'a> {
     ) -> Result<Option<Status>, OptimiseError> {
         let t = state.iterate.iteration;
         let work = self.objective.work();
+        let check_clock = Instant::now();
         let mut status = budget_spent(&self.settings, t, work, seconds, &self.cancel)
             .or_else(|| solver.converged().then_some(Status::Converged));
         let check = if self.check_due(state.iterate.iteration, status) {
@@ -569,10 +570,13 @@ impl<'a> Optimiser<'a> {
         } else {
             None
         };
+        // Stamped when the record is made: a check's certified numbers carry
+        // the time they were known, its guarantee ascent included.
+        let recorded = seconds + check_clock.elapsed().as_secs_f64();
         observer.observe(&record(
             solver,
             state,
-            seconds,
+            recorded,
             check.as_ref(),
             books.upper_bound,
         ));
