@@ -276,12 +276,19 @@ fn almost_surely(
     let mut within = positive.to_vec();
     let mut strategy = vec![0; n];
     loop {
+        // Whether each (global) action keeps every successor in `U`: once
+        // per pass, not once per edge of the action.
+        let stays: Vec<bool> = (0..mdp.num_state_actions())
+            .map(|action| {
+                let successors = mdp.global_distribution(action);
+                successors.iter().all(|&(u, _)| within[u])
+            })
+            .collect();
         let mut found = target.to_vec();
         let mut frontier: Vec<usize> = (0..n).filter(|&s| target[s]).collect();
         while let Some(t) = frontier.pop() {
             for &(s, a) in predecessors.of(t) {
-                let stays = || mdp.distribution(s, a).iter().all(|&(u, _)| within[u]);
-                if within[s] && !found[s] && stays() {
+                if within[s] && !found[s] && stays[mdp.action_offsets[s] + a] {
                     found[s] = true;
                     strategy[s] = a;
                     frontier.push(s);
