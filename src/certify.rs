@@ -574,6 +574,17 @@ pub(crate) fn product_mdp(
     Ok((states, mdp, initial))
 }
 
+/// The number of states of [`product_mdp`]'s product, and its errors, by
+/// walking its graph without building the MDP.
+pub(crate) fn product_states(
+    game: &Posg,
+    dra: &Dra,
+    controller: &Fsc,
+    fixed: Role,
+) -> Result<usize, CertifyError> {
+    Product::count_states(game, dra, controller, fixed)
+}
+
 /// Builds the product with `controller` playing for `fixed` and decides,
 /// by graph search alone, where the free player wins with positive
 /// probability and where almost surely.

@@ -11,7 +11,7 @@ use crate::automaton::{Dra, RabinPair};
 use crate::controller::{Fsc, Mixture, Role, Support};
 use crate::game::{AdversaryAction, DefenderAction, Player, Posg};
 use crate::interner::{Interner, TooManyKeys};
-use crate::mdp::{Mdp, MdpBuilder};
+use crate::mdp::{Mdp, MdpBuilder, MdpError};
 
 /// The reachable product MDP of a game, an automaton and one player's controller.
 pub(super) struct Product {
@@ -79,88 +79,89 @@ impl Product {
         fixed: Role,
         seeds: Seeds,
     ) -> Result<(Self, Option<Recipe>), CertifyError> {
-        check_fits(game, controller, fixed)?;
-        let free_actions = free_actions(fixed.other().player(game), game.num_states());
-        let letters = dra.state_letters(game);
         let support = Support::of(controller);
         let mut mixture = Mixture::build(fixed.player(game), &support, game.num_states());
         mixture.refill(&Support::probabilities_of(controller).entries);
-        let transition = |s: usize, f: usize, w: usize| match fixed {
-            Role::Defender => game.transition(s, DefenderAction(f), AdversaryAction(w)),
-            Role::Adversary => game.transition(s, DefenderAction(w), AdversaryAction(f)),
-        };
-        let mut ids: Interner<(usize, usize, usize)> = Interner::default();
-        let mut initial = Vec::new();
-        let mut initial_terms = Vec::new();
-        for &(s, p) in game.initial() {
-            let q = dra.successor(dra.initial(), letters[s]);
-            for (g, &p_node) in controller.initial().iter().enumerate() {
-                if p_node > 0.0 {
-                    initial.push((state_id(&mut ids, (s, q, g))?, p * p_node));
-                    initial_terms.push((p, g));
-                } else if seeds == Seeds::EveryNode {
-                    state_id(&mut ids, (s, q, g))?;
-                }
-            }
-        }
+        let values = mixture.values();
         let mut builder = MdpBuilder::new();
-        let mut found = Vec::new();
         let mut action: Vec<(usize, u32, f64)> = Vec::new();
         let (mut terms, mut term_ends) = (Vec::new(), vec![0]);
         let mut vanished = false;
-        let mut total_terms = 0u128;
-        while builder.num_states() < ids.len() {
-            let (s, q, g) = ids.keys()[builder.num_states()];
-            for &w in &free_actions[s] {
-                found.clear();
-                for j in mixture.at(s, g) {
-                    let (next, f) = mixture.entry(j);
-                    for &(s2, t) in transition(s, f as usize, w) {
-                        found.push(((s2, dra.successor(q, letters[s2]), next as usize), j, t));
+        let walked = walk(
+            game,
+            dra,
+            controller,
+            fixed,
+            seeds,
+            &mixture,
+            |step| match step {
+                Step::Action(found) => {
+                    // The builder sums repeated successors in the order met
+                    // (a stable sort by successor): so does the recipe.
+                    action.clear();
+                    action.extend_from_slice(found);
+                    action.sort_by_key(|&(m, _, _)| m);
+                    vanished |= action
+                        .iter()
+                        .any(|&(_, j, t)| values[j as usize] * t == 0.0);
+                    for run in action.chunk_by(|a, b| a.0 == b.0) {
+                        terms.extend(run.iter().map(|&(_, j, t)| (j, t)));
+                        term_ends.push(terms.len());
                     }
+                    builder.add_action(action.iter().map(|&(m, j, t)| (m, values[j as usize] * t)));
                 }
-                total_terms += found.len() as u128;
-                if let Some(message) = crate::limits::exceeded(
-                    "the certification product MDP",
-                    total_terms,
-                    crate::limits::MAX_CHAIN_TRANSITIONS,
-                    "transitions or more",
-                    "MAX_CHAIN_TRANSITIONS",
-                ) {
-                    return Err(CertifyError::Budget(message));
-                }
-                action.clear();
-                for &(key, j, t) in &found {
-                    action.push((state_id(&mut ids, key)?, j as u32, t));
-                }
-                // The builder sums repeated successors in the order met
-                // (a stable sort by successor): so does the recipe.
-                action.sort_by_key(|&(m, _, _)| m);
-                let values = mixture.values();
-                vanished |= action.iter().any(|&(_, j, t)| values[j as usize] * t == 0.0);
-                for run in action.chunk_by(|a, b| a.0 == b.0) {
-                    terms.extend(run.iter().map(|&(_, j, t)| (j, t)));
-                    term_ends.push(terms.len());
-                }
-                builder.add_action(action.iter().map(|&(m, j, t)| (m, values[j as usize] * t)));
-            }
-            builder.end_state();
-        }
+                Step::StateEnd => builder.end_state(),
+            },
+        )?;
+        let product = Self {
+            mdp: builder.build()?,
+            ids: walked.ids,
+            initial: walked.initial,
+            free_actions: walked.free_actions,
+        };
         let recipe = (!vanished).then_some(Recipe {
             support,
             seeds,
             mixture,
             terms,
             term_ends,
-            initial: initial_terms,
+            initial: walked.initial_terms,
         });
-        let product = Self {
-            mdp: builder.build()?,
-            ids,
-            initial,
-            free_actions,
-        };
         Ok((product, recipe))
+    }
+
+    /// The number of states of [`Product::build`]'s product, and its errors,
+    /// without building the MDP (a state without an action is an error as
+    /// there; the probabilities are not formed, so not checked).
+    pub fn count_states(
+        game: &Posg,
+        dra: &Dra,
+        controller: &Fsc,
+        fixed: Role,
+    ) -> Result<usize, CertifyError> {
+        let mixture = Mixture::build(
+            fixed.player(game),
+            &Support::of(controller),
+            game.num_states(),
+        );
+        let walked = walk(
+            game,
+            dra,
+            controller,
+            fixed,
+            Seeds::Initial,
+            &mixture,
+            |_| {},
+        )?;
+        let stuck = walked
+            .ids
+            .keys()
+            .iter()
+            .position(|&(s, _, _)| walked.free_actions[s].is_empty());
+        match stuck {
+            Some(m) => Err(MdpError::Malformed(format!("state {m} has no action")).into()),
+            None => Ok(walked.ids.len()),
+        }
     }
 
     /// `(s, q, node)` of each MDP state, in exploration order.
@@ -175,8 +176,20 @@ impl Product {
 
     /// The product's parts: `(s, q, node)` per state, the MDP, `p0`, the
     /// free player's actions per game state.
-    pub fn into_parts(self) -> (Vec<(usize, usize, usize)>, Mdp, Vec<(usize, f64)>, Vec<Vec<usize>>) {
-        (self.ids.into_keys(), self.mdp, self.initial, self.free_actions)
+    pub fn into_parts(
+        self,
+    ) -> (
+        Vec<(usize, usize, usize)>,
+        Mdp,
+        Vec<(usize, f64)>,
+        Vec<Vec<usize>>,
+    ) {
+        (
+            self.ids.into_keys(),
+            self.mdp,
+            self.initial,
+            self.free_actions,
+        )
     }
 
     /// The automaton's Rabin pairs read on product states through their `q`.
@@ -233,6 +246,100 @@ impl Recipe {
         }
         Ok(true)
     }
+}
+
+/// One step of a product's breadth-first walk ([`walk`]).
+enum Step<'a> {
+    /// The next free action of the current state: its terms
+    /// `(successor, mixture entry j, T)` in the order met.
+    Action(&'a [(usize, u32, f64)]),
+    /// The current state has no further action.
+    StateEnd,
+}
+
+/// What a walk numbered and met: the states, `p0` as `(MDP state,
+/// probability)` and as `(init(s), node)` per entry, the free player's
+/// actions per game state.
+struct Walked {
+    ids: Interner<(usize, usize, usize)>,
+    initial: Vec<(usize, f64)>,
+    initial_terms: Vec<(f64, usize)>,
+    free_actions: Vec<Vec<usize>>,
+}
+
+/// Walks the product of `controller` (its mixture `mixture`, on its
+/// support) breadth first from `seeds`, numbering states in order of
+/// discovery, and hands each state's free actions and their terms to
+/// `visit`, then [`Step::StateEnd`].
+fn walk(
+    game: &Posg,
+    dra: &Dra,
+    controller: &Fsc,
+    fixed: Role,
+    seeds: Seeds,
+    mixture: &Mixture,
+    mut visit: impl FnMut(Step<'_>),
+) -> Result<Walked, CertifyError> {
+    check_fits(game, controller, fixed)?;
+    let free_actions = free_actions(fixed.other().player(game), game.num_states());
+    let letters = dra.state_letters(game);
+    let transition = |s: usize, f: usize, w: usize| match fixed {
+        Role::Defender => game.transition(s, DefenderAction(f), AdversaryAction(w)),
+        Role::Adversary => game.transition(s, DefenderAction(w), AdversaryAction(f)),
+    };
+    let mut ids: Interner<(usize, usize, usize)> = Interner::default();
+    let mut initial = Vec::new();
+    let mut initial_terms = Vec::new();
+    for &(s, p) in game.initial() {
+        let q = dra.successor(dra.initial(), letters[s]);
+        for (g, &p_node) in controller.initial().iter().enumerate() {
+            if p_node > 0.0 {
+                initial.push((state_id(&mut ids, (s, q, g))?, p * p_node));
+                initial_terms.push((p, g));
+            } else if seeds == Seeds::EveryNode {
+                state_id(&mut ids, (s, q, g))?;
+            }
+        }
+    }
+    let mut found = Vec::new();
+    let mut action = Vec::new();
+    let mut total_terms = 0u128;
+    let mut walked = 0;
+    while walked < ids.len() {
+        let (s, q, g) = ids.keys()[walked];
+        for &w in &free_actions[s] {
+            found.clear();
+            for j in mixture.at(s, g) {
+                let (next, f) = mixture.entry(j);
+                for &(s2, t) in transition(s, f as usize, w) {
+                    found.push(((s2, dra.successor(q, letters[s2]), next as usize), j, t));
+                }
+            }
+            total_terms += found.len() as u128;
+            if let Some(message) = crate::limits::exceeded(
+                "the certification product MDP",
+                total_terms,
+                crate::limits::MAX_CHAIN_TRANSITIONS,
+                "transitions or more",
+                "MAX_CHAIN_TRANSITIONS",
+            ) {
+                return Err(CertifyError::Budget(message));
+            }
+            action.clear();
+            for &(key, j, t) in &found {
+                action.push((state_id(&mut ids, key)?, j as u32, t));
+            }
+            visit(Step::Action(&action));
+        }
+        visit(Step::StateEnd);
+        walked += 1;
+    }
+    Ok(Walked {
+        ids,
+        initial,
+        initial_terms,
+        free_actions,
+    })
 }
 
 /// Checks that `controller` is `role`'s and fits that player of `game`
@@ -301,13 +408,19 @@ mod tests {
     #[test]
     fn a_refilled_product_is_the_explored_one() {
         let game = GridSpec::square(5).build().unwrap();
-        let not_phi = Automata::from_ltl("!unsafe U goal").unwrap().not_phi.unwrap();
+        let not_phi = Automata::from_ltl("!unsafe U goal")
+            .unwrap()
+            .not_phi
+            .unwrap();
         let first = reweighted(&Fsc::uniform_enabled(Role::Defender, 2, game.defender()), 1);
         for seeds in [Seeds::Initial, Seeds::EveryNode] {
             let (mut product, recipe) =
                 Product::explore(&game, &not_phi, &first, Role::Defender, seeds).unwrap();
             let mut recipe = recipe.expect("no term vanishes");
-            let summed = recipe.term_ends.windows(2).any(|ends| ends[1] - ends[0] > 1);
+            let summed = recipe
+                .term_ends
+                .windows(2)
+                .any(|ends| ends[1] - ends[0] > 1);
             assert!(summed, "some entry sums several terms");
             for salt in 2..5 {
                 let next = reweighted(&first, salt);
@@ -324,7 +437,10 @@ mod tests {
                 for m in 0..explored.mdp.num_states() {
                     for a in 0..explored.mdp.num_actions(m) {
                         let bits = |mdp: &Mdp| -> Vec<u64> {
-                            mdp.distribution(m, a).iter().map(|e| e.1.to_bits()).collect()
+                            mdp.distribution(m, a)
+                                .iter()
+                                .map(|e| e.1.to_bits())
+                                .collect()
                         };
                         assert_eq!(bits(&product.mdp), bits(&explored.mdp), "state {m}");
                     }
@@ -340,6 +456,27 @@ mod tests {
             let dropped = block.pop().unwrap();
             block[0].probability += dropped.probability;
             assert!(!recipe.fits(&narrower, seeds));
+        }
+    }
+
+    /// The states counted without building the MDP are those explored, for
+    /// controllers of one to three nodes, with some initial node unused.
+    #[test]
+    fn the_counted_states_are_the_explored_ones() {
+        let game = GridSpec::square(5).build().unwrap();
+        let not_phi = Automata::from_ltl("GF goal & G !unsafe")
+            .unwrap()
+            .not_phi
+            .unwrap();
+        for nodes in 1..=3 {
+            let uniform = Fsc::uniform_enabled(Role::Defender, nodes, game.defender());
+            for fsc in [uniform.clone(), reweighted(&uniform, nodes)] {
+                let (explored, _) =
+                    Product::explore(&game, &not_phi, &fsc, Role::Defender, Seeds::Initial)
+                        .unwrap();
+                let counted = Product::count_states(&game, &not_phi, &fsc, Role::Defender).unwrap();
+                assert_eq!(counted, explored.states().len(), "{nodes} nodes");
+            }
         }
     }
 }

@@ -225,11 +225,6 @@ impl MdpBuilder {
         self.mdp.action_offsets.push(actions);
     }
 
-    /// The number of states closed so far.
-    pub fn num_states(&self) -> usize {
-        self.mdp.num_states()
-    }
-
     /// Checks and returns the MDP: every state has an action, every
     /// successor is a state, every probability is finite and positive, and
     /// every distribution sums to 1 within [`SUM_TOLERANCE`].

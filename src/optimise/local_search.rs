@@ -38,7 +38,7 @@ use crate::automaton::Dra;
 use crate::certify::gradient::LowerBoundGradients;
 use crate::certify::refutation::Refuter;
 use crate::certify::{
-    Analysis, CertifyError, lower_value_or_trivial_within, product_mdp, ranked_lower_bound,
+    Analysis, CertifyError, lower_value_or_trivial_within, product_states, ranked_lower_bound,
 };
 use crate::controller::{Choice, Fsc, Role, Support};
 use crate::game::{AdversaryAction, DefenderAction, Posg};
@@ -173,9 +173,9 @@ fn lock<T>(map: &Mutex<T>) -> MutexGuard<'_, T> {
 struct EvaluationKey(Vec<u64>);
 
 impl EvaluationKey {
-    /// The key of `defender` in `game`.
-    fn of(game: &Posg, defender: &Fsc) -> Self {
-        let in_use = blocks_in_use(game, defender);
+    /// The key of `defender` in the game of `steps`.
+    fn of(steps: &DefenderSteps<'_>, defender: &Fsc) -> Self {
+        let in_use = steps.blocks_in_use(defender);
         let mut key = vec![defender.num_nodes() as u64];
         key.extend(defender.initial().iter().map(|p| p.to_bits()));
         for (b, block) in defender
@@ -200,6 +200,9 @@ impl EvaluationKey {
 /// bounds evaluated so far.
 struct Search<'a> {
     game: &'a Posg,
+    /// The game's defender steps, for the blocks in use of the defenders
+    /// the search keys.
+    steps: DefenderSteps<'a>,
     not_phi: &'a Dra,
     universe: &'a Fsc,
     support: Support,
@@ -234,6 +237,7 @@ impl<'a> Search<'a> {
     ) -> Self {
         Self {
             game,
+            steps: DefenderSteps::new(game),
             not_phi,
             universe,
             support: Support::of(universe),
@@ -287,7 +291,7 @@ impl<'a> Landscape<'a> {
     /// solve, but counts its product's states as spent all the same, so
     /// that the climbs go as they would without the memo.
     fn bound(&self, defender: &Fsc) -> Result<f64, CertifyError> {
-        self.bound_keyed(EvaluationKey::of(self.search.game, defender), defender)
+        self.bound_keyed(EvaluationKey::of(&self.search.steps, defender), defender)
     }
 
     /// [`Self::bound`] of `defender`, whose key is `key`.
@@ -301,7 +305,7 @@ impl<'a> Landscape<'a> {
     /// What the search knows of `defender` ([`Judged`]), solved where it
     /// has not judged it before; not counted as the climb's work.
     fn judge(&self, defender: &Fsc) -> Result<Judged, CertifyError> {
-        self.judge_keyed(EvaluationKey::of(self.search.game, defender), defender)
+        self.judge_keyed(EvaluationKey::of(&self.search.steps, defender), defender)
     }
 
     /// [`Self::judge`] of `defender`, whose key is `key`.
@@ -323,7 +327,7 @@ impl<'a> Landscape<'a> {
         if !self.search.pass_over_refuted {
             return None;
         }
-        let key = EvaluationKey::of(game, defender);
+        let key = EvaluationKey::of(&self.search.steps, defender);
         match self.last_solved.take() {
             Some((solved, analysis)) if solved == key => {
                 Some(Refuter::from_analysis(game, not_phi, analysis))
@@ -368,7 +372,10 @@ impl<'a> Landscape<'a> {
             if self.exhausted() {
                 return Ok(());
             }
-            self.pass_over_one(EvaluationKey::of(self.search.game, &candidate), &candidate)?;
+            self.pass_over_one(
+                EvaluationKey::of(&self.search.steps, &candidate),
+                &candidate,
+            )?;
         }
         Ok(())
     }
@@ -381,8 +388,7 @@ impl<'a> Landscape<'a> {
         let states = match self.search.known.states(&key) {
             Some(states) => states,
             None => {
-                let (states, _, _) = product_mdp(game, not_phi, candidate, Role::Defender)?;
-                let states = states.len();
+                let states = product_states(game, not_phi, candidate, Role::Defender)?;
                 self.search.known.insert_states(key, states);
                 states
             }
@@ -413,7 +419,7 @@ impl<'a> Landscape<'a> {
             Err(error) if error.is_numerical() => return Ok(Vec::new()),
             Err(error) => return Err(error),
         };
-        let in_use = blocks_in_use(search.game, current);
+        let in_use = search.steps.blocks_in_use(current);
         let mut moves = Vec::new();
         for b in (0..current.blocks.len()).filter(|&b| in_use[b]) {
             let rate = |choices: &[Choice]| block_rate(&search.support, &entries, b, choices);
@@ -443,7 +449,7 @@ impl<'a> Landscape<'a> {
             if self.exhausted() {
                 return Ok(None);
             }
-            let key = EvaluationKey::of(self.search.game, &candidate);
+            let key = EvaluationKey::of(&self.search.steps, &candidate);
             if self.search.known.get(&key).is_none() && refuted(&candidate) {
                 self.pass_over_one(key, &candidate)?;
                 continue;
@@ -542,7 +548,7 @@ fn first_improving_split(
         bound: current.bound,
     };
     let improves = |end: &Climbed| end.bound > current.bound + IMPROVEMENT;
-    for split in splits(landscape.search.game, &current.defender) {
+    for split in splits(&landscape.search.steps, &current.defender) {
         if let Some(first) = guided_step(landscape, &from(split))? {
             let end = climb_by_single_moves(landscape, first)?;
             if improves(&end) {
@@ -550,7 +556,7 @@ fn first_improving_split(
             }
         }
     }
-    for split in splits(landscape.search.game, &current.defender) {
+    for split in splits(&landscape.search.steps, &current.defender) {
         if landscape.exhausted() {
             break;
         }
@@ -625,7 +631,7 @@ fn sweep(landscape: &Landscape<'_>, from: &Climbed) -> Result<Option<Climbed>, C
     }
     let mut current = from.clone();
     let mut changed = false;
-    let mut in_use = blocks_in_use(landscape.search.game, &current.defender);
+    let mut in_use = landscape.search.steps.blocks_in_use(&current.defender);
     let mut met = landscape.judge(&current.defender)?.met;
     // Built when a move first asks, once per current defender.
     let mut refuter = OnceCell::new();
@@ -645,7 +651,7 @@ fn sweep(landscape: &Landscape<'_>, from: &Climbed) -> Result<Option<Climbed>, C
         } else if let Some(better) = landscape.first_improvement(moves, current.bound, refuted)? {
             current = better;
             changed = true;
-            in_use = blocks_in_use(landscape.search.game, &current.defender);
+            in_use = landscape.search.steps.blocks_in_use(&current.defender);
             met = landscape.judge(&current.defender)?.met;
             refuter = OnceCell::new();
         }
@@ -660,8 +666,8 @@ fn sweep(landscape: &Landscape<'_>, from: &Climbed) -> Result<Option<Climbed>, C
 /// in use): for each choice `(g', u)` of a block in use, `fsc` with that
 /// choice sent to `h` instead and `h` a copy of node `g'` (blocks and next
 /// nodes), which changes no value. Empty where every node is in use.
-fn splits<'a>(game: &Posg, fsc: &'a Fsc) -> impl Iterator<Item = Fsc> + 'a {
-    let in_use = blocks_in_use(game, fsc);
+fn splits<'a>(steps: &DefenderSteps<'_>, fsc: &'a Fsc) -> impl Iterator<Item = Fsc> + 'a {
+    let in_use = steps.blocks_in_use(fsc);
     let observations = fsc.num_observations();
     let spare =
         (0..fsc.num_nodes()).find(|&h| (0..observations).all(|o| !in_use[h * observations + o]));
@@ -911,41 +917,93 @@ fn random_memoryless(shape: &Fsc, universe: &Fsc, rng: &mut ChaCha8Rng) -> Fsc {
 }
 
 /// Which blocks `(g, o)` of the defender `fsc` can be used in `game`
-/// against any adversary: those of the pairs `(s, g)` reachable from the
-/// initial states and nodes, where `o` is an observation of `s`. A move in
-/// any other block changes no value.
+/// against any adversary ([`DefenderSteps::blocks_in_use`]).
 fn blocks_in_use(game: &Posg, fsc: &Fsc) -> Vec<bool> {
-    let nodes = fsc.num_nodes();
-    let observations = fsc.num_observations();
-    let mut seen = vec![false; game.num_states() * nodes];
-    let mut blocks = vec![false; nodes * observations];
-    let mut stack: Vec<(usize, usize)> = Vec::new();
-    let mut visit = |s: usize, g: usize, stack: &mut Vec<(usize, usize)>| {
-        if !std::mem::replace(&mut seen[s * nodes + g], true) {
-            stack.push((s, g));
+    DefenderSteps::new(game).blocks_in_use(fsc)
+}
+
+/// Where the defender's action `u` can lead in `game` from each state `s`,
+/// whatever the adversary plays: the distinct successors of `(s, u, v)`
+/// over every adversary action `v`, once per game (the blocks in use of
+/// every defender a search keys are found on it).
+struct DefenderSteps<'a> {
+    game: &'a Posg,
+    /// The successors of `(s, u)` are
+    /// `successors[offsets[s |U| + u]..offsets[s |U| + u + 1]]`, increasing.
+    offsets: Vec<usize>,
+    successors: Vec<usize>,
+}
+
+impl<'a> DefenderSteps<'a> {
+    /// The steps of `game`'s defender.
+    fn new(game: &'a Posg) -> Self {
+        let (actions, adversary_actions) = (
+            game.defender().num_actions(),
+            game.adversary().num_actions(),
+        );
+        let mut offsets = Vec::with_capacity(game.num_states() * actions + 1);
+        offsets.push(0);
+        let mut successors = Vec::new();
+        let mut reached = Vec::new();
+        for s in 0..game.num_states() {
+            for u in 0..actions {
+                reached.clear();
+                for v in 0..adversary_actions {
+                    let moves = game.transition(s, DefenderAction(u), AdversaryAction(v));
+                    reached.extend(moves.iter().map(|&(t, _)| t));
+                }
+                reached.sort_unstable();
+                reached.dedup();
+                successors.extend_from_slice(&reached);
+                offsets.push(successors.len());
+            }
         }
-    };
-    for &(s, _) in game.initial() {
-        for (g, _) in fsc.initial().iter().enumerate().filter(|(_, p)| **p > 0.0) {
-            visit(s, g, &mut stack);
+        Self {
+            game,
+            offsets,
+            successors,
         }
     }
-    let adversary_actions = game.adversary().num_actions();
-    while let Some((s, g)) = stack.pop() {
-        for &(o, _) in game.defender().observation_distribution(s) {
-            blocks[g * observations + o] = true;
-            for choice in fsc.choices(g, o) {
-                for v in 0..adversary_actions {
-                    let moves =
-                        game.transition(s, DefenderAction(choice.action), AdversaryAction(v));
-                    for &(t, _) in moves {
+
+    /// The successors of `(s, u)`.
+    fn from(&self, s: usize, u: usize) -> &[usize] {
+        let i = s * self.game.defender().num_actions() + u;
+        &self.successors[self.offsets[i]..self.offsets[i + 1]]
+    }
+
+    /// Which blocks `(g, o)` of the defender `fsc` can be used against any
+    /// adversary: those of the pairs `(s, g)` reachable from the initial
+    /// states and nodes, where `o` is an observation of `s`. A move in any
+    /// other block changes no value.
+    fn blocks_in_use(&self, fsc: &Fsc) -> Vec<bool> {
+        let game = self.game;
+        let nodes = fsc.num_nodes();
+        let observations = fsc.num_observations();
+        let mut seen = vec![false; game.num_states() * nodes];
+        let mut blocks = vec![false; nodes * observations];
+        let mut stack: Vec<(usize, usize)> = Vec::new();
+        let mut visit = |s: usize, g: usize, stack: &mut Vec<(usize, usize)>| {
+            if !std::mem::replace(&mut seen[s * nodes + g], true) {
+                stack.push((s, g));
+            }
+        };
+        for &(s, _) in game.initial() {
+            for (g, _) in fsc.initial().iter().enumerate().filter(|(_, p)| **p > 0.0) {
+                visit(s, g, &mut stack);
+            }
+        }
+        while let Some((s, g)) = stack.pop() {
+            for &(o, _) in game.defender().observation_distribution(s) {
+                blocks[g * observations + o] = true;
+                for choice in fsc.choices(g, o) {
+                    for &t in self.from(s, choice.action) {
                         visit(t, choice.next, &mut stack);
                     }
                 }
             }
         }
+        blocks
     }
-    blocks
 }
 
 /// `fsc` with block `b` replaced by `choices`.
@@ -1089,7 +1147,8 @@ mod tests {
                 .expect("a block with a second pair");
             vec![certain(pair)]
         };
-        let key = |fsc: &Fsc| EvaluationKey::of(&game, fsc);
+        let steps = DefenderSteps::new(&game);
+        let key = |fsc: &Fsc| EvaluationKey::of(&steps, fsc);
         assert_eq!(
             key(&with_block(&start, unused, other_pair(unused))),
             key(&start)
