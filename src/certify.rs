@@ -570,8 +570,7 @@ pub(crate) fn product_mdp(
     controller: &Fsc,
     fixed: Role,
 ) -> Result<ProductMdp, CertifyError> {
-    let (states, mdp, initial, _) = Product::build(game, dra, controller, fixed)?.into_parts();
-    Ok((states, mdp, initial))
+    Ok(Product::build(game, dra, controller, fixed)?.into_parts().0)
 }
 
 /// The number of states of [`product_mdp`]'s product, and its errors, by
@@ -622,7 +621,7 @@ fn analyse_with<R>(
     let product = Product::build(game, dra, controller, fixed)?;
     let pairs = product.lift(dra.pairs());
     let (result, accepting) = solve(&product.mdp, &pairs)?;
-    let (states, mdp, initial, free_actions) = product.into_parts();
+    let ((states, mdp, initial), free_actions) = product.into_parts();
     Ok(Analysis {
         states,
         mdp,

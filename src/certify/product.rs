@@ -6,7 +6,7 @@
 //! controllers of one support; the exploration's hashing was most of a
 //! bound's cost on the 16x16 grid).
 
-use super::CertifyError;
+use super::{CertifyError, ProductMdp};
 use crate::automaton::{Dra, RabinPair};
 use crate::controller::{Fsc, Mixture, Role, Support};
 use crate::game::{AdversaryAction, DefenderAction, Player, Posg};
@@ -174,22 +174,11 @@ impl Product {
         self.ids.get(&key).map(|m| m as usize)
     }
 
-    /// The product's parts: `(s, q, node)` per state, the MDP, `p0`, the
-    /// free player's actions per game state.
-    pub fn into_parts(
-        self,
-    ) -> (
-        Vec<(usize, usize, usize)>,
-        Mdp,
-        Vec<(usize, f64)>,
-        Vec<Vec<usize>>,
-    ) {
-        (
-            self.ids.into_keys(),
-            self.mdp,
-            self.initial,
-            self.free_actions,
-        )
+    /// The product's parts: `(s, q, node)` per state, the MDP and `p0`;
+    /// and the free player's actions per game state.
+    pub fn into_parts(self) -> (ProductMdp, Vec<Vec<usize>>) {
+        let product = (self.ids.into_keys(), self.mdp, self.initial);
+        (product, self.free_actions)
     }
 
     /// The automaton's Rabin pairs read on product states through their `q`.
