@@ -306,6 +306,8 @@ struct Bookkeeping {
     upper_schedule: check::Backoff,
     /// The last argmax rounding certified, and its certified lower bound.
     last_rounding: Option<(Fsc, f64)>,
+    /// When the checks certify a changed argmax rounding.
+    rounding_schedule: check::Backoff,
     checks: usize,
     phases: PhaseSeconds,
 }
@@ -324,6 +326,7 @@ impl Bookkeeping {
             last_response: None,
             upper_schedule: check::Backoff::new(upper_interval),
             last_rounding: None,
+            rounding_schedule: check::Backoff::new(check::ROUNDING_BACKOFF_CAP),
             checks: 0,
             phases: PhaseSeconds::default(),
         }

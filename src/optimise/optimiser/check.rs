@@ -420,7 +420,11 @@ impl Optimiser<'_> {
     /// iterates would approach it only slowly. The rounding's lower bound
     /// is computed again only when the rounded controller changed; with
     /// neither it nor the upper bound (`upper_tightened`) changed, the
-    /// answer is the last one.
+    /// answer is the last one. A changed rounding is certified at every
+    /// check while its bound reaches the incumbent's score, otherwise at
+    /// intervals that double up to [`ROUNDING_BACKOFF_CAP`] checks: where
+    /// the argmax of noisy iterates changes at every check and certifies
+    /// far below them (the 16x16 grid), it paid for nothing.
     fn rounding_closes_gap(
         &self,
         iterate: &Iterate,
@@ -442,8 +446,11 @@ impl Optimiser<'_> {
                 }
                 *lower
             }
+            _ if !books.rounding_schedule.due(books.checks) => return Ok(false),
             _ => {
                 let lower = lower_value_or_trivial(certifier.game, certifier.not_phi, &rounded)?;
+                let competitive = books.best.as_ref().is_none_or(|best| lower >= best.score());
+                books.rounding_schedule.after(books.checks, competitive);
                 books.last_rounding = Some((rounded, lower));
                 lower
             }
@@ -452,6 +459,12 @@ impl Optimiser<'_> {
         Ok(self.settings.gap_closed(lower, upper))
     }
 }
+
+/// The longest interval, in checks, between certifications of a changed
+/// argmax rounding that does not reach the incumbent's score
+/// ([`Optimiser::rounding_closes_gap`]): 20 iterations at the default
+/// `check_every`.
+pub(super) const ROUNDING_BACKOFF_CAP: usize = 4;
 
 /// A candidate after [`Optimiser::judge`]: its value against the adversary
 /// it was judged against (a best response when one was computed), and
