@@ -62,10 +62,13 @@ pub fn lower_bound_gradient(
 }
 
 /// [`lower_bound_gradient`] for many controllers, usually of one support:
-/// where the product MDP has the graph of the previous one
-/// (`Mdp::same_graph`), its graph analysis (accepting end components,
-/// qualitative reachability) is reused and policy iteration starts from the
-/// previous optimal strategy, which is proper on that graph.
+/// from the third controller of one support (and seeds) in a row, the
+/// product is the previous one refilled by the recipe recorded while
+/// exploring the second, not explored again (`src/certify/product.rs`); where the product MDP has the graph of the
+/// previous one (`Mdp::same_graph`), its graph analysis (accepting end
+/// components, qualitative reachability) is reused and policy iteration
+/// starts from the previous optimal strategy, which is proper on that
+/// graph.
 pub struct LowerBoundGradients<'a> {
     game: &'a Posg,
     dra_not_phi: &'a Dra,
@@ -74,31 +77,42 @@ pub struct LowerBoundGradients<'a> {
     work: f64,
 }
 
-/// The last product, its recipe (where it has one), its graph analysis (in
-/// its policies' linear systems: one symbolic analysis for the graph) and
-/// its optimal strategy.
+/// The last product, the support and seeds it was explored for, its
+/// recipe (where one was recorded), its graph analysis (in its policies'
+/// linear systems: one symbolic analysis for the graph) and its optimal
+/// strategy.
 struct LastAnalysis {
     product: Product,
+    support: Support,
+    seeds: Seeds,
     recipe: Option<Recipe>,
     systems: PolicySystems,
     strategy: Vec<usize>,
 }
 
 impl LastAnalysis {
-    /// Whether `defender`'s product explored from `seeds` is the last one
-    /// refilled (the recipe fits and refilled it).
+    /// Whether the product of `defender` (with `support`) explored from
+    /// `seeds` is the last one refilled (the recipe fits and refilled it).
     fn refilled(
         &mut self,
         game: &Posg,
         defender: &Fsc,
+        support: &Support,
         seeds: Seeds,
     ) -> Result<bool, CertifyError> {
         match &mut self.recipe {
-            Some(recipe) if recipe.fits(defender, seeds) => {
-                recipe.refill(game, &mut self.product, defender, Role::Defender)
+            Some(recipe) if recipe.fits(support, Role::Defender, seeds) => {
+                recipe.refill(game, &mut self.product, defender)
             }
             _ => Ok(false),
         }
+    }
+
+    /// Whether a controller with `support` explored from `seeds` has the
+    /// last product's graph: the second of a run of such controllers, for
+    /// which the product is explored with its recipe.
+    fn repeats(&self, support: &Support, seeds: Seeds) -> bool {
+        self.seeds == seeds && self.support == *support
     }
 }
 
@@ -187,22 +201,37 @@ impl<'a> LowerBoundGradients<'a> {
         seeds: Seeds,
     ) -> Result<(&Product, Reachability, &mut PolicySystems), CertifyError> {
         let (game, dra) = (self.game, self.dra_not_phi);
+        let support = Support::of(defender);
         let refilled = match &mut self.last {
-            Some(last) => last.refilled(game, defender, seeds)?,
+            Some(last) => last.refilled(game, defender, &support, seeds)?,
             None => false,
         };
         let mut last = match self.last.take() {
             Some(last) if refilled => last,
             last => {
-                let (product, recipe) =
-                    Product::explore(game, dra, defender, Role::Defender, seeds)?;
+                let repeats = last.as_ref().is_some_and(|l| l.repeats(&support, seeds));
+                let explored = if repeats {
+                    Product::explore_with_recipe(game, dra, defender, Role::Defender, seeds)
+                } else {
+                    Product::explore(game, dra, defender, Role::Defender, seeds).map(|p| (p, None))
+                };
+                let (product, recipe) = match explored {
+                    Ok(explored) => explored,
+                    Err(error) => {
+                        // The last analysis stays for the next controller.
+                        self.last = last;
+                        return Err(error);
+                    }
+                };
                 match last {
                     Some(last) if last.systems.fits(&product.mdp) => LastAnalysis {
                         product,
+                        support,
+                        seeds,
                         recipe,
                         ..last
                     },
-                    _ => self.analyse_graph(product, recipe)?,
+                    _ => self.analyse_graph(product, support, seeds, recipe)?,
                 }
             }
         };
@@ -217,12 +246,14 @@ impl<'a> LowerBoundGradients<'a> {
         Ok((product, result?, systems))
     }
 
-    /// The graph analysis of a new `product`: its accepting end components,
-    /// qualitative reachability and policy systems, starting from the
-    /// greedy strategy.
+    /// The graph analysis of a new `product` (explored for `support` and
+    /// `seeds`): its accepting end components, qualitative reachability and
+    /// policy systems, starting from the greedy strategy.
     fn analyse_graph(
         &self,
         product: Product,
+        support: Support,
+        seeds: Seeds,
         recipe: Option<Recipe>,
     ) -> Result<LastAnalysis, CertifyError> {
         let pairs = product.lift(self.dra_not_phi.pairs());
@@ -234,6 +265,8 @@ impl<'a> LowerBoundGradients<'a> {
             strategy: systems.greedy_start(&product.mdp),
             systems,
             product,
+            support,
+            seeds,
             recipe,
         })
     }

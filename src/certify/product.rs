@@ -44,6 +44,8 @@ pub(super) enum Seeds {
 /// gives.
 pub(super) struct Recipe {
     support: Support,
+    /// The player whose controller the product fixes.
+    fixed: Role,
     seeds: Seeds,
     mixture: Mixture,
     /// Each term's mixture entry `j` and game probability `T`, entry after
@@ -66,19 +68,44 @@ impl Product {
         controller: &Fsc,
         fixed: Role,
     ) -> Result<Self, CertifyError> {
-        Ok(Self::explore(game, dra, controller, fixed, Seeds::Initial)?.0)
+        Self::explore(game, dra, controller, fixed, Seeds::Initial)
     }
 
-    /// [`Product::build`], its exploration starting from `seeds`, with the
-    /// recipe of its probabilities (none where a term `A(j) T` is 0 in
-    /// floating point: the graph then depends on more than the support).
+    /// [`Product::build`], its exploration starting from `seeds`.
     pub fn explore(
         game: &Posg,
         dra: &Dra,
         controller: &Fsc,
         fixed: Role,
         seeds: Seeds,
+    ) -> Result<Self, CertifyError> {
+        Ok(Self::explore_recording(game, dra, controller, fixed, seeds, false)?.0)
+    }
+
+    /// [`Product::explore`] with the recipe of the product's probabilities
+    /// (none where a term `A(j) T` is 0 in floating point: the graph then
+    /// depends on more than the support). Recording it costs a little more
+    /// than exploring: worth it where controllers of one support follow.
+    pub fn explore_with_recipe(
+        game: &Posg,
+        dra: &Dra,
+        controller: &Fsc,
+        fixed: Role,
+        seeds: Seeds,
     ) -> Result<(Self, Option<Recipe>), CertifyError> {
+        Self::explore_recording(game, dra, controller, fixed, seeds, true)
+    }
+
+    /// [`Product::explore`], with the recipe where `record`.
+    fn explore_recording(
+        game: &Posg,
+        dra: &Dra,
+        controller: &Fsc,
+        fixed: Role,
+        seeds: Seeds,
+        record: bool,
+    ) -> Result<(Self, Option<Recipe>), CertifyError> {
+        check_fits(game, controller, fixed)?;
         let support = Support::of(controller);
         let mut mixture = Mixture::build(fixed.player(game), &support, game.num_states());
         mixture.refill(&Support::probabilities_of(controller).entries);
@@ -95,6 +122,9 @@ impl Product {
             seeds,
             &mixture,
             |step| match step {
+                Step::Action(found) if !record => {
+                    builder.add_action(found.iter().map(|&(m, j, t)| (m, values[j as usize] * t)));
+                }
                 Step::Action(found) => {
                     // The builder sums repeated successors in the order met
                     // (a stable sort by successor): so does the recipe.
@@ -119,8 +149,9 @@ impl Product {
             initial: walked.initial,
             free_actions: walked.free_actions,
         };
-        let recipe = (!vanished).then_some(Recipe {
+        let recipe = (record && !vanished).then_some(Recipe {
             support,
+            fixed,
             seeds,
             mixture,
             terms,
@@ -130,15 +161,17 @@ impl Product {
         Ok((product, recipe))
     }
 
-    /// The number of states of [`Product::build`]'s product, and its errors,
-    /// without building the MDP (a state without an action is an error as
-    /// there; the probabilities are not formed, so not checked).
+    /// The number of states of [`Product::build`]'s product, without
+    /// building the MDP: the same count, and the same errors but those of
+    /// the probabilities, which it does not form (a state without an action
+    /// is an error as there).
     pub fn count_states(
         game: &Posg,
         dra: &Dra,
         controller: &Fsc,
         fixed: Role,
     ) -> Result<usize, CertifyError> {
+        check_fits(game, controller, fixed)?;
         let mixture = Mixture::build(
             fixed.player(game),
             &Support::of(controller),
@@ -159,7 +192,7 @@ impl Product {
             .iter()
             .position(|&(s, _, _)| walked.free_actions[s].is_empty());
         match stuck {
-            Some(m) => Err(MdpError::Malformed(format!("state {m} has no action")).into()),
+            Some(m) => Err(MdpError::no_action(m).into()),
             None => Ok(walked.ids.len()),
         }
     }
@@ -194,25 +227,29 @@ impl Product {
 }
 
 impl Recipe {
-    /// Whether `controller`'s product explored from `seeds` has the graph of
-    /// the recipe's: the same support (choices and initial nodes) and seeds.
-    pub fn fits(&self, controller: &Fsc, seeds: Seeds) -> bool {
-        seeds == self.seeds && Support::of(controller) == self.support
+    /// Whether the product of a controller with `support` (its choices and
+    /// initial nodes: [`Support::of`]), fixing player `fixed` and explored
+    /// from `seeds`, has the graph of the recipe's: the same player,
+    /// support and seeds.
+    pub fn fits(&self, support: &Support, fixed: Role, seeds: Seeds) -> bool {
+        fixed == self.fixed && seeds == self.seeds && *support == self.support
     }
 
     /// Writes `controller`'s probabilities into `product`, the product this
     /// recipe came with (or one it refilled), where the recipe
-    /// [fits](Recipe::fits) `controller`. False, and `product` left as it
-    /// was, where an entry's terms sum to 0 in floating point (the graph
-    /// then differs: explore instead).
+    /// [fits](Recipe::fits) `controller`: `Ok(true)`, or the error
+    /// exploring would give (`controller` not fitting the game, a
+    /// probability not positive and finite, a distribution not summing to
+    /// 1). `Ok(false)`, and `product` left as it was, where an entry's terms
+    /// sum to 0 in floating point (the graph then differs: explore
+    /// instead).
     pub fn refill(
         &mut self,
         game: &Posg,
         product: &mut Product,
         controller: &Fsc,
-        fixed: Role,
     ) -> Result<bool, CertifyError> {
-        check_fits(game, controller, fixed)?;
+        check_fits(game, controller, self.fixed)?;
         self.mixture
             .refill(&Support::probabilities_of(controller).entries);
         let values = self.mixture.values();
@@ -228,7 +265,7 @@ impl Recipe {
             }
             probabilities.push(sum);
         }
-        product.mdp.set_probabilities(&probabilities);
+        product.mdp.set_probabilities(&probabilities)?;
         let initial = controller.initial();
         for (entry, &(p, g)) in product.initial.iter_mut().zip(&self.initial) {
             entry.1 = p * initial[g];
@@ -257,7 +294,7 @@ struct Walked {
 }
 
 /// Walks the product of `controller` (its mixture `mixture`, on its
-/// support) breadth first from `seeds`, numbering states in order of
+/// support; `controller` checked to fit the game) breadth first from `seeds`, numbering states in order of
 /// discovery, and hands each state's free actions and their terms to
 /// `visit`, then [`Step::StateEnd`].
 fn walk(
@@ -269,7 +306,6 @@ fn walk(
     mixture: &Mixture,
     mut visit: impl FnMut(Step<'_>),
 ) -> Result<Walked, CertifyError> {
-    check_fits(game, controller, fixed)?;
     let free_actions = free_actions(fixed.other().player(game), game.num_states());
     let letters = dra.state_letters(game);
     let transition = |s: usize, f: usize, w: usize| match fixed {
@@ -371,20 +407,32 @@ mod tests {
     use crate::game::grid::GridSpec;
     use crate::pipeline::Automata;
 
-    /// `fsc` with its choices reweighted by a fixed positive pattern (the
-    /// support unchanged) and its initial distribution spread over every
-    /// node.
+    /// `fsc` with its choices and its initial nodes reweighted by a
+    /// positive pattern varying with `salt` (the support unchanged: an
+    /// unused initial node stays unused).
     fn reweighted(fsc: &Fsc, salt: usize) -> Fsc {
+        let pattern = |i: usize| ((i * 7919 + salt * 31) % 97 + 1) as f64;
+        let normalised = |weights: Vec<f64>| {
+            let total: f64 = weights.iter().sum();
+            weights.into_iter().map(move |w| w / total)
+        };
         let mut other = fsc.clone();
         for block in &mut other.blocks {
-            let weights: Vec<f64> = (0..block.len())
-                .map(|i| ((i * 7919 + salt * 31) % 97 + 1) as f64)
-                .collect();
-            let total: f64 = weights.iter().sum();
-            for (choice, w) in block.iter_mut().zip(weights) {
-                choice.probability = w / total;
+            let weights = (0..block.len()).map(pattern).collect();
+            for (choice, p) in block.iter_mut().zip(normalised(weights)) {
+                choice.probability = p;
             }
         }
+        let weights = (other.initial.iter().enumerate())
+            .map(|(g, &p)| if p > 0.0 { pattern(g) } else { 0.0 })
+            .collect();
+        other.initial = normalised(weights).collect();
+        other
+    }
+
+    /// `fsc` starting in every node.
+    fn starting_anywhere(fsc: &Fsc) -> Fsc {
+        let mut other = fsc.clone();
         let nodes = other.initial.len() as f64;
         other.initial.iter_mut().for_each(|p| *p = 1.0 / nodes);
         other
@@ -392,8 +440,10 @@ mod tests {
 
     /// On a grid whose defender observes its cell with noise (several
     /// terms per MDP entry), the recipe of one controller's product writes
-    /// the product of another on the same support to the bit, from either
-    /// seeds; it does not fit another support or other seeds.
+    /// the product of another on the same support to the bit (transitions
+    /// and `p0`), from either seeds, with an unused initial node (so that
+    /// the seeds differ) or none; it does not fit another support, other
+    /// seeds or the other player.
     #[test]
     fn a_refilled_product_is_the_explored_one() {
         let game = GridSpec::square(5).build().unwrap();
@@ -401,55 +451,90 @@ mod tests {
             .unwrap()
             .not_phi
             .unwrap();
-        let first = reweighted(&Fsc::uniform_enabled(Role::Defender, 2, game.defender()), 1);
-        for seeds in [Seeds::Initial, Seeds::EveryNode] {
-            let (mut product, recipe) =
-                Product::explore(&game, &not_phi, &first, Role::Defender, seeds).unwrap();
-            let mut recipe = recipe.expect("no term vanishes");
-            let summed = recipe
-                .term_ends
-                .windows(2)
-                .any(|ends| ends[1] - ends[0] > 1);
-            assert!(summed, "some entry sums several terms");
-            for salt in 2..5 {
-                let next = reweighted(&first, salt);
-                assert!(recipe.fits(&next, seeds));
-                let refilled = recipe
-                    .refill(&game, &mut product, &next, Role::Defender)
-                    .unwrap();
-                assert!(refilled);
-                let (explored, _) =
-                    Product::explore(&game, &not_phi, &next, Role::Defender, seeds).unwrap();
-                assert_eq!(product.states(), explored.states());
-                assert_eq!(product.initial, explored.initial);
-                assert!(product.mdp.same_graph(&explored.mdp));
-                for m in 0..explored.mdp.num_states() {
-                    for a in 0..explored.mdp.num_actions(m) {
-                        let bits = |mdp: &Mdp| -> Vec<u64> {
-                            mdp.distribution(m, a)
-                                .iter()
-                                .map(|e| e.1.to_bits())
-                                .collect()
-                        };
-                        assert_eq!(bits(&product.mdp), bits(&explored.mdp), "state {m}");
-                    }
-                }
+        let uniform = Fsc::uniform_enabled(Role::Defender, 2, game.defender());
+        for first in [
+            reweighted(&uniform, 1),
+            reweighted(&starting_anywhere(&uniform), 1),
+        ] {
+            for seeds in [Seeds::Initial, Seeds::EveryNode] {
+                refills_as_explored(&game, &not_phi, &first, seeds);
             }
-            let other_seeds = match seeds {
-                Seeds::Initial => Seeds::EveryNode,
-                Seeds::EveryNode => Seeds::Initial,
-            };
-            assert!(!recipe.fits(&first, other_seeds));
-            let mut narrower = first.clone();
-            let block = narrower.blocks.iter_mut().find(|b| b.len() > 1).unwrap();
-            let dropped = block.pop().unwrap();
-            block[0].probability += dropped.probability;
-            assert!(!recipe.fits(&narrower, seeds));
         }
     }
 
+    /// The checks of [`a_refilled_product_is_the_explored_one`] from `first`.
+    fn refills_as_explored(game: &Posg, not_phi: &Dra, first: &Fsc, seeds: Seeds) {
+        let (mut product, recipe) =
+            Product::explore_with_recipe(game, not_phi, first, Role::Defender, seeds).unwrap();
+        let mut recipe = recipe.expect("no term vanishes");
+        let summed = recipe
+            .term_ends
+            .windows(2)
+            .any(|ends| ends[1] - ends[0] > 1);
+        assert!(summed, "some entry sums several terms");
+        for salt in 2..5 {
+            let next = reweighted(first, salt);
+            assert!(recipe.fits(&Support::of(&next), Role::Defender, seeds));
+            assert!(recipe.refill(game, &mut product, &next).unwrap());
+            let explored = Product::explore(game, not_phi, &next, Role::Defender, seeds).unwrap();
+            assert_eq!(product.states(), explored.states());
+            let bits = |initial: &[(usize, f64)]| -> Vec<(usize, u64)> {
+                initial.iter().map(|&(m, p)| (m, p.to_bits())).collect()
+            };
+            assert_eq!(bits(&product.initial), bits(&explored.initial));
+            assert!(product.mdp.same_graph(&explored.mdp));
+            for m in 0..explored.mdp.num_states() {
+                for a in 0..explored.mdp.num_actions(m) {
+                    let bits = |mdp: &Mdp| -> Vec<u64> {
+                        mdp.distribution(m, a)
+                            .iter()
+                            .map(|e| e.1.to_bits())
+                            .collect()
+                    };
+                    assert_eq!(bits(&product.mdp), bits(&explored.mdp), "state {m}");
+                }
+            }
+        }
+        let other_seeds = match seeds {
+            Seeds::Initial => Seeds::EveryNode,
+            Seeds::EveryNode => Seeds::Initial,
+        };
+        let support = Support::of(first);
+        assert!(!recipe.fits(&support, Role::Defender, other_seeds));
+        assert!(!recipe.fits(&support, Role::Adversary, seeds));
+        let mut narrower = first.clone();
+        let block = narrower.blocks.iter_mut().find(|b| b.len() > 1).unwrap();
+        let dropped = block.pop().unwrap();
+        block[0].probability += dropped.probability;
+        assert!(!recipe.fits(&Support::of(&narrower), Role::Defender, seeds));
+    }
+
+    /// A controller made for another game is refused with the player's
+    /// mismatch, by exploring, counting and refilling alike.
+    #[test]
+    fn a_controller_for_another_game_is_a_mismatch_not_a_panic() {
+        let game = GridSpec::square(5).build().unwrap();
+        let smaller = GridSpec::square(3).build().unwrap();
+        let not_phi = Automata::from_ltl("!unsafe U goal")
+            .unwrap()
+            .not_phi
+            .unwrap();
+        let foreign = Fsc::uniform_enabled(Role::Defender, 2, smaller.defender());
+        let mismatch = |error: CertifyError| matches!(error, CertifyError::Mismatch { .. });
+        let explored = Product::explore(&game, &not_phi, &foreign, Role::Defender, Seeds::Initial);
+        assert!(explored.err().is_some_and(mismatch));
+        let counted = Product::count_states(&game, &not_phi, &foreign, Role::Defender);
+        assert!(counted.err().is_some_and(mismatch));
+        let own = Fsc::uniform_enabled(Role::Defender, 2, game.defender());
+        let (mut product, recipe) =
+            Product::explore_with_recipe(&game, &not_phi, &own, Role::Defender, Seeds::Initial)
+                .unwrap();
+        let refilled = recipe.unwrap().refill(&game, &mut product, &foreign);
+        assert!(refilled.err().is_some_and(mismatch));
+    }
+
     /// The states counted without building the MDP are those explored, for
-    /// controllers of one to three nodes, with some initial node unused.
+    /// controllers of one to three nodes, starting in node 0 or anywhere.
     #[test]
     fn the_counted_states_are_the_explored_ones() {
         let game = GridSpec::square(5).build().unwrap();
@@ -459,8 +544,8 @@ mod tests {
             .unwrap();
         for nodes in 1..=3 {
             let uniform = Fsc::uniform_enabled(Role::Defender, nodes, game.defender());
-            for fsc in [uniform.clone(), reweighted(&uniform, nodes)] {
-                let (explored, _) =
+            for fsc in [uniform.clone(), starting_anywhere(&uniform)] {
+                let explored =
                     Product::explore(&game, &not_phi, &fsc, Role::Defender, Seeds::Initial)
                         .unwrap();
                 let counted = Product::count_states(&game, &not_phi, &fsc, Role::Defender).unwrap();

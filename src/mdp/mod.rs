@@ -60,6 +60,13 @@ pub enum MdpError {
     OptimalityUnproved(String),
 }
 
+impl MdpError {
+    /// State `s` has no action: every state of an MDP needs one.
+    pub(crate) fn no_action(s: usize) -> Self {
+        Self::Malformed(format!("state {s} has no action"))
+    }
+}
+
 /// A finite MDP in compressed form: the actions of state `s` are the global
 /// actions `action_offsets[s]..action_offsets[s + 1]`, and global action `a`
 /// has the successors `entries[entry_offsets[a]..entry_offsets[a + 1]]`:
@@ -107,15 +114,29 @@ impl Mdp {
     }
 
     /// Overwrites the probabilities, entry after entry in the order of
-    /// [`Mdp::distribution`] over states and actions, keeping the graph:
-    /// `probabilities` has one positive value per entry, each action's
-    /// summing to 1 (the caller's promise: the values of another controller
-    /// on the support the MDP was built for).
-    pub(crate) fn set_probabilities(&mut self, probabilities: &[f64]) {
-        debug_assert_eq!(probabilities.len(), self.entries.len());
+    /// [`Mdp::distribution`] over states and actions, keeping the graph,
+    /// after the checks [`MdpBuilder::build`] makes on them (one positive,
+    /// finite value per entry, each action's summing to 1 within
+    /// [`SUM_TOLERANCE`]); on an error nothing is written.
+    pub(crate) fn set_probabilities(&mut self, probabilities: &[f64]) -> Result<(), MdpError> {
+        if probabilities.len() != self.entries.len() {
+            return Err(MdpError::Malformed(format!(
+                "{} probabilities for {} transitions",
+                probabilities.len(),
+                self.entries.len()
+            )));
+        }
+        for s in 0..self.num_states() {
+            for (a, action) in self.global_actions(s).enumerate() {
+                let range = self.entry_offsets[action]..self.entry_offsets[action + 1];
+                check_probabilities(probabilities[range].iter().copied())
+                    .map_err(|m| MdpError::Malformed(format!("state {s}, action {a}: {m}")))?;
+            }
+        }
         for (entry, &p) in self.entries.iter_mut().zip(probabilities) {
             entry.1 = p;
         }
+        Ok(())
     }
 
     fn global_distribution(&self, action: usize) -> &[(usize, f64)] {
@@ -238,7 +259,7 @@ impl MdpBuilder {
         let n = mdp.num_states();
         for s in 0..n {
             if mdp.num_actions(s) == 0 {
-                return Err(MdpError::Malformed(format!("state {s} has no action")));
+                return Err(MdpError::no_action(s));
             }
             for a in 0..mdp.num_actions(s) {
                 check_distribution(mdp.distribution(s, a), n)
@@ -253,13 +274,16 @@ fn check_distribution(distribution: &[(usize, f64)], n: usize) -> Result<(), Str
     if let Some(&(t, _)) = distribution.iter().find(|&&(t, _)| t >= n) {
         return Err(format!("successor {t} is not a state"));
     }
-    if let Some(&(_, p)) = distribution
-        .iter()
-        .find(|&&(_, p)| !(p > 0.0 && p.is_finite()))
-    {
+    check_probabilities(distribution.iter().map(|&(_, p)| p))
+}
+
+/// Every probability positive and finite, their sum 1 within
+/// [`SUM_TOLERANCE`].
+fn check_probabilities(probabilities: impl Iterator<Item = f64> + Clone) -> Result<(), String> {
+    if let Some(p) = probabilities.clone().find(|&p| !(p > 0.0 && p.is_finite())) {
         return Err(format!("probability {p} is not positive and finite"));
     }
-    let total: f64 = distribution.iter().map(|&(_, p)| p).sum();
+    let total: f64 = probabilities.sum();
     if (total - 1.0).abs() > SUM_TOLERANCE {
         return Err(format!("probabilities sum to {total}, not 1"));
     }

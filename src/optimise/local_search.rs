@@ -165,7 +165,7 @@ fn lock<T>(map: &Mutex<T>) -> MutexGuard<'_, T> {
 /// What determines a defender's bound among the defenders of the searches
 /// sharing a [`SearchMemo`] (on one game and automaton): its number of
 /// nodes, its initial distribution (the probabilities' bits) and its
-/// blocks in use ([`blocks_in_use`]), each as its index, its number of
+/// blocks in use ([`DefenderSteps::blocks_in_use`]), each as its index, its number of
 /// choices and its choices (next node, action, the probability's bits).
 /// Blocks out of use are never played, so defenders that differ only
 /// there have the same product.
@@ -810,7 +810,7 @@ pub fn climb_with_restarts(
         let Some(best) = rounds.best.as_ref().filter(|best| best.bound > 0.0) else {
             break;
         };
-        let in_use = blocks_in_use(game, &best.defender);
+        let in_use = rounds.search.steps.blocks_in_use(&best.defender);
         let kicks = draws(KICKS_PER_ROUND, rng, |stream| {
             kicked(&best.defender, &in_use, &universe, stream)
         });
@@ -873,7 +873,7 @@ impl Rounds<'_> {
 }
 
 /// `fsc` with one in [`KICK_DIVISOR`] of its blocks in use (`in_use`, by
-/// [`blocks_in_use`]; at least [`MIN_KICKED_BLOCKS`]), drawn from `rng`
+/// [`DefenderSteps::blocks_in_use`]; at least [`MIN_KICKED_BLOCKS`]), drawn from `rng`
 /// without repetition, each playing one of `universe`'s enabled pairs
 /// `(next node, action)` with probability 1, drawn uniformly: a jump out
 /// of a climb's end point's basin that keeps most of what the climb found.
@@ -914,12 +914,6 @@ fn random_memoryless(shape: &Fsc, universe: &Fsc, rng: &mut ChaCha8Rng) -> Fsc {
         *block = vec![certain(stay[rng.random_range(0..stay.len())])];
     }
     random
-}
-
-/// Which blocks `(g, o)` of the defender `fsc` can be used in `game`
-/// against any adversary ([`DefenderSteps::blocks_in_use`]).
-fn blocks_in_use(game: &Posg, fsc: &Fsc) -> Vec<bool> {
-    DefenderSteps::new(game).blocks_in_use(fsc)
 }
 
 /// Where the defender's action `u` can lead in `game` from each state `s`,
@@ -1021,6 +1015,12 @@ mod tests {
     use crate::game::grid::GridSpec;
     use crate::optimise::truncated;
     use crate::pipeline::Automata;
+
+    /// Which blocks `(g, o)` of the defender `fsc` can be used in `game`
+    /// against any adversary ([`DefenderSteps::blocks_in_use`]).
+    fn blocks_in_use(game: &Posg, fsc: &Fsc) -> Vec<bool> {
+        DefenderSteps::new(game).blocks_in_use(fsc)
+    }
 
     const UNLIMITED: Effort = Effort {
         work: usize::MAX,

@@ -27,7 +27,9 @@
 //!   not certified: its certified lower bound is at most its worst case,
 //!   which is at most that value, so it cannot replace the incumbent;
 //! - the argmax rounding's lower bound is computed again only when the
-//!   rounded controller changed;
+//!   rounded controller changed, and then at every check only while it
+//!   reaches the incumbent's score, otherwise at intervals that double up
+//!   to [`ROUNDING_BACKOFF_CAP`] checks ([`Backoff`]);
 //! - the game upper bound is tightened against the adversaries at every
 //!   check while that tightens it, otherwise at intervals that double up
 //!   to `best_response_every` checks ([`Backoff`]); deep checks and the
@@ -475,8 +477,8 @@ struct Judged {
     incumbent: Option<Incumbent>,
 }
 
-/// The schedule of an optional certification (the game upper bound's):
-/// due at every check while it pays, otherwise at intervals (in checks)
+/// The schedule of an optional certification (the game upper bound's, a
+/// changed argmax rounding's): due at every check while it pays, otherwise at intervals (in checks)
 /// that double, up to `cap`, after each check where it did not.
 pub(super) struct Backoff {
     interval: usize,
