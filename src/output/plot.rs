@@ -718,13 +718,17 @@ fn nice_step(raw: f64) -> f64 {
 }
 
 /// The top axis: for round numbers of seconds, the (fractional) iteration
-/// at which that much time had elapsed, and the label to show there.
+/// at which that much time had elapsed, and the label to show there. The
+/// records' seconds count from the structure's start, before the local
+/// search that precedes the race: only the times from the first record on
+/// have an iteration, so the round numbers are those of that span.
 fn seconds_ticks(records: &[IterationRecord]) -> Vec<(f64, String)> {
+    let first = records.first().map_or(0.0, |r| r.seconds);
     let total = records.last().map_or(0.0, |r| r.seconds);
-    let step = nice_step(total / 6.0);
+    let step = nice_step((total - first) / 6.0);
     let decimals = decimals_of(step);
     let mut ticks = Vec::new();
-    let mut k = 1.0;
+    let mut k = (first / step).ceil().max(1.0);
     while k * step <= total {
         let target = k * step;
         if let Some(w) = records.windows(2).find(|w| w[1].seconds >= target) {
@@ -1126,6 +1130,22 @@ mod tests {
         assert!((ticks[0].0 - 11.0).abs() < 1e-9, "{ticks:?}");
         assert_eq!(ticks.last().unwrap().1, "10");
         assert!((ticks.last().unwrap().0 - 19.0).abs() < 1e-9);
+    }
+
+    /// A race that starts 4.4 s in (after its local search) has no tick
+    /// before its first iteration: the ticks sit at distinct, increasing
+    /// iterations with distinct labels, on the round numbers of its span.
+    #[test]
+    fn seconds_ticks_start_where_the_race_starts() {
+        let records: Vec<IterationRecord> =
+            (0..=40).map(|t| record(t, 4.4 + 0.1 * t as f64)).collect();
+        let ticks = seconds_ticks(&records);
+        assert_eq!(ticks[0].1, "5", "{ticks:?}");
+        assert!((ticks[0].0 - 6.0).abs() < 1e-9, "{ticks:?}");
+        assert_eq!(ticks.last().unwrap().1, "8");
+        for pair in ticks.windows(2) {
+            assert!(pair[1].0 > pair[0].0 && pair[1].1 != pair[0].1, "{ticks:?}");
+        }
     }
 
     #[test]
