@@ -64,11 +64,11 @@ pub fn lower_bound_gradient(
 /// [`lower_bound_gradient`] for many controllers, usually of one support:
 /// from the third controller of one support (and seeds) in a row, the
 /// product is the previous one refilled by the recipe recorded while
-/// exploring the second, not explored again (`src/certify/product.rs`); where the product MDP has the graph of the
-/// previous one (`Mdp::same_graph`), its graph analysis (accepting end
-/// components, qualitative reachability) is reused and policy iteration
-/// starts from the previous optimal strategy, which is proper on that
-/// graph.
+/// exploring the second, not explored again (`src/certify/product.rs`);
+/// where the product MDP has the graph of the previous one
+/// (`Mdp::same_graph`), its graph analysis (accepting end components,
+/// qualitative reachability) is reused and policy iteration starts from
+/// the previous optimal strategy, which is proper on that graph.
 pub struct LowerBoundGradients<'a> {
     game: &'a Posg,
     dra_not_phi: &'a Dra,

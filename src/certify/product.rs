@@ -15,6 +15,8 @@ use crate::mdp::{Mdp, MdpBuilder, MdpError};
 
 /// The reachable product MDP of a game, an automaton and one player's controller.
 pub(super) struct Product {
+    /// The MDP: in the state of `(s, q, node)`, action `a` is the free
+    /// player's action `free_actions[s][a]`.
     pub mdp: Mdp,
     /// The number of each `(s, q, node)`: MDP state `m` is `ids.keys()[m]`.
     ids: Interner<(usize, usize, usize)>,
@@ -294,9 +296,9 @@ struct Walked {
 }
 
 /// Walks the product of `controller` (its mixture `mixture`, on its
-/// support; `controller` checked to fit the game) breadth first from `seeds`, numbering states in order of
-/// discovery, and hands each state's free actions and their terms to
-/// `visit`, then [`Step::StateEnd`].
+/// support; `controller` checked to fit the game) breadth first from
+/// `seeds`, numbering states in order of discovery, and hands each state's
+/// free actions and their terms to `visit`, then [`Step::StateEnd`].
 fn walk(
     game: &Posg,
     dra: &Dra,
