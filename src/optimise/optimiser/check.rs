@@ -478,8 +478,9 @@ struct Judged {
 }
 
 /// The schedule of an optional certification (the game upper bound's, a
-/// changed argmax rounding's): due at every check while it pays, otherwise at intervals (in checks)
-/// that double, up to `cap`, after each check where it did not.
+/// changed argmax rounding's): due at every check while it pays,
+/// otherwise at intervals (in checks) that double, up to `cap`, after each
+/// check where it did not.
 pub(super) struct Backoff {
     interval: usize,
     next: usize,
