@@ -54,6 +54,7 @@ use thiserror::Error;
 use crate::automaton::{Dra, RabinPair};
 use crate::controller::{Fsc, Role};
 use crate::game::Posg;
+use crate::interner::Interner;
 use crate::mdp::{
     AcceptingComponent, Mdp, QualitativeReachability, Reachability, max_rabin_analysis,
     max_rabin_qualitative,
@@ -544,8 +545,9 @@ fn best_response(
 /// or only qualitatively (`R` = [`QualitativeReachability`]: what support
 /// synthesis needs).
 pub(crate) struct Analysis<R = Reachability> {
-    /// `(s, q, node)` of each MDP state.
-    pub states: Vec<(usize, usize, usize)>,
+    /// `(s, q, node)` of each MDP state (`states[m]`), and the state of
+    /// each `(s, q, node)` the product has (`states.get`).
+    pub states: Interner<(usize, usize, usize)>,
     /// The MDP: state `m`'s action `w` is the free player's action `w`.
     pub mdp: Mdp,
     /// `p0` as `(MDP state, probability)`.
@@ -570,7 +572,10 @@ pub(crate) fn product_mdp(
     controller: &Fsc,
     fixed: Role,
 ) -> Result<ProductMdp, CertifyError> {
-    Ok(Product::build(game, dra, controller, fixed)?.into_parts().0)
+    let Product {
+        ids, mdp, initial, ..
+    } = Product::build(game, dra, controller, fixed)?;
+    Ok((ids.into_keys(), mdp, initial))
 }
 
 /// The number of states of [`product_mdp`]'s product, and its errors, by
@@ -621,9 +626,14 @@ fn analyse_with<R>(
     let product = Product::build(game, dra, controller, fixed)?;
     let pairs = product.lift(dra.pairs());
     let (result, accepting) = solve(&product.mdp, &pairs)?;
-    let ((states, mdp, initial), free_actions) = product.into_parts();
+    let Product {
+        ids,
+        mdp,
+        initial,
+        free_actions,
+    } = product;
     Ok(Analysis {
-        states,
+        states: ids,
         mdp,
         initial,
         result,

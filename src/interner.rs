@@ -62,6 +62,20 @@ impl<K> Interner<K> {
     pub(crate) fn into_keys(self) -> Vec<K> {
         self.keys
     }
+
+    /// The keys in index order.
+    pub(crate) fn iter(&self) -> std::slice::Iter<'_, K> {
+        self.keys.iter()
+    }
+}
+
+impl<K> std::ops::Index<usize> for Interner<K> {
+    type Output = K;
+
+    /// The key numbered `index`.
+    fn index(&self, index: usize) -> &K {
+        &self.keys[index]
+    }
 }
 
 #[cfg(test)]

@@ -6,7 +6,7 @@
 //! controllers of one support; the exploration's hashing was most of a
 //! bound's cost on the 16x16 grid).
 
-use super::{CertifyError, ProductMdp};
+use super::CertifyError;
 use crate::automaton::{Dra, RabinPair};
 use crate::controller::{Fsc, Mixture, Role, Support};
 use crate::game::{AdversaryAction, DefenderAction, Player, Posg};
@@ -18,8 +18,8 @@ pub(super) struct Product {
     /// The MDP: in the state of `(s, q, node)`, action `a` is the free
     /// player's action `free_actions[s][a]`.
     pub mdp: Mdp,
-    /// The number of each `(s, q, node)`: MDP state `m` is `ids.keys()[m]`.
-    ids: Interner<(usize, usize, usize)>,
+    /// The number of each `(s, q, node)`: MDP state `m` is `ids[m]`.
+    pub ids: Interner<(usize, usize, usize)>,
     /// `p0` as `(MDP state, probability)`.
     pub initial: Vec<(usize, f64)>,
     /// The free player's actions per game state: MDP action `a` in
@@ -207,13 +207,6 @@ impl Product {
     /// The MDP state of `(s, q, node)`, if the exploration reached it.
     pub fn state(&self, key: (usize, usize, usize)) -> Option<usize> {
         self.ids.get(&key).map(|m| m as usize)
-    }
-
-    /// The product's parts: `(s, q, node)` per state, the MDP and `p0`;
-    /// and the free player's actions per game state.
-    pub fn into_parts(self) -> (ProductMdp, Vec<Vec<usize>>) {
-        let product = (self.ids.into_keys(), self.mdp, self.initial);
-        (product, self.free_actions)
     }
 
     /// The automaton's Rabin pairs read on product states through their `q`.

@@ -67,8 +67,6 @@ pub struct Refuter<'a> {
     dra: &'a Dra,
     letters: Vec<Letter>,
     analysis: Analysis,
-    /// The index of each product state `(s, q, node)`.
-    index: FxHashMap<(usize, usize, usize), usize>,
     /// The product states of each defender node (up to the last node of
     /// a product state).
     by_node: Vec<Vec<usize>>,
@@ -90,10 +88,6 @@ impl<'a> Refuter<'a> {
     /// The refuter of the defender whose product with `dra_not_phi` is
     /// `analysis` ([`Self::new`] without the solve).
     pub(crate) fn from_analysis(game: &'a Posg, dra_not_phi: &'a Dra, analysis: Analysis) -> Self {
-        let index = (analysis.states.iter().copied())
-            .enumerate()
-            .map(|(m, key)| (key, m))
-            .collect();
         let nodes = analysis.states.iter().map(|&(_, _, g)| g + 1).max();
         let mut by_node = vec![Vec::new(); nodes.unwrap_or(0)];
         for (m, &(_, _, g)) in analysis.states.iter().enumerate() {
@@ -104,7 +98,6 @@ impl<'a> Refuter<'a> {
             dra: dra_not_phi,
             letters: dra_not_phi.state_letters(game),
             analysis,
-            index,
             by_node,
         }
     }
@@ -196,7 +189,11 @@ impl<'a> Refuter<'a> {
                         continue;
                     }
                     let key = (t, self.dra.successor(q, self.letters[t]), choice.next);
-                    let next = self.index.get(&key).copied().unwrap_or(UNKNOWN);
+                    let next = self
+                        .analysis
+                        .states
+                        .get(&key)
+                        .map_or(UNKNOWN, |m| m as usize);
                     row.push((next, probability));
                 }
             }
