@@ -236,20 +236,7 @@ fn partially_observed_single_player_is_at_least_the_best_deterministic_controlle
     }
 }
 
-const MATCHING_PENNIES: &str = r#"{
-  "posg": 1, "states": ["s", "goal", "trap"], "initial": {"s": 1.0},
-  "labels": {"goal": ["goal"]},
-  "defender": {"actions": ["H", "T"], "observe": "full"},
-  "adversary": {"actions": ["H", "T"], "observe": "full"},
-  "transitions": [
-    {"state": "s", "defender": "H", "adversary": "H", "next": {"goal": 1.0}},
-    {"state": "s", "defender": "T", "adversary": "T", "next": {"goal": 1.0}},
-    {"state": "s", "defender": "H", "adversary": "T", "next": {"trap": 1.0}},
-    {"state": "s", "defender": "T", "adversary": "H", "next": {"trap": 1.0}},
-    {"state": "goal", "defender": "*", "adversary": "*", "next": {"goal": 1.0}},
-    {"state": "trap", "defender": "*", "adversary": "*", "next": {"trap": 1.0}}
-  ]
-}"#;
+const MATCHING_PENNIES: &str = include_str!("data/valid/matching-pennies.posg.json");
 
 #[test]
 fn matching_pennies_has_max_min_value_one_half_with_both_mixing() {

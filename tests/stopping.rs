@@ -91,6 +91,32 @@ fn a_gap_that_cannot_close_stops_on_stall_and_says_so() {
     assert!((bracket.upper_bound - 1.0).abs() < 1e-9, "{bracket:?}");
 }
 
+/// Matching pennies for reaching `goal`: the max-min value is 1/2, with
+/// both players mixing evenly.
+const MATCHING_PENNIES: &str = include_str!("data/valid/matching-pennies.posg.json");
+
+/// The stall rule measures a window between ascended scores. On matching
+/// pennies the first guarantee ascent (at iteration 255, where the stall
+/// rule is first judged) climbs to the optimum 1/2; the play before it
+/// creeps towards it. Measured from the window start's raw score, that
+/// ascent's jump counted as the window's progress and every start ran a
+/// second window to iteration 511; from the window start's own ascent (also
+/// 1/2), every start stops at the first judgement.
+#[test]
+fn a_stall_is_judged_between_ascended_scores() {
+    let outcome = solve(&game(MATCHING_PENNIES), "F goal", 1);
+    let report = &outcome.best().report;
+    for start in &report.starts {
+        assert_eq!(
+            (start.status, start.iterations),
+            (Status::Stalled, 256),
+            "{report:?}"
+        );
+    }
+    let lower = outcome.certified.unwrap().certified_lower;
+    assert!((lower - 0.5).abs() < 1e-9, "{lower}");
+}
+
 /// The work cap ends a run that would otherwise go on to its stall: with
 /// `max_work` worth 20 outer iterations of gradient play (11 evaluations
 /// of the GMC each, its best responses counting too) the run stops by the
