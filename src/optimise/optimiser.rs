@@ -688,7 +688,7 @@ impl<'a> Optimiser<'a> {
         let Some(start) = books.unascended_window_start.take() else {
             return Ok(None);
         };
-        let incumbent = std::mem::replace(&mut books.best, Some(start));
+        let incumbent = books.best.replace(start);
         let ascended = self.ascend_guarantee(iterate, books, seconds, None)?;
         let start = std::mem::replace(&mut books.best, incumbent);
         let n = books.window_ends.len();
