@@ -39,8 +39,9 @@
 //! (smallest game upper bound minus the best certified lower bound) is at
 //! most `gap_tolerance`, or when the best score has gained at most
 //! `stall_gain` (relative) over the second half of its checks, once there
-//! are `stall_checks` of them ([`stalled`]; both ends of that window
-//! ascended, [`Optimiser::ascend_window_start`]). A stall while some logit
+//! are `stall_checks` of them ([`stalled`]; with the guarantee ascent, the
+//! window's start is ascended too where its raw score would not make the
+//! window a stall: [`Optimiser::ascend_window_start`]). A stall while some logit
 //! sits on the bound `c` and `c < logit_bound` does not stop the run: `c`
 //! doubles (capped at `logit_bound`) and the stall count restarts. So `c`
 //! starts small (`initial_logit_bound`, where the softmax is far from
@@ -572,7 +573,7 @@ impl<'a> Optimiser<'a> {
         let check = if self.check_due(state.iterate.iteration, status) {
             let deep = books.checks % self.settings.best_response_every == 0;
             let mut check = self.check(state, books, deep)?;
-            let timing = (status, seconds);
+            let timing = (status, seconds, check_clock);
             status = self.after_check(&mut check, timing, &mut state.iterate, books)?;
             Some(check)
         } else {
@@ -605,10 +606,13 @@ impl<'a> Optimiser<'a> {
     fn after_check(
         &mut self,
         check: &mut Check,
-        (status, seconds): (Option<Status>, f64),
+        (status, seconds, check_clock): (Option<Status>, f64, Instant),
         iterate: &mut Iterate,
         books: &mut Bookkeeping,
     ) -> Result<Option<Status>, OptimiseError> {
+        // The seconds into the run now (an ascent spends the rest of the
+        // time budget).
+        let now = || seconds + check_clock.elapsed().as_secs_f64();
         let score = books
             .best
             .as_ref()
@@ -630,7 +634,7 @@ impl<'a> Optimiser<'a> {
         let ascends = (stall_judged || probes_floor || status.is_some()) && !out_of_time;
         if ascends {
             let steps = probe_alone.then_some(FLOOR_PROBE_STEPS);
-            if let Some(ascended) = self.ascend_guarantee(iterate, books, seconds, steps)? {
+            if let Some(ascended) = self.ascend_guarantee(iterate, books, now(), steps)? {
                 check.certified_lower = Some(ascended);
             }
         }
@@ -646,13 +650,6 @@ impl<'a> Optimiser<'a> {
         books.history.push(score);
         if window_ends(iteration) {
             books.window_ends.push(score);
-            if stall_judged && !out_of_time && status.is_none() {
-                if let Some(raised) = self.ascend_window_start(iterate, books, seconds)? {
-                    check.certified_lower = Some(raised);
-                }
-            }
-            let ascended_here = ascends && !probe_alone && self.ascends_guarantee();
-            books.unascended_window_start = books.best.clone().filter(|_| !ascended_here);
         }
         if status.is_some() {
             return Ok(status);
@@ -663,51 +660,63 @@ impl<'a> Optimiser<'a> {
         if check.rounding_closes_gap {
             return Ok(Some(Status::GapClosed));
         }
+        if window_ends(iteration) {
+            if stall_judged {
+                if let Some(raised) = self.ascend_window_start(iterate, books, now())? {
+                    check.certified_lower = Some(raised);
+                }
+            }
+            let ascended_here = ascends && !probe_alone && self.ascends_guarantee();
+            books.unascended_window_start = (!ascended_here).then(|| books.best.clone()).flatten();
+        }
         Ok(self.stop_or_widen(books, iterate))
     }
 
-    /// Where the stall rule judges a window (its end ascended) whose start
-    /// was not ascended, and its gain from that start's score would not
-    /// count as a stall: the guarantee ascent from the start's incumbent
-    /// too, so that the window gains one ascended score over another. The
-    /// higher of the start's score and its ascent becomes the window's
-    /// baseline, and the start's ascended defender the incumbent where it
-    /// beats the incumbent, whose bound this returns. (A window of creeping
-    /// play otherwise counts the first ascent's jump as its own progress:
-    /// on the 16x16 grid the starts ran 256 more iterations for a gain
-    /// of 1e-4.)
+    /// Where the stall rule judges a window (its end ascended, `seconds`
+    /// into the run) whose start was not ascended, and its gain from that
+    /// start's raw score would not count as a stall: the guarantee ascent
+    /// from the start's incumbent too, so that the window gains one
+    /// ascended score over another. The higher of the start's raw score
+    /// and its ascent's bound becomes the window's baseline; the ascended
+    /// defender becomes the incumbent where it beats the incumbent, and
+    /// its certified lower bound is returned. (Without this, a window of
+    /// creeping play counts the first ascent's jump as its own progress:
+    /// on the 16x16 grid the starts ran 256 more iterations for a relative
+    /// gain of 1e-4.)
     fn ascend_window_start(
         &mut self,
         iterate: &Iterate,
         books: &mut Bookkeeping,
         seconds: f64,
     ) -> Result<Option<f64>, OptimiseError> {
-        if stalled(&books.history, &books.window_ends, &self.settings) {
+        if !self.ascends_guarantee() || stalled(&books.history, &books.window_ends, &self.settings)
+        {
             return Ok(None);
         }
         let Some(start) = books.unascended_window_start.take() else {
             return Ok(None);
         };
-        let incumbent = books.best.replace(start);
-        let ascended = self.ascend_guarantee(iterate, books, seconds, None)?;
-        let start = std::mem::replace(&mut books.best, incumbent);
-        let n = books.window_ends.len();
-        if let (Some(bound), true) = (ascended, n > 1) {
-            books.window_ends[n - 2] = books.window_ends[n - 2].max(bound);
-        }
-        let beats = |start: &Incumbent, best: Option<&Incumbent>| {
-            best.is_none_or(|best| start.score() > best.score())
+        let Some(ascended) = self.ascend_from(&start, iterate, &mut books.phases, seconds, None)?
+        else {
+            return Ok(None);
         };
-        match start {
-            Some(start) if beats(&start, books.best.as_ref()) => {
-                let score = start.score();
-                books.best = Some(start);
-                *books.history.last_mut().expect("pushed above") = score;
-                books.window_ends[n - 1] = score;
-                Ok(Some(score))
-            }
-            _ => Ok(None),
+        let n = books.window_ends.len();
+        let bound = ascended.score();
+        if let Some(baseline) = n.checked_sub(2).map(|i| &mut books.window_ends[i]) {
+            *baseline = baseline.max(bound);
         }
+        if books
+            .best
+            .as_ref()
+            .is_some_and(|best| best.score() >= bound)
+        {
+            return Ok(None);
+        }
+        *books.history.last_mut().expect("pushed by after_check") = bound;
+        books.window_ends[n - 1] = bound;
+        let certified_lower = ascended.certified_lower;
+        books.best = Some(ascended);
+        Ok(certified_lower)
     }
 
     /// [`Status::GapClosed`] when the certified gap is at most

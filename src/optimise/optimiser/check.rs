@@ -148,10 +148,34 @@ impl Optimiser<'_> {
         seconds: f64,
         steps: Option<usize>,
     ) -> Result<Option<f64>, OptimiseError> {
+        let Some(best) = books.best.as_ref() else {
+            return Ok(None);
+        };
+        let Some(ascended) = self.ascend_from(best, iterate, &mut books.phases, seconds, steps)?
+        else {
+            return Ok(None);
+        };
+        let bound = ascended.certified_lower;
+        books.best = Some(ascended);
+        Ok(bound)
+    }
+
+    /// The guarantee ascent ([`Self::ascend_guarantee`]) from `from`: the
+    /// defender it climbed to as an incumbent at `iterate`, where its
+    /// certified lower bound exceeds `from`'s score; its seconds added to
+    /// `phases`.
+    pub(super) fn ascend_from(
+        &mut self,
+        from: &Incumbent,
+        iterate: &Iterate,
+        phases: &mut PhaseSeconds,
+        seconds: f64,
+        steps: Option<usize>,
+    ) -> Result<Option<Incumbent>, OptimiseError> {
         if !self.ascends_guarantee() {
             return Ok(None);
         }
-        let (Some(bounds), Some(best)) = (self.lower_bounds.as_mut(), books.best.as_ref()) else {
+        let Some(bounds) = self.lower_bounds.as_mut() else {
             return Ok(None);
         };
         let clock = Instant::now();
@@ -177,19 +201,19 @@ impl Optimiser<'_> {
             }),
             ..self.settings.clone()
         };
-        let ascended = ascend(&mut guarantee, &best.defender, &settings, &self.cancel);
-        books.phases.guarantee += clock.elapsed().as_secs_f64();
+        let ascended = ascend(&mut guarantee, &from.defender, &settings, &self.cancel);
+        phases.guarantee += clock.elapsed().as_secs_f64();
         let polished = match ascended {
             Ok(ascended) => ascended,
             Err(error) if error.is_numerical() => return Ok(None),
             Err(error) => return Err(error),
         };
-        if polished.bound <= best.score() {
+        if polished.bound <= from.score() {
             return Ok(None);
         }
         let clock = Instant::now();
         let worst_case = self.objective.value(&polished.defender, &iterate.adversary);
-        books.phases.optimisation += clock.elapsed().as_secs_f64();
+        phases.optimisation += clock.elapsed().as_secs_f64();
         let worst_case = match worst_case {
             Ok(value) => value,
             // Nearly deterministic choices can make the GMC too stiff to
@@ -198,14 +222,13 @@ impl Optimiser<'_> {
             Err(ValueError::Solver(_)) => return Ok(None),
             Err(error) => return Err(error.into()),
         };
-        books.best = Some(Incumbent {
+        Ok(Some(Incumbent {
             defender: polished.defender,
             adversary: iterate.adversary.clone(),
             worst_case,
             certified_lower: Some(polished.bound),
             iteration: iterate.iteration,
-        });
-        Ok(Some(polished.bound))
+        }))
     }
 
     /// The incumbent's full best response, once a run without a certifier
