@@ -164,8 +164,22 @@ def run_case(binary, label, case, directory, options):
     return row, points
 
 
-SECONDS_TICKS = (0, 0.01, 0.02, 0.05, 0.1, 0.2, 0.5, 1, 2, 3, 5, 7, 10, 15, 20, 30, 50, 70, 100,
-                 150, 200, 300, 500)
+SECONDS_TICKS = (0, 0.05, 0.1, 0.2, 0.5, 1, 2, 5, 10, 20, 50, 100, 200, 500)
+
+
+def seconds_axis(axis, first, last):
+    """A panel's seconds axis for curves from `first` to `last` seconds:
+    linear (matplotlib's own ticks) where they span less than a decade or
+    end within a second, else symlog (linear below 0.1 s) with round numbers
+    of seconds up to the last point (symlog alone labels only the decades)."""
+    from matplotlib.ticker import FixedLocator, FuncFormatter, NullLocator
+    if last < 1 or first >= 0.1 * last:
+        return
+    axis.set_xscale("symlog", linthresh=0.1)
+    ticks = [t for t in SECONDS_TICKS if t <= 1.05 * last]
+    axis.xaxis.set_major_locator(FixedLocator(ticks))
+    axis.xaxis.set_major_formatter(FuncFormatter(lambda x, _: f"{x:g}"))
+    axis.xaxis.set_minor_locator(NullLocator())
 
 
 def plot(rows, curves, path):
@@ -179,24 +193,17 @@ def plot(rows, curves, path):
     names = list(dict.fromkeys(r["case"] for r in rows))
     columns = 4
     lines = (len(names) + columns - 1) // columns
-    from matplotlib.ticker import FixedLocator, FuncFormatter, NullLocator
     figure, axes = plt.subplots(lines, columns, figsize=(4 * columns, 2.8 * lines), squeeze=False)
     for axis, name in zip(axes.flat, names):
-        longest = 0.0
+        first, last = float("inf"), 0.0
         for (case, label), points in curves.items():
             if case == name and points:
                 xs, ys = zip(*points)
                 line, = axis.step(xs, ys, where="post", label=label)
                 axis.plot(xs[-1:], ys[-1:], "o", color=line.get_color(), markersize=4)
-                longest = max(longest, xs[-1])
+                first, last = min(first, xs[0]), max(last, xs[-1])
         axis.set_title(name, fontsize=9)
-        axis.set_xscale("symlog", linthresh=0.1)
-        # Round numbers of seconds up to the longest run (symlog alone
-        # labels only the decades: one label on a panel of 2-12 s).
-        ticks = [t for t in SECONDS_TICKS if t <= 1.05 * longest] or [0]
-        axis.xaxis.set_major_locator(FixedLocator(ticks))
-        axis.xaxis.set_major_formatter(FuncFormatter(lambda x, _: f"{x:g}"))
-        axis.xaxis.set_minor_locator(NullLocator())
+        seconds_axis(axis, first, last)
         axis.set_xlabel("seconds", fontsize=8)
         single = name.startswith(("pomdp", "maze"))
         axis.set_ylabel("best exact value (POMDP)" if single else "best certified lower bound",

@@ -602,7 +602,8 @@ impl<'a> Optimiser<'a> {
     /// After a check: records the best score in the stall history; unless
     /// the run already stops (`status`), [`Status::GapClosed`] when the
     /// current defender's rounding closes the gap, else
-    /// [`Self::stop_or_widen`].
+    /// [`Self::stop_or_widen`] (where a window ends, after
+    /// [`Self::ascend_window_start`]).
     fn after_check(
         &mut self,
         check: &mut Check,
@@ -673,8 +674,9 @@ impl<'a> Optimiser<'a> {
     }
 
     /// Where the stall rule judges a window (its end ascended, `seconds`
-    /// into the run) whose start was not ascended, and its gain from that
-    /// start's raw score would not count as a stall: the guarantee ascent
+    /// into the run) whose start was not ascended, its gain from that
+    /// start's raw score would not count as a stall, and neither the time
+    /// budget nor a closed certified gap stops the run: the guarantee ascent
     /// from the start's incumbent too, so that the window gains one
     /// ascended score over another. The higher of the start's raw score
     /// and its ascent's bound becomes the window's baseline; the ascended
@@ -689,7 +691,19 @@ impl<'a> Optimiser<'a> {
         books: &mut Bookkeeping,
         seconds: f64,
     ) -> Result<Option<f64>, OptimiseError> {
-        if !self.ascends_guarantee() || stalled(&books.history, &books.window_ends, &self.settings)
+        let s = &self.settings;
+        let out_of_time = s.time_budget > 0.0 && seconds >= s.time_budget;
+        let gap_closed = books
+            .best
+            .as_ref()
+            .and_then(|best| best.certified_lower)
+            .zip(books.upper_bound)
+            .is_some_and(|(lower, upper)| s.gap_closed(lower, upper));
+        // The run stops at this check anyway, or the window is a stall.
+        if !self.ascends_guarantee()
+            || out_of_time
+            || gap_closed
+            || stalled(&books.history, &books.window_ends, s)
         {
             return Ok(None);
         }
