@@ -91,28 +91,27 @@ struct LastAnalysis {
 }
 
 impl LastAnalysis {
-    /// Whether the product of `defender` (with `support`) explored from
-    /// `seeds` is the last one refilled (the recipe fits and refilled it).
+    /// Whether the product of `defender` explored from `seeds` is the last
+    /// one refilled (the recipe fits and refilled it).
     fn refilled(
         &mut self,
         game: &Posg,
         defender: &Fsc,
-        support: &Support,
         seeds: Seeds,
     ) -> Result<bool, CertifyError> {
         match &mut self.recipe {
-            Some(recipe) if recipe.fits(support, Role::Defender, seeds) => {
+            Some(recipe) if recipe.fits(defender, Role::Defender, seeds) => {
                 recipe.refill(game, &mut self.product, defender)
             }
             _ => Ok(false),
         }
     }
 
-    /// Whether a controller with `support` explored from `seeds` has the
-    /// last product's graph: the second of a run of such controllers, for
-    /// which the product is explored with its recipe.
-    fn repeats(&self, support: &Support, seeds: Seeds) -> bool {
-        self.seeds == seeds && self.support == *support
+    /// Whether `defender` explored from `seeds` has the last product's
+    /// graph (the same support and seeds): the second of a run of such
+    /// controllers, for which the product is explored with its recipe.
+    fn repeats(&self, defender: &Fsc, seeds: Seeds) -> bool {
+        self.seeds == seeds && self.support.describes(defender)
     }
 }
 
@@ -201,15 +200,15 @@ impl<'a> LowerBoundGradients<'a> {
         seeds: Seeds,
     ) -> Result<(&Product, Reachability, &mut PolicySystems), CertifyError> {
         let (game, dra) = (self.game, self.dra_not_phi);
-        let support = Support::of(defender);
         let refilled = match &mut self.last {
-            Some(last) => last.refilled(game, defender, &support, seeds)?,
+            Some(last) => last.refilled(game, defender, seeds)?,
             None => false,
         };
         let mut last = match self.last.take() {
             Some(last) if refilled => last,
             last => {
-                let repeats = last.as_ref().is_some_and(|l| l.repeats(&support, seeds));
+                let support = Support::of(defender);
+                let repeats = last.as_ref().is_some_and(|l| l.repeats(defender, seeds));
                 let explored = if repeats {
                     Product::explore_with_recipe(game, dra, defender, Role::Defender, seeds)
                 } else {

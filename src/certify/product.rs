@@ -57,6 +57,9 @@ pub(super) struct Recipe {
     term_ends: Vec<usize>,
     /// `(init(s), node)` of each entry of `p0`.
     initial: Vec<(f64, usize)>,
+    /// The entries' probabilities of the last refill (kept to reuse the
+    /// allocation).
+    probabilities: Vec<f64>,
 }
 
 impl Product {
@@ -159,6 +162,7 @@ impl Product {
             terms,
             term_ends,
             initial: walked.initial_terms,
+            probabilities: Vec::new(),
         });
         Ok((product, recipe))
     }
@@ -222,12 +226,11 @@ impl Product {
 }
 
 impl Recipe {
-    /// Whether the product of a controller with `support` (its choices and
-    /// initial nodes: [`Support::of`]), fixing player `fixed` and explored
-    /// from `seeds`, has the graph of the recipe's: the same player,
-    /// support and seeds.
-    pub fn fits(&self, support: &Support, fixed: Role, seeds: Seeds) -> bool {
-        fixed == self.fixed && seeds == self.seeds && *support == self.support
+    /// Whether the product of `controller` (its choices and initial nodes:
+    /// [`Support::of`]), fixing player `fixed` and explored from `seeds`,
+    /// has the graph of the recipe's: the same player, support and seeds.
+    pub fn fits(&self, controller: &Fsc, fixed: Role, seeds: Seeds) -> bool {
+        fixed == self.fixed && seeds == self.seeds && self.support.describes(controller)
     }
 
     /// Writes `controller`'s probabilities into `product`, the product this
@@ -248,7 +251,8 @@ impl Recipe {
         self.mixture
             .refill(&Support::probabilities_of(controller).entries);
         let values = self.mixture.values();
-        let mut probabilities = Vec::with_capacity(self.term_ends.len() - 1);
+        let probabilities = &mut self.probabilities;
+        probabilities.clear();
         for ends in self.term_ends.windows(2) {
             // From -0.0, as the builder's sum from the first term is.
             let sum: f64 = self.terms[ends[0]..ends[1]]
@@ -260,7 +264,7 @@ impl Recipe {
             }
             probabilities.push(sum);
         }
-        product.mdp.set_probabilities(&probabilities)?;
+        product.mdp.set_probabilities(probabilities)?;
         let initial = controller.initial();
         for (entry, &(p, g)) in product.initial.iter_mut().zip(&self.initial) {
             entry.1 = p * initial[g];
@@ -469,7 +473,7 @@ mod tests {
         assert!(summed, "some entry sums several terms");
         for salt in 2..5 {
             let next = reweighted(first, salt);
-            assert!(recipe.fits(&Support::of(&next), Role::Defender, seeds));
+            assert!(recipe.fits(&next, Role::Defender, seeds));
             assert!(recipe.refill(game, &mut product, &next).unwrap());
             let explored = Product::explore(game, not_phi, &next, Role::Defender, seeds).unwrap();
             assert_eq!(product.states(), explored.states());
@@ -494,14 +498,13 @@ mod tests {
             Seeds::Initial => Seeds::EveryNode,
             Seeds::EveryNode => Seeds::Initial,
         };
-        let support = Support::of(first);
-        assert!(!recipe.fits(&support, Role::Defender, other_seeds));
-        assert!(!recipe.fits(&support, Role::Adversary, seeds));
+        assert!(!recipe.fits(first, Role::Defender, other_seeds));
+        assert!(!recipe.fits(first, Role::Adversary, seeds));
         let mut narrower = first.clone();
         let block = narrower.blocks.iter_mut().find(|b| b.len() > 1).unwrap();
         let dropped = block.pop().unwrap();
         block[0].probability += dropped.probability;
-        assert!(!recipe.fits(&Support::of(&narrower), Role::Defender, seeds));
+        assert!(!recipe.fits(&narrower, Role::Defender, seeds));
     }
 
     /// A controller made for another game is refused with the player's

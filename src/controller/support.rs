@@ -5,7 +5,7 @@
 //! built from a [`Support`] (the GMC's sparsity pattern, its recurrence
 //! classes, the LU's symbolic analysis) is built once.
 
-use super::Fsc;
+use super::{Choice, Fsc};
 
 /// The supported entries `(g', u)` of every block `(g, o)`, in a fixed order,
 /// and the supported initial nodes.
@@ -49,6 +49,28 @@ impl Support {
             entries,
             initial_nodes,
         }
+    }
+
+    /// Whether `fsc`'s support is this one ([`Support::of`]`(fsc) == *self`),
+    /// decided without building it: the same numbers of nodes and
+    /// observations, the same choices listed in each block and the same
+    /// initial nodes.
+    pub fn describes(&self, fsc: &Fsc) -> bool {
+        let listed_alike = |b: usize, block: &[Choice]| {
+            let listed = &self.entries[self.block_by_index(b)];
+            listed.len() == block.len()
+                && (listed.iter().zip(block)).all(|(&(next, action), c)| {
+                    (next as usize, action as usize) == (c.next, c.action)
+                })
+        };
+        let initial_nodes = (0..fsc.num_nodes)
+            .filter(|&g| fsc.initial[g] > 0.0)
+            .map(|g| g as u32);
+        self.num_nodes == fsc.num_nodes
+            && self.num_observations == fsc.num_observations
+            && self.num_blocks() == fsc.blocks.len()
+            && (fsc.blocks.iter().enumerate()).all(|(b, block)| listed_alike(b, block))
+            && self.initial_nodes.iter().copied().eq(initial_nodes)
     }
 
     /// The controller's probabilities, aligned with [`Support::of`]'s order.
@@ -105,5 +127,43 @@ impl Support {
     /// The nodes with positive initial probability.
     pub fn initial_nodes(&self) -> impl Iterator<Item = usize> + '_ {
         self.initial_nodes.iter().map(|&g| g as usize)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::controller::Role;
+    use crate::game::grid::GridSpec;
+
+    /// `describes` agrees with comparing the built supports: on the
+    /// controller itself, other probabilities on its support, a dropped
+    /// choice, another initial node, another number of nodes.
+    #[test]
+    fn describes_is_equality_of_the_built_supports() {
+        let game = GridSpec::square(4).build().unwrap();
+        let fsc = Fsc::uniform_enabled(Role::Defender, 2, game.defender());
+        let mut reweighted = fsc.clone();
+        let block = reweighted.blocks.iter_mut().find(|b| b.len() > 1).unwrap();
+        block[0].probability += block[1].probability / 2.0;
+        block[1].probability /= 2.0;
+        let mut dropped = fsc.clone();
+        let block = dropped.blocks.iter_mut().find(|b| b.len() > 1).unwrap();
+        let choice = block.pop().unwrap();
+        block[0].probability += choice.probability;
+        let mut elsewhere = fsc.clone();
+        elsewhere.initial = vec![0.5, 0.5];
+        let larger = Fsc::uniform_enabled(Role::Defender, 3, game.defender());
+        let support = Support::of(&fsc);
+        for (name, other, same) in [
+            ("itself", &fsc, true),
+            ("reweighted", &reweighted, true),
+            ("a choice dropped", &dropped, false),
+            ("another initial node", &elsewhere, false),
+            ("more nodes", &larger, false),
+        ] {
+            assert_eq!(support.describes(other), same, "{name}");
+            assert_eq!(Support::of(other) == support, same, "{name}");
+        }
     }
 }
