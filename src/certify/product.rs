@@ -406,6 +406,11 @@ mod tests {
     use crate::game::grid::GridSpec;
     use crate::pipeline::Automata;
 
+    /// An automaton for the negation of `formula`.
+    fn not_phi(formula: &str) -> Dra {
+        Automata::from_ltl(formula).unwrap().not_phi.unwrap()
+    }
+
     /// `fsc` with its choices and its initial nodes reweighted by a
     /// positive pattern varying with `salt` (the support unchanged: an
     /// unused initial node stays unused).
@@ -446,10 +451,7 @@ mod tests {
     #[test]
     fn a_refilled_product_is_the_explored_one() {
         let game = GridSpec::square(5).build().unwrap();
-        let not_phi = Automata::from_ltl("!unsafe U goal")
-            .unwrap()
-            .not_phi
-            .unwrap();
+        let not_phi = not_phi("!unsafe U goal");
         let uniform = Fsc::uniform_enabled(Role::Defender, 2, game.defender());
         for first in [
             reweighted(&uniform, 1),
@@ -513,10 +515,7 @@ mod tests {
     fn a_controller_for_another_game_is_a_mismatch_not_a_panic() {
         let game = GridSpec::square(5).build().unwrap();
         let smaller = GridSpec::square(3).build().unwrap();
-        let not_phi = Automata::from_ltl("!unsafe U goal")
-            .unwrap()
-            .not_phi
-            .unwrap();
+        let not_phi = not_phi("!unsafe U goal");
         let foreign = Fsc::uniform_enabled(Role::Defender, 2, smaller.defender());
         let mismatch = |error: CertifyError| matches!(error, CertifyError::Mismatch { .. });
         let explored = Product::explore(&game, &not_phi, &foreign, Role::Defender, Seeds::Initial);
@@ -536,10 +535,7 @@ mod tests {
     #[test]
     fn the_counted_states_are_the_explored_ones() {
         let game = GridSpec::square(5).build().unwrap();
-        let not_phi = Automata::from_ltl("GF goal & G !unsafe")
-            .unwrap()
-            .not_phi
-            .unwrap();
+        let not_phi = not_phi("GF goal & G !unsafe");
         for nodes in 1..=3 {
             let uniform = Fsc::uniform_enabled(Role::Defender, nodes, game.defender());
             for fsc in [uniform.clone(), starting_anywhere(&uniform)] {
