@@ -104,6 +104,34 @@ fn solve_writes_a_titled_curve_with_the_certified_band_and_a_controller_picture(
 }
 
 #[test]
+fn the_last_progress_line_is_not_repeated_at_the_end() {
+    let dir = scratch("lines");
+    let game = grid(&dir);
+    let out = dir.join("out").display().to_string();
+    let output = posg_fsc(&[
+        "solve",
+        &game,
+        "--ltl",
+        "F goal & G !unsafe",
+        "--out",
+        &out,
+        "--max-iterations",
+        "12",
+        "--structures",
+        "full",
+        "--progress-every",
+        "1e-9",
+    ]);
+    let stderr = String::from_utf8(output.stderr).unwrap();
+    let lines: Vec<&str> = stderr
+        .lines()
+        .filter(|line| line.contains(" at iteration "))
+        .collect();
+    assert!(lines.len() >= 2, "a line per record: {stderr}");
+    assert!(lines.windows(2).all(|pair| pair[0] != pair[1]), "{stderr}");
+}
+
+#[test]
 fn quiet_solve_and_sweep_report_no_progress() {
     let dir = scratch("quiet");
     let game = grid(&dir);

@@ -196,13 +196,16 @@ impl Observer for BarProgress {
     }
 }
 
-/// A line on stderr every `interval` and at the end.
+/// A line on stderr every `interval` and at the end (unless the last
+/// line already showed every record).
 struct LineProgress {
     label: String,
     iterations: usize,
     interval: Duration,
     last_line: Instant,
     latest: Latest,
+    /// Whether a record arrived since the last line.
+    unprinted: bool,
 }
 
 impl LineProgress {
@@ -213,10 +216,13 @@ impl LineProgress {
             interval,
             last_line: Instant::now(),
             latest: Latest::default(),
+            unprinted: false,
         }
     }
 
-    fn print(&self) {
+    fn print(&mut self) {
+        self.unprinted = false;
+        self.last_line = Instant::now();
         eprintln!(
             "[{}] {} (at most {} iterations); {:.1} s",
             self.label,
@@ -230,9 +236,9 @@ impl LineProgress {
 impl Observer for LineProgress {
     fn observe(&mut self, record: &IterationRecord) {
         self.latest.update(record);
+        self.unprinted = true;
         if self.last_line.elapsed() >= self.interval {
             self.print();
-            self.last_line = Instant::now();
         }
     }
 
@@ -242,7 +248,9 @@ impl Observer for LineProgress {
     }
 
     fn finish(&mut self) -> Result<(), ObserverError> {
-        self.print();
+        if self.unprinted {
+            self.print();
+        }
         Ok(())
     }
 }

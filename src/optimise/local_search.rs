@@ -99,9 +99,9 @@ struct Judged {
 }
 
 /// The defenders the climbs of the searches sharing a [`SearchMemo`] have
-/// judged ([`Landscape::judge`]), and the product sizes of those they
-/// passed over ([`Landscape::pass_over`]), shared by the climbs that run
-/// in parallel.
+/// judged ([`Landscape::judge`]), the product sizes of those they passed
+/// over ([`Landscape::pass_over`]), and where their climbs ended, shared
+/// by the climbs that run in parallel.
 /// The climbs come back to defenders judged before: a kick that climbs
 /// back to the end point it left sweeps that point's moves again, and a
 /// move that overrides a split's redirected choice gives a defender one
@@ -114,6 +114,13 @@ struct Evaluations {
     known: Mutex<HashMap<EvaluationKey, Judged>>,
     /// The product states of the defenders passed over and not judged.
     sizes: Mutex<HashMap<EvaluationKey, usize>>,
+    /// Where each climb ([`climb`]) ended and the work it spent, by its
+    /// start (every block, [`EvaluationKey::whole`]) and its effort's
+    /// work: the structures of a run draw the same random starts and,
+    /// from the same best end point, the same kicks, and a climb from a
+    /// start already climbed would only go the same way again (its
+    /// evaluations found in the memo, its gradients and refutations not).
+    climbs: Mutex<HashMap<(EvaluationKey, usize), (Climbed, usize)>>,
 }
 
 impl Evaluations {
@@ -140,11 +147,22 @@ impl Evaluations {
     fn insert_states(&self, key: EvaluationKey, states: usize) {
         lock(&self.sizes).insert(key, states);
     }
+
+    /// Where the climb from `start` with `work` ended, if one did.
+    fn climbed(&self, start: &(EvaluationKey, usize)) -> Option<(Climbed, usize)> {
+        lock(&self.climbs).get(start).cloned()
+    }
+
+    /// Records where the climb from `start` with `work` ended.
+    fn insert_climb(&self, start: (EvaluationKey, usize), end: (Climbed, usize)) {
+        lock(&self.climbs).insert(start, end);
+    }
 }
 
 /// What the local searches on one game and automaton have evaluated
 /// ([`climb_with_restarts`]): the structures of one run share it, so that
-/// a climb one search made costs another no solve (the searches' universe,
+/// a defender one search judged costs another no solve, and a climb one
+/// made from a start costs another nothing (the searches' universe,
 /// every enabled pair of the game's defender, is the same for every
 /// structure with the same number of nodes). Sharing changes no search:
 /// a defender found in it is charged as where it is solved (up to the
@@ -175,14 +193,24 @@ struct EvaluationKey(Vec<u64>);
 impl EvaluationKey {
     /// The key of `defender` in the game of `steps`.
     fn of(steps: &DefenderSteps<'_>, defender: &Fsc) -> Self {
-        let in_use = steps.blocks_in_use(defender);
+        Self::with_blocks(defender, &steps.blocks_in_use(defender))
+    }
+
+    /// The key of `defender` with every block, in use or not: what a climb
+    /// from it does depends on the blocks its moves bring into use.
+    fn whole(defender: &Fsc) -> Self {
+        Self::with_blocks(defender, &vec![true; defender.blocks.len()])
+    }
+
+    /// The key of `defender` with the blocks `b` where `blocks[b]`.
+    fn with_blocks(defender: &Fsc, blocks: &[bool]) -> Self {
         let mut key = vec![defender.num_nodes() as u64];
         key.extend(defender.initial().iter().map(|p| p.to_bits()));
         for (b, block) in defender
             .blocks
             .iter()
             .enumerate()
-            .filter(|&(b, _)| in_use[b])
+            .filter(|&(b, _)| blocks[b])
         {
             key.extend([b as u64, block.len() as u64]);
             for choice in block {
@@ -530,6 +558,22 @@ fn climb(search: &Search<'_>, start: &Fsc) -> Result<(Climbed, usize), CertifyEr
     Ok((current, landscape.spent.get()))
 }
 
+/// [`climb`] from `start`, or where the searches sharing the memo
+/// climbed from it before with the same work ([`Evaluations`]); a climb
+/// that ends after the deadline is not recorded (the deadline may have
+/// cut it short).
+fn climb_remembered(search: &Search<'_>, start: &Fsc) -> Result<(Climbed, usize), CertifyError> {
+    let key = (EvaluationKey::whole(start), search.effort.work);
+    if let Some(end) = search.known.climbed(&key) {
+        return Ok(end);
+    }
+    let end = climb(search, start)?;
+    if !search.effort.past_deadline() {
+        search.known.insert_climb(key, end.clone());
+    }
+    Ok(end)
+}
+
 /// The first split of `current` ([`splits`]) from which single-block
 /// moves climb above its bound, where they end; `None` when none does (or
 /// the effort is spent). The splits where a guided step ([`guided_step`])
@@ -845,7 +889,7 @@ impl Rounds<'_> {
     fn climb_from(&mut self, froms: Vec<Fsc>) -> Result<(), CertifyError> {
         let ends = froms
             .par_iter()
-            .map(|from| climb(&self.search, from))
+            .map(|from| climb_remembered(&self.search, from))
             .collect::<Result<Vec<_>, _>>()?;
         for end in ends {
             self.keep(end);
@@ -1378,6 +1422,30 @@ mod tests {
             solved(&shared) - before,
             solved(&own)
         );
+    }
+
+    /// A climb the searches sharing a memo made is not made again: on the
+    /// 4x4 grid, the same search repeated on the memo, its evaluations
+    /// forgotten, ends where it ended without judging a single defender.
+    #[test]
+    fn a_search_repeated_on_a_memo_climbs_nothing_again() {
+        let game = grid_4x4();
+        let not_phi = not_phi("!unsafe U goal");
+        let start = first_pairs(&game, 2);
+        let memo = SearchMemo::default();
+        let search = || {
+            let mut rng = ChaCha8Rng::seed_from_u64(5);
+            climb_with_restarts(&game, &not_phi, &start, 3, &mut rng, UNLIMITED, &memo).unwrap()
+        };
+        let first = search();
+        assert!(lock(&memo.0.climbs).len() > 1, "the restarts are recorded");
+        lock(&memo.0.known).clear();
+        lock(&memo.0.sizes).clear();
+        let again = search();
+        assert_eq!(again.defender, first.defender);
+        assert_eq!(again.bound.to_bits(), first.bound.to_bits());
+        assert!(lock(&memo.0.known).is_empty(), "a climb was made again");
+        assert!(lock(&memo.0.sizes).is_empty(), "a climb was made again");
     }
 
     /// The restarts keep the best end point and are reproducible: on the
