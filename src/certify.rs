@@ -62,6 +62,7 @@ use crate::mdp::{
 use crate::solver::{SolverError, SolverSettings};
 
 pub use crate::mdp::MdpError;
+pub mod belief;
 pub mod gradient;
 mod product;
 use product::Product;

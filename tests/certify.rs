@@ -10,10 +10,12 @@ use common::automata;
 
 use common::dense::{self, DMatrix, DVector};
 use posg_fsc::automaton::Dra;
+use posg_fsc::certify::belief::{BeliefBudget, belief_upper_bound};
 use posg_fsc::certify::{Bound, CertifyError, lower_bound, upper_bound};
 use posg_fsc::controller::{Fsc, Role};
 use posg_fsc::game::file::from_json_str;
 use posg_fsc::game::{AdversaryAction, DefenderAction, Posg};
+use posg_fsc::value::SolverSettings;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde_json::{Map, Value, json};
@@ -356,6 +358,48 @@ fn bounds_hold_against_every_controller_tried_on_random_games() {
             );
         }
     }
+}
+
+/// The belief bound of a one-player game (method.md section 6) holds
+/// against every defender tried, of 1-3 nodes, valued on the dense product
+/// (`common::reference_value`), and is at most the fully informed bound.
+#[test]
+fn the_belief_bound_holds_against_every_defender_tried_on_random_pomdps() {
+    let mut checked = 0;
+    for seed in 0..200 {
+        let game = from_json_str(&common::random::game_json(seed), "random.posg.json").unwrap();
+        let formula = FORMULAS[seed as usize % FORMULAS.len()];
+        let (phi, _) = automata(formula);
+        let budget = BeliefBudget::default();
+        let settings = SolverSettings::default();
+        let Some(belief) = belief_upper_bound(&game, &phi, &budget, &settings).unwrap() else {
+            continue;
+        };
+        checked += 1;
+        let adversary = Fsc::uniform_enabled(Role::Adversary, 1, game.adversary());
+        let informed = upper_bound(&game, &phi, &adversary).unwrap().value;
+        assert!(
+            belief.value <= informed + 1e-9,
+            "seed {seed}, {formula}: belief {} > informed {informed}",
+            belief.value
+        );
+        for trial in 0..6 {
+            let nodes = 1 + trial as usize % 3;
+            let defender = common::random::controller_with_nodes(
+                seed * 10 + trial,
+                &game,
+                Role::Defender,
+                nodes,
+            );
+            let value = common::reference_value(&game, &phi, &defender, &adversary);
+            assert!(
+                value <= belief.value + 1e-9,
+                "seed {seed}, {formula}, {nodes} nodes: {value} > belief {}",
+                belief.value
+            );
+        }
+    }
+    assert!(checked >= 20, "only {checked} one-player games");
 }
 
 #[test]

@@ -84,6 +84,7 @@ use serde::Serialize;
 use thiserror::Error;
 
 use crate::automaton::Dra;
+use crate::certify::belief::{BeliefBound, BeliefBudget, belief_upper_bound};
 use crate::certify::{lower_value_or_trivial, upper_value_or_trivial};
 use crate::controller::{Fsc, Role};
 use crate::game::{ModelError, Posg};
@@ -313,8 +314,14 @@ pub struct StructureReport {
     /// adversary (method.md section 6), when an automaton for !phi was given.
     pub certified_lower: Option<f64>,
     /// The smallest game upper bound over the best responses found (for a
-    /// single-player game: the fully observable optimum), with `certified_lower`.
+    /// single-player game: the fully observable optimum, or the belief
+    /// bound where it is lower), with `certified_lower`.
     pub upper_bound: Option<f64>,
+    /// The belief bound of a single-player game (a POMDP; method.md
+    /// section 6), where the fully informed optimum left the bracket open:
+    /// no defender of any memory does better; `complete` where every
+    /// belief was explored.
+    pub belief_bound: Option<BeliefBound>,
     /// How the structure was optimised.
     pub method: Method,
     /// Which candidate was returned: `unrounded`, `truncated-<d>` or `argmax`.
@@ -716,6 +723,7 @@ impl<'a> StructuresRun<'a> {
                 seconds: clock.elapsed().as_secs_f64(),
                 certified_lower: chosen.certified_lower,
                 upper_bound: chosen.upper_bound,
+                belief_bound: chosen.belief_bound,
                 method,
                 rounding: chosen.name,
                 candidates: chosen.candidates,
@@ -897,6 +905,8 @@ struct Chosen {
     worst_case: f64,
     certified_lower: Option<f64>,
     upper_bound: Option<f64>,
+    /// The belief bound, where it was computed.
+    belief_bound: Option<BeliefBound>,
     candidates: Vec<CandidateReport>,
     /// The score the defender was chosen by.
     score: f64,
@@ -981,6 +991,7 @@ fn finalise(
         worst_case: best.worst_case,
         certified_lower: best.certified_lower,
         upper_bound,
+        belief_bound: None,
         candidates: vec![CandidateReport {
             name: "unrounded".into(),
             score: best.score(),
@@ -1003,11 +1014,21 @@ fn finalise(
         certifier,
     };
     if let (Method::Ascent, Some(c)) = (method, certifier) {
-        // The single player's upper bound (its fully informed value) first:
-        // where the run's value or a rounding already meets it, the local
-        // search has nothing to find, and where it runs it stops there.
+        // The single player's upper bound (its fully informed value, then,
+        // where that leaves the bracket open, the belief bound of a POMDP)
+        // first: where the run's value or a rounding already meets it, the
+        // local search has nothing to find, and where it runs it stops
+        // there.
         let clock = Instant::now();
         chosen.upper_bound = Some(upper_value_or_trivial(game, c.phi, &chosen.adversary)?);
+        if !chosen.bracket_closed(settings) {
+            let budget = BeliefBudget::default();
+            chosen.belief_bound =
+                belief_upper_bound(game, c.phi, &budget, &settings.solver_settings())?;
+            if let Some(belief) = chosen.belief_bound {
+                optimiser::tighten(&mut chosen.upper_bound, belief.value);
+            }
+        }
         phases.certification += clock.elapsed().as_secs_f64();
     }
     let clock = Instant::now();

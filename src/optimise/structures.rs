@@ -23,6 +23,7 @@ use serde::{Deserialize, Serialize};
 use super::{OptimiseError, Settings, Structure, StructureOutcome};
 use crate::automaton::Dra;
 use crate::certify::almost_sure_win_possible;
+use crate::certify::belief::{BeliefBound, BeliefBudget, belief_upper_bound};
 use crate::controller::{Fsc, Support};
 use crate::game::Posg;
 use crate::prune::{PruneSettings, prune};
@@ -171,8 +172,9 @@ pub const POSITIVE_BUDGET_SHARE: f64 = 0.1;
 /// [`ALMOST_SURE_BUDGET_SHARE`] of the time budget), else positive (within
 /// [`POSITIVE_BUDGET_SHARE`]). The almost-sure question is not asked when
 /// even a defender that sees the state cannot win almost surely against
-/// the structure's starting adversary ([`almost_sure_win_possible`]): no
-/// support can then win almost surely against every adversary.
+/// the structure's starting adversary ([`almost_sure_win_possible`]), nor
+/// where the belief bound of a single-player game is below 1: no support
+/// can then win almost surely against every adversary.
 fn synthesised(
     game: &Posg,
     dra: &Dra,
@@ -198,6 +200,13 @@ fn synthesised(
              sees the state wins with probability below 1 (decided on the graph)"
                 .to_string(),
         );
+    } else if let Some(belief) = belief_below_one(game, dra, settings)? {
+        modes.remove(0);
+        reasons.push(format!(
+            "almost-sure synthesis skipped: the belief bound proves that no defender wins with \
+             probability above {:.6}",
+            belief.value
+        ));
     }
     for mode in modes {
         let share = match mode {
@@ -236,6 +245,18 @@ fn synthesised(
         }
     }
     Ok((Vec::new(), reasons.join("; ")))
+}
+
+/// The belief bound of a single-player game (method.md section 6), where
+/// it is below 1: no support then wins almost surely.
+fn belief_below_one(
+    game: &Posg,
+    dra: &Dra,
+    settings: &Settings,
+) -> Result<Option<BeliefBound>, OptimiseError> {
+    let budget = BeliefBudget::default();
+    let found = belief_upper_bound(game, dra, &budget, &settings.solver_settings())?;
+    Ok(found.filter(|belief| belief.value < 1.0))
 }
 
 /// The paper source: the structures Algorithm 1 keeps from `start`.
