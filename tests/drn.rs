@@ -276,7 +276,12 @@ fn a_state_without_choices_is_an_error() {
 fn solve_proves_a_pomdps_optimum_with_the_belief_bound() {
     let out = std::env::temp_dir().join(format!("posg-fsc-coin-{}", std::process::id()));
     let output = std::process::Command::new(env!("CARGO_BIN_EXE_posg-fsc"))
-        .args(["solve", "tests/data/drn/coin.drn", "--props", "tests/data/drn/coin.props"])
+        .args([
+            "solve",
+            "tests/data/drn/coin.drn",
+            "--props",
+            "tests/data/drn/coin.props",
+        ])
         .args(["--def-nodes", "1", "--quiet", "--force", "--out"])
         .arg(&out)
         .output()
@@ -290,8 +295,14 @@ fn solve_proves_a_pomdps_optimum_with_the_belief_bound() {
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     let lower = summary["certified"]["certified_lower"].as_f64().unwrap();
     let upper = summary["certified"]["upper_bound"].as_f64().unwrap();
-    assert!((lower - 2.0 / 3.0).abs() < 1e-6 && lower <= 2.0 / 3.0 + 1e-9, "{lower}");
-    assert!((upper - 2.0 / 3.0).abs() < 1e-9 && upper >= 2.0 / 3.0, "{upper}");
+    assert!(
+        (lower - 2.0 / 3.0).abs() < 1e-6 && lower <= 2.0 / 3.0 + 1e-9,
+        "{lower}"
+    );
+    assert!(
+        (upper - 2.0 / 3.0).abs() < 1e-9 && upper >= 2.0 / 3.0,
+        "{upper}"
+    );
     let structure = &summary["structures"][0];
     assert_eq!(structure["status"], "gap-closed", "{structure}");
     assert_eq!(structure["belief_bound"]["complete"], true, "{structure}");

@@ -2,10 +2,12 @@
 //! certified bounds (docs/method.md section 6), support synthesis by SAT
 //! (section 7) and the LTL translation, as the commands of the same names.
 
+use posg_fsc::certify::belief::{BeliefBudget, belief_upper_bound};
 use posg_fsc::certify::{Bound as CertifiedBound, check_consistent, lower_bound, upper_bound};
 use posg_fsc::controller::Role;
 use posg_fsc::ltl;
 use posg_fsc::synthesis::{self, Mode};
+use posg_fsc::value::SolverSettings;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -32,6 +34,9 @@ fn bound<'py>(py: Python<'py>, bound: &CertifiedBound) -> PyResult<Bound<'py, Py
 /// adversary is given, `upper`, the best probability any defender achieves
 /// against it. Each is a dict with `value`, `mdp_states`, `seconds`,
 /// `residual` and `error_bound`; `upper` is `None` without an adversary.
+/// `belief`, on a one-player game (a POMDP), is the belief bound: `value`
+/// (no defender of any memory does better), `beliefs` and `complete`
+/// (every belief explored); `None` on a game with an adversary.
 /// Controllers are `Controller`s, paths or `"uniform:K"`.
 #[pyfunction]
 #[pyo3(signature = (game, ltl, defender, adversary = None))]
@@ -52,7 +57,7 @@ pub fn certify<'py>(
         .not_phi
         .as_ref()
         .expect("the negation was asked for");
-    let (lower, upper) = compute(py, || {
+    let (lower, upper, belief) = compute(py, || {
         let lower = lower_bound(posg, not_phi, &defender)?;
         let upper = match &adversary {
             Some(adversary) => {
@@ -62,12 +67,24 @@ pub fn certify<'py>(
             }
             None => None,
         };
-        Ok::<_, posg_fsc::certify::CertifyError>((lower, upper))
+        let settings = SolverSettings::default();
+        let belief = belief_upper_bound(posg, &objective.phi, &BeliefBudget::default(), &settings)?;
+        Ok::<_, posg_fsc::certify::CertifyError>((lower, upper, belief))
     })?;
     let report = PyDict::new(py);
     report.set_item("formula", ltl)?;
     report.set_item("lower", bound(py, &lower)?)?;
     report.set_item("upper", upper.map(|u| bound(py, &u)).transpose()?)?;
+    let belief = belief
+        .map(|b| {
+            let dict = PyDict::new(py);
+            dict.set_item("value", b.value)?;
+            dict.set_item("beliefs", b.beliefs)?;
+            dict.set_item("complete", b.complete)?;
+            Ok::<_, PyErr>(dict)
+        })
+        .transpose()?;
+    report.set_item("belief", belief)?;
     Ok(report)
 }
 

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import posg_fsc
-from conftest import FORMULA, cli_json, run_cli
+from conftest import FORMULA, REPOSITORY, cli_json, run_cli
 
 
 def random_controller(game, role, nodes, rng):
@@ -88,6 +88,21 @@ def test_certify_and_translate_equal_the_cli(cli, grid_file, tmp_path):
     assert ours["lower"]["value"] <= ours["upper"]["value"]
     hoa = run_cli(cli, "translate", "--hoa", FORMULA).stdout
     assert posg_fsc.translate(FORMULA) == hoa
+
+
+def test_a_pomdps_belief_bound_equals_the_cli(cli, grid_file):
+    # tests/data/drn/coin.drn: no defender that cannot see the coin wins
+    # more than 2/3 (docs/method.md section 6, the belief bound).
+    model = REPOSITORY / "tests" / "data" / "drn" / "coin.drn"
+    report = cli_json(cli, "certify", model, "--ltl", "F goal", "--defender", "uniform:1")
+    game = posg_fsc.Game.from_drn(model)
+    ours = posg_fsc.certify(game, "F goal", "uniform:1")
+    assert ours["belief"]["value"] == report["belief"]["value"]
+    assert ours["belief"]["value"] == pytest.approx(2 / 3, abs=1e-12)
+    assert ours["belief"]["complete"] and report["belief"]["complete"]
+    assert ours["lower"]["value"] <= ours["belief"]["value"]
+    grid = posg_fsc.Game.load(grid_file)
+    assert posg_fsc.certify(grid, FORMULA, "uniform:1")["belief"] is None
 
 
 def test_support_equals_the_cli(cli, grid_file, tmp_path):

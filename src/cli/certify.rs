@@ -12,6 +12,7 @@ use std::path::{Path, PathBuf};
 
 use clap::Args;
 use posg_fsc::automaton::Dra;
+use posg_fsc::certify::belief::{BeliefBound, BeliefBudget, belief_upper_bound};
 use posg_fsc::certify::strategy::StrategyFile;
 use posg_fsc::certify::{Bound, check_consistent, lower_bound_within, upper_bound_within};
 use posg_fsc::controller::Role;
@@ -58,6 +59,9 @@ struct Report {
     formula: String,
     lower: BoundSummary,
     upper: Option<BoundSummary>,
+    /// A one-player game's belief bound (method.md section 6): no defender
+    /// of any memory does better.
+    belief: Option<BeliefBound>,
 }
 
 /// A bound without its strategy.
@@ -116,12 +120,28 @@ pub fn run(args: CertifyArgs) -> anyhow::Result<()> {
         }
         None => None,
     };
+    let budget = BeliefBudget::default();
+    let belief = belief_upper_bound(&game, &phi_dra, &budget, &settings)?;
+    if let Some(belief) = belief {
+        // The belief bound holds for every defender, this one included.
+        let slack = lower.error_bound + 4.0 * f64::EPSILON;
+        if lower.value > belief.value + slack {
+            anyhow::bail!(
+                "inconsistent bounds: the certified lower bound {} exceeds the belief bound {} \
+                 by more than its error bound ({:e}); the numbers cannot be trusted",
+                lower.value,
+                belief.value,
+                lower.error_bound
+            );
+        }
+    }
     common::print_json(&Report {
         provenance: Provenance::current(),
         game: args.game.display().to_string(),
         formula,
         lower: (&lower).into(),
         upper: upper.as_ref().map(BoundSummary::from),
+        belief,
     })
 }
 
