@@ -37,14 +37,14 @@ use super::{Analysis, CertifyError, analyse};
 use crate::automaton::Dra;
 use crate::controller::{Fsc, Role};
 use crate::game::Posg;
-use crate::mdp::{MdpBuilder, max_reachability};
+use crate::mdp::{MdpBuilder, accepting_union, max_reachability};
 use crate::solver::SolverSettings;
 
 /// How far the belief exploration goes: beliefs beyond these counts are
 /// not expanded (they leave with their fully informed bound).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct BeliefBudget {
-    /// The most beliefs expanded.
+    /// Beliefs after the first this many met are not expanded.
     pub beliefs: usize,
     /// The most belief entries (product states with positive belief,
     /// summed over the beliefs met) before the exploration stops expanding.
@@ -58,12 +58,14 @@ pub struct BeliefBudget {
 }
 
 impl Default for BeliefBudget {
-    /// 20,000 beliefs, 100,000 entries, a million bits, 256-bit weights.
+    /// 20,000 beliefs, 100,000 entries, 200,000 bits, 256-bit weights: at
+    /// most about 0.2 s on PRISM's POMDPs and the grid POMDPs of
+    /// `experiments/benchmarks`.
     fn default() -> Self {
         Self {
             beliefs: 20_000,
             entries: 100_000,
-            bits: 1_000_000,
+            bits: 200_000,
             weight_bits: 256,
         }
     }
@@ -99,25 +101,32 @@ pub fn belief_upper_bound(
         return Ok(None);
     }
     let adversary = Fsc::uniform_enabled(Role::Adversary, 1, game.adversary());
+    // The bound is optional: where the product is too large or too stiff,
+    // or the belief MDP cannot be built, there is none.
     let analysis = match analyse(game, dra_phi, &adversary, Role::Adversary, settings) {
         Ok(analysis) => analysis,
-        Err(error) if error.is_numerical() => return Ok(None),
+        Err(error) if error.is_numerical() || matches!(error, CertifyError::Budget(_)) => {
+            return Ok(None);
+        }
         Err(error) => return Err(error),
     };
     let explored = Exploration::new(game, &analysis, *budget).explore();
-    let mdp = explored.mdp()?;
-    match max_reachability(&mdp, &explored.target(), settings) {
-        Ok(result) => {
-            let value = result.upper[ROOT] * (1.0 + 4.0 * f64::EPSILON);
-            Ok(Some(BeliefBound {
-                value: value.min(1.0),
-                beliefs: explored.beliefs.len(),
-                complete: explored.frontier.iter().all(|&f| !f),
-            }))
-        }
-        Err(error) if CertifyError::from(error.clone()).is_numerical() => Ok(None),
-        Err(error) => Err(error.into()),
+    let Ok(mdp) = explored.mdp() else {
+        return Ok(None);
+    };
+    let Ok(result) = max_reachability(&mdp, &explored.target(), settings) else {
+        return Ok(None);
+    };
+    // `upper` is proved for the MDP of rounded probabilities; checked on
+    // the exact ones (rounded up), it bounds the exact belief MDP too.
+    if !explored.excessive(&result.upper) {
+        return Ok(None);
     }
+    Ok(Some(BeliefBound {
+        value: result.upper[ROOT].min(1.0),
+        beliefs: explored.beliefs.len(),
+        complete: explored.frontier.iter().all(|&f| !f),
+    }))
 }
 
 /// The belief MDP's state where `A` has been reached.
@@ -133,28 +142,55 @@ const ROOT: usize = 2;
 /// over their sum, and equal beliefs have equal weights.
 #[derive(Debug, Clone, PartialEq, Eq, Hash)]
 struct Belief {
+    /// The observation the defender has just seen.
     observation: usize,
+    /// `(product state, weight)`, the weights coprime.
     entries: Vec<(usize, BigUint)>,
 }
 
-/// A belief MDP action: the probability of reaching `A` at once, of
-/// losing, and of each successor belief (by index).
+/// A belief MDP action: the probabilities of reaching `A` at once and of
+/// each successor belief (by index) rounded up to doubles, that of losing
+/// rounded to the nearest (it counts nothing where `A` is the target); and,
+/// exactly, the masses won and of each successor with the scales they read
+/// by.
 struct Move {
+    /// Reaching `A` at once.
     won: f64,
+    /// Reaching a state that cannot reach `A`.
     lost: f64,
+    /// Each successor belief, after its observation.
     next: Vec<(usize, f64)>,
+    /// The mass won, read by `scale`.
+    won_mass: BigUint,
+    /// The mass lost, read by `scale`.
+    lost_mass: BigUint,
+    /// How `won_mass` reads as a probability.
+    scale: Scale,
+    /// Each successor's mass, read by `scale` times `2^observed_exponent`.
+    next_masses: Vec<BigUint>,
+    /// The power of 2 the observations' probabilities add to `scale`.
+    observed_exponent: i64,
 }
 
 /// A double `mantissa * 2^exponent`, exactly.
 #[derive(Debug, Clone, Copy)]
 struct Dyadic {
+    /// The integer significand.
     mantissa: u64,
+    /// The power of 2.
     exponent: i64,
 }
 
 impl Dyadic {
-    /// The nonnegative finite double `x`, exactly (0 for 0).
+    /// The positive finite double `x`, exactly (a game's probabilities
+    /// are positive: formats.md section 3).
     fn of(x: f64) -> Self {
+        debug_assert!(x > 0.0 && x.is_finite(), "{x}");
+        Self::of_nonnegative(x)
+    }
+
+    /// The nonnegative finite double `x`, exactly (0 as `0 * 2^-1074`).
+    fn of_nonnegative(x: f64) -> Self {
         let bits = x.to_bits();
         let biased = ((bits >> 52) & 0x7ff) as i64;
         let fraction = bits & ((1 << 52) - 1);
@@ -172,28 +208,57 @@ impl Dyadic {
     }
 }
 
-/// A measure on product states as integer weights `w(m)` times
-/// `2^exponent` over `scale`, before it is split into beliefs.
-struct Measure {
-    weights: Vec<(usize, BigUint)>,
+/// How integer masses read as probabilities: `mass * 2^exponent /
+/// denominator`.
+#[derive(Debug, Clone)]
+struct Scale {
+    /// The power of 2.
     exponent: i64,
-    scale: BigUint,
+    /// The denominator (the weights' sum of the belief they come from).
+    denominator: BigUint,
 }
 
-impl Measure {
-    /// `(weight * 2^exponent) / scale` rounded to the nearest double.
-    fn probability(&self, weight: &BigUint) -> f64 {
-        if weight.is_zero() {
+impl Scale {
+    /// The probability of `mass` as a ratio of integers.
+    fn ratio(&self, mass: &BigUint) -> (BigUint, BigUint) {
+        if self.exponent >= 0 {
+            (mass << self.exponent as usize, self.denominator.clone())
+        } else {
+            (mass.clone(), &self.denominator << (-self.exponent) as usize)
+        }
+    }
+
+    /// The probability of `mass`, rounded to the nearest double.
+    fn nearest(&self, mass: &BigUint) -> f64 {
+        if mass.is_zero() {
             return 0.0;
         }
-        let (numer, denom) = if self.exponent >= 0 {
-            (weight << self.exponent as usize, self.scale.clone())
-        } else {
-            (weight.clone(), &self.scale << (-self.exponent) as usize)
-        };
-        BigRational::new(BigInt::from(numer), BigInt::from(denom))
+        let (numer, denom) = self.ratio(mass);
+        // `to_f64` rounds the exact ratio, reduced or not.
+        BigRational::new_raw(BigInt::from(numer), BigInt::from(denom))
             .to_f64()
             .unwrap_or(0.0)
+    }
+
+    /// The probability of `mass`, rounded up to a double.
+    fn above(&self, mass: &BigUint) -> f64 {
+        let nearest = self.nearest(mass);
+        if nearest == 0.0 && mass.is_zero() {
+            return 0.0;
+        }
+        let (numer, denom) = self.ratio(mass);
+        let d = Dyadic::of_nonnegative(nearest);
+        let shift = |x: BigUint, by: i64| if by >= 0 { x << by as usize } else { x };
+        // `nearest < numer / denom` as `mantissa 2^e denom < numer`.
+        let (left, right) = (
+            shift(&denom * d.mantissa, d.exponent),
+            shift(numer, -d.exponent),
+        );
+        if left < right {
+            f64::from_bits(nearest.to_bits() + 1)
+        } else {
+            nearest
+        }
     }
 }
 
@@ -213,13 +278,18 @@ fn integer_terms(terms: &[(usize, &BigUint, Dyadic)]) -> (Vec<(usize, BigUint)>,
 
 /// The breadth-first exploration of the beliefs.
 struct Exploration<'a> {
+    /// The game: the defender's observations and enabled actions.
     game: &'a Posg,
+    /// The product with the automaton for `phi`, the defender free: its
+    /// transitions, accepting components and proved optimum `x*`.
     analysis: &'a Analysis,
+    /// When to stop expanding.
     budget: BeliefBudget,
     /// Per product state: in `A`, or unable to reach it.
     in_target: Vec<bool>,
     /// The beliefs met, numbered in order of discovery.
     beliefs: Vec<Belief>,
+    /// The number of each belief met.
     ids: FxHashMap<Belief, usize>,
     /// The root's move (the initial distribution split by observation).
     root: Move,
@@ -234,24 +304,28 @@ struct Exploration<'a> {
 }
 
 impl<'a> Exploration<'a> {
+    /// The exploration of the beliefs of `game` on the product `analysis`
+    /// (for `phi`, the defender free), within `budget`, nothing met yet.
     fn new(game: &'a Posg, analysis: &'a Analysis, budget: BeliefBudget) -> Self {
-        let mut in_target = vec![false; analysis.mdp.num_states()];
-        for component in &analysis.accepting {
-            for &m in &component.component.states {
-                in_target[m] = true;
-            }
-        }
         Self {
             game,
             analysis,
             budget,
-            in_target,
+            in_target: accepting_union(&analysis.mdp, &analysis.accepting),
             beliefs: Vec::new(),
             ids: FxHashMap::default(),
             root: Move {
                 won: 0.0,
                 lost: 0.0,
                 next: Vec::new(),
+                won_mass: BigUint::zero(),
+                lost_mass: BigUint::zero(),
+                scale: Scale {
+                    exponent: 0,
+                    denominator: BigUint::one(),
+                },
+                next_masses: Vec::new(),
+                observed_exponent: 0,
             },
             moves: Vec::new(),
             frontier: Vec::new(),
@@ -267,12 +341,12 @@ impl<'a> Exploration<'a> {
         let terms: Vec<(usize, &BigUint, Dyadic)> = (self.analysis.initial.iter())
             .map(|&(m, p)| (m, &one, Dyadic::of(p)))
             .collect();
-        let (weights, exponent) = integer_terms(&terms);
-        self.root = self.split(Measure {
-            weights,
+        let (masses, exponent) = integer_terms(&terms);
+        let scale = Scale {
             exponent,
-            scale: BigUint::one(),
-        });
+            denominator: BigUint::one(),
+        };
+        self.root = self.split(masses, &scale);
         let mut expanded = 0;
         while expanded < self.beliefs.len() {
             let within = expanded < self.budget.beliefs
@@ -300,10 +374,12 @@ impl<'a> Exploration<'a> {
             .all(|(_, w)| w.bits() <= self.budget.weight_bits)
     }
 
-    /// The moves of belief `i`: one per action its observation enables.
+    /// The moves of belief `i`: one per action its observation enables
+    /// (each enabled in every state of the belief: a state is in it only
+    /// where it shows that observation).
     fn expand(&mut self, i: usize) -> Vec<Move> {
         let belief = self.beliefs[i].clone();
-        let scale: BigUint = belief.entries.iter().map(|(_, w)| w).sum();
+        let denominator: BigUint = belief.entries.iter().map(|(_, w)| w).sum();
         let actions: Vec<usize> = (self.game.defender())
             .enabled_actions(belief.observation)
             .collect();
@@ -321,71 +397,77 @@ impl<'a> Exploration<'a> {
                         terms.push((m2, weight, Dyadic::of(t)));
                     }
                 }
-                let (weights, exponent) = integer_terms(&terms);
-                self.split(Measure {
-                    weights,
+                let (masses, exponent) = integer_terms(&terms);
+                let scale = Scale {
                     exponent,
-                    scale: scale.clone(),
-                })
+                    denominator: denominator.clone(),
+                };
+                self.split(masses, &scale)
             })
             .collect()
     }
 
-    /// The move of the product-state measure `nu`: its mass in `A` won,
-    /// its mass where `A` cannot be reached lost, the rest split by the
-    /// observation of its states into beliefs (numbered where new).
-    fn split(&mut self, nu: Measure) -> Move {
+    /// The move of the product-state measure `masses` (read by `scale`):
+    /// its mass in `A` won, its mass where `A` cannot be reached lost, the
+    /// rest split by the observation of its states into beliefs (numbered
+    /// where new).
+    fn split(&mut self, masses: Vec<(usize, BigUint)>, scale: &Scale) -> Move {
         let mut won = BigUint::zero();
         let mut lost = BigUint::zero();
         let mut observed = Vec::new();
-        for (m, weight) in &nu.weights {
+        for (m, mass) in &masses {
             if self.in_target[*m] {
-                won += weight;
+                won += mass;
             } else if !self.analysis.result.possible[*m] {
-                lost += weight;
+                lost += mass;
             } else {
                 let s = self.analysis.states[*m].0;
                 for &(o, q) in self.game.defender().observation_distribution(s) {
-                    observed.push((o, *m, weight, Dyadic::of(q)));
+                    observed.push((o, *m, mass, Dyadic::of(q)));
                 }
             }
         }
-        let mut move_ = Move {
-            won: nu.probability(&won),
-            lost: nu.probability(&lost),
-            next: Vec::new(),
-        };
         // Every observation's masses on one scale (the least exponent), so
-        // that the observations' weights compare.
+        // that their probabilities read alike.
         let least = observed.iter().map(|t| t.3.exponent).min().unwrap_or(0);
         let mut by_observation: Vec<(usize, Vec<(usize, BigUint)>)> = Vec::new();
         observed.sort_by_key(|t| (t.0, t.1));
-        for (o, m, weight, d) in observed {
-            let mass = (weight * d.mantissa) << (d.exponent - least) as usize;
+        for (o, m, mass, d) in observed {
+            let mass = (mass * d.mantissa) << (d.exponent - least) as usize;
             match by_observation.last_mut() {
                 Some((last, entries)) if *last == o => entries.push((m, mass)),
                 _ => by_observation.push((o, vec![(m, mass)])),
             }
         }
-        let split = Measure {
-            weights: Vec::new(),
-            exponent: nu.exponent + least,
-            scale: nu.scale,
+        let observed_scale = Scale {
+            exponent: scale.exponent + least,
+            denominator: scale.denominator.clone(),
         };
+        let mut next = Vec::new();
+        let mut next_masses = Vec::new();
         for (o, entries) in by_observation {
             let total: BigUint = entries.iter().map(|(_, w)| w).sum();
-            let weight = split.probability(&total);
-            let divisor = entries.iter().fold(BigUint::zero(), |g, (_, w)| g.gcd(w));
+            let probability = observed_scale.above(&total);
+            let divisor = (entries.iter()).fold(BigUint::zero(), |g, (_, w)| g.gcd(w));
             let belief = Belief {
                 observation: o,
-                entries: entries
-                    .into_iter()
+                entries: (entries.into_iter())
                     .map(|(m, w)| (m, w / &divisor))
                     .collect(),
             };
-            move_.next.push((self.id(belief), weight));
+            next.push((self.id(belief), probability));
+            next_masses.push(total);
         }
-        move_
+        Move {
+            won: scale.above(&won),
+            lost: scale.nearest(&lost),
+            next,
+            won_mass: won,
+            lost_mass: lost,
+            scale: scale.clone(),
+            next_masses,
+            observed_exponent: least,
+        }
     }
 
     /// The number of `belief`, numbered next where new.
@@ -408,16 +490,16 @@ impl<'a> Exploration<'a> {
     /// certificate's proved `x*`, rounded up, at most 1.
     fn informed_bound(&self, i: usize) -> f64 {
         let entries = &self.beliefs[i].entries;
-        let belief = Measure {
-            weights: Vec::new(),
+        let scale = Scale {
             exponent: 0,
-            scale: entries.iter().map(|(_, w)| w).sum(),
+            denominator: entries.iter().map(|(_, w)| w).sum(),
         };
-        let sum: f64 = entries
-            .iter()
-            .map(|(m, w)| belief.probability(w) * self.analysis.result.upper[*m])
+        let sum: f64 = (entries.iter())
+            .map(|(m, w)| scale.nearest(w) * self.analysis.result.upper[*m])
             .sum();
-        let rounding = 1.0 + 4.0 * (entries.len() as f64 + 2.0) * f64::EPSILON;
+        // Each term within a relative eps (the probability's and the
+        // product's rounding), the sum within `count` eps.
+        let rounding = 1.0 + (2.0 * entries.len() as f64 + 4.0) * f64::EPSILON;
         (sum * rounding).min(1.0)
     }
 
@@ -451,16 +533,75 @@ impl<'a> Exploration<'a> {
         target[WON] = true;
         target
     }
+
+    /// Whether `y` (on the states of [`Self::mdp`]) is excessive for the
+    /// exact belief MDP: `y(WON) = 1`, at least the fully informed bound at
+    /// a belief not expanded, and at least every move's expected `y` by
+    /// the exact probabilities ([`holds`], in integers). Then `y` bounds
+    /// the exact least fixed point, the maximal probability of reaching
+    /// `A` (Knaster-Tarski), whatever the rounding of the MDP the
+    /// certificate proved `y` on.
+    fn excessive(&self, y: &[f64]) -> bool {
+        let belief = |j: usize| ROOT + 1 + j;
+        let at_most = |at: usize, step: &Move| holds(step, y[at], y[WON], |j| y[belief(j)]);
+        y[WON] == 1.0
+            && at_most(ROOT, &self.root)
+            && (0..self.beliefs.len()).all(|i| {
+                let frontier_holds = !self.frontier[i] || self.informed_bound(i) <= y[belief(i)];
+                frontier_holds && self.moves[i].iter().all(|step| at_most(belief(i), step))
+            })
+    }
 }
 
-/// Adds `step` as an action of the current state (beliefs after [`ROOT`]).
+/// Whether `won * y_won + sum_j next_j y(j) <= y_at` for `step`'s exact
+/// probabilities, each mass over the step's exact total (a game's doubles
+/// may sum to 1 plus an ulp: the exact belief MDP is the one of the rows
+/// normalised). In integers: every double as `mantissa * 2^exponent`, the
+/// masses' common denominator cancelled.
+fn holds(step: &Move, y_at: f64, y_won: f64, y: impl Fn(usize) -> f64) -> bool {
+    let observed = step.scale.exponent + step.observed_exponent;
+    let masses = [(&step.won_mass, step.scale.exponent, y_won)]
+        .into_iter()
+        .chain([(&step.lost_mass, step.scale.exponent, 0.0)])
+        .chain((step.next.iter().zip(&step.next_masses)).map(|((j, _), m)| (m, observed, y(*j))));
+    // `(mass * y, mass)` as `(integer, exponent)` pairs.
+    let mut weighted: Vec<(BigUint, i64)> = Vec::new();
+    let mut total: Vec<(BigUint, i64)> = Vec::new();
+    for (mass, exponent, value) in masses {
+        if mass.is_zero() {
+            continue;
+        }
+        total.push((mass.clone(), exponent));
+        if value > 0.0 {
+            let d = Dyadic::of_nonnegative(value);
+            weighted.push((mass * d.mantissa, exponent + d.exponent));
+        }
+    }
+    let at = Dyadic::of_nonnegative(y_at);
+    let scaled_total: Vec<(BigUint, i64)> = (total.into_iter())
+        .map(|(m, e)| (m * at.mantissa, e + at.exponent))
+        .collect();
+    exact_sum_at_most(&weighted, &scaled_total)
+}
+
+/// Whether `sum left <= sum right`, each term `integer * 2^exponent`.
+fn exact_sum_at_most(left: &[(BigUint, i64)], right: &[(BigUint, i64)]) -> bool {
+    let least = left.iter().chain(right).map(|t| t.1).min().unwrap_or(0);
+    let sum = |terms: &[(BigUint, i64)]| -> BigUint {
+        terms
+            .iter()
+            .map(|(value, exponent)| value << (exponent - least) as usize)
+            .sum()
+    };
+    sum(left) <= sum(right)
+}
+
+/// Adds `step` as an action of the current state (beliefs after [`ROOT`]),
+/// with its probabilities as doubles (rounded up but the lost one).
 fn add_move(builder: &mut MdpBuilder, step: &Move) {
-    let beliefs = step.next.iter().map(|&(j, w)| (ROOT + 1 + j, w));
-    builder.add_action(
-        [(WON, step.won), (LOST, step.lost)]
-            .into_iter()
-            .chain(beliefs),
-    );
+    let beliefs = step.next.iter().map(|&(j, p)| (ROOT + 1 + j, p));
+    let ends = [(WON, step.won), (LOST, step.lost)];
+    builder.add_action(ends.into_iter().chain(beliefs));
 }
 
 #[cfg(test)]
@@ -533,6 +674,42 @@ mod tests {
             assert_eq!(found.beliefs, 3, "{formula}");
             assert!((found.value - 0.75).abs() < 1e-9, "{formula}: {found:?}");
         }
+    }
+
+    /// A move whose masses are `0.8` and `0.2` as doubles (which sum to 1
+    /// plus an ulp) to two beliefs, read over the masses' exact total.
+    fn move_of_doubles(won: f64) -> Move {
+        let (a, b) = (Dyadic::of(0.8), Dyadic::of(0.2));
+        let least = a.exponent.min(b.exponent);
+        let mass = |d: Dyadic| BigUint::from(d.mantissa) << (d.exponent - least) as usize;
+        Move {
+            won,
+            lost: 0.0,
+            next: vec![(0, 0.8), (1, 0.2)],
+            won_mass: BigUint::zero(),
+            lost_mass: BigUint::zero(),
+            scale: Scale {
+                exponent: least,
+                denominator: BigUint::one(),
+            },
+            next_masses: vec![mass(a), mass(b)],
+            observed_exponent: 0,
+        }
+    }
+
+    /// The excessiveness check is exact on the normalised row: `y` equal
+    /// everywhere holds (though `0.8 + 0.2 > 1` in doubles), and a state
+    /// an ulp below its successors' average does not.
+    #[test]
+    fn a_move_holds_exactly_on_its_normalised_row() {
+        let step = move_of_doubles(0.0);
+        let y = [0.75, 0.75];
+        assert!(holds(&step, 0.75, 1.0, |j| y[j]));
+        let below = f64::from_bits(0.75f64.to_bits() - 1);
+        assert!(!holds(&step, below, 1.0, |j| y[j]));
+        let uneven = [0.75, 0.5];
+        assert!(holds(&step, 0.7001, 1.0, |j| uneven[j]));
+        assert!(!holds(&step, 0.6999, 1.0, |j| uneven[j]));
     }
 
     /// A game with an adversary that chooses has no belief bound.

@@ -14,7 +14,9 @@ use clap::Args;
 use posg_fsc::automaton::Dra;
 use posg_fsc::certify::belief::{BeliefBound, BeliefBudget, belief_upper_bound};
 use posg_fsc::certify::strategy::StrategyFile;
-use posg_fsc::certify::{Bound, check_consistent, lower_bound_within, upper_bound_within};
+use posg_fsc::certify::{
+    Bound, CertifyError, check_consistent, lower_bound_within, upper_bound_within,
+};
 use posg_fsc::controller::Role;
 use posg_fsc::controller::file::resolve;
 use posg_fsc::game::Posg;
@@ -126,13 +128,13 @@ pub fn run(args: CertifyArgs) -> anyhow::Result<()> {
         // The belief bound holds for every defender, this one included.
         let slack = lower.error_bound + 4.0 * f64::EPSILON;
         if lower.value > belief.value + slack {
-            anyhow::bail!(
-                "inconsistent bounds: the certified lower bound {} exceeds the belief bound {} \
-                 by more than its error bound ({:e}); the numbers cannot be trusted",
-                lower.value,
-                belief.value,
-                lower.error_bound
-            );
+            return Err(CertifyError::Inconsistent {
+                lower: lower.value,
+                upper: belief.value,
+                lower_error: lower.error_bound,
+                upper_error: 0.0,
+            }
+            .into());
         }
     }
     common::print_json(&Report {

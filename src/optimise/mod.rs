@@ -1098,13 +1098,39 @@ fn finalise(
         let clock = Instant::now();
         chosen.certified_lower =
             match crate::certify::lower_bound(game, c.not_phi, &chosen.defender) {
-                Ok(bound) => Some(bound.value),
+                Ok(bound) => {
+                    check_below_belief(&bound, chosen.belief_bound)?;
+                    Some(bound.value)
+                }
                 Err(error) if error.is_numerical() => None,
                 Err(error) => return Err(error.into()),
             };
         phases.certification += clock.elapsed().as_secs_f64();
     }
     Ok(chosen)
+}
+
+/// Checks that the certified lower bound `lower` is at most the belief
+/// bound `belief` (which holds for every defender) up to its error bound:
+/// exact numbers always are, so anything else is a numerical failure,
+/// never a bracket.
+fn check_below_belief(
+    lower: &crate::certify::Bound,
+    belief: Option<BeliefBound>,
+) -> Result<(), OptimiseError> {
+    let Some(belief) = belief else {
+        return Ok(());
+    };
+    if lower.value <= belief.value + lower.error_bound + 4.0 * f64::EPSILON {
+        return Ok(());
+    }
+    Err(crate::certify::CertifyError::Inconsistent {
+        lower: lower.value,
+        upper: belief.value,
+        lower_error: lower.error_bound,
+        upper_error: 0.0,
+    }
+    .into())
 }
 
 /// The returned defender's full best response (its worst-case estimate,

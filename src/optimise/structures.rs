@@ -204,7 +204,7 @@ fn synthesised(
         modes.remove(0);
         reasons.push(format!(
             "almost-sure synthesis skipped: the belief bound proves that no defender wins with \
-             probability above {:.6}",
+             probability above {}",
             belief.value
         ));
     }
