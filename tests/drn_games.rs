@@ -1,8 +1,9 @@
 //! Turn-based games from DRN (`SMG`, `POSMG`; formats.md section 6) and
 //! Storm property files: a hand-written POSMG whose values are derived on
 //! paper, imported and solved; PAYNT's test-game with PAYNT's own optimal
-//! controllers, whose certified lower bounds must be PAYNT's values; and
-//! one test per malformed player or observation annotation.
+//! controllers, whose certified lower bounds must be PAYNT's values; one
+//! test per malformed player or observation annotation; and a POMDP whose
+//! optimum `solve` proves with the belief bound.
 //!
 //! The POSMG `tests/data/drn/pennies.drn` (biased matching pennies): player
 //! 1 moves first in s0, `left` to s1 or `right` to s2; player 0 sees one
@@ -369,6 +370,37 @@ fn solve_reads_the_drn_and_the_property_file_and_certifies_the_paper_values() {
     assert_eq!(summary["objective"], "G !goal");
     let lower = summary["certified"]["certified_lower"].as_f64().unwrap();
     assert!((lower - 0.5).abs() < 1e-3 && lower <= 0.5 + 1e-6, "{lower}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// `solve` on a POMDP proves its optimum with the belief bound (method.md
+/// section 6): on `tests/data/drn/coin.drn` a coin puts the defender in one
+/// of two states it cannot tell apart (1/3 and 2/3), so no defender wins
+/// more than 2/3, while one that sees the state wins surely. One node
+/// certifies 2/3, and the bracket closes at 2/3, the belief MDP explored
+/// to the end.
+#[test]
+fn solve_proves_a_pomdps_optimum_with_the_belief_bound() {
+    let dir = temp_dir("coin");
+    let summary = solve_drn(
+        "tests/data/drn/coin.drn",
+        "tests/data/drn/coin.props",
+        1,
+        &dir,
+    );
+    let lower = summary["certified"]["certified_lower"].as_f64().unwrap();
+    let upper = summary["certified"]["upper_bound"].as_f64().unwrap();
+    assert!(
+        (lower - 2.0 / 3.0).abs() < 1e-6 && lower <= 2.0 / 3.0 + 1e-9,
+        "{lower}"
+    );
+    assert!(
+        (upper - 2.0 / 3.0).abs() < 1e-9 && upper >= 2.0 / 3.0,
+        "{upper}"
+    );
+    let structure = &summary["structures"][0];
+    assert_eq!(structure["status"], "gap-closed", "{structure}");
+    assert_eq!(structure["belief_bound"]["complete"], true, "{structure}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
