@@ -311,7 +311,9 @@ def certify(
     """The certified bounds of `posg-fsc certify`: "lower" (the defender's
     guaranteed value against every adversary) and "upper" (the best any
     defender does against `adversary`, None without one); each a dict with
-    value, mdp_states, seconds, residual, error_bound."""
+    value, mdp_states, seconds, residual, error_bound. "belief": for a
+    one-player game, the best any defender of any memory does (a dict with
+    value, beliefs, complete), else None."""
 
 def support(
     game: Game,

@@ -2,7 +2,7 @@
 //! certified bounds (docs/method.md section 6), support synthesis by SAT
 //! (section 7) and the LTL translation, as the commands of the same names.
 
-use posg_fsc::certify::belief::{BeliefBudget, belief_upper_bound};
+use posg_fsc::certify::belief::{BeliefBudget, belief_upper_bound, check_below_belief};
 use posg_fsc::certify::{Bound as CertifiedBound, check_consistent, lower_bound, upper_bound};
 use posg_fsc::controller::Role;
 use posg_fsc::ltl;
@@ -36,7 +36,8 @@ fn bound<'py>(py: Python<'py>, bound: &CertifiedBound) -> PyResult<Bound<'py, Py
 /// `residual` and `error_bound`; `upper` is `None` without an adversary.
 /// `belief`, on a one-player game (a POMDP), is the belief bound: `value`
 /// (no defender of any memory does better), `beliefs` and `complete`
-/// (every belief explored); `None` on a game with an adversary.
+/// (every belief explored); `None` on a game with an adversary, or where
+/// the bound cannot be had (docs/method.md section 6).
 /// Controllers are `Controller`s, paths or `"uniform:K"`.
 #[pyfunction]
 #[pyo3(signature = (game, ltl, defender, adversary = None))]
@@ -69,6 +70,9 @@ pub fn certify<'py>(
         };
         let settings = SolverSettings::default();
         let belief = belief_upper_bound(posg, &objective.phi, &BeliefBudget::default(), &settings)?;
+        if let Some(belief) = &belief {
+            check_below_belief(&lower, belief)?;
+        }
         Ok::<_, posg_fsc::certify::CertifyError>((lower, upper, belief))
     })?;
     let report = PyDict::new(py);

@@ -19,10 +19,14 @@
 //! with the fully informed bound `sum_m b(m) x*(m)` (its optimality
 //! certificate's proved side, module documentation of [`super`]), which
 //! bounds what any defender achieves from it. The beliefs are exact
-//! rationals (so a belief met again is recognised, and the exploration of
-//! a finite belief MDP completes); the MDP's probabilities are those
-//! rationals rounded to the nearest double, and its maximal reachability
-//! is proved by the optimality certificate (method.md section 8).
+//! (integer weights without a common factor, over their sum: the game's
+//! doubles are dyadic rationals), so a belief met again is recognised and
+//! the exploration of a finite belief MDP completes. The MDP is solved
+//! with its probabilities rounded up to doubles, its maximal reachability
+//! proved by the optimality certificate (method.md section 8), and that
+//! proved vector is checked in integers to be excessive for the exact
+//! belief MDP ([`Exploration::excessive`]): it then bounds the exact least
+//! fixed point, whatever the rounding.
 
 use std::collections::hash_map::Entry;
 
@@ -33,7 +37,7 @@ use num_traits::{One, ToPrimitive, Zero};
 use rustc_hash::FxHashMap;
 use serde::Serialize;
 
-use super::{Analysis, CertifyError, analyse};
+use super::{Analysis, Bound, CertifyError, analyse};
 use crate::automaton::Dra;
 use crate::controller::{Fsc, Role};
 use crate::game::Posg;
@@ -59,7 +63,7 @@ pub struct BeliefBudget {
 
 impl Default for BeliefBudget {
     /// 20,000 beliefs, 100,000 entries, 200,000 bits, 256-bit weights: at
-    /// most about 0.2 s on PRISM's POMDPs and the grid POMDPs of
+    /// most about 0.25 s on PRISM's POMDPs and the grid POMDPs of
     /// `experiments/benchmarks`.
     fn default() -> Self {
         Self {
@@ -89,8 +93,9 @@ pub struct BeliefBound {
 /// The belief bound of `game` for `phi` (automaton `dra_phi`): `None`
 /// where the adversary has more than one action (a game, not a POMDP),
 /// where the defender observes the state (the fully informed bound is
-/// then exact), or where a product or the belief MDP mixes too slowly to
-/// prove its optimum.
+/// then exact), where the product exceeds the resource budget or mixes
+/// too slowly to prove its optimum, where the belief MDP cannot be built
+/// or solved, or where its proved bound fails the exact check.
 pub fn belief_upper_bound(
     game: &Posg,
     dra_phi: &Dra,
@@ -542,6 +547,9 @@ impl<'a> Exploration<'a> {
     /// `A` (Knaster-Tarski), whatever the rounding of the MDP the
     /// certificate proved `y` on.
     fn excessive(&self, y: &[f64]) -> bool {
+        if !y.iter().all(|v| v.is_finite() && *v >= 0.0) {
+            return false;
+        }
         let belief = |j: usize| ROOT + 1 + j;
         let at_most = |at: usize, step: &Move| holds(step, y[at], y[WON], |j| y[belief(j)]);
         y[WON] == 1.0
@@ -594,6 +602,22 @@ fn exact_sum_at_most(left: &[(BigUint, i64)], right: &[(BigUint, i64)]) -> bool 
             .sum()
     };
     sum(left) <= sum(right)
+}
+
+/// Checks that the certified lower bound `lower` of some defender is at
+/// most the belief bound `belief` (which holds for every defender) up to
+/// its error bound: exact numbers always are, so anything else is a
+/// numerical failure, never a bracket.
+pub fn check_below_belief(lower: &Bound, belief: &BeliefBound) -> Result<(), CertifyError> {
+    if lower.value <= belief.value + lower.error_bound + 4.0 * f64::EPSILON {
+        return Ok(());
+    }
+    Err(CertifyError::Inconsistent {
+        lower: lower.value,
+        upper: belief.value,
+        lower_error: lower.error_bound,
+        upper_error: 0.0,
+    })
 }
 
 /// Adds `step` as an action of the current state (beliefs after [`ROOT`]),

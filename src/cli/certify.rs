@@ -1,10 +1,12 @@
-//! `posg-fsc certify`: the two certified bounds of method.md section 6 for
-//! a defender controller and, optionally, an adversary controller.
+//! `posg-fsc certify`: the certified bounds of method.md section 6 for a
+//! defender controller and, optionally, an adversary controller.
 //!
 //! Prints one JSON object: `lower` is the defender's guaranteed probability
 //! of the formula against every adversary (of any size, observation and
 //! memory); `upper` (null without `--adversary`) is the best probability any
-//! defender achieves against the given adversary. The strategies behind them
+//! defender achieves against the given adversary; `belief` (null but for a
+//! one-player game, and where the belief bound has nothing to say) is the
+//! best any defender of any memory achieves. The strategies behind them
 //! are written to files on request (`--attack`, `--response`; format in
 //! docs/formats.md section 7, read back by `posg-fsc strategy`).
 
@@ -12,11 +14,11 @@ use std::path::{Path, PathBuf};
 
 use clap::Args;
 use posg_fsc::automaton::Dra;
-use posg_fsc::certify::belief::{BeliefBound, BeliefBudget, belief_upper_bound};
-use posg_fsc::certify::strategy::StrategyFile;
-use posg_fsc::certify::{
-    Bound, CertifyError, check_consistent, lower_bound_within, upper_bound_within,
+use posg_fsc::certify::belief::{
+    BeliefBound, BeliefBudget, belief_upper_bound, check_below_belief,
 };
+use posg_fsc::certify::strategy::StrategyFile;
+use posg_fsc::certify::{Bound, check_consistent, lower_bound_within, upper_bound_within};
 use posg_fsc::controller::Role;
 use posg_fsc::controller::file::resolve;
 use posg_fsc::game::Posg;
@@ -124,18 +126,9 @@ pub fn run(args: CertifyArgs) -> anyhow::Result<()> {
     };
     let budget = BeliefBudget::default();
     let belief = belief_upper_bound(&game, &phi_dra, &budget, &settings)?;
-    if let Some(belief) = belief {
+    if let Some(belief) = &belief {
         // The belief bound holds for every defender, this one included.
-        let slack = lower.error_bound + 4.0 * f64::EPSILON;
-        if lower.value > belief.value + slack {
-            return Err(CertifyError::Inconsistent {
-                lower: lower.value,
-                upper: belief.value,
-                lower_error: lower.error_bound,
-                upper_error: 0.0,
-            }
-            .into());
-        }
+        check_below_belief(&lower, belief)?;
     }
     common::print_json(&Report {
         provenance: Provenance::current(),

@@ -84,7 +84,7 @@ use serde::Serialize;
 use thiserror::Error;
 
 use crate::automaton::Dra;
-use crate::certify::belief::{BeliefBound, BeliefBudget, belief_upper_bound};
+use crate::certify::belief::{BeliefBound, BeliefBudget, belief_upper_bound, check_below_belief};
 use crate::certify::{lower_value_or_trivial, upper_value_or_trivial};
 use crate::controller::{Fsc, Role};
 use crate::game::{ModelError, Posg};
@@ -1099,7 +1099,9 @@ fn finalise(
         chosen.certified_lower =
             match crate::certify::lower_bound(game, c.not_phi, &chosen.defender) {
                 Ok(bound) => {
-                    check_below_belief(&bound, chosen.belief_bound)?;
+                    if let Some(belief) = &chosen.belief_bound {
+                        check_below_belief(&bound, belief)?;
+                    }
                     Some(bound.value)
                 }
                 Err(error) if error.is_numerical() => None,
@@ -1108,29 +1110,6 @@ fn finalise(
         phases.certification += clock.elapsed().as_secs_f64();
     }
     Ok(chosen)
-}
-
-/// Checks that the certified lower bound `lower` is at most the belief
-/// bound `belief` (which holds for every defender) up to its error bound:
-/// exact numbers always are, so anything else is a numerical failure,
-/// never a bracket.
-fn check_below_belief(
-    lower: &crate::certify::Bound,
-    belief: Option<BeliefBound>,
-) -> Result<(), OptimiseError> {
-    let Some(belief) = belief else {
-        return Ok(());
-    };
-    if lower.value <= belief.value + lower.error_bound + 4.0 * f64::EPSILON {
-        return Ok(());
-    }
-    Err(crate::certify::CertifyError::Inconsistent {
-        lower: lower.value,
-        upper: belief.value,
-        lower_error: lower.error_bound,
-        upper_error: 0.0,
-    }
-    .into())
 }
 
 /// The returned defender's full best response (its worst-case estimate,

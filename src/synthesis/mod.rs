@@ -205,8 +205,8 @@ pub struct Settings {
     pub clause_budget: usize,
     /// Seconds the SAT solver (with the lazy engine's judging) may take in
     /// all (0: no limit); running out is an error for `support`; `solve` and
-    /// `sweep` give the almost-sure attempt a hundredth of it and the
-    /// positive one a tenth, and note a timeout and go on without.
+    /// `sweep` give the almost-sure attempt 0.4% of it and the positive one
+    /// a tenth, and note a timeout and go on without.
     #[arg(
         id = "synthesis_time_budget",
         long = "synthesis-time-budget",
