@@ -25,7 +25,7 @@
 //! with its probabilities rounded up to doubles, its maximal reachability
 //! proved by the optimality certificate (method.md section 8), and that
 //! proved vector is checked in integers to be excessive for the exact
-//! belief MDP ([`Exploration::excessive`]): it then bounds the exact least
+//! belief MDP (`Exploration::excessive`): it then bounds the exact least
 //! fixed point, whatever the rounding.
 
 use std::collections::hash_map::Entry;
