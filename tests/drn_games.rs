@@ -401,6 +401,25 @@ fn solve_proves_a_pomdps_optimum_with_the_belief_bound() {
     let structure = &summary["structures"][0];
     assert_eq!(structure["status"], "gap-closed", "{structure}");
     assert_eq!(structure["belief_bound"]["complete"], true, "{structure}");
+    // The report says what the upper bound is.
+    let output = Command::new(env!("CARGO_BIN_EXE_posg-fsc"))
+        .args([
+            "solve",
+            "tests/data/drn/coin.drn",
+            "--ltl",
+            "F goal",
+            "--quiet",
+            "--force",
+        ])
+        .arg("--out")
+        .arg(dir.join("again"))
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert!(
+        stdout.contains("game value at most 0.666667 (the belief bound, every belief explored"),
+        "{stdout}"
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

@@ -210,8 +210,21 @@ pub fn run(args: SolveArgs) -> anyhow::Result<()> {
             }
         },
         |b| {
+            // Where the belief bound set the upper bound, it bounds every
+            // controller, not only the adversaries tried.
+            let belief = (report.belief_bound)
+                .filter(|belief| belief.value <= b.upper_bound)
+                .map_or(String::new(), |belief| {
+                    let explored = if belief.complete {
+                        ", every belief explored"
+                    } else {
+                        ""
+                    };
+                    format!(" (the belief bound{explored}: no defender of any memory does better)")
+                });
             format!(
-                "; certified: at least {:.6} against every adversary, game value at most {:.6}",
+                "; certified: at least {:.6} against every adversary, game value at most \
+                 {:.6}{belief}",
                 b.certified_lower, b.upper_bound
             )
         },
