@@ -312,15 +312,26 @@ pub fn upper_value_or_trivial(
 /// adversary, `lower_bound(defender) <= V(defender, adversary) <=
 /// upper_bound(adversary)`, so exact numbers always satisfy it.
 pub fn check_consistent(lower: &Bound, upper: &Bound) -> Result<(), CertifyError> {
-    let slack = lower.error_bound + upper.error_bound + 4.0 * f64::EPSILON;
-    if lower.value <= upper.value + slack {
+    check_values_consistent(
+        (lower.value, lower.error_bound),
+        (upper.value, upper.error_bound),
+    )
+}
+
+/// [`check_consistent`] on `(value, error bound)` pairs.
+fn check_values_consistent(
+    (lower, lower_error): (f64, f64),
+    (upper, upper_error): (f64, f64),
+) -> Result<(), CertifyError> {
+    let slack = lower_error + upper_error + 4.0 * f64::EPSILON;
+    if lower <= upper + slack {
         Ok(())
     } else {
         Err(CertifyError::Inconsistent {
-            lower: lower.value,
-            upper: upper.value,
-            lower_error: lower.error_bound,
-            upper_error: upper.error_bound,
+            lower,
+            upper,
+            lower_error,
+            upper_error,
         })
     }
 }

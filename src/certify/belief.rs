@@ -37,7 +37,7 @@ use num_traits::{One, ToPrimitive, Zero};
 use rustc_hash::FxHashMap;
 use serde::Serialize;
 
-use super::{Analysis, Bound, CertifyError, analyse};
+use super::{Analysis, Bound, CertifyError, analyse, check_values_consistent};
 use crate::automaton::Dra;
 use crate::controller::{Fsc, Role};
 use crate::game::Posg;
@@ -130,7 +130,7 @@ pub fn belief_upper_bound(
     Ok(Some(BeliefBound {
         value: result.upper[ROOT].min(1.0),
         beliefs: explored.beliefs.len(),
-        complete: explored.frontier.iter().all(|&f| !f),
+        complete: explored.complete(),
     }))
 }
 
@@ -153,28 +153,41 @@ struct Belief {
     entries: Vec<(usize, BigUint)>,
 }
 
-/// A belief MDP action: the probabilities of reaching `A` at once and of
-/// each successor belief (by index) rounded up to doubles, that of losing
-/// rounded to the nearest (it counts nothing where `A` is the target); and,
-/// exactly, the masses won and of each successor with the scales they read
-/// by.
+/// A belief MDP action, exactly: the masses that reach `A` at once, that
+/// reach a state that cannot reach it, and of each successor belief (by
+/// index), with the scales they read by as probabilities.
+#[derive(Default)]
 struct Move {
-    /// Reaching `A` at once.
-    won: f64,
-    /// Reaching a state that cannot reach `A`.
-    lost: f64,
-    /// Each successor belief, after its observation.
-    next: Vec<(usize, f64)>,
-    /// The mass won, read by `scale`.
-    won_mass: BigUint,
-    /// The mass lost, read by `scale`.
-    lost_mass: BigUint,
-    /// How `won_mass` reads as a probability.
+    /// The mass that reaches `A`, read by `scale`.
+    won: BigUint,
+    /// The mass that reaches a state that cannot reach `A`, read by
+    /// `scale`.
+    lost: BigUint,
+    /// Each successor belief, after its observation, with its mass, read
+    /// by `scale` times `2^observed_exponent`.
+    next: Vec<(usize, BigUint)>,
+    /// How `won` and `lost` read as probabilities.
     scale: Scale,
-    /// Each successor's mass, read by `scale` times `2^observed_exponent`.
-    next_masses: Vec<BigUint>,
     /// The power of 2 the observations' probabilities add to `scale`.
     observed_exponent: i64,
+}
+
+impl Move {
+    /// How the successors' masses read as probabilities.
+    fn observed_scale(&self) -> Scale {
+        Scale {
+            exponent: self.scale.exponent + self.observed_exponent,
+            denominator: self.scale.denominator.clone(),
+        }
+    }
+}
+
+/// What the exploration did with a belief.
+enum Expansion {
+    /// Its moves, one per action its observation enables.
+    Expanded(Vec<Move>),
+    /// Not expanded: it leaves with its fully informed bound.
+    Frontier(f64),
 }
 
 /// A double `mantissa * 2^exponent`, exactly.
@@ -214,8 +227,8 @@ impl Dyadic {
 }
 
 /// How integer masses read as probabilities: `mass * 2^exponent /
-/// denominator`.
-#[derive(Debug, Clone)]
+/// denominator` (the default, a placeholder, reads nothing).
+#[derive(Debug, Clone, Default)]
 struct Scale {
     /// The power of 2.
     exponent: i64,
@@ -247,10 +260,10 @@ impl Scale {
 
     /// The probability of `mass`, rounded up to a double.
     fn above(&self, mass: &BigUint) -> f64 {
-        let nearest = self.nearest(mass);
-        if nearest == 0.0 && mass.is_zero() {
+        if mass.is_zero() {
             return 0.0;
         }
+        let nearest = self.nearest(mass);
         let (numer, denom) = self.ratio(mass);
         let d = Dyadic::of_nonnegative(nearest);
         let shift = |x: BigUint, by: i64| if by >= 0 { x << by as usize } else { x };
@@ -298,10 +311,9 @@ struct Exploration<'a> {
     ids: FxHashMap<Belief, usize>,
     /// The root's move (the initial distribution split by observation).
     root: Move,
-    /// Each expanded belief's moves, one per enabled action.
-    moves: Vec<Vec<Move>>,
-    /// Per belief: not expanded.
-    frontier: Vec<bool>,
+    /// What became of each belief, in order (the beliefs not yet taken
+    /// have none).
+    expansions: Vec<Expansion>,
     /// The entries of the beliefs met.
     entries: usize,
     /// The bits of those entries' weights.
@@ -319,21 +331,8 @@ impl<'a> Exploration<'a> {
             in_target: accepting_union(&analysis.mdp, &analysis.accepting),
             beliefs: Vec::new(),
             ids: FxHashMap::default(),
-            root: Move {
-                won: 0.0,
-                lost: 0.0,
-                next: Vec::new(),
-                won_mass: BigUint::zero(),
-                lost_mass: BigUint::zero(),
-                scale: Scale {
-                    exponent: 0,
-                    denominator: BigUint::one(),
-                },
-                next_masses: Vec::new(),
-                observed_exponent: 0,
-            },
-            moves: Vec::new(),
-            frontier: Vec::new(),
+            root: Move::default(),
+            expansions: Vec::new(),
             entries: 0,
             bits: 0,
         }
@@ -352,23 +351,25 @@ impl<'a> Exploration<'a> {
             denominator: BigUint::one(),
         };
         self.root = self.split(masses, &scale);
-        let mut expanded = 0;
-        while expanded < self.beliefs.len() {
-            let within = expanded < self.budget.beliefs
+        while self.expansions.len() < self.beliefs.len() {
+            let i = self.expansions.len();
+            let within = i < self.budget.beliefs
                 && self.entries <= self.budget.entries
                 && self.bits <= self.budget.bits
-                && self.small_weights(&self.beliefs[expanded]);
-            if within {
-                let moves = self.expand(expanded);
-                self.moves.push(moves);
-                self.frontier.push(false);
+                && self.small_weights(&self.beliefs[i]);
+            let expansion = if within {
+                Expansion::Expanded(self.expand(i))
             } else {
-                self.moves.push(Vec::new());
-                self.frontier.push(true);
-            }
-            expanded += 1;
+                Expansion::Frontier(self.informed_bound(i))
+            };
+            self.expansions.push(expansion);
         }
         self
+    }
+
+    /// Whether every belief met was expanded.
+    fn complete(&self) -> bool {
+        (self.expansions.iter()).all(|e| matches!(e, Expansion::Expanded(_)))
     }
 
     /// Whether every weight of `belief` is within the budget's bits.
@@ -444,33 +445,24 @@ impl<'a> Exploration<'a> {
                 _ => by_observation.push((o, vec![(m, mass)])),
             }
         }
-        let observed_scale = Scale {
-            exponent: scale.exponent + least,
-            denominator: scale.denominator.clone(),
-        };
-        let mut next = Vec::new();
-        let mut next_masses = Vec::new();
-        for (o, entries) in by_observation {
-            let total: BigUint = entries.iter().map(|(_, w)| w).sum();
-            let probability = observed_scale.above(&total);
-            let divisor = (entries.iter()).fold(BigUint::zero(), |g, (_, w)| g.gcd(w));
-            let belief = Belief {
-                observation: o,
-                entries: (entries.into_iter())
-                    .map(|(m, w)| (m, w / &divisor))
-                    .collect(),
-            };
-            next.push((self.id(belief), probability));
-            next_masses.push(total);
-        }
+        let next = (by_observation.into_iter())
+            .map(|(o, entries)| {
+                let total: BigUint = entries.iter().map(|(_, w)| w).sum();
+                let divisor = (entries.iter()).fold(BigUint::zero(), |g, (_, w)| g.gcd(w));
+                let belief = Belief {
+                    observation: o,
+                    entries: (entries.into_iter())
+                        .map(|(m, w)| (m, w / &divisor))
+                        .collect(),
+                };
+                (self.id(belief), total)
+            })
+            .collect();
         Move {
-            won: scale.above(&won),
-            lost: scale.nearest(&lost),
+            won,
+            lost,
             next,
-            won_mass: won,
-            lost_mass: lost,
             scale: scale.clone(),
-            next_masses,
             observed_exponent: least,
         }
     }
@@ -519,13 +511,16 @@ impl<'a> Exploration<'a> {
         }
         add_move(&mut builder, &self.root);
         builder.end_state();
-        for (i, moves) in self.moves.iter().enumerate() {
-            if self.frontier[i] {
-                let bound = self.informed_bound(i);
-                builder.add_action([(WON, bound), (LOST, 1.0 - bound)]);
-            }
-            for step in moves {
-                add_move(&mut builder, step);
+        for expansion in &self.expansions {
+            match expansion {
+                Expansion::Expanded(moves) => {
+                    for step in moves {
+                        add_move(&mut builder, step);
+                    }
+                }
+                Expansion::Frontier(bound) => {
+                    builder.add_action([(WON, *bound), (LOST, 1.0 - bound)]);
+                }
             }
             builder.end_state();
         }
@@ -554,9 +549,9 @@ impl<'a> Exploration<'a> {
         let at_most = |at: usize, step: &Move| holds(step, y[at], y[WON], |j| y[belief(j)]);
         y[WON] == 1.0
             && at_most(ROOT, &self.root)
-            && (0..self.beliefs.len()).all(|i| {
-                let frontier_holds = !self.frontier[i] || self.informed_bound(i) <= y[belief(i)];
-                frontier_holds && self.moves[i].iter().all(|step| at_most(belief(i), step))
+            && (self.expansions.iter().enumerate()).all(|(i, expansion)| match expansion {
+                Expansion::Expanded(moves) => moves.iter().all(|step| at_most(belief(i), step)),
+                Expansion::Frontier(bound) => *bound <= y[belief(i)],
             })
     }
 }
@@ -568,10 +563,10 @@ impl<'a> Exploration<'a> {
 /// masses' common denominator cancelled.
 fn holds(step: &Move, y_at: f64, y_won: f64, y: impl Fn(usize) -> f64) -> bool {
     let observed = step.scale.exponent + step.observed_exponent;
-    let masses = [(&step.won_mass, step.scale.exponent, y_won)]
+    let masses = [(&step.won, step.scale.exponent, y_won)]
         .into_iter()
-        .chain([(&step.lost_mass, step.scale.exponent, 0.0)])
-        .chain((step.next.iter().zip(&step.next_masses)).map(|((j, _), m)| (m, observed, y(*j))));
+        .chain([(&step.lost, step.scale.exponent, 0.0)])
+        .chain((step.next.iter()).map(|(j, m)| (m, observed, y(*j))));
     // `(mass * y, mass)` as `(integer, exponent)` pairs.
     let mut weighted: Vec<(BigUint, i64)> = Vec::new();
     let mut total: Vec<(BigUint, i64)> = Vec::new();
@@ -609,22 +604,19 @@ fn exact_sum_at_most(left: &[(BigUint, i64)], right: &[(BigUint, i64)]) -> bool 
 /// its error bound: exact numbers always are, so anything else is a
 /// numerical failure, never a bracket.
 pub fn check_below_belief(lower: &Bound, belief: &BeliefBound) -> Result<(), CertifyError> {
-    if lower.value <= belief.value + lower.error_bound + 4.0 * f64::EPSILON {
-        return Ok(());
-    }
-    Err(CertifyError::Inconsistent {
-        lower: lower.value,
-        upper: belief.value,
-        lower_error: lower.error_bound,
-        upper_error: 0.0,
-    })
+    check_values_consistent((lower.value, lower.error_bound), (belief.value, 0.0))
 }
 
 /// Adds `step` as an action of the current state (beliefs after [`ROOT`]),
-/// with its probabilities as doubles (rounded up but the lost one).
+/// its probabilities rounded up to doubles but the lost one (rounded to
+/// the nearest: it counts nothing where [`WON`] is the target).
 fn add_move(builder: &mut MdpBuilder, step: &Move) {
-    let beliefs = step.next.iter().map(|&(j, p)| (ROOT + 1 + j, p));
-    let ends = [(WON, step.won), (LOST, step.lost)];
+    let observed = step.observed_scale();
+    let beliefs = (step.next.iter()).map(|(j, mass)| (ROOT + 1 + j, observed.above(mass)));
+    let ends = [
+        (WON, step.scale.above(&step.won)),
+        (LOST, step.scale.nearest(&step.lost)),
+    ];
     builder.add_action(ends.into_iter().chain(beliefs));
 }
 
@@ -702,22 +694,17 @@ mod tests {
 
     /// A move whose masses are `0.8` and `0.2` as doubles (which sum to 1
     /// plus an ulp) to two beliefs, read over the masses' exact total.
-    fn move_of_doubles(won: f64) -> Move {
+    fn move_of_doubles() -> Move {
         let (a, b) = (Dyadic::of(0.8), Dyadic::of(0.2));
         let least = a.exponent.min(b.exponent);
         let mass = |d: Dyadic| BigUint::from(d.mantissa) << (d.exponent - least) as usize;
         Move {
-            won,
-            lost: 0.0,
-            next: vec![(0, 0.8), (1, 0.2)],
-            won_mass: BigUint::zero(),
-            lost_mass: BigUint::zero(),
+            next: vec![(0, mass(a)), (1, mass(b))],
             scale: Scale {
                 exponent: least,
                 denominator: BigUint::one(),
             },
-            next_masses: vec![mass(a), mass(b)],
-            observed_exponent: 0,
+            ..Move::default()
         }
     }
 
@@ -726,7 +713,7 @@ mod tests {
     /// an ulp below its successors' average does not.
     #[test]
     fn a_move_holds_exactly_on_its_normalised_row() {
-        let step = move_of_doubles(0.0);
+        let step = move_of_doubles();
         let y = [0.75, 0.75];
         assert!(holds(&step, 0.75, 1.0, |j| y[j]));
         let below = f64::from_bits(0.75f64.to_bits() - 1);
