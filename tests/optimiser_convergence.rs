@@ -9,6 +9,7 @@ mod common;
 use std::process::Command;
 
 use posg_fsc::automaton::Dra;
+use posg_fsc::certify::belief::BeliefBoundOnce;
 use posg_fsc::certify::lower_bound;
 use posg_fsc::controller::{Choice, Fsc, Role, Support};
 use posg_fsc::game::Posg;
@@ -401,14 +402,15 @@ fn a_warm_started_sweep_is_monotone_in_the_defenders_size() {
         if let Some(smaller) = &previous {
             start = warm_started(start, &smaller.defender, false).unwrap();
         }
+        let belief = BeliefBoundOnce::new(&g, &phi, settings.solver_settings());
         let mut solution = posg_fsc::optimise::optimise_structures(
             &g,
-            &phi,
-            Some(&not_phi),
+            (&phi, Some(&not_phi)),
             &[start],
             &settings,
             |_, _| Box::new(()),
             &posg_fsc::optimise::Cancel::new(),
+            &belief,
         )
         .unwrap();
         if let Some(smaller) = &previous {
@@ -519,12 +521,12 @@ fn the_structures_of_a_run_search_one_after_another_alike() {
     let both = Searches::default();
     posg_fsc::optimise::optimise_structures(
         &g,
-        &phi,
-        Some(&not_phi),
+        (&phi, Some(&not_phi)),
         &[structure.clone(), structure],
         &settings,
         |index, _| Box::new(Searches(both.0.clone(), index)),
         &Cancel::new(),
+        &BeliefBoundOnce::new(&g, &phi, settings.solver_settings()),
     )
     .unwrap();
     let alone = alone.0.lock().unwrap().clone();

@@ -2,7 +2,7 @@
 //! certified bounds (docs/method.md section 6), support synthesis by SAT
 //! (section 7) and the LTL translation, as the commands of the same names.
 
-use posg_fsc::certify::belief::{BeliefBudget, belief_upper_bound, check_below_belief};
+use posg_fsc::certify::belief::belief_bound_above;
 use posg_fsc::certify::{Bound as CertifiedBound, check_consistent, lower_bound, upper_bound};
 use posg_fsc::controller::Role;
 use posg_fsc::ltl;
@@ -69,10 +69,7 @@ pub fn certify<'py>(
             None => None,
         };
         let settings = SolverSettings::default();
-        let belief = belief_upper_bound(posg, &objective.phi, &BeliefBudget::default(), &settings)?;
-        if let Some(belief) = &belief {
-            check_below_belief(&lower, belief)?;
-        }
+        let belief = belief_bound_above(posg, &objective.phi, &lower, &settings)?;
         Ok::<_, posg_fsc::certify::CertifyError>((lower, upper, belief))
     })?;
     let report = PyDict::new(py);

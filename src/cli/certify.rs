@@ -14,9 +14,7 @@ use std::path::{Path, PathBuf};
 
 use clap::Args;
 use posg_fsc::automaton::Dra;
-use posg_fsc::certify::belief::{
-    BeliefBound, BeliefBudget, belief_upper_bound, check_below_belief,
-};
+use posg_fsc::certify::belief::{BeliefBound, belief_bound_above};
 use posg_fsc::certify::strategy::StrategyFile;
 use posg_fsc::certify::{Bound, check_consistent, lower_bound_within, upper_bound_within};
 use posg_fsc::controller::Role;
@@ -124,12 +122,8 @@ pub fn run(args: CertifyArgs) -> anyhow::Result<()> {
         }
         None => None,
     };
-    let budget = BeliefBudget::default();
-    let belief = belief_upper_bound(&game, &phi_dra, &budget, &settings)?;
-    if let Some(belief) = &belief {
-        // The belief bound holds for every defender, this one included.
-        check_below_belief(&lower, belief)?;
-    }
+    // The belief bound holds for every defender, this one included.
+    let belief = belief_bound_above(&game, &phi_dra, &lower, &settings)?;
     common::print_json(&Report {
         provenance: Provenance::current(),
         game: args.game.display().to_string(),

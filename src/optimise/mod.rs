@@ -84,7 +84,7 @@ use serde::Serialize;
 use thiserror::Error;
 
 use crate::automaton::Dra;
-use crate::certify::belief::{BeliefBound, BeliefBudget, belief_upper_bound, check_below_belief};
+use crate::certify::belief::{BeliefBound, BeliefBoundOnce, check_below_belief};
 use crate::certify::{lower_value_or_trivial, upper_value_or_trivial};
 use crate::controller::{Fsc, Role};
 use crate::game::{ModelError, Posg};
@@ -386,21 +386,29 @@ impl Solution {
 /// be solved to the tolerance is dropped and named in
 /// [`Solution::failed`] (an error only if every structure fails). With an
 /// automaton `negated` for !phi, every best-response check also certifies
-/// (see `Certifier`). Every run stops early once `cancel` is set.
+/// (see `Certifier`); a single-player run takes the belief bound from
+/// `belief` (the run's, for `game` and `dra`). Every run stops early once
+/// `cancel` is set.
+#[allow(clippy::too_many_arguments)]
 pub fn optimise_structures<F>(
     game: &Posg,
-    dra: &Dra,
-    negated: Option<&Dra>,
+    (dra, negated): (&Dra, Option<&Dra>),
     structures: &[Structure],
     settings: &Settings,
     observer: F,
     cancel: &Cancel,
+    belief: &BeliefBoundOnce<'_>,
 ) -> Result<Solution, OptimiseError>
 where
     F: Fn(usize, &Structure) -> Box<dyn Observer + Send> + Sync,
 {
     settings.validate()?;
-    let run = StructuresRun::new((game, dra, negated), settings, cancel, search_stream(0));
+    let run = StructuresRun::new(
+        (game, dra, negated),
+        (settings, cancel),
+        search_stream(0),
+        belief,
+    );
     let mut watchers: Vec<_> = (structures.iter().enumerate())
         .map(|(index, structure)| observer(index, structure))
         .collect();
@@ -463,11 +471,12 @@ pub fn optimise_structure(
     cancel: &Cancel,
 ) -> Result<StructureOutcome, OptimiseError> {
     settings.validate()?;
+    let belief = BeliefBoundOnce::new(game, dra, settings.solver_settings());
     let run = StructuresRun::new(
         (game, dra, negated),
-        settings,
-        cancel,
+        (settings, cancel),
         search_stream(stream),
+        &belief,
     );
     let presolved = run.presolve(structure, observer)?;
     run.race(structure, stream, observer, presolved)
@@ -482,8 +491,8 @@ fn search_stream(stream: u64) -> u64 {
 
 /// What the structures of one run share: the game, the automata of phi and
 /// (with a certifier) of !phi, the settings, the cancellation, when the
-/// run began, and the memo and random stream of the local searches before
-/// the races ([`search_supports`]).
+/// run began, the memo and random stream of the local searches before
+/// the races ([`search_supports`]), and the belief bound.
 struct StructuresRun<'a> {
     game: &'a Posg,
     dra: &'a Dra,
@@ -493,6 +502,7 @@ struct StructuresRun<'a> {
     started: Instant,
     memo: local_search::SearchMemo,
     search_stream: u64,
+    belief: &'a BeliefBoundOnce<'a>,
 }
 
 /// The local search before a structure's race ([`search_supports`]): its
@@ -505,12 +515,12 @@ struct Presolved {
 impl<'a> StructuresRun<'a> {
     /// A run on `game` with the automata of phi and (with a certifier)
     /// of !phi, beginning now, nothing searched yet, its searches on
-    /// random stream `search_stream`.
+    /// random stream `search_stream`, its belief bound `belief`.
     fn new(
         (game, dra, negated): (&'a Posg, &'a Dra, Option<&'a Dra>),
-        settings: &'a Settings,
-        cancel: &'a Cancel,
+        (settings, cancel): (&'a Settings, &'a Cancel),
         search_stream: u64,
+        belief: &'a BeliefBoundOnce<'a>,
     ) -> Self {
         Self {
             game,
@@ -521,6 +531,7 @@ impl<'a> StructuresRun<'a> {
             started: Instant::now(),
             memo: local_search::SearchMemo::default(),
             search_stream,
+            belief,
         }
     }
 
@@ -620,6 +631,14 @@ impl<'a> StructuresRun<'a> {
         // its checks' value is exact already.
         let run_certifier = certifier.filter(|_| method == Method::MaxMin);
         let floor = presolved.as_ref().map(|climbed| climbed.bound);
+        let clock_ceiling = Instant::now();
+        let ceiling = match (method, certifier) {
+            (Method::Ascent, Some(c)) => {
+                Some(single_player_upper_bound(c, structure, self.belief)?)
+            }
+            _ => None,
+        };
+        let ceiling_seconds = clock_ceiling.elapsed().as_secs_f64();
         let racers = (0..settings.starts)
             .into_par_iter()
             .map(|i| {
@@ -632,7 +651,7 @@ impl<'a> StructuresRun<'a> {
                 )
             })
             .collect();
-        let mut finished = race(racers, settings, floor);
+        let mut finished = race(racers, settings, (floor, ceiling));
         if run_certifier.is_none() {
             let fresh = || structure_objective(game, dra, structure, settings);
             settle(&mut finished, clock, &fresh)?;
@@ -679,6 +698,7 @@ impl<'a> StructuresRun<'a> {
                 problem: "must be at least 1".into(),
             })?;
         let mut phases = presolve;
+        phases.certification += ceiling_seconds;
         for run in &runs {
             phases.add(&run.outcome.phases);
         }
@@ -695,7 +715,7 @@ impl<'a> StructuresRun<'a> {
             &mut run,
             (upper_bound, presolved),
             settings,
-            (method, clock, &self.memo),
+            (method, clock, &self.memo, self.belief),
             &mut phases,
         )?;
         // Whichever candidate closed it, a closed bracket is why the run ended.
@@ -801,6 +821,22 @@ fn search_supports(
         },
         &run.memo,
     )?))
+}
+
+/// The single player's upper bound on what any defender of `structure`
+/// achieves, before its race: the fully informed optimum against the
+/// structure's adversary, or the run's belief bound where the SAT source
+/// has explored it already and it is lower (it is not explored for this:
+/// where the race or its rounding meets the fully informed optimum,
+/// `finalise` needs no belief bound either).
+fn single_player_upper_bound(
+    certifier: Certifier<'_>,
+    structure: &Structure,
+    belief: &BeliefBoundOnce<'_>,
+) -> Result<f64, OptimiseError> {
+    let informed = upper_value_or_trivial(certifier.game, certifier.phi, &structure.adversary)?;
+    let explored = belief.known().flatten().map(|b| b.value);
+    Ok(explored.map_or(informed, |b| b.min(informed)))
 }
 
 /// Whether start outcome `a` is kept before `b`: a start that closed the
@@ -968,7 +1004,8 @@ type Scored = (f64, Option<(f64, Fsc)>);
 /// completes its numbers: worst-case estimate, certified lower bound and
 /// the smallest game upper bound. Its best responses end at the
 /// [`Settings::final_deadline`] of the run, begun at `started`; its local
-/// search shares the run's `memo`.
+/// search shares the run's `memo`; a single player's belief bound comes
+/// from the run's `belief`.
 #[allow(clippy::too_many_arguments)]
 fn finalise(
     game: &Posg,
@@ -977,7 +1014,12 @@ fn finalise(
     run: &mut StartRun,
     (upper_bound, presolved): (Option<f64>, Option<local_search::Climbed>),
     settings: &Settings,
-    (method, started, memo): (Method, Instant, &local_search::SearchMemo),
+    (method, started, memo, belief): (
+        Method,
+        Instant,
+        &local_search::SearchMemo,
+        &BeliefBoundOnce<'_>,
+    ),
     phases: &mut PhaseSeconds,
 ) -> Result<Chosen, OptimiseError> {
     let best = &run.outcome.best;
@@ -1022,9 +1064,7 @@ fn finalise(
         let clock = Instant::now();
         chosen.upper_bound = Some(upper_value_or_trivial(game, c.phi, &chosen.adversary)?);
         if !chosen.bracket_closed(settings) {
-            let budget = BeliefBudget::default();
-            chosen.belief_bound =
-                belief_upper_bound(game, c.phi, &budget, &settings.solver_settings())?;
+            chosen.belief_bound = belief.get()?;
             if let Some(belief) = chosen.belief_bound {
                 optimiser::tighten(&mut chosen.upper_bound, belief.value);
             }

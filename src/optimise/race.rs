@@ -10,9 +10,11 @@
 //! closed the certified gap (its own, or the best score against the
 //! smallest game upper bound of any start: every start's upper bound
 //! bounds the same game value), the others are stopped as outpaced too:
-//! none can certify more than `gap_tolerance` above it; a bound proved
-//! before the race (the local search's) counts as a best score here.
-//! Decisions are taken
+//! none can certify more than `gap_tolerance` above it; a lower bound
+//! proved before the race (the local search's) counts as a best score
+//! here; where an upper bound was proved before the race (a single
+//! player's, whose starts have none of their own), a start meeting it
+//! ends the race as well. Decisions are taken
 //! between rounds on numbers at the same iteration of every start, so
 //! they, and every start's iterations, do not depend on thread timing: a
 //! seeded run is reproducible.
@@ -75,16 +77,28 @@ impl<'a, O: Observer + Send> Racer<'a, O> {
     }
 }
 
+/// A best score this close to the ceiling (the upper bound proved before
+/// the race) has met it: no defender does better, beyond the values'
+/// accuracy (the solver's tolerance, 1e-9). Only a met ceiling ends a
+/// single player's race: a start within `gap_tolerance` of it still
+/// climbs to it (on PRISM's grid-avoid-4-0 with 1 node, stopping within
+/// `gap_tolerance` reported 0.928530 for the optimum 0.928571), where its
+/// converging steps cost little.
+pub const CEILING_MET: f64 = 1e-8;
+
 /// Runs every start (an error in place of a start that failed to begin
 /// or failed later) until each stops; returns each start's optimiser and
 /// outcome, or its error. `floor` is a certified lower bound already
 /// proved for a defender outside the race (the local search's, run before
 /// it): once it is within `gap_tolerance` of a start's upper bound, the
-/// race is over.
+/// race is over. `ceiling` is an upper bound on every defender's score
+/// proved before the race (a single player's, whose starts check no
+/// upper bound of their own): once a start's best score meets it
+/// ([`CEILING_MET`]), the race is over too.
 pub(super) fn race<'a, O: Observer + Send>(
     mut racers: Vec<Result<Racer<'a, O>, OptimiseError>>,
     settings: &Settings,
-    floor: Option<f64>,
+    (floor, ceiling): (Option<f64>, Option<f64>),
 ) -> Vec<Result<(Optimiser<'a>, RunOutcome), OptimiseError>> {
     let mut last = 0usize;
     while racers
@@ -100,7 +114,7 @@ pub(super) fn race<'a, O: Observer + Send>(
                 *entry = Err(error);
             }
         });
-        stop_the_outpaced(&mut racers, settings, floor);
+        stop_the_outpaced(&mut racers, settings, (floor, ceiling));
         last = last.saturating_mul(2).saturating_add(1);
     }
     racers
@@ -111,11 +125,11 @@ pub(super) fn race<'a, O: Observer + Send>(
 
 /// After a round: stops each running start outpaced by the best score of
 /// any start, or by a closed gap (module documentation; `floor` counts as
-/// a score), and records each start's best score.
+/// a score) or a met `ceiling`, and records each start's best score.
 fn stop_the_outpaced<O>(
     racers: &mut [Result<Racer<'_, O>, OptimiseError>],
     settings: &Settings,
-    floor: Option<f64>,
+    (floor, ceiling): (Option<f64>, Option<f64>),
 ) {
     let started = || racers.iter().filter_map(|entry| entry.as_ref().ok());
     let leader = started()
@@ -125,7 +139,11 @@ fn stop_the_outpaced<O>(
     let upper = started()
         .filter_map(|racer| racer.run.upper_bound())
         .reduce(f64::min);
+    let met_ceiling = leader
+        .zip(ceiling)
+        .is_some_and(|(lower, ceiling)| ceiling - lower <= CEILING_MET);
     let gap_closed = started().any(|racer| racer.stopped == Some(Status::GapClosed))
+        || met_ceiling
         || leader
             .zip(upper)
             .is_some_and(|(lower, upper)| settings.gap_closed(lower, upper));

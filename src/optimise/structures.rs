@@ -23,7 +23,7 @@ use serde::{Deserialize, Serialize};
 use super::{OptimiseError, Settings, Structure, StructureOutcome};
 use crate::automaton::Dra;
 use crate::certify::almost_sure_win_possible;
-use crate::certify::belief::{BeliefBound, BeliefBudget, belief_upper_bound};
+use crate::certify::belief::BeliefBoundOnce;
 use crate::controller::{Fsc, Support};
 use crate::game::Posg;
 use crate::prune::{PruneSettings, prune};
@@ -92,13 +92,14 @@ pub struct Candidates {
 /// The structures of the sources in `settings.structures`, starting from
 /// `start` (the full structure or the user's controllers, always kept
 /// when it came from files). `negated`, an automaton for !phi, is needed
-/// by the `sat` source (which certifies what it finds).
+/// by the `sat` source (which certifies what it finds); `belief` is the
+/// run's belief bound of `game` for the automaton `dra` of phi.
 pub fn candidate_structures(
     game: &Posg,
-    dra: &Dra,
-    negated: Option<&Dra>,
+    (dra, negated): (&Dra, Option<&Dra>),
     start: Structure,
     settings: &Settings,
+    belief: &BeliefBoundOnce<'_>,
 ) -> Result<Candidates, OptimiseError> {
     let mut candidates = Candidates {
         structures: Vec::new(),
@@ -114,7 +115,7 @@ pub fn candidate_structures(
         let clock = Instant::now();
         let (found, note) = match source {
             StructureSource::Full => (vec![start.clone()], format!("the {} structure", start.name)),
-            StructureSource::Sat => synthesised(game, dra, negated, &start, settings)?,
+            StructureSource::Sat => synthesised(game, (dra, negated), &start, settings, belief)?,
             StructureSource::Paper => pruned(game, dra, &start, settings)?,
         };
         let mut note = SourceNote {
@@ -177,10 +178,10 @@ pub const POSITIVE_BUDGET_SHARE: f64 = 0.1;
 /// can then win almost surely against every adversary.
 fn synthesised(
     game: &Posg,
-    dra: &Dra,
-    negated: Option<&Dra>,
+    (dra, negated): (&Dra, Option<&Dra>),
     start: &Structure,
     settings: &Settings,
+    belief: &BeliefBoundOnce<'_>,
 ) -> Result<(Vec<Structure>, String), OptimiseError> {
     let Some(negated) = negated else {
         return Ok((
@@ -200,7 +201,7 @@ fn synthesised(
              sees the state wins with probability below 1 (decided on the graph)"
                 .to_string(),
         );
-    } else if let Some(belief) = belief_below_one(game, dra, settings)? {
+    } else if let Some(belief) = belief.get()?.filter(|belief| belief.value < 1.0) {
         modes.remove(0);
         reasons.push(format!(
             "almost-sure synthesis skipped: the belief bound proves that no defender wins with \
@@ -245,18 +246,6 @@ fn synthesised(
         }
     }
     Ok((Vec::new(), reasons.join("; ")))
-}
-
-/// The belief bound of a single-player game (method.md section 6), where
-/// it is below 1: no support then wins almost surely.
-fn belief_below_one(
-    game: &Posg,
-    dra: &Dra,
-    settings: &Settings,
-) -> Result<Option<BeliefBound>, OptimiseError> {
-    let budget = BeliefBudget::default();
-    let found = belief_upper_bound(game, dra, &budget, &settings.solver_settings())?;
-    Ok(found.filter(|belief| belief.value < 1.0))
 }
 
 /// The paper source: the structures Algorithm 1 keeps from `start`.

@@ -35,6 +35,7 @@ use std::time::Instant;
 use thiserror::Error;
 
 use crate::automaton::Dra;
+use crate::certify::belief::BeliefBoundOnce;
 use crate::certify::{self, Bracket, CertifyError};
 use crate::game::{ModelError, Posg};
 use crate::ltl::{self, TranslateError};
@@ -280,14 +281,15 @@ where
         cancel,
     } = job;
     let (phi, not_phi) = (&automata.phi, automata.not_phi.as_ref());
-    let candidates = optimise::candidate_structures(game, phi, not_phi, start, settings)?;
+    let belief = BeliefBoundOnce::new(game, phi, settings.solver_settings());
+    let candidates =
+        optimise::candidate_structures(game, (phi, not_phi), start, settings, &belief)?;
     let count = candidates.structures.len();
     let records: Vec<Arc<Mutex<Vec<IterationRecord>>>> =
         (0..count).map(|_| Arc::default()).collect();
     let mut solution = optimise::optimise_structures(
         game,
-        phi,
-        not_phi,
+        (phi, not_phi),
         &candidates.structures,
         settings,
         |index, structure| {
@@ -300,6 +302,7 @@ where
             Box::new(vec![given, Box::new(recorder)]) as Box<dyn Observer + Send>
         },
         &cancel,
+        &belief,
     )?;
     if let Some(floor) = floor {
         let nodes = solution.best().defender.num_nodes();
