@@ -29,7 +29,7 @@
 //! fixed point, whatever the rounding.
 
 use std::collections::hash_map::Entry;
-use std::sync::{Mutex, PoisonError};
+use std::sync::OnceLock;
 
 use num_bigint::{BigInt, BigUint};
 use num_integer::Integer;
@@ -144,8 +144,8 @@ pub struct BeliefBoundOnce<'a> {
     game: &'a Posg,
     dra_phi: &'a Dra,
     settings: SolverSettings,
-    /// The bound, once computed (`Some(None)`: there is none).
-    found: Mutex<Option<Option<BeliefBound>>>,
+    /// The bound, once computed (`None` inside: there is none).
+    found: OnceLock<Option<BeliefBound>>,
 }
 
 impl<'a> BeliefBoundOnce<'a> {
@@ -156,22 +156,29 @@ impl<'a> BeliefBoundOnce<'a> {
             game,
             dra_phi,
             settings,
-            found: Mutex::new(None),
+            found: OnceLock::new(),
         }
+    }
+
+    /// Whether this is the bound of `game` for the automaton `dra_phi`
+    /// (the same objects).
+    pub fn is_of(&self, game: &Posg, dra_phi: &Dra) -> bool {
+        std::ptr::eq(self.game, game) && std::ptr::eq(self.dra_phi, dra_phi)
     }
 
     /// The bound if it has been computed (`Some(None)`: there is none),
     /// without computing it.
     pub fn known(&self) -> Option<Option<BeliefBound>> {
-        *self.found.lock().unwrap_or_else(PoisonError::into_inner)
+        self.found.get().copied()
     }
 
     /// [`belief_upper_bound`] with [`BeliefBudget::default`], computed on
-    /// the first call (a call while another computes it waits for that
-    /// one); an error is returned, not kept.
+    /// the first call and kept; an error is returned, not kept. No lock is
+    /// held while it is computed (its solves may run on rayon's threads,
+    /// which may meanwhile take up another call): calls at once may each
+    /// compute it, and the first to finish keeps it (the same bound).
     pub fn get(&self) -> Result<Option<BeliefBound>, CertifyError> {
-        let mut found = self.found.lock().unwrap_or_else(PoisonError::into_inner);
-        if let Some(bound) = *found {
+        if let Some(&bound) = self.found.get() {
             return Ok(bound);
         }
         let bound = belief_upper_bound(
@@ -180,8 +187,7 @@ impl<'a> BeliefBoundOnce<'a> {
             &BeliefBudget::default(),
             &self.settings,
         )?;
-        *found = Some(bound);
-        Ok(bound)
+        Ok(*self.found.get_or_init(|| bound))
     }
 }
 
@@ -803,11 +809,12 @@ mod tests {
         assert_eq!(found.unwrap(), None);
     }
 
-    /// The bound kept once is the bound computed alone, for threads asking
-    /// at once, and kept where there is none; a check against a defender's
-    /// lower bound above it is an error.
+    /// The bound kept is the bound computed alone, for threads asking at
+    /// once; nothing is known before it is asked for, and where there is
+    /// none, that is kept; a check against a defender's lower bound above
+    /// it is an error.
     #[test]
-    fn the_bound_is_computed_once_and_kept() {
+    fn the_bound_is_kept_once_computed() {
         let game = coin();
         let dra = phi("F goal");
         let alone = bound(&game, "F goal", &BeliefBudget::default());
@@ -825,6 +832,7 @@ mod tests {
         let none = BeliefBoundOnce::new(&grid, &dra, SolverSettings::default());
         assert_eq!(none.get().unwrap(), None);
         assert_eq!(none.known(), Some(None));
+        assert!(once.is_of(&game, &dra) && !none.is_of(&game, &dra));
         let not_phi = Automata::from_ltl("F goal").unwrap().not_phi.unwrap();
         let defender = Fsc::uniform_enabled(Role::Defender, 1, game.defender());
         let certified = super::super::lower_bound(&game, &not_phi, &defender).unwrap();

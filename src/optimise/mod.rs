@@ -182,7 +182,9 @@ pub enum Status {
     TimeBudget,
     /// The best score stopped improving (at the widest logit bound).
     Stalled,
-    /// The certified gap closed to `gap_tolerance`.
+    /// The certified gap closed to `gap_tolerance`; or a single player's
+    /// value met the upper bound proved before its race (`race.rs`,
+    /// `CEILING_MET`).
     GapClosed,
     /// The single-player solver found no ascent step (a stationary point),
     /// or ten consecutive steps each gained less than `1e-12` of the value.
@@ -191,7 +193,8 @@ pub enum Status {
     Cancelled,
     /// Another start of the portfolio (or the local search before the
     /// race) was ahead by more than this one gained over the second half of
-    /// its run, or closed the certified gap (`race.rs`); or the start's
+    /// its run, or closed the certified gap or met the single player's
+    /// upper bound (`race.rs`); or the start's
     /// early probe against the local search's bound found it out of reach
     /// (`optimiser.rs`, `FLOOR_PROBE_CHECKS`).
     Outpaced,
@@ -389,7 +392,6 @@ impl Solution {
 /// (see `Certifier`); a single-player run takes the belief bound from
 /// `belief` (the run's, for `game` and `dra`). Every run stops early once
 /// `cancel` is set.
-#[allow(clippy::too_many_arguments)]
 pub fn optimise_structures<F>(
     game: &Posg,
     (dra, negated): (&Dra, Option<&Dra>),
@@ -492,7 +494,8 @@ fn search_stream(stream: u64) -> u64 {
 /// What the structures of one run share: the game, the automata of phi and
 /// (with a certifier) of !phi, the settings, the cancellation, when the
 /// run began, the memo and random stream of the local searches before
-/// the races ([`search_supports`]), and the belief bound.
+/// the races ([`search_supports`]), the belief bound, and its value where
+/// it was explored before the run (the SAT source's).
 struct StructuresRun<'a> {
     game: &'a Posg,
     dra: &'a Dra,
@@ -503,6 +506,7 @@ struct StructuresRun<'a> {
     memo: local_search::SearchMemo,
     search_stream: u64,
     belief: &'a BeliefBoundOnce<'a>,
+    belief_before: Option<f64>,
 }
 
 /// The local search before a structure's race ([`search_supports`]): its
@@ -515,13 +519,15 @@ struct Presolved {
 impl<'a> StructuresRun<'a> {
     /// A run on `game` with the automata of phi and (with a certifier)
     /// of !phi, beginning now, nothing searched yet, its searches on
-    /// random stream `search_stream`, its belief bound `belief`.
+    /// random stream `search_stream`, its belief bound `belief` (of
+    /// `game` and `dra`).
     fn new(
         (game, dra, negated): (&'a Posg, &'a Dra, Option<&'a Dra>),
         (settings, cancel): (&'a Settings, &'a Cancel),
         search_stream: u64,
         belief: &'a BeliefBoundOnce<'a>,
     ) -> Self {
+        debug_assert!(belief.is_of(game, dra), "the belief bound of another game");
         Self {
             game,
             dra,
@@ -532,6 +538,9 @@ impl<'a> StructuresRun<'a> {
             memo: local_search::SearchMemo::default(),
             search_stream,
             belief,
+            // Read once, here: a structure's `finalise` may explore it while
+            // another structure's race is set up.
+            belief_before: belief.known().flatten().map(|b| b.value),
         }
     }
 
@@ -631,13 +640,17 @@ impl<'a> StructuresRun<'a> {
         // its checks' value is exact already.
         let run_certifier = certifier.filter(|_| method == Method::MaxMin);
         let floor = presolved.as_ref().map(|climbed| climbed.bound);
+        // A single player's upper bound before its race (its ceiling): the
+        // fully informed optimum, or the belief bound where the SAT source
+        // explored it and it is lower.
         let clock_ceiling = Instant::now();
-        let ceiling = match (method, certifier) {
+        let informed = match (method, certifier) {
             (Method::Ascent, Some(c)) => {
-                Some(single_player_upper_bound(c, structure, self.belief)?)
+                Some(upper_value_or_trivial(game, c.phi, &structure.adversary)?)
             }
             _ => None,
         };
+        let ceiling = informed.map(|u| self.belief_before.map_or(u, |b| b.min(u)));
         let ceiling_seconds = clock_ceiling.elapsed().as_secs_f64();
         let racers = (0..settings.starts)
             .into_par_iter()
@@ -713,7 +726,7 @@ impl<'a> StructuresRun<'a> {
             dra,
             certifier,
             &mut run,
-            (upper_bound, presolved),
+            (upper_bound, presolved, informed),
             settings,
             (method, clock, &self.memo, self.belief),
             &mut phases,
@@ -821,22 +834,6 @@ fn search_supports(
         },
         &run.memo,
     )?))
-}
-
-/// The single player's upper bound on what any defender of `structure`
-/// achieves, before its race: the fully informed optimum against the
-/// structure's adversary, or the run's belief bound where the SAT source
-/// has explored it already and it is lower (it is not explored for this:
-/// where the race or its rounding meets the fully informed optimum,
-/// `finalise` needs no belief bound either).
-fn single_player_upper_bound(
-    certifier: Certifier<'_>,
-    structure: &Structure,
-    belief: &BeliefBoundOnce<'_>,
-) -> Result<f64, OptimiseError> {
-    let informed = upper_value_or_trivial(certifier.game, certifier.phi, &structure.adversary)?;
-    let explored = belief.known().flatten().map(|b| b.value);
-    Ok(explored.map_or(informed, |b| b.min(informed)))
 }
 
 /// Whether start outcome `a` is kept before `b`: a start that closed the
@@ -1002,17 +999,18 @@ type Scored = (f64, Option<(f64, Fsc)>);
 /// certified lower bound with a certifier, the worst-case estimate
 /// without), keeps the best (the unrounded defender wins ties), and
 /// completes its numbers: worst-case estimate, certified lower bound and
-/// the smallest game upper bound. Its best responses end at the
-/// [`Settings::final_deadline`] of the run, begun at `started`; its local
-/// search shares the run's `memo`; a single player's belief bound comes
-/// from the run's `belief`.
+/// the smallest game upper bound (a single player's fully informed bound
+/// is `informed` where the race's ceiling computed it). Its best
+/// responses end at the [`Settings::final_deadline`] of the run, begun at
+/// `started`; its local search shares the run's `memo`; a single player's
+/// belief bound comes from the run's `belief`.
 #[allow(clippy::too_many_arguments)]
 fn finalise(
     game: &Posg,
     dra: &Dra,
     certifier: Option<Certifier<'_>>,
     run: &mut StartRun,
-    (upper_bound, presolved): (Option<f64>, Option<local_search::Climbed>),
+    (upper_bound, presolved, informed): (Option<f64>, Option<local_search::Climbed>, Option<f64>),
     settings: &Settings,
     (method, started, memo, belief): (
         Method,
@@ -1062,7 +1060,10 @@ fn finalise(
         // local search has nothing to find, and where it runs it stops
         // there.
         let clock = Instant::now();
-        chosen.upper_bound = Some(upper_value_or_trivial(game, c.phi, &chosen.adversary)?);
+        chosen.upper_bound = Some(match informed {
+            Some(informed) => informed,
+            None => upper_value_or_trivial(game, c.phi, &chosen.adversary)?,
+        });
         if !chosen.bracket_closed(settings) {
             chosen.belief_bound = belief.get()?;
             if let Some(belief) = chosen.belief_bound {

@@ -125,7 +125,8 @@ pub(super) fn race<'a, O: Observer + Send>(
 
 /// After a round: stops each running start outpaced by the best score of
 /// any start, or by a closed gap (module documentation; `floor` counts as
-/// a score) or a met `ceiling`, and records each start's best score.
+/// a score) or a met `ceiling` (a start that met it has closed the gap),
+/// and records each start's best score.
 fn stop_the_outpaced<O>(
     racers: &mut [Result<Racer<'_, O>, OptimiseError>],
     settings: &Settings,
@@ -149,6 +150,12 @@ fn stop_the_outpaced<O>(
             .is_some_and(|(lower, upper)| settings.gap_closed(lower, upper));
     for racer in racers.iter_mut().filter_map(|entry| entry.as_mut().ok()) {
         let best = racer.run.best_score();
+        let met = best
+            .zip(ceiling)
+            .is_some_and(|(best, ceiling)| ceiling - best <= CEILING_MET);
+        if met && racer.stopped.is_none() {
+            racer.stopped = Some(Status::GapClosed);
+        }
         if gap_closed && racer.stopped.is_none() {
             racer.stopped = Some(Status::Outpaced);
         }

@@ -101,6 +101,7 @@ pub fn candidate_structures(
     settings: &Settings,
     belief: &BeliefBoundOnce<'_>,
 ) -> Result<Candidates, OptimiseError> {
+    debug_assert!(belief.is_of(game, dra), "the belief bound of another game");
     let mut candidates = Candidates {
         structures: Vec::new(),
         notes: Vec::new(),
