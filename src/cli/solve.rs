@@ -230,17 +230,17 @@ pub fn run(args: SolveArgs) -> anyhow::Result<()> {
         },
     );
     print_text(&format!(
-        "structure {}: worst-case estimate {:.6} (last iterate value {:.6}) after {} iterations \
-         ({}, {}; best of {} starts; {} defender), {:.1} s; \
+        "structure {}: worst-case estimate {:.6} (last iterate value {:.6}) after {} \
+         ({}, {}; best of {}; {} defender), {:.1} s; \
          GMC {} states{bracket}\nwrote curve.csv, curve.{format}, defender.fsc.json, defender.dot, \
          adversary.fsc.json, summary.json to {}\n",
         report.name,
         report.worst_case,
         report.last_value,
-        report.iterations,
+        posg_fsc::output::counted(report.iterations, "iteration"),
         serde_json::to_value(report.method)?.as_str().unwrap_or("?"),
         serde_json::to_value(report.status)?.as_str().unwrap_or("?"),
-        report.starts.len(),
+        posg_fsc::output::counted(report.starts.len(), "start"),
         report.rounding,
         report.seconds,
         report.gmc.states,

@@ -12,7 +12,8 @@
 //!   atomically, under a lock, never mixing old and new results;
 //! * [`shard`]: a sweep split into shards (`sweep --shard K/N`), one
 //!   directory per size pair, and their merge into `sweep.csv`/`sweep.svg`;
-//! * [`slurm`]: the Slurm array job and merge job of a sharded sweep.
+//! * [`slurm`]: the Slurm array job and merge job of a sharded sweep;
+//! * [`counted`]: a count and its noun, as reports print them.
 
 mod directory;
 pub mod dot;
@@ -28,6 +29,23 @@ use std::fs::File;
 use std::path::Path;
 
 use crate::optimise::{IterationRecord, Observer, ObserverError};
+
+/// `count` `noun`s, the noun singular for one ("1 iteration", "4
+/// starts"), as reports and plot titles print counts.
+///
+/// ```
+/// use posg_fsc::output::counted;
+/// assert_eq!(counted(1, "iteration"), "1 iteration");
+/// assert_eq!(counted(4, "start"), "4 starts");
+/// assert_eq!(counted(0, "node"), "0 nodes");
+/// ```
+pub fn counted(count: usize, noun: &str) -> String {
+    if count == 1 {
+        format!("1 {noun}")
+    } else {
+        format!("{count} {noun}s")
+    }
+}
 
 /// Writes one CSV row per [`IterationRecord`]: `iteration, seconds, value,
 /// defender_gradient_norm, adversary_gradient_norm, defender_step,

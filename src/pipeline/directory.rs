@@ -269,13 +269,7 @@ fn curve_stem(count: usize, name: &str) -> String {
 /// The title of the curve of the structure `name`: game and objective, then
 /// the sizes (those of `best`, the same for every structure) and the name.
 fn plot_title(game: &Posg, automata: &Automata, best: &StructureOutcome, name: &str) -> Title {
-    let nodes = |n: usize| {
-        if n == 1 {
-            "1 node".to_string()
-        } else {
-            format!("{n} nodes")
-        }
-    };
+    let nodes = |n: usize| crate::output::counted(n, "node");
     let adversary = if game.has_adversary() {
         format!(", adversary {}", nodes(best.adversary.num_nodes()))
     } else {
