@@ -999,8 +999,9 @@ type Scored = (f64, Option<(f64, Fsc)>);
 /// certified lower bound with a certifier, the worst-case estimate
 /// without), keeps the best (the unrounded defender wins ties), and
 /// completes its numbers: worst-case estimate, certified lower bound and
-/// the smallest game upper bound (a single player's fully informed bound
-/// is `informed` where the race's ceiling computed it). Its best
+/// the smallest game upper bound (`informed`: a single player's fully
+/// informed bound, with a certifier, which the race's ceiling computed).
+/// Its best
 /// responses end at the [`Settings::final_deadline`] of the run, begun at
 /// `started`; its local search shares the run's `memo`; a single player's
 /// belief bound comes from the run's `belief`.
@@ -1053,17 +1054,14 @@ fn finalise(
         method,
         certifier,
     };
-    if let (Method::Ascent, Some(c)) = (method, certifier) {
+    if let Some(informed) = informed {
         // The single player's upper bound (its fully informed value, then,
         // where that leaves the bracket open, the belief bound of a POMDP)
         // first: where the run's value or a rounding already meets it, the
         // local search has nothing to find, and where it runs it stops
         // there.
         let clock = Instant::now();
-        chosen.upper_bound = Some(match informed {
-            Some(informed) => informed,
-            None => upper_value_or_trivial(game, c.phi, &chosen.adversary)?,
-        });
+        chosen.upper_bound = Some(informed);
         if !chosen.bracket_closed(settings) {
             chosen.belief_bound = belief.get()?;
             if let Some(belief) = chosen.belief_bound {

@@ -132,6 +132,13 @@ fn stop_the_outpaced<O>(
     settings: &Settings,
     (floor, ceiling): (Option<f64>, Option<f64>),
 ) {
+    // A start that met the ceiling has closed the gap.
+    let meets_ceiling = |score: f64| ceiling.is_some_and(|c| c - score <= CEILING_MET);
+    for racer in racers.iter_mut().filter_map(|entry| entry.as_mut().ok()) {
+        if racer.stopped.is_none() && racer.run.best_score().is_some_and(meets_ceiling) {
+            racer.stopped = Some(Status::GapClosed);
+        }
+    }
     let started = || racers.iter().filter_map(|entry| entry.as_ref().ok());
     let leader = started()
         .filter_map(|racer| racer.run.best_score())
@@ -140,22 +147,14 @@ fn stop_the_outpaced<O>(
     let upper = started()
         .filter_map(|racer| racer.run.upper_bound())
         .reduce(f64::min);
-    let met_ceiling = leader
-        .zip(ceiling)
-        .is_some_and(|(lower, ceiling)| ceiling - lower <= CEILING_MET);
+    // The leader also covers a start that stopped (converged) at the ceiling.
     let gap_closed = started().any(|racer| racer.stopped == Some(Status::GapClosed))
-        || met_ceiling
+        || leader.is_some_and(meets_ceiling)
         || leader
             .zip(upper)
             .is_some_and(|(lower, upper)| settings.gap_closed(lower, upper));
     for racer in racers.iter_mut().filter_map(|entry| entry.as_mut().ok()) {
         let best = racer.run.best_score();
-        let met = best
-            .zip(ceiling)
-            .is_some_and(|(best, ceiling)| ceiling - best <= CEILING_MET);
-        if met && racer.stopped.is_none() {
-            racer.stopped = Some(Status::GapClosed);
-        }
         if gap_closed && racer.stopped.is_none() {
             racer.stopped = Some(Status::Outpaced);
         }
