@@ -450,6 +450,45 @@ fn solve_proves_a_pomdps_optimum_with_the_belief_bound() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// `sweep` warm-starts each defender size from the smaller one's best: on
+/// an imported turn-based game, whose observations enable different
+/// actions, the embedded defender keeps to the enabled ones (it failed
+/// with "plays action `stay` ... which does not enable it" before), and
+/// the sizes' certified values do not fall.
+#[test]
+fn a_sweep_over_defender_sizes_runs_on_a_turn_based_game() {
+    let dir = temp_dir("pennies-sweep");
+    let output = Command::new(env!("CARGO_BIN_EXE_posg-fsc"))
+        .args(["sweep", PENNIES, "--props", "tests/data/drn/pennies.props"])
+        .args([
+            "--def-nodes",
+            "1..2",
+            "--adv-nodes",
+            "1",
+            "--quiet",
+            "--force",
+        ])
+        .arg("--out")
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    let csv = std::fs::read_to_string(dir.join("sweep.csv")).unwrap();
+    let mut lines = csv.lines().filter(|l| !l.starts_with('#'));
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let column = header.iter().position(|h| *h == "certified_lower").unwrap();
+    let values: Vec<f64> = lines
+        .map(|l| l.split(',').nth(column).unwrap().parse().unwrap())
+        .collect();
+    assert_eq!(values.len(), 2, "{csv}");
+    assert!(values[1] >= values[0] - 1e-9, "{csv}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 #[test]
 fn import_drn_takes_the_defender_from_the_property_file() {
     let run = |args: &[&str]| {

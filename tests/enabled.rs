@@ -11,6 +11,7 @@ use posg_fsc::controller::{Choice, Fsc, Role, Support};
 use posg_fsc::game::file::{from_json_str, to_json_string};
 use posg_fsc::game::{AdversaryAction, DefenderAction, Posg};
 use posg_fsc::ltl;
+use posg_fsc::optimise::{Structure, warm_started};
 use posg_fsc::prune::{PruneSettings, prune};
 use posg_fsc::value::Gmc;
 use posg_fsc::value::SolverSettings;
@@ -233,6 +234,61 @@ fn uniform_controllers_are_uniform_over_enabled_actions_only() {
     let defaulted =
         fsc_from_json(&controller.to_string(), "d.fsc.json", &g, Role::Defender).unwrap();
     assert_eq!(defaulted, fsc);
+}
+
+/// A warm start (a sweep's next size) embeds the smaller defender into the
+/// full structure's enabled pairs only: it fits the player, block by block
+/// on the full structure's support (it mixed over every action before).
+#[test]
+fn a_warm_start_embeds_into_the_enabled_actions_only() {
+    let g = game(&corridor());
+    let smaller = resolve("uniform:1", &g, Role::Defender).unwrap();
+    let full = Structure::full(&g, 2, 1, false);
+    let started = warm_started(full.clone(), &smaller, false).unwrap();
+    let (defender, support) = (&started.defender, &full.defender);
+    assert_eq!(defender.check_fits(g.defender()), Ok(()));
+    let pairs = |choices: &[Choice]| -> Vec<(usize, usize)> {
+        choices.iter().map(|c| (c.next, c.action)).collect()
+    };
+    for (h, o) in (0..2).flat_map(|h| (0..3).map(move |o| (h, o))) {
+        let block = defender.choices(h, o);
+        assert_eq!(
+            pairs(block),
+            pairs(support.choices(h, o)),
+            "block ({h}, {o})"
+        );
+        let total: f64 = block.iter().map(|c| c.probability).sum();
+        assert!(
+            (total - 1.0).abs() < 1e-12,
+            "block ({h}, {o}) sums to {total}"
+        );
+    }
+    // A structure without a pair the smaller defender plays is refused:
+    // node 0 under `dark` without `step` (action 0).
+    let blocks = (0..2)
+        .flat_map(|h| (0..3).map(move |o| (h, o)))
+        .map(|(h, o)| {
+            let mut block = support.choices(h, o).to_vec();
+            if (h, o) == (0, 0) {
+                block.retain(|c| c.action != 0);
+                let p = 1.0 / block.len() as f64;
+                block.iter_mut().for_each(|c| c.probability = p);
+            }
+            block
+        })
+        .collect();
+    let narrow = Fsc::new(Role::Defender, 2, 3, 3, vec![1.0, 0.0], blocks).unwrap();
+    let error = warm_started(
+        Structure {
+            defender: narrow,
+            ..full
+        },
+        &smaller,
+        false,
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(error.contains("outside the structure's support"), "{error}");
 }
 
 #[test]

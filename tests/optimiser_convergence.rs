@@ -375,8 +375,8 @@ fn padding_keeps_the_value_and_embedding_moves_it_by_at_most_the_mix() {
         let n = def.num_nodes() + 1;
         let padded = pad(&def, n).unwrap();
         assert!((value(&padded) - value(&def)).abs() < 1e-12);
-        let embedded = embed(&def, n, 1e-6, false).unwrap();
         let full = Structure::full(&g, n, 1, false).defender;
+        let embedded = embed(&def, &full, 1e-6, false).unwrap();
         assert!(
             (0..n)
                 .flat_map(|h| (0..full.num_observations()).map(move |o| (h, o)))

@@ -12,19 +12,29 @@ use crate::game::ModelError;
 /// so that it has the full support structure ([`embed`]).
 pub const WARM_START_MIX: f64 = 1e-6;
 
-/// `fsc` embedded into `nodes` nodes on the full support structure (every
-/// `(g', u)` in every block): block `(g, o)` is
-/// `(1 - mix) mu(. | g, o) + mix * uniform` for the old nodes `g < k`, and a
-/// copy of node 0's for the new nodes, so the new nodes are entered with
-/// probability at most `mix` per step and the value moves by `O(mix)`.
-/// The initial distribution is `fsc`'s padded with zeros, or, with
-/// `mix_initial`, mixed with the uniform one over all nodes like the blocks.
-pub fn embed(fsc: &Fsc, nodes: usize, mix: f64, mix_initial: bool) -> Result<Fsc, ModelError> {
-    let k = fsc.num_nodes();
+/// `fsc` embedded into the support structure `onto` (its nodes, `n >= k`,
+/// and in each block `(g, o)` its pairs `(g', u)`: for the full structure,
+/// every node with every action enabled under `o`): block `(g, o)` is
+/// `(1 - mix) mu(. | g, o) + mix * uniform` over `onto`'s pairs of that
+/// block, for the old nodes `g < k`, and a copy of node 0's for the new
+/// nodes, so the new nodes are entered with probability at most `mix` per
+/// step and the value moves by `O(mix)`. The initial distribution is
+/// `fsc`'s padded with zeros, or, with `mix_initial`, mixed with the
+/// uniform one over all nodes like the blocks. An error where `fsc` plays a
+/// pair outside `onto`'s block, or has other observations or actions.
+pub fn embed(fsc: &Fsc, onto: &Fsc, mix: f64, mix_initial: bool) -> Result<Fsc, ModelError> {
+    let (k, nodes) = (fsc.num_nodes(), onto.num_nodes());
     if nodes < k {
         return Err(ModelError::new(
             "warm start",
             format!("a {k}-node controller does not embed into {nodes} nodes"),
+        ));
+    }
+    if (fsc.num_observations(), fsc.num_actions()) != (onto.num_observations(), onto.num_actions())
+    {
+        return Err(ModelError::new(
+            "warm start",
+            "the controller and the structure differ in observations or actions",
         ));
     }
     if !(0.0..1.0).contains(&mix) || (mix == 0.0 && nodes > k) {
@@ -33,29 +43,17 @@ pub fn embed(fsc: &Fsc, nodes: usize, mix: f64, mix_initial: bool) -> Result<Fsc
             format!("the uniform weight must be in (0, 1), got {mix}"),
         ));
     }
-    let actions = fsc.num_actions();
-    let pairs = (nodes * actions) as f64;
     let blocks = (0..nodes)
         .flat_map(|g| (0..fsc.num_observations()).map(move |o| (g, o)))
         .map(|(g, o)| {
-            let old = fsc.choices(if g < k { g } else { 0 }, o);
-            (0..nodes)
-                .flat_map(|next| (0..actions).map(move |action| (next, action)))
-                .map(|(next, action)| {
-                    let p = old
-                        .iter()
-                        .find(|c| (c.next, c.action) == (next, action))
-                        .map_or(0.0, |c| c.probability);
-                    Choice {
-                        next,
-                        action,
-                        probability: (1.0 - mix) * p + mix / pairs,
-                        logit: None,
-                    }
-                })
-                .collect()
+            mixed_block(
+                fsc.choices(if g < k { g } else { 0 }, o),
+                onto.choices(g, o),
+                mix,
+                o,
+            )
         })
-        .collect();
+        .collect::<Result<_, _>>()?;
     let mut initial: Vec<f64> = (0..nodes)
         .map(|g| fsc.initial().get(g).copied().unwrap_or(0.0))
         .collect();
@@ -68,10 +66,51 @@ pub fn embed(fsc: &Fsc, nodes: usize, mix: f64, mix_initial: bool) -> Result<Fsc
         fsc.role(),
         nodes,
         fsc.num_observations(),
-        actions,
+        fsc.num_actions(),
         initial,
         blocks,
     )
+}
+
+/// One block of [`embed`]: `old`'s distribution mixed with weight `mix`
+/// with the uniform one over the pairs of `support` (the structure's block
+/// under observation `o`), which must hold every pair `old` plays.
+fn mixed_block(
+    old: &[Choice],
+    support: &[Choice],
+    mix: f64,
+    o: usize,
+) -> Result<Vec<Choice>, ModelError> {
+    if let Some(outside) = old.iter().find(|c| {
+        c.probability > 0.0
+            && !support
+                .iter()
+                .any(|s| (s.next, s.action) == (c.next, c.action))
+    }) {
+        return Err(ModelError::new(
+            "warm start",
+            format!(
+                "the controller plays action {} to node {} under observation {o}, outside the structure's support",
+                outside.action, outside.next
+            ),
+        ));
+    }
+    let pairs = support.len() as f64;
+    Ok(support
+        .iter()
+        .map(|s| {
+            let p = old
+                .iter()
+                .find(|c| (c.next, c.action) == (s.next, s.action))
+                .map_or(0.0, |c| c.probability);
+            Choice {
+                next: s.next,
+                action: s.action,
+                probability: (1.0 - mix) * p + mix / pairs,
+                logit: None,
+            }
+        })
+        .collect())
 }
 
 /// `fsc` with `nodes >= k` nodes and the same behaviour: the old nodes keep
@@ -102,21 +141,16 @@ pub fn pad(fsc: &Fsc, nodes: usize) -> Result<Fsc, ModelError> {
     )
 }
 
-/// `structure` with its defender replaced by `previous` embedded
-/// ([`embed`], uniform weight [`WARM_START_MIX`]) into the structure's
-/// defender size: the optimisation of `n` nodes starts from the best
-/// smaller defender.
+/// `structure` with its defender replaced by `previous` embedded into it
+/// ([`embed`] onto the structure's defender, uniform weight
+/// [`WARM_START_MIX`]): the optimisation of `n` nodes starts from the best
+/// smaller defender, on the structure's support.
 pub fn warm_started(
     mut structure: Structure,
     previous: &Fsc,
     mix_initial: bool,
 ) -> Result<Structure, ModelError> {
-    structure.defender = embed(
-        previous,
-        structure.defender.num_nodes(),
-        WARM_START_MIX,
-        mix_initial,
-    )?;
+    structure.defender = embed(previous, &structure.defender, WARM_START_MIX, mix_initial)?;
     Ok(structure)
 }
 
