@@ -161,19 +161,27 @@ REPEATS = 5
 
 def timed(command, limit, interrupt_after=None, **kwargs):
     """Runs `command`; returns (stdout+stderr or None when killed at `limit`,
-    return code, wall seconds, CPU seconds (user+sys) of the child and its children).
-    With `interrupt_after`, the child gets SIGINT after that many seconds.
-    A run that ended by itself within SHORT_RUN CPU seconds is repeated
-    (REPEATS runs in all) and the seconds are the runs' medians."""
+    return code, wall seconds, CPU seconds (user+sys) of the child and its
+    children, the CPU seconds of every run made). With `interrupt_after`,
+    the child gets SIGINT after that many seconds. A run that exited with
+    0 before any interrupt within SHORT_RUN CPU seconds is repeated
+    (REPEATS runs in all; each repeat must end the same way, or the
+    experiment stops) and the seconds are the runs' medians; the output
+    is the first run's (each tool here is deterministic for its inputs,
+    posg-fsc by its seed: every repeat writes the same)."""
     out, code, wall, cpu = timed_once(command, limit, interrupt_after, **kwargs)
-    if out is None or cpu >= SHORT_RUN or (interrupt_after and wall >= interrupt_after):
-        return out, code, wall, cpu
+    interrupted = interrupt_after is not None and wall >= interrupt_after
+    if out is None or code != 0 or interrupted or cpu >= SHORT_RUN:
+        return out, code, wall, cpu, [cpu]
     walls, cpus = [wall], [cpu]
     for _ in range(REPEATS - 1):
-        _, _, wall, cpu = timed_once(command, limit, interrupt_after, **kwargs)
+        again, code, wall, cpu = timed_once(command, limit, interrupt_after, **kwargs)
+        if again is None or code != 0 or (interrupt_after is not None and wall >= interrupt_after):
+            raise RuntimeError(f"a repeat of {' '.join(command)} did not end as its first run: "
+                               f"exit code {code}, {wall:.1f} s")
         walls.append(wall)
         cpus.append(cpu)
-    return out, code, statistics.median(walls), statistics.median(cpus)
+    return out, 0, statistics.median(walls), statistics.median(cpus), cpus
 
 
 def timed_once(command, limit, interrupt_after=None, **kwargs):
@@ -206,9 +214,9 @@ def run_posg(directory, k, limit):
     command = [BINARY, "solve", os.path.join(directory, "model.drn"), "--props",
                os.path.join(directory, "sketch.props"), "--def-nodes", str(k), "--out", out,
                "--force", "--quiet"]
-    log, code, wall, cpu = timed(command, limit)
+    log, code, wall, cpu, samples = timed(command, limit)
     record = {"command": " ".join(["posg-fsc", *command[1:]]), "wall_seconds": wall,
-              "cpu_seconds": cpu, "value": None}
+              "cpu_seconds": cpu, "cpu_samples": samples, "value": None}
     if log is None:
         record["status"] = "timeout"
         return record
@@ -234,7 +242,7 @@ def run_paynt(directory, k, timeout):
     prop = prop_of(directory)
     command = [sys.executable, "-m", "paynt", directory, "--sketch", "sketch.templ", "--props",
                "sketch.props", "--fsc-memory-size", str(k), "--timeout", str(timeout)]
-    log, code, wall, cpu = timed(command, timeout + 120)
+    log, code, wall, cpu, samples = timed(command, timeout + 120)
     log = log or ""
     optimum = re.search(r"^optimum: (\S+)", log, re.M)
     explored = re.search(r"^explored: (\d+) %", log, re.M)
@@ -246,7 +254,7 @@ def run_paynt(directory, k, timeout):
     return {"command": " ".join(["python", "-m", "paynt", *command[3:]]),
             "optimum": value, "value": complement(value, prop),
             "status": status, "explored_percent": int(explored.group(1)) if explored else None,
-            "wall_seconds": wall, "cpu_seconds": cpu, "log_tail": log[-1500:]}
+            "wall_seconds": wall, "cpu_seconds": cpu, "cpu_samples": samples, "log_tail": log[-1500:]}
 
 
 def run_gd(directory, k, bound, limit):
@@ -254,9 +262,9 @@ def run_gd(directory, k, bound, limit):
     interrupted by SIGINT after `limit` seconds (Storm then stops the descent)."""
     command = [sys.executable, os.path.abspath(__file__), "--gd-worker", directory, str(k),
                repr(bound)]
-    log, code, wall, cpu = timed(command, limit + 60, interrupt_after=limit)
+    log, code, wall, cpu, samples = timed(command, limit + 60, interrupt_after=limit)
     record = {"command": f"stormpy GD, bound P>={bound!r}, k={k}", "bound": bound,
-              "wall_seconds": wall, "cpu_seconds": cpu, "value": None}
+              "wall_seconds": wall, "cpu_seconds": cpu, "cpu_samples": samples, "value": None}
     if log is None:
         record["status"] = "timeout (killed)"
         return record
@@ -324,9 +332,9 @@ def run_belief(directory, limit):
     --belief-worker), exploration stopped after `limit` seconds."""
     command = [sys.executable, os.path.abspath(__file__), "--belief-worker", directory,
                str(limit)]
-    log, code, wall, cpu = timed(command, limit + 120)
+    log, code, wall, cpu, samples = timed(command, limit + 120)
     record = {"command": f"stormpy verify_with_belief_unfolding, max_exploration_time={limit}",
-              "wall_seconds": wall, "cpu_seconds": cpu, "value": None, "completed": False}
+              "wall_seconds": wall, "cpu_seconds": cpu, "cpu_samples": samples, "value": None, "completed": False}
     result = re.search(r"^RESULT (.*)$", log or "", re.M)
     if result is None:
         record.update(status="timeout (killed)" if log is None else "error",

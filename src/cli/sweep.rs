@@ -26,7 +26,8 @@ use super::solve::{check_sizes, load, settings, solve_into};
 /// Arguments of `sweep`.
 #[derive(Debug, Args)]
 pub struct SweepArgs {
-    /// The game, a `*.posg.json` file (docs/formats.md section 1).
+    /// The game: a `*.posg.json` file (docs/formats.md section 1), its
+    /// binary form, or a model in Storm's DRN format (section 6).
     game: PathBuf,
     #[command(flatten)]
     objective: ObjectiveArgs,
