@@ -360,8 +360,13 @@ fn the_logit_bound_widens_when_progress_stalls_on_it() {
 
 #[test]
 fn padding_keeps_the_value_and_embedding_moves_it_by_at_most_the_mix() {
-    for seed in 0..6 {
-        let g = game(&common::random::game_json(seed));
+    // Half the games enable actions per observation (formats.md section 6).
+    for seed in 0..12 {
+        let g = game(&if seed < 6 {
+            common::random::game_json(seed)
+        } else {
+            common::random::game_json_with_enabled(seed)
+        });
         let dra = common::random::dra(seed);
         let def = common::random::controller(seed, &g, Role::Defender);
         let adv = common::random::controller(seed, &g, Role::Adversary);

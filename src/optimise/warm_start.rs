@@ -9,7 +9,7 @@ use crate::controller::{Choice, Fsc};
 use crate::game::ModelError;
 
 /// The weight of the uniform distribution mixed into an embedded controller
-/// so that it has the full support structure ([`embed`]).
+/// so that it has the support of the structure it starts on ([`embed`]).
 pub const WARM_START_MIX: f64 = 1e-6;
 
 /// `fsc` embedded into the support structure `onto` (its nodes, `n >= k`,
