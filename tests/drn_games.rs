@@ -332,13 +332,10 @@ fn solve(props: &str, out: &Path) -> Value {
     solve_drn(PENNIES, props, 1, out)
 }
 
-/// `posg-fsc solve DRN --props PROPS --def-nodes NODES --seed 1` into `out`,
-/// defaults otherwise; the summary.
-fn solve_drn(drn: &str, props: &str, nodes: usize, out: &Path) -> Value {
+/// Runs `posg-fsc ARGS --out OUT --quiet` and checks that it succeeded.
+fn run_ok(args: &[&str], out: &Path) {
     let output = Command::new(env!("CARGO_BIN_EXE_posg-fsc"))
-        .args(["solve", drn, "--props", props, "--seed", "1"])
-        .arg("--def-nodes")
-        .arg(nodes.to_string())
+        .args(args)
         .arg("--out")
         .arg(out)
         .arg("--quiet")
@@ -349,6 +346,23 @@ fn solve_drn(drn: &str, props: &str, nodes: usize, out: &Path) -> Value {
         "{}",
         String::from_utf8_lossy(&output.stderr)
     );
+}
+
+/// `posg-fsc solve DRN --props PROPS --def-nodes NODES --seed 1` into `out`,
+/// defaults otherwise; the summary.
+fn solve_drn(drn: &str, props: &str, nodes: usize, out: &Path) -> Value {
+    let nodes = nodes.to_string();
+    let args = [
+        "solve",
+        drn,
+        "--props",
+        props,
+        "--seed",
+        "1",
+        "--def-nodes",
+        &nodes,
+    ];
+    run_ok(&args, out);
     let summary = std::fs::read_to_string(out.join("summary.json")).unwrap();
     serde_json::from_str(&summary).unwrap()
 }
@@ -458,24 +472,11 @@ fn solve_proves_a_pomdps_optimum_with_the_belief_bound() {
 #[test]
 fn a_sweep_over_defender_sizes_runs_on_a_turn_based_game() {
     let dir = temp_dir("pennies-sweep");
-    let output = Command::new(env!("CARGO_BIN_EXE_posg-fsc"))
-        .args(["sweep", PENNIES, "--props", "tests/data/drn/pennies.props"])
-        .args([
-            "--def-nodes",
-            "1..2",
-            "--adv-nodes",
-            "1",
-            "--quiet",
-            "--force",
-        ])
-        .arg("--out")
-        .arg(&dir)
-        .output()
-        .unwrap();
-    assert!(
-        output.status.success(),
-        "{}",
-        String::from_utf8_lossy(&output.stderr)
+    let props = "tests/data/drn/pennies.props";
+    let sizes = ["--def-nodes", "1..2", "--adv-nodes", "1", "--force"];
+    run_ok(
+        &[&["sweep", PENNIES, "--props", props][..], &sizes].concat(),
+        &dir,
     );
     let csv = std::fs::read_to_string(dir.join("sweep.csv")).unwrap();
     let mut lines = csv.lines().filter(|l| !l.starts_with('#'));
