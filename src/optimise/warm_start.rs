@@ -81,12 +81,13 @@ fn mixed_block(
     mix: f64,
     o: usize,
 ) -> Result<Vec<Choice>, ModelError> {
-    if let Some(outside) = old.iter().find(|c| {
-        c.probability > 0.0
-            && !support
-                .iter()
-                .any(|s| (s.next, s.action) == (c.next, c.action))
-    }) {
+    // Every choice of a controller has positive probability (`Fsc::new`).
+    let in_support = |c: &Choice| {
+        support
+            .iter()
+            .any(|s| (s.next, s.action) == (c.next, c.action))
+    };
+    if let Some(outside) = old.iter().find(|c| !in_support(c)) {
         return Err(ModelError::new(
             "warm start",
             format!(
