@@ -31,9 +31,8 @@
 use std::collections::hash_map::Entry;
 use std::sync::OnceLock;
 
-use num_bigint::{BigInt, BigUint};
+use num_bigint::BigUint;
 use num_integer::Integer;
-use num_rational::BigRational;
 use num_traits::{One, ToPrimitive, Zero};
 use rustc_hash::FxHashMap;
 use serde::Serialize;
@@ -139,7 +138,7 @@ pub fn belief_upper_bound(
 /// budget, computed when first asked for and then kept: a `solve` run
 /// asks for it in the SAT source and for each structure's upper bound
 /// (method.md section 6), and the exploration is most of a small POMDP's
-/// run (3,008 beliefs, 80 ms, on PRISM's grid-avoid-4-0).
+/// run (3,008 beliefs, 6 ms on a 2-core EPYC, on PRISM's grid-avoid-4-0).
 pub struct BeliefBoundOnce<'a> {
     game: &'a Posg,
     dra_phi: &'a Dra,
@@ -263,10 +262,12 @@ enum Expansion {
     Frontier(f64),
 }
 
-/// A double `mantissa * 2^exponent`, exactly.
+/// A double `mantissa * 2^exponent`, exactly, the mantissa odd (or 0):
+/// a probability 1 or 1/2 multiplies a weight by 1, so that weights grow
+/// only by the bits their probabilities have.
 #[derive(Debug, Clone, Copy)]
 struct Dyadic {
-    /// The integer significand.
+    /// The integer significand, odd unless the double is 0.
     mantissa: u64,
     /// The power of 2.
     exponent: i64,
@@ -280,21 +281,26 @@ impl Dyadic {
         Self::of_nonnegative(x)
     }
 
-    /// The nonnegative finite double `x`, exactly (0 as `0 * 2^-1074`).
+    /// The nonnegative finite double `x`, exactly (0 as `0 * 2^0`).
     fn of_nonnegative(x: f64) -> Self {
         let bits = x.to_bits();
         let biased = ((bits >> 52) & 0x7ff) as i64;
         let fraction = bits & ((1 << 52) - 1);
-        if biased == 0 {
-            Self {
-                mantissa: fraction,
-                exponent: -1074,
-            }
+        let (mantissa, exponent) = if biased == 0 {
+            (fraction, -1074)
         } else {
-            Self {
-                mantissa: fraction | (1 << 52),
-                exponent: biased - 1075,
-            }
+            (fraction | (1 << 52), biased - 1075)
+        };
+        if mantissa == 0 {
+            return Self {
+                mantissa: 0,
+                exponent: 0,
+            };
+        }
+        let zeros = mantissa.trailing_zeros();
+        Self {
+            mantissa: mantissa >> zeros,
+            exponent: exponent + i64::from(zeros),
         }
     }
 }
@@ -310,61 +316,138 @@ struct Scale {
 }
 
 impl Scale {
-    /// The probability of `mass` as a ratio of integers.
-    fn ratio(&self, mass: &BigUint) -> (BigUint, BigUint) {
-        if self.exponent >= 0 {
-            (mass << self.exponent as usize, self.denominator.clone())
-        } else {
-            (mass.clone(), &self.denominator << (-self.exponent) as usize)
-        }
-    }
-
     /// The probability of `mass`, rounded to the nearest double.
     fn nearest(&self, mass: &BigUint) -> f64 {
-        if mass.is_zero() {
-            return 0.0;
-        }
-        let (numer, denom) = self.ratio(mass);
-        // `to_f64` rounds the exact ratio, reduced or not.
-        BigRational::new_raw(BigInt::from(numer), BigInt::from(denom))
-            .to_f64()
-            .unwrap_or(0.0)
+        self.rounded(mass, Rounding::Nearest)
     }
 
     /// The probability of `mass`, rounded up to a double.
     fn above(&self, mass: &BigUint) -> f64 {
+        self.rounded(mass, Rounding::Up)
+    }
+
+    /// The probability of `mass` rounded as `rounding` says, from one
+    /// integer division: the quotient to 66 or 67 bits, and whether a
+    /// remainder is left.
+    fn rounded(&self, mass: &BigUint, rounding: Rounding) -> f64 {
         if mass.is_zero() {
             return 0.0;
         }
-        let nearest = self.nearest(mass);
-        let (numer, denom) = self.ratio(mass);
-        let d = Dyadic::of_nonnegative(nearest);
-        let shift = |x: BigUint, by: i64| if by >= 0 { x << by as usize } else { x };
-        // `nearest < numer / denom` as `mantissa 2^e denom < numer`.
-        let (left, right) = (
-            shift(&denom * d.mantissa, d.exponent),
-            shift(numer, -d.exponent),
-        );
-        if left < right {
-            f64::from_bits(nearest.to_bits() + 1)
+        // `mass 2^shift / denominator` lies in [2^65, 2^67).
+        let shift = 66 - (mass.bits() as i64 - self.denominator.bits() as i64);
+        let (quotient, remainder) = if shift >= 0 {
+            (mass << shift as usize).div_rem(&self.denominator)
         } else {
-            nearest
-        }
+            mass.div_rem(&(&self.denominator << (-shift) as usize))
+        };
+        let quotient = quotient
+            .to_u128()
+            .expect("a quotient below 2^67 fits 128 bits");
+        rounded_double(
+            quotient,
+            remainder.is_zero(),
+            self.exponent - shift,
+            rounding,
+        )
+    }
+}
+
+/// How an exact number becomes a double.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Rounding {
+    /// To the nearest double, ties to an even significand.
+    Nearest,
+    /// To the least double at least the number.
+    Up,
+}
+
+/// The positive number `(quotient + f) 2^exponent`, `f` in `[0, 1)` and 0
+/// exactly when `exact`, rounded to a double as `rounding` says:
+/// `quotient` of at least 54 bits, so that the bits below the double's
+/// last one are `quotient`'s low bits and `f`. Numbers above `2^1000`
+/// (never a probability) read as infinity.
+fn rounded_double(quotient: u128, exact: bool, exponent: i64, rounding: Rounding) -> f64 {
+    debug_assert!(quotient >> 53 != 0, "{quotient}");
+    let bits = i64::from(128 - quotient.leading_zeros());
+    if bits + exponent > 1000 {
+        return f64::INFINITY;
+    }
+    // Below half the least subnormal: 0 to the nearest, that one up.
+    if bits + exponent < -1074 {
+        return match rounding {
+            Rounding::Nearest => 0.0,
+            Rounding::Up => f64::from_bits(1),
+        };
+    }
+    // The bits dropped: below a normal double's 53, or below 2^-1074.
+    let dropped = (bits - 53).max(-1074 - exponent);
+    let (kept, rest, half) = if dropped >= bits {
+        (0, quotient, 1u128 << (bits - 1).min(127))
+    } else {
+        (
+            (quotient >> dropped) as u64,
+            quotient & ((1u128 << dropped) - 1),
+            1u128 << (dropped - 1),
+        )
+    };
+    let above_half = rest > half || (rest == half && !exact);
+    let tie = rest == half && exact;
+    let up = match rounding {
+        Rounding::Up => rest != 0 || !exact,
+        Rounding::Nearest => above_half || (tie && kept & 1 == 1),
+    };
+    let significand = kept + u64::from(up);
+    significand as f64 * power_of_two(exponent + dropped)
+}
+
+/// `2^e` for `e` in `[-1074, 1023]`, exactly.
+fn power_of_two(e: i64) -> f64 {
+    if e >= -1022 {
+        f64::from_bits(((e + 1023) as u64) << 52)
+    } else {
+        f64::from_bits(1 << (e + 1074))
     }
 }
 
 /// `terms` as integers: each `weight * mantissa * 2^(exponent - least)`,
 /// summed per product state, and the least exponent `least`.
-fn integer_terms(terms: &[(usize, &BigUint, Dyadic)]) -> (Vec<(usize, BigUint)>, i64) {
+fn integer_terms(terms: &mut [(usize, &BigUint, Dyadic)]) -> (Vec<(usize, BigUint)>, i64) {
     let least = terms.iter().map(|t| t.2.exponent).min().unwrap_or(0);
-    let mut summed: FxHashMap<usize, BigUint> = FxHashMap::default();
-    for &(m, weight, d) in terms {
-        let term = (weight * d.mantissa) << (d.exponent - least) as usize;
-        *summed.entry(m).or_insert_with(BigUint::zero) += term;
+    terms.sort_unstable_by_key(|t| t.0);
+    let mut summed: Vec<(usize, BigUint)> = Vec::with_capacity(terms.len());
+    for &mut (m, weight, d) in terms {
+        let term = scaled(weight, d.mantissa, d.exponent - least);
+        match summed.last_mut() {
+            Some((last, sum)) if *last == m => *sum += term,
+            _ => summed.push((m, term)),
+        }
     }
-    let mut summed: Vec<(usize, BigUint)> = summed.into_iter().collect();
-    summed.sort_unstable_by_key(|&(m, _)| m);
     (summed, least)
+}
+
+/// `mass * factor * 2^shift` (`shift` nonnegative), without arithmetic
+/// where `factor` is 1 and `shift` 0 (a probability 1: most observations).
+fn scaled(mass: &BigUint, factor: u64, shift: i64) -> BigUint {
+    if factor == 1 && shift == 0 {
+        mass.clone()
+    } else {
+        (mass * factor) << shift as usize
+    }
+}
+
+/// `weights` divided by their greatest common divisor (none where it is
+/// 1, as it mostly is).
+fn coprime(weights: Vec<(usize, BigUint)>) -> Vec<(usize, BigUint)> {
+    let mut divisor = BigUint::zero();
+    for (_, w) in &weights {
+        divisor = divisor.gcd(w);
+        if divisor.is_one() {
+            return weights;
+        }
+    }
+    (weights.into_iter())
+        .map(|(m, w)| (m, w / &divisor))
+        .collect()
 }
 
 /// The breadth-first exploration of the beliefs.
@@ -415,10 +498,10 @@ impl<'a> Exploration<'a> {
     /// is spent.
     fn explore(mut self) -> Self {
         let one = BigUint::one();
-        let terms: Vec<(usize, &BigUint, Dyadic)> = (self.analysis.initial.iter())
+        let mut terms: Vec<(usize, &BigUint, Dyadic)> = (self.analysis.initial.iter())
             .map(|&(m, p)| (m, &one, Dyadic::of(p)))
             .collect();
-        let (masses, exponent) = integer_terms(&terms);
+        let (masses, exponent) = integer_terms(&mut terms);
         let scale = Scale {
             exponent,
             denominator: BigUint::one(),
@@ -457,13 +540,10 @@ impl<'a> Exploration<'a> {
     /// (each enabled in every state of the belief: a state is in it only
     /// where it shows that observation).
     fn expand(&mut self, i: usize) -> Vec<Move> {
-        let belief = self.beliefs[i].clone();
+        let belief = &self.beliefs[i];
         let denominator: BigUint = belief.entries.iter().map(|(_, w)| w).sum();
-        let actions: Vec<usize> = (self.game.defender())
+        let measures: Vec<(Vec<(usize, BigUint)>, i64)> = (self.game.defender())
             .enabled_actions(belief.observation)
-            .collect();
-        actions
-            .into_iter()
             .map(|u| {
                 let mut terms = Vec::new();
                 for (m, weight) in &belief.entries {
@@ -476,7 +556,11 @@ impl<'a> Exploration<'a> {
                         terms.push((m2, weight, Dyadic::of(t)));
                     }
                 }
-                let (masses, exponent) = integer_terms(&terms);
+                integer_terms(&mut terms)
+            })
+            .collect();
+        (measures.into_iter())
+            .map(|(masses, exponent)| {
                 let scale = Scale {
                     exponent,
                     denominator: denominator.clone(),
@@ -512,7 +596,7 @@ impl<'a> Exploration<'a> {
         let mut by_observation: Vec<(usize, Vec<(usize, BigUint)>)> = Vec::new();
         observed.sort_by_key(|t| (t.0, t.1));
         for (o, m, mass, d) in observed {
-            let mass = (mass * d.mantissa) << (d.exponent - least) as usize;
+            let mass = scaled(mass, d.mantissa, d.exponent - least);
             match by_observation.last_mut() {
                 Some((last, entries)) if *last == o => entries.push((m, mass)),
                 _ => by_observation.push((o, vec![(m, mass)])),
@@ -521,12 +605,9 @@ impl<'a> Exploration<'a> {
         let next = (by_observation.into_iter())
             .map(|(o, entries)| {
                 let total: BigUint = entries.iter().map(|(_, w)| w).sum();
-                let divisor = (entries.iter()).fold(BigUint::zero(), |g, (_, w)| g.gcd(w));
                 let belief = Belief {
                     observation: o,
-                    entries: (entries.into_iter())
-                        .map(|(m, w)| (m, w / &divisor))
-                        .collect(),
+                    entries: coprime(entries),
                 };
                 (self.id(belief), total)
             })
@@ -698,6 +779,10 @@ mod tests {
     use super::*;
     use std::path::Path;
 
+    use num_bigint::BigInt;
+    use num_rational::BigRational;
+    use num_traits::{Pow, Signed};
+
     use crate::game::drn::read;
     use crate::pipeline::Automata;
 
@@ -844,5 +929,88 @@ mod tests {
         let below = belief_bound_above(&game, &dra, &at(0.5), &settings).unwrap();
         assert_eq!(below, Some(alone));
         assert!(belief_bound_above(&game, &dra, &at(0.7), &settings).is_err());
+    }
+
+    /// The exact value of the finite double `x`.
+    fn exact(x: f64) -> BigRational {
+        BigRational::from_float(x).expect("finite")
+    }
+
+    /// Whether `x` is `ratio` rounded as `rounding` says, by exact
+    /// comparison with its neighbouring doubles.
+    fn is_rounded(x: f64, ratio: &BigRational, rounding: Rounding) -> bool {
+        let below = f64::from_bits(x.to_bits() - 1);
+        let above = f64::from_bits(x.to_bits() + 1);
+        match rounding {
+            Rounding::Up => exact(x) >= *ratio && (x == f64::from_bits(1) || exact(below) < *ratio),
+            Rounding::Nearest => {
+                let distance = |y: f64| (exact(y) - ratio).abs();
+                let (here, left, right) = (distance(x), distance(below), distance(above));
+                let even = x.to_bits() & 1 == 0;
+                (here < left || (here == left && even)) && (here < right || (here == right && even))
+            }
+        }
+    }
+
+    proptest::proptest! {
+        /// A mass over a denominator, times a power of 2, rounds to the
+        /// double an exact comparison picks (ties to even), up and to the
+        /// nearest, down to subnormals and quotients with many bits.
+        #[test]
+        fn a_scaled_ratio_rounds_like_the_exact_one(
+            mass in proptest::collection::vec(proptest::prelude::any::<u32>(), 1..6),
+            denominator in proptest::collection::vec(proptest::prelude::any::<u32>(), 1..6),
+            exponent in -1150i64..40,
+            halves in 0u32..3,
+        ) {
+            let mass = BigUint::new(mass) << halves;
+            let denominator = BigUint::new(denominator);
+            proptest::prop_assume!(!mass.is_zero() && !denominator.is_zero());
+            let scale = Scale { exponent, denominator: denominator.clone() };
+            let power = BigRational::from_integer(BigInt::from(2)).pow(exponent as i32);
+            let ratio = BigRational::new(BigInt::from(mass.clone()), BigInt::from(denominator)) * power;
+            for (x, rounding) in [(scale.nearest(&mass), Rounding::Nearest), (scale.above(&mass), Rounding::Up)] {
+                if x == 0.0 {
+                    proptest::prop_assert!(rounding == Rounding::Nearest);
+                    proptest::prop_assert!(ratio < exact(f64::from_bits(1)) / BigInt::from(2));
+                } else {
+                    proptest::prop_assert!(is_rounded(x, &ratio, rounding), "{x:e} {rounding:?}");
+                }
+            }
+        }
+    }
+
+    /// Exact ties round to an even significand: `1 + 2^-53` down to 1,
+    /// `1 + 3 2^-53` up to `1 + 2^-51`; up, each to the double above.
+    #[test]
+    fn a_tie_rounds_to_even() {
+        let one = BigUint::one();
+        let scale = Scale {
+            exponent: -53,
+            denominator: one.clone(),
+        };
+        let eps = f64::EPSILON;
+        for (odd, nearest, up) in [
+            (1u32, 1.0, 1.0 + eps),
+            (3, 1.0 + 2.0 * eps, 1.0 + 2.0 * eps),
+        ] {
+            let numerator = (&one << 53) + odd;
+            assert_eq!(scale.nearest(&numerator), nearest, "{odd}");
+            assert_eq!(scale.above(&numerator), up, "{odd}");
+        }
+    }
+
+    /// A double's mantissa is odd: 1 is `1 * 2^0`, 0.75 is `3 * 2^-2`.
+    #[test]
+    fn a_dyadic_has_an_odd_mantissa() {
+        for (x, mantissa, exponent) in [
+            (1.0, 1, 0),
+            (0.75, 3, -2),
+            (0.0, 0, 0),
+            (f64::from_bits(1), 1, -1074),
+        ] {
+            let d = Dyadic::of_nonnegative(x);
+            assert_eq!((d.mantissa, d.exponent), (mantissa, exponent), "{x}");
+        }
     }
 }
