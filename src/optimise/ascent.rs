@@ -38,8 +38,17 @@ const NEGLIGIBLE_GAIN: f64 = 1e-12;
 
 /// The single-player solver has converged after this many consecutive
 /// negligible steps (where the line search still finds one: logits
-/// creeping towards a face of the box).
+/// creeping towards a face of the box); or, at a stationary point, once
+/// this many steps together gained at most the solver's tolerance times
+/// `V`, below what the values resolve.
 const NEGLIGIBLE_STEPS: usize = 10;
+
+/// A point where `|dV/dphi|` is at most this fraction of `V` is
+/// stationary: on PRISM's grid-avoid-4-0.1 the ascent reaches 5e-8 and
+/// then creeps by 1e-11 per step for a hundred steps; a slow ascent far
+/// from one (pomdp-grid10 with 3 nodes, 4e-3, gaining 1e-10 per step)
+/// may still speed up.
+const STATIONARY_GRADIENT: f64 = 1e-6;
 
 /// Armijo's sufficient-increase constant.
 const ARMIJO: f64 = 1e-4;
@@ -155,14 +164,18 @@ impl Lbfgs {
 /// The single-player solver under the driver: each iteration is one L-BFGS
 /// step of the defender on `V` against the adversary's fixed logits; once
 /// no step increases `V`, or [`NEGLIGIBLE_STEPS`] consecutive steps each
-/// gained at most [`NEGLIGIBLE_GAIN`] of it, the solver has converged
-/// ([`super::Status::Converged`]).
+/// gained at most [`NEGLIGIBLE_GAIN`] of it, or, at a stationary point
+/// ([`STATIONARY_GRADIENT`]), together at most `solver_tolerance` of it,
+/// the solver has converged ([`super::Status::Converged`]).
 pub(super) struct Ascent {
     settings: Settings,
     lbfgs: Option<Lbfgs>,
     last_step: f64,
     /// Consecutive steps that gained at most [`NEGLIGIBLE_GAIN`].
     negligible_steps: usize,
+    /// `V` after each of the last [`NEGLIGIBLE_STEPS`] steps, and before
+    /// the first of them.
+    recent_values: VecDeque<f64>,
     converged: bool,
 }
 
@@ -174,8 +187,21 @@ impl Ascent {
             lbfgs: None,
             last_step: 0.0,
             negligible_steps: 0,
+            recent_values: VecDeque::with_capacity(NEGLIGIBLE_STEPS + 1),
             converged: false,
         }
+    }
+
+    /// Records `value`, reached by a step, in `recent_values`; whether the
+    /// last [`NEGLIGIBLE_STEPS`] steps together gained at most `tolerance`
+    /// times it.
+    fn gained_little(recent_values: &mut VecDeque<f64>, value: f64, tolerance: f64) -> bool {
+        if recent_values.len() > NEGLIGIBLE_STEPS {
+            recent_values.pop_front();
+        }
+        recent_values.push_back(value);
+        recent_values.len() > NEGLIGIBLE_STEPS
+            && value - recent_values[0] <= tolerance * value.abs()
     }
 
     /// The state at `iterate`, the ascent being at `lbfgs`.
@@ -207,6 +233,9 @@ impl Solver for Ascent {
         };
         let lbfgs = Lbfgs::start(&mut against, &start.defender, start.bound, &self.settings)?;
         let state = Self::state(&lbfgs, start);
+        self.negligible_steps = 0;
+        self.recent_values.clear();
+        self.recent_values.push_back(lbfgs.value());
         self.lbfgs = Some(lbfgs);
         Ok(state)
     }
@@ -224,17 +253,21 @@ impl Solver for Ascent {
             objective,
             adversary: &iterate.adversary,
         };
-        let before = lbfgs.value();
         match lbfgs.step(&mut against)? {
             Some(step) => {
                 self.last_step = step;
-                let negligible = lbfgs.value() - before <= NEGLIGIBLE_GAIN * lbfgs.value().abs();
-                self.negligible_steps = if negligible {
+                let value = lbfgs.value();
+                let before = self.recent_values.back().copied().unwrap_or(value);
+                self.negligible_steps = if value - before <= NEGLIGIBLE_GAIN * value.abs() {
                     self.negligible_steps + 1
                 } else {
                     0
                 };
-                self.converged = self.negligible_steps >= NEGLIGIBLE_STEPS;
+                let tolerance = self.settings.solver_tolerance;
+                let stationary = norm(lbfgs.gradient()) <= STATIONARY_GRADIENT * value.abs();
+                let stalled = Self::gained_little(&mut self.recent_values, value, tolerance);
+                self.converged =
+                    self.negligible_steps >= NEGLIGIBLE_STEPS || (stationary && stalled);
             }
             None => {
                 self.last_step = 0.0;
@@ -396,4 +429,37 @@ impl Memory {
 
 fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Feeds `values` (the first as the start) to a fresh window; whether
+    /// each step's value closed it as stalled.
+    fn stalls(values: &[f64], tolerance: f64) -> Vec<bool> {
+        let mut recent = VecDeque::from([values[0]]);
+        (values[1..].iter())
+            .map(|&v| Ascent::gained_little(&mut recent, v, tolerance))
+            .collect()
+    }
+
+    /// The window judges the last [`NEGLIGIBLE_STEPS`] steps together:
+    /// not before that many steps, not while they gain more than the
+    /// tolerance times `V`, and as soon as they gain less.
+    #[test]
+    fn the_window_stalls_on_the_gain_of_its_last_steps_together() {
+        let creeping: Vec<f64> = (0..=20).map(|i| 0.5 + 1e-11 * i as f64).collect();
+        let verdicts = stalls(&creeping, 1e-9);
+        assert!(verdicts[..NEGLIGIBLE_STEPS - 1].iter().all(|&s| !s));
+        assert!(verdicts[NEGLIGIBLE_STEPS - 1..].iter().all(|&s| s));
+        // 1e-10 per step: 1e-9 over ten, above 1e-9 * 0.5.
+        let climbing: Vec<f64> = (0..=20).map(|i| 0.5 + 1e-10 * i as f64).collect();
+        assert!(stalls(&climbing, 1e-9).iter().all(|&s| !s));
+        // A jump leaves the window after ten steps.
+        let mut jumped = vec![0.4];
+        jumped.extend(std::iter::repeat_n(0.5, 20));
+        let verdicts = stalls(&jumped, 1e-9);
+        assert!(!verdicts[NEGLIGIBLE_STEPS - 1] && verdicts[NEGLIGIBLE_STEPS]);
+    }
 }

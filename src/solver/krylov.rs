@@ -233,12 +233,14 @@ impl KrylovSolver {
         self.system.probe(&mut self.forward, b, x, iterations)
     }
 
-    /// [`Self::solve`] and [`Self::solve_transpose`] at once, on two threads.
+    /// [`Self::solve`] and [`Self::solve_transpose`], at once on two threads
+    /// from [`super::PARALLEL_SOLVE_ROWS`] unknowns.
     pub fn solve_both(&mut self, b: &[f64], x: &mut [f64], c: &[f64], y: &mut [f64]) -> SolvePair {
         let system = &self.system;
         let (forward, transposed) = (&mut self.forward, &mut self.transposed);
         let tolerance = system.tolerance;
         join_directions(
+            b.len(),
             || system.solve(forward, b, x, Direction::Forward, tolerance),
             || system.solve(transposed, c, y, Direction::Transposed, tolerance),
         )

@@ -251,7 +251,8 @@ impl LuSolver {
         factors.solve(&mut self.transposed, c, y, Direction::Transposed, tolerance)
     }
 
-    /// [`Self::solve`] and [`Self::solve_transpose`] at once, on two threads.
+    /// [`Self::solve`] and [`Self::solve_transpose`], at once on two threads
+    /// from [`super::PARALLEL_SOLVE_ROWS`] unknowns.
     pub fn solve_both(&mut self, b: &[f64], x: &mut [f64], c: &[f64], y: &mut [f64]) -> SolvePair {
         let tolerance = self.system.tolerance;
         let factors = match self.system.factors() {
@@ -260,6 +261,7 @@ impl LuSolver {
         };
         let (forward, transposed) = (&mut self.forward, &mut self.transposed);
         join_directions(
+            b.len(),
             || factors.solve(forward, b, x, Direction::Forward, tolerance),
             || factors.solve(transposed, c, y, Direction::Transposed, tolerance),
         )
