@@ -275,15 +275,16 @@ fn almost_surely(
     let n = mdp.num_states();
     let mut within = positive.to_vec();
     let mut strategy = vec![0; n];
+    // Whether each (global) action keeps every successor in `U`; as `U`
+    // only shrinks, an action that leaves it is found once, from the
+    // predecessors of the states that leave it.
+    let mut stays: Vec<bool> = (0..mdp.num_state_actions())
+        .map(|action| {
+            let successors = mdp.global_distribution(action);
+            successors.iter().all(|&(u, _)| within[u])
+        })
+        .collect();
     loop {
-        // Whether each (global) action keeps every successor in `U`: once
-        // per pass, not once per edge of the action.
-        let stays: Vec<bool> = (0..mdp.num_state_actions())
-            .map(|action| {
-                let successors = mdp.global_distribution(action);
-                successors.iter().all(|&(u, _)| within[u])
-            })
-            .collect();
         let mut found = target.to_vec();
         let mut frontier: Vec<usize> = (0..n).filter(|&s| target[s]).collect();
         while let Some(t) = frontier.pop() {
@@ -297,6 +298,11 @@ fn almost_surely(
         }
         if found == within {
             return (within, strategy);
+        }
+        for u in (0..n).filter(|&u| within[u] && !found[u]) {
+            for &(s, a) in predecessors.of(u) {
+                stays[mdp.action_offsets[s] + a] = false;
+            }
         }
         within = found;
     }
