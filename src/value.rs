@@ -450,8 +450,9 @@ impl Evaluator {
     }
 
     /// The value and its gradient with respect to every probability of both
-    /// controllers (adjoint method: one factorisation, two solves, run at
-    /// once on two threads, and one pass over the GMC).
+    /// controllers (adjoint method: one factorisation, two solves, at once
+    /// on two threads from `PARALLEL_SOLVE_ROWS` unknowns, and one pass over
+    /// the GMC).
     pub fn evaluate_with_gradient(
         &mut self,
         defender: &Probabilities,

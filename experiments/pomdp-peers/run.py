@@ -451,9 +451,12 @@ def main():
                     os.path.join(directory, f"gd-beat-{k}-t{args.beat_timeout}.json"),
                     lambda: run_gd(directory, k, max(peers) + TOLERANCE, args.beat_timeout))
             gd_cpu, lower_bound = gd_cpu_to_best(case)
-            if args.long_gd and lower_bound and posg["cpu_seconds"] > TARGET_CPU_RATIO * gd_cpu:
+            none_reached = all(r["status"] != "reached-bound" for tool, r in case.items()
+                               if tool.startswith("storm-gd"))
+            if (args.long_gd and none_reached and max(peers) > NEAR
+                    and posg["cpu_seconds"] > TARGET_CPU_RATIO * gd_cpu):
                 case["storm-gd>=best-0.01 (long)"] = cached(
-                    os.path.join(directory, f"gd-near-{k}-t{args.long_gd}.json"),
+                    os.path.join(directory, f"gd-long-{k}-t{args.long_gd}.json"),
                     lambda: run_gd(directory, k, max(peers) - NEAR, args.long_gd))
                 gd_cpu, lower_bound = gd_cpu_to_best(case)
             for tool, record in case.items():
@@ -602,7 +605,6 @@ def markdown(rows, long_gd):
                      f"{beat_text} | {posg['best']} | "
                      f"{'<= ' if posg['gd_cpu_is_lower_bound'] else ''}{posg['posg_cpu_over_gd_cpu']} |")
     return "\n".join(lines)
-
 
 
 if __name__ == "__main__":

@@ -365,8 +365,8 @@ enum Rounding {
 /// The positive number `(quotient + f) 2^exponent`, `f` in `[0, 1)` and 0
 /// exactly when `exact`, rounded to a double as `rounding` says:
 /// `quotient` of at least 54 bits, so that the bits below the double's
-/// last one are `quotient`'s low bits and `f`. Numbers above `2^1000`
-/// (never a probability) read as infinity.
+/// last one are `quotient`'s low bits and `f`. Numbers of `2^1000` and
+/// more (never a probability) read as infinity.
 fn rounded_double(quotient: u128, exact: bool, exponent: i64, rounding: Rounding) -> f64 {
     debug_assert!(quotient >> 53 != 0, "{quotient}");
     let bits = i64::from(128 - quotient.leading_zeros());
@@ -382,8 +382,9 @@ fn rounded_double(quotient: u128, exact: bool, exponent: i64, rounding: Rounding
     }
     // The bits dropped: below a normal double's 53, or below 2^-1074.
     let dropped = (bits - 53).max(-1074 - exponent);
+    // Every bit dropped only where the number is just below 2^-1074.
     let (kept, rest, half) = if dropped >= bits {
-        (0, quotient, 1u128 << (bits - 1).min(127))
+        (0, quotient, 1u128 << (bits - 1))
     } else {
         (
             (quotient >> dropped) as u64,

@@ -233,6 +233,8 @@ impl Solver for Ascent {
         };
         let lbfgs = Lbfgs::start(&mut against, &start.defender, start.bound, &self.settings)?;
         let state = Self::state(&lbfgs, start);
+        self.last_step = 0.0;
+        self.converged = false;
         self.negligible_steps = 0;
         self.recent_values.clear();
         self.recent_values.push_back(lbfgs.value());
