@@ -47,7 +47,8 @@ For each model and k, one tool at a time:
 
 CPU and wall seconds are the process's (start-up, parsing and model
 building included, for every tool alike); a run of any tool that took
-under a second of CPU is made five times and the medians are reported.
+under a second of CPU is a warm-up: it is made eleven times more and
+the medians of those eleven are reported.
 `posg_cpu_over_gd_cpu` divides posg-fsc's CPU by GD's: by the CPU of the
 first GD run where it met its bound, else by the most CPU any GD run of
 the case spent without meeting the first run's bound (GD stops at the
@@ -162,37 +163,43 @@ def complement(value, prop):
 
 
 # A run of any tool that took under SHORT_RUN CPU seconds is made
-# REPEATS times in all and its median CPU and wall seconds are reported: one
-# sample of a run of a few milliseconds is mostly the host's noise and the
-# kernel's accounting tick (one posg-fsc run of nrp-8 measured 0.03 s, ten
-# of them 0.007 s each).
+# REPEATS times more and the median CPU and wall seconds of those repeats
+# are reported, the first run a warm-up: one sample of a run of a few
+# milliseconds is mostly the host's noise and the kernel's accounting tick
+# (one posg-fsc run of nrp-8 measured 0.03 s, ten of them 0.007 s each),
+# and the first runs after other work are the slow ones (posg-fsc on
+# grid-avoid-4-0, 15 runs in a row: 0.046, 0.024, 0.029, then 0.014-0.015 s).
+# Eleven, not five: on this host one run in a few takes 3-4 times the CPU
+# of the others (a 54 ms run among 14 ms ones, with 105 context switches
+# instead of 31 and 38 ms of system time), and five repeats of grid-avoid-4-0
+# with 2 nodes once held three such runs.
 SHORT_RUN = 1.0
-REPEATS = 5
+REPEATS = 11
 
 
 def timed(command, limit, interrupt_after=None, **kwargs):
     """Runs `command`; returns (stdout+stderr or None when killed at `limit`,
     return code, wall seconds, CPU seconds (user+sys) of the child and its
-    children, the CPU seconds of every run made). With `interrupt_after`,
-    the child gets SIGINT after that many seconds. A run that exited with
-    0 before any interrupt within SHORT_RUN CPU seconds is repeated
-    (REPEATS runs in all; each repeat must end the same way, or the
-    experiment stops) and the seconds are the runs' medians; the output
-    is the first run's (each tool here is deterministic for its inputs,
-    posg-fsc by its seed: every repeat writes the same)."""
+    children, the CPU seconds of every run made, the warm-up first). With
+    `interrupt_after`, the child gets SIGINT after that many seconds. A
+    run that exited with 0 before any interrupt within SHORT_RUN CPU
+    seconds is a warm-up: REPEATS more runs are made (each must end the
+    same way, or the experiment stops) and the seconds are their medians;
+    the output is the first run's (each tool here is deterministic for
+    its inputs, posg-fsc by its seed: every repeat writes the same)."""
     out, code, wall, cpu = timed_once(command, limit, interrupt_after, **kwargs)
     interrupted = interrupt_after is not None and wall >= interrupt_after
     if out is None or code != 0 or interrupted or cpu >= SHORT_RUN:
         return out, code, wall, cpu, [cpu]
-    walls, cpus = [wall], [cpu]
-    for _ in range(REPEATS - 1):
+    warmup, walls, cpus = cpu, [], []
+    for _ in range(REPEATS):
         again, code, wall, cpu = timed_once(command, limit, interrupt_after, **kwargs)
         if again is None or code != 0 or (interrupt_after is not None and wall >= interrupt_after):
             raise RuntimeError(f"a repeat of {' '.join(command)} did not end as its first run: "
                                f"exit code {code}, {wall:.1f} s")
         walls.append(wall)
         cpus.append(cpu)
-    return out, 0, statistics.median(walls), statistics.median(cpus), cpus
+    return out, 0, statistics.median(walls), statistics.median(cpus), [warmup] + cpus
 
 
 def timed_once(command, limit, interrupt_after=None, **kwargs):
@@ -283,8 +290,13 @@ def run_gd(directory, k, bound, limit):
     if result is None:
         # Storm aborts 30 s after the SIGINT when the descent has not reached
         # a point where it checks for it (model construction, a long solve).
+        # A child killed by SIGKILL before its time limit: on this host the
+        # kernel's out-of-memory killer (Storm building the pMC of
+        # drone-4-1 with 3 nodes reached 24 GB).
         aborted = "received signal" in log
-        record.update(status="timeout (aborted)" if aborted else "error", log_tail=log[-1500:])
+        status = ("timeout (aborted)" if aborted else
+                  "killed (SIGKILL, out of memory?)" if code == -signal.SIGKILL else "error")
+        record.update(status=status, return_code=code, log_tail=log[-1500:])
         return record
     record.update(json.loads(result.group(1)))
     record["interrupted"] = wall >= limit
@@ -561,7 +573,9 @@ def write(args, rows, records):
         "peers_from": args.peers_from,
         "values": "probability of the property's path formula (1 - p for Pmin)",
         "cpu_seconds": "user+sys of the child process and its children (getrusage deltas); "
-                       f"a run of any tool under {SHORT_RUN} s of CPU: the median of {REPEATS} runs",
+                       f"a run of any tool under {SHORT_RUN} s of CPU: the median of {REPEATS} runs "
+                       "after it, itself a warm-up (cpu_samples: the warm-up, then the "
+                       f"{REPEATS} runs)",
     }
     with open(args.out, "w", newline="") as handle:
         handle.write("# " + json.dumps(settings) + "\n")
