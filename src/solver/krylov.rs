@@ -234,7 +234,7 @@ impl KrylovSolver {
     }
 
     /// [`Self::solve`] and [`Self::solve_transpose`], at once on two threads
-    /// from [`super::PARALLEL_SOLVE_ROWS`] unknowns.
+    /// from `PARALLEL_SOLVE_ROWS` unknowns.
     pub fn solve_both(&mut self, b: &[f64], x: &mut [f64], c: &[f64], y: &mut [f64]) -> SolvePair {
         let system = &self.system;
         let (forward, transposed) = (&mut self.forward, &mut self.transposed);

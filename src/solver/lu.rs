@@ -252,7 +252,7 @@ impl LuSolver {
     }
 
     /// [`Self::solve`] and [`Self::solve_transpose`], at once on two threads
-    /// from [`super::PARALLEL_SOLVE_ROWS`] unknowns.
+    /// from `PARALLEL_SOLVE_ROWS` unknowns.
     pub fn solve_both(&mut self, b: &[f64], x: &mut [f64], c: &[f64], y: &mut [f64]) -> SolvePair {
         let tolerance = self.system.tolerance;
         let factors = match self.system.factors() {

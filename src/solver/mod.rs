@@ -417,7 +417,7 @@ enum Direction {
 /// other on the calling thread: handing one to another thread (waking it,
 /// and its spinning once done) costs more CPU than such a solve (PRISM's
 /// grid-avoid-4-0.1, 33 unknowns: 24% less CPU per run).
-pub(crate) const PARALLEL_SOLVE_ROWS: usize = 4096;
+const PARALLEL_SOLVE_ROWS: usize = 4096;
 
 /// Runs `forward` and `transposed` of a system of `rows` unknowns: at once
 /// on two threads (rayon), or in turn below [`PARALLEL_SOLVE_ROWS`].
@@ -1387,7 +1387,7 @@ impl LinearSolver {
     }
 
     /// [`Self::solve`] and [`Self::solve_transpose`], at once on two threads
-    /// from [`PARALLEL_SOLVE_ROWS`] unknowns
+    /// from `PARALLEL_SOLVE_ROWS` unknowns
     /// (the two solves share the factorisation and nothing else); the
     /// forward solve's error is then bounded as by [`Self::solve`].
     pub fn solve_both(&mut self, b: &[f64], x: &mut [f64], c: &[f64], y: &mut [f64]) -> SolvePair {
