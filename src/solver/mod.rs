@@ -416,7 +416,11 @@ enum Direction {
 /// Systems of fewer unknowns solve their two directions one after the
 /// other on the calling thread: handing one to another thread (waking it,
 /// and its spinning once done) costs more CPU than such a solve (PRISM's
-/// grid-avoid-4-0.1, 33 unknowns: 24% less CPU per run).
+/// grid-avoid-4-0.1 with 2 and 3 nodes, 33 and 49 unknowns: 17% and 21%
+/// less CPU per run). The same bound as the gradient pass's
+/// `PARALLEL_GRADIENT_ROWS`; below it the portfolio's starts, which run in
+/// parallel, keep both threads busy (drone-4-1, 2,305 unknowns: the same
+/// CPU and wall time).
 const PARALLEL_SOLVE_ROWS: usize = 4096;
 
 /// Runs `forward` and `transposed` of a system of `rows` unknowns: at once
