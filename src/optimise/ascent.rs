@@ -171,10 +171,8 @@ pub(super) struct Ascent {
     settings: Settings,
     lbfgs: Option<Lbfgs>,
     last_step: f64,
-    /// Consecutive steps that gained at most [`NEGLIGIBLE_GAIN`].
-    negligible_steps: usize,
     /// `V` after each of the last [`NEGLIGIBLE_STEPS`] steps, and before
-    /// the first of them.
+    /// the first of them: the window both convergence rules judge.
     recent_values: VecDeque<f64>,
     converged: bool,
 }
@@ -186,7 +184,6 @@ impl Ascent {
             settings: settings.clone(),
             lbfgs: None,
             last_step: 0.0,
-            negligible_steps: 0,
             recent_values: VecDeque::with_capacity(NEGLIGIBLE_STEPS + 1),
             converged: false,
         }
@@ -202,6 +199,14 @@ impl Ascent {
         recent_values.push_back(value);
         recent_values.len() > NEGLIGIBLE_STEPS
             && value - recent_values[0] <= tolerance * value.abs()
+    }
+
+    /// Whether the window holds [`NEGLIGIBLE_STEPS`] steps and each gained
+    /// at most [`NEGLIGIBLE_GAIN`] of the value it reached.
+    fn each_step_negligible(recent_values: &VecDeque<f64>) -> bool {
+        recent_values.len() > NEGLIGIBLE_STEPS
+            && (recent_values.iter().zip(recent_values.iter().skip(1)))
+                .all(|(before, after)| after - before <= NEGLIGIBLE_GAIN * after.abs())
     }
 
     /// The state at `iterate`, the ascent being at `lbfgs`.
@@ -235,7 +240,6 @@ impl Solver for Ascent {
         let state = Self::state(&lbfgs, start);
         self.last_step = 0.0;
         self.converged = false;
-        self.negligible_steps = 0;
         self.recent_values.clear();
         self.recent_values.push_back(lbfgs.value());
         self.lbfgs = Some(lbfgs);
@@ -259,17 +263,11 @@ impl Solver for Ascent {
             Some(step) => {
                 self.last_step = step;
                 let value = lbfgs.value();
-                let before = self.recent_values.back().copied().unwrap_or(value);
-                self.negligible_steps = if value - before <= NEGLIGIBLE_GAIN * value.abs() {
-                    self.negligible_steps + 1
-                } else {
-                    0
-                };
                 let tolerance = self.settings.solver_tolerance;
                 let stationary = norm(lbfgs.gradient()) <= STATIONARY_GRADIENT * value.abs();
                 let stalled = Self::gained_little(&mut self.recent_values, value, tolerance);
                 self.converged =
-                    self.negligible_steps >= NEGLIGIBLE_STEPS || (stationary && stalled);
+                    Self::each_step_negligible(&self.recent_values) || (stationary && stalled);
             }
             None => {
                 self.last_step = 0.0;
@@ -463,5 +461,25 @@ mod tests {
         jumped.extend(std::iter::repeat_n(0.5, 20));
         let verdicts = stalls(&jumped, 1e-9);
         assert!(!verdicts[NEGLIGIBLE_STEPS - 1] && verdicts[NEGLIGIBLE_STEPS]);
+    }
+
+    /// The per-step rule holds once the window's last [`NEGLIGIBLE_STEPS`]
+    /// steps each gained at most [`NEGLIGIBLE_GAIN`]: a step above it keeps
+    /// it off until ten negligible steps follow it (the consecutive count
+    /// it replaces).
+    #[test]
+    fn each_step_must_be_negligible_for_ten_steps_in_a_row() {
+        let mut values = vec![0.5, 0.6];
+        values.extend((1..=20).map(|i| 0.6 + 1e-14 * i as f64));
+        let mut recent = VecDeque::from([values[0]]);
+        let verdicts: Vec<bool> = (values[1..].iter())
+            .map(|&v| {
+                Ascent::gained_little(&mut recent, v, 1e-9);
+                Ascent::each_step_negligible(&recent)
+            })
+            .collect();
+        // Step 1 gains 0.1; steps 2.. gain 1e-14 (below 1e-12 * 0.6).
+        assert!(verdicts[..NEGLIGIBLE_STEPS].iter().all(|&v| !v));
+        assert!(verdicts[NEGLIGIBLE_STEPS..].iter().all(|&v| v));
     }
 }
