@@ -329,11 +329,35 @@ impl Scale {
 
     /// The probability of `mass` rounded as `rounding` says, from one
     /// integer division: the quotient to 66 or 67 bits, and whether a
-    /// remainder is left.
+    /// remainder is left. Most masses and denominators have a few bits:
+    /// those divide in machine integers, without a big one built.
     fn rounded(&self, mass: &BigUint, rounding: Rounding) -> f64 {
         if mass.is_zero() {
             return 0.0;
         }
+        match (mass.to_u64(), self.denominator.to_u64()) {
+            (Some(mass), Some(denominator)) if denominator < SMALL_DENOMINATOR => {
+                self.rounded_small(mass, denominator, rounding)
+            }
+            _ => self.rounded_big(mass, rounding),
+        }
+    }
+
+    /// [`Scale::rounded`] of a mass of at most 64 bits over this scale's
+    /// denominator, `denominator` (below [`SMALL_DENOMINATOR`]): the
+    /// shifted mass has at most `66 + 62` bits.
+    fn rounded_small(&self, mass: u64, denominator: u64, rounding: Rounding) -> f64 {
+        let bits = |x: u64| i64::from(64 - x.leading_zeros());
+        // At least 3: `mass` has at most 63 more bits than `denominator`.
+        let shift = 66 - (bits(mass) - bits(denominator));
+        let numerator = u128::from(mass) << shift;
+        let denominator = u128::from(denominator);
+        let (quotient, remainder) = (numerator / denominator, numerator % denominator);
+        rounded_double(quotient, remainder == 0, self.exponent - shift, rounding)
+    }
+
+    /// [`Scale::rounded`] in big integers.
+    fn rounded_big(&self, mass: &BigUint, rounding: Rounding) -> f64 {
         // `mass 2^shift / denominator` lies in [2^65, 2^67).
         let shift = 66 - (mass.bits() as i64 - self.denominator.bits() as i64);
         let (quotient, remainder) = if shift >= 0 {
@@ -352,6 +376,10 @@ impl Scale {
         )
     }
 }
+
+/// Denominators below `2^62` divide in machine integers
+/// ([`Scale::rounded_small`]).
+const SMALL_DENOMINATOR: u64 = 1 << 62;
 
 /// How an exact number becomes a double.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -978,6 +1006,50 @@ mod tests {
                 } else {
                     proptest::prop_assert!(is_rounded(x, &ratio, rounding), "{x:e} {rounding:?}");
                 }
+            }
+        }
+    }
+
+    /// The same rounding of `mass` by `scale` in machine integers and in
+    /// big ones, both directions.
+    fn assert_small_is_big(scale: &Scale, mass: u64) {
+        let denominator = scale.denominator.to_u64().expect("a small denominator");
+        for rounding in [Rounding::Nearest, Rounding::Up] {
+            let small = scale.rounded_small(mass, denominator, rounding);
+            let big = scale.rounded_big(&BigUint::from(mass), rounding);
+            assert_eq!(
+                small.to_bits(),
+                big.to_bits(),
+                "{mass} / {denominator} {rounding:?}"
+            );
+        }
+    }
+
+    proptest::proptest! {
+        /// Masses of at most 64 bits over denominators below
+        /// [`SMALL_DENOMINATOR`] round in machine integers as in big ones.
+        #[test]
+        fn a_small_ratio_rounds_as_in_big_integers(
+            mass in 1u64..,
+            denominator in 1u64..SMALL_DENOMINATOR,
+            exponent in -1150i64..40,
+        ) {
+            let scale = Scale { exponent, denominator: BigUint::from(denominator) };
+            assert_small_is_big(&scale, mass);
+        }
+    }
+
+    /// The widest machine-integer division: a 64-bit mass over the largest
+    /// small denominator and over 1.
+    #[test]
+    fn the_widest_small_ratios_round_as_in_big_integers() {
+        for denominator in [1, 3, SMALL_DENOMINATOR - 1] {
+            let scale = Scale {
+                exponent: -60,
+                denominator: BigUint::from(denominator),
+            };
+            for mass in [1, 2, u64::MAX, u64::MAX - 1, 1 << 63] {
+                assert_small_is_big(&scale, mass);
             }
         }
     }
