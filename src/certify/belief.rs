@@ -28,13 +28,14 @@
 //! belief MDP (`Exploration::excessive`): it then bounds the exact least
 //! fixed point, whatever the rounding.
 
-use std::collections::hash_map::Entry;
+use std::hash::{Hash, Hasher};
 use std::sync::OnceLock;
 
+use indexmap::{Equivalent, IndexSet};
 use num_bigint::BigUint;
 use num_integer::Integer;
 use num_traits::{One, ToPrimitive, Zero};
-use rustc_hash::FxHashMap;
+use rustc_hash::FxBuildHasher;
 use serde::Serialize;
 
 use super::{Analysis, Bound, CertifyError, analyse, check_values_consistent};
@@ -218,7 +219,7 @@ const ROOT: usize = 2;
 /// with positive probability (increasing), each with a positive integer
 /// weight, the weights without a common factor: the belief is the weights
 /// over their sum, and equal beliefs have equal weights.
-#[derive(Debug, Clone, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, PartialEq, Eq)]
 struct Belief {
     /// The observation the defender has just seen.
     observation: usize,
@@ -226,39 +227,88 @@ struct Belief {
     entries: Vec<(usize, BigUint)>,
 }
 
+impl Belief {
+    /// The belief as a borrowed key.
+    fn key(&self) -> BeliefKey<'_> {
+        BeliefKey {
+            observation: self.observation,
+            entries: &self.entries,
+        }
+    }
+}
+
+impl Hash for Belief {
+    /// The hash of [`Belief::key`], so that a key finds its belief.
+    fn hash<H: Hasher>(&self, state: &mut H) {
+        self.key().hash(state);
+    }
+}
+
+/// A [`Belief`] borrowed: a candidate successor is looked up by its
+/// entries, and copied only where it is new.
+#[derive(Hash)]
+struct BeliefKey<'e> {
+    /// The observation.
+    observation: usize,
+    /// `(product state, weight)`, the weights coprime.
+    entries: &'e [(usize, BigUint)],
+}
+
+impl Equivalent<Belief> for BeliefKey<'_> {
+    fn equivalent(&self, belief: &Belief) -> bool {
+        self.observation == belief.observation && self.entries == belief.entries.as_slice()
+    }
+}
+
 /// A belief MDP action, exactly: the masses that reach `A` at once, that
 /// reach a state that cannot reach it, and of each successor belief (by
-/// index), with the scales they read by as probabilities.
+/// index), with the powers of 2 they read by as probabilities (over the
+/// denominator of the belief the move leaves, [`Expansion::Expanded`]).
 #[derive(Default)]
 struct Move {
-    /// The mass that reaches `A`, read by `scale`.
+    /// The mass that reaches `A`, times `2^exponent`.
     won: BigUint,
-    /// The mass that reaches a state that cannot reach `A`, read by
-    /// `scale`.
+    /// The mass that reaches a state that cannot reach `A`, times
+    /// `2^exponent`.
     lost: BigUint,
-    /// Each successor belief, after its observation, with its mass, read
-    /// by `scale` times `2^observed_exponent`.
+    /// Each successor belief, after its observation, with its mass, times
+    /// `2^(exponent + observed_exponent)`.
     next: Vec<(usize, BigUint)>,
-    /// How `won` and `lost` read as probabilities.
-    scale: Scale,
-    /// The power of 2 the observations' probabilities add to `scale`.
+    /// The power of 2 of `won` and `lost`.
+    exponent: i64,
+    /// The power of 2 the observations' probabilities add to `exponent`.
     observed_exponent: i64,
 }
 
 impl Move {
-    /// How the successors' masses read as probabilities.
-    fn observed_scale(&self) -> Scale {
+    /// How `won` and `lost` read as probabilities over `denominator`.
+    fn scale<'d>(&self, denominator: &'d BigUint) -> Scale<'d> {
         Scale {
-            exponent: self.scale.exponent + self.observed_exponent,
-            denominator: self.scale.denominator.clone(),
+            exponent: self.exponent,
+            denominator,
+        }
+    }
+
+    /// How the successors' masses read as probabilities over
+    /// `denominator`.
+    fn observed_scale<'d>(&self, denominator: &'d BigUint) -> Scale<'d> {
+        Scale {
+            exponent: self.exponent + self.observed_exponent,
+            denominator,
         }
     }
 }
 
 /// What the exploration did with a belief.
 enum Expansion {
-    /// Its moves, one per action its observation enables.
-    Expanded(Vec<Move>),
+    /// Its moves, one per action its observation enables, and the sum of
+    /// its weights, which their masses read over.
+    Expanded {
+        /// The belief's weights summed.
+        denominator: BigUint,
+        /// One move per action.
+        moves: Vec<Move>,
+    },
     /// Not expanded: it leaves with its fully informed bound.
     Frontier(f64),
 }
@@ -307,16 +357,16 @@ impl Dyadic {
 }
 
 /// How integer masses read as probabilities: `mass * 2^exponent /
-/// denominator` (the default, a placeholder, reads nothing).
-#[derive(Debug, Clone, Default)]
-struct Scale {
+/// denominator`.
+#[derive(Debug, Clone, Copy)]
+struct Scale<'d> {
     /// The power of 2.
     exponent: i64,
     /// The denominator (the weights' sum of the belief they come from).
-    denominator: BigUint,
+    denominator: &'d BigUint,
 }
 
-impl Scale {
+impl Scale<'_> {
     /// The probability of `mass`, rounded to the nearest double.
     fn nearest(&self, mass: &BigUint) -> f64 {
         self.rounded(mass, Rounding::Nearest)
@@ -361,9 +411,9 @@ impl Scale {
         // `mass 2^shift / denominator` lies in [2^65, 2^67).
         let shift = 66 - (mass.bits() as i64 - self.denominator.bits() as i64);
         let (quotient, remainder) = if shift >= 0 {
-            (mass << shift as usize).div_rem(&self.denominator)
+            (mass << shift as usize).div_rem(self.denominator)
         } else {
-            mass.div_rem(&(&self.denominator << (-shift) as usize))
+            mass.div_rem(&(self.denominator << (-shift) as usize))
         };
         let quotient = quotient
             .to_u128()
@@ -439,20 +489,26 @@ fn power_of_two(e: i64) -> f64 {
     }
 }
 
-/// `terms` as integers: each `weight * mantissa * 2^(exponent - least)`,
-/// summed per product state, and the least exponent `least`.
-fn integer_terms(terms: &mut [(usize, &BigUint, Dyadic)]) -> (Vec<(usize, BigUint)>, i64) {
+/// `terms` `(m, k, d)` as integers: each `weights[k] * d` as `weights[k]
+/// * mantissa * 2^(exponent - least)`, summed per product state `m`
+/// (increasing) and appended to `summed`; returns the least exponent
+/// `least`.
+fn integer_terms(
+    terms: &mut [(usize, usize, Dyadic)],
+    weights: &[(usize, BigUint)],
+    summed: &mut Vec<(usize, BigUint)>,
+) -> i64 {
     let least = terms.iter().map(|t| t.2.exponent).min().unwrap_or(0);
     terms.sort_unstable_by_key(|t| t.0);
-    let mut summed: Vec<(usize, BigUint)> = Vec::with_capacity(terms.len());
-    for &mut (m, weight, d) in terms {
-        let term = scaled(weight, d.mantissa, d.exponent - least);
-        match summed.last_mut() {
+    let start = summed.len();
+    for &mut (m, k, d) in terms {
+        let term = scaled(&weights[k].1, d.mantissa, d.exponent - least);
+        match summed[start..].last_mut() {
             Some((last, sum)) if *last == m => *sum += term,
             _ => summed.push((m, term)),
         }
     }
-    (summed, least)
+    least
 }
 
 /// `mass * factor * 2^shift` (`shift` nonnegative), without arithmetic
@@ -465,19 +521,44 @@ fn scaled(mass: &BigUint, factor: u64, shift: i64) -> BigUint {
     }
 }
 
-/// `weights` divided by their greatest common divisor (none where it is
-/// 1, as it mostly is).
-fn coprime(weights: Vec<(usize, BigUint)>) -> Vec<(usize, BigUint)> {
+/// Divides `weights` by their greatest common divisor (nothing where it
+/// is 1, as it mostly is).
+fn make_coprime(weights: &mut [(usize, BigUint)]) {
     let mut divisor = BigUint::zero();
-    for (_, w) in &weights {
+    for (_, w) in weights.iter() {
         divisor = divisor.gcd(w);
         if divisor.is_one() {
-            return weights;
+            return;
         }
     }
-    (weights.into_iter())
-        .map(|(m, w)| (m, w / &divisor))
-        .collect()
+    for (_, w) in weights {
+        *w /= &divisor;
+    }
+}
+
+/// Buffers an exploration reuses from move to move (cleared before each
+/// use), so that a move allocates only what it keeps.
+#[derive(Default)]
+struct Scratch {
+    /// The terms `(m', entry, probability)` of one action's successors.
+    terms: Vec<(usize, usize, Dyadic)>,
+    /// The product-state masses of each action of a belief, one after
+    /// the other.
+    masses: Vec<(usize, BigUint)>,
+    /// Per action: where its masses end in `masses`, and their exponent.
+    actions: Vec<(usize, i64)>,
+    /// The buffers of [`Exploration::split`].
+    split: SplitScratch,
+}
+
+/// Buffers of [`Exploration::split`].
+#[derive(Default)]
+struct SplitScratch {
+    /// The measure's masses by observation: `(observation, m, mass,
+    /// probability)`, `mass` an index into the measure.
+    observed: Vec<(usize, usize, usize, Dyadic)>,
+    /// The weights of one candidate successor belief.
+    entries: Vec<(usize, BigUint)>,
 }
 
 /// The breadth-first exploration of the beliefs.
@@ -491,11 +572,10 @@ struct Exploration<'a> {
     budget: BeliefBudget,
     /// Per product state: in `A`, or unable to reach it.
     in_target: Vec<bool>,
-    /// The beliefs met, numbered in order of discovery.
-    beliefs: Vec<Belief>,
-    /// The number of each belief met.
-    ids: FxHashMap<Belief, usize>,
-    /// The root's move (the initial distribution split by observation).
+    /// The beliefs met, numbered (indexed) in order of discovery.
+    beliefs: IndexSet<Belief, FxBuildHasher>,
+    /// The root's move (the initial distribution split by observation,
+    /// over the denominator 1).
     root: Move,
     /// What became of each belief, in order (the beliefs not yet taken
     /// have none).
@@ -504,6 +584,8 @@ struct Exploration<'a> {
     entries: usize,
     /// The bits of those entries' weights.
     bits: u64,
+    /// Buffers reused from move to move.
+    scratch: Scratch,
 }
 
 impl<'a> Exploration<'a> {
@@ -515,28 +597,26 @@ impl<'a> Exploration<'a> {
             analysis,
             budget,
             in_target: accepting_union(&analysis.mdp, &analysis.accepting),
-            beliefs: Vec::new(),
-            ids: FxHashMap::default(),
+            beliefs: IndexSet::default(),
             root: Move::default(),
             expansions: Vec::new(),
             entries: 0,
             bits: 0,
+            scratch: Scratch::default(),
         }
     }
 
     /// Explores from `p0` until every belief met is expanded or the budget
     /// is spent.
     fn explore(mut self) -> Self {
-        let one = BigUint::one();
-        let mut terms: Vec<(usize, &BigUint, Dyadic)> = (self.analysis.initial.iter())
-            .map(|&(m, p)| (m, &one, Dyadic::of(p)))
-            .collect();
-        let (masses, exponent) = integer_terms(&mut terms);
-        let scale = Scale {
-            exponent,
-            denominator: BigUint::one(),
-        };
-        self.root = self.split(masses, &scale);
+        let mut scratch = std::mem::take(&mut self.scratch);
+        let start = [(0, BigUint::one())];
+        scratch.terms.clear();
+        (scratch.terms).extend((self.analysis.initial.iter()).map(|&(m, p)| (m, 0, Dyadic::of(p))));
+        scratch.masses.clear();
+        let exponent = integer_terms(&mut scratch.terms, &start, &mut scratch.masses);
+        self.root = self.split(&scratch.masses, exponent, &mut scratch.split);
+        self.scratch = scratch;
         while self.expansions.len() < self.beliefs.len() {
             let i = self.expansions.len();
             let within = i < self.budget.beliefs
@@ -544,7 +624,7 @@ impl<'a> Exploration<'a> {
                 && self.bits <= self.budget.bits
                 && self.small_weights(&self.beliefs[i]);
             let expansion = if within {
-                Expansion::Expanded(self.expand(i))
+                self.expand(i)
             } else {
                 Expansion::Frontier(self.informed_bound(i))
             };
@@ -555,7 +635,7 @@ impl<'a> Exploration<'a> {
 
     /// Whether every belief met was expanded.
     fn complete(&self) -> bool {
-        (self.expansions.iter()).all(|e| matches!(e, Expansion::Expanded(_)))
+        (self.expansions.iter()).all(|e| matches!(e, Expansion::Expanded { .. }))
     }
 
     /// Whether every weight of `belief` is within the budget's bits.
@@ -569,46 +649,52 @@ impl<'a> Exploration<'a> {
     /// The moves of belief `i`: one per action its observation enables
     /// (each enabled in every state of the belief: a state is in it only
     /// where it shows that observation).
-    fn expand(&mut self, i: usize) -> Vec<Move> {
+    fn expand(&mut self, i: usize) -> Expansion {
+        let mut scratch = std::mem::take(&mut self.scratch);
         let belief = &self.beliefs[i];
         let denominator: BigUint = belief.entries.iter().map(|(_, w)| w).sum();
-        let measures: Vec<(Vec<(usize, BigUint)>, i64)> = (self.game.defender())
-            .enabled_actions(belief.observation)
-            .map(|u| {
-                let mut terms = Vec::new();
-                for (m, weight) in &belief.entries {
-                    let s = self.analysis.states[*m].0;
-                    let a = self.analysis.free_actions[s]
-                        .iter()
-                        .position(|&w| w == u)
-                        .expect("an action the observation enables is enabled in its states");
-                    for &(m2, t) in self.analysis.mdp.distribution(*m, a) {
-                        terms.push((m2, weight, Dyadic::of(t)));
-                    }
+        scratch.masses.clear();
+        scratch.actions.clear();
+        for u in self.game.defender().enabled_actions(belief.observation) {
+            scratch.terms.clear();
+            for (k, (m, _)) in belief.entries.iter().enumerate() {
+                let s = self.analysis.states[*m].0;
+                let a = self.analysis.free_actions[s]
+                    .iter()
+                    .position(|&w| w == u)
+                    .expect("an action the observation enables is enabled in its states");
+                for &(m2, t) in self.analysis.mdp.distribution(*m, a) {
+                    scratch.terms.push((m2, k, Dyadic::of(t)));
                 }
-                integer_terms(&mut terms)
-            })
-            .collect();
-        (measures.into_iter())
-            .map(|(masses, exponent)| {
-                let scale = Scale {
-                    exponent,
-                    denominator: denominator.clone(),
-                };
-                self.split(masses, &scale)
-            })
-            .collect()
+            }
+            let exponent = integer_terms(&mut scratch.terms, &belief.entries, &mut scratch.masses);
+            scratch.actions.push((scratch.masses.len(), exponent));
+        }
+        let mut moves = Vec::with_capacity(scratch.actions.len());
+        let mut start = 0;
+        for &(end, exponent) in &scratch.actions {
+            moves.push(self.split(&scratch.masses[start..end], exponent, &mut scratch.split));
+            start = end;
+        }
+        self.scratch = scratch;
+        Expansion::Expanded { denominator, moves }
     }
 
-    /// The move of the product-state measure `masses` (read by `scale`):
-    /// its mass in `A` won, its mass where `A` cannot be reached lost, the
-    /// rest split by the observation of its states into beliefs (numbered
-    /// where new).
-    fn split(&mut self, masses: Vec<(usize, BigUint)>, scale: &Scale) -> Move {
+    /// The move of the product-state measure `masses` (times
+    /// `2^exponent`): its mass in `A` won, its mass where `A` cannot be
+    /// reached lost, the rest split by the observation of its states into
+    /// beliefs (numbered where new).
+    fn split(
+        &mut self,
+        masses: &[(usize, BigUint)],
+        exponent: i64,
+        scratch: &mut SplitScratch,
+    ) -> Move {
         let mut won = BigUint::zero();
         let mut lost = BigUint::zero();
-        let mut observed = Vec::new();
-        for (m, mass) in &masses {
+        let observed = &mut scratch.observed;
+        observed.clear();
+        for (k, (m, mass)) in masses.iter().enumerate() {
             if self.in_target[*m] {
                 won += mass;
             } else if !self.analysis.result.possible[*m] {
@@ -616,64 +702,63 @@ impl<'a> Exploration<'a> {
             } else {
                 let s = self.analysis.states[*m].0;
                 for &(o, q) in self.game.defender().observation_distribution(s) {
-                    observed.push((o, *m, mass, Dyadic::of(q)));
+                    observed.push((o, *m, k, Dyadic::of(q)));
                 }
             }
         }
         // Every observation's masses on one scale (the least exponent), so
         // that their probabilities read alike.
         let least = observed.iter().map(|t| t.3.exponent).min().unwrap_or(0);
-        let mut by_observation: Vec<(usize, Vec<(usize, BigUint)>)> = Vec::new();
-        observed.sort_by_key(|t| (t.0, t.1));
-        for (o, m, mass, d) in observed {
-            let mass = scaled(mass, d.mantissa, d.exponent - least);
-            match by_observation.last_mut() {
-                Some((last, entries)) if *last == o => entries.push((m, mass)),
-                _ => by_observation.push((o, vec![(m, mass)])),
-            }
+        observed.sort_unstable_by_key(|t| (t.0, t.1));
+        let mut next = Vec::new();
+        for group in observed.chunk_by(|a, b| a.0 == b.0) {
+            let entries = &mut scratch.entries;
+            entries.clear();
+            (entries).extend(
+                group
+                    .iter()
+                    .map(|&(_, m, k, d)| (m, scaled(&masses[k].1, d.mantissa, d.exponent - least))),
+            );
+            let total: BigUint = entries.iter().map(|(_, w)| w).sum();
+            make_coprime(entries);
+            next.push((self.id(group[0].0, entries), total));
         }
-        let next = (by_observation.into_iter())
-            .map(|(o, entries)| {
-                let total: BigUint = entries.iter().map(|(_, w)| w).sum();
-                let belief = Belief {
-                    observation: o,
-                    entries: coprime(entries),
-                };
-                (self.id(belief), total)
-            })
-            .collect();
         Move {
             won,
             lost,
             next,
-            scale: scale.clone(),
+            exponent,
             observed_exponent: least,
         }
     }
 
-    /// The number of `belief`, numbered next where new.
-    fn id(&mut self, belief: Belief) -> usize {
-        let next = self.beliefs.len();
-        match self.ids.entry(belief) {
-            Entry::Occupied(entry) => *entry.get(),
-            Entry::Vacant(entry) => {
-                let entries = &entry.key().entries;
-                self.entries += entries.len();
-                self.bits += entries.iter().map(|(_, w)| w.bits()).sum::<u64>();
-                self.beliefs.push(entry.key().clone());
-                entry.insert(next);
-                next
-            }
+    /// The number of the belief of `observation` and (coprime) `entries`,
+    /// numbered next where new (its entries then taken).
+    fn id(&mut self, observation: usize, entries: &mut Vec<(usize, BigUint)>) -> usize {
+        let key = BeliefKey {
+            observation,
+            entries,
+        };
+        if let Some(i) = self.beliefs.get_index_of(&key) {
+            return i;
         }
+        self.entries += entries.len();
+        self.bits += entries.iter().map(|(_, w)| w.bits()).sum::<u64>();
+        let belief = Belief {
+            observation,
+            entries: std::mem::take(entries),
+        };
+        self.beliefs.insert_full(belief).0
     }
 
     /// The fully informed bound of belief `i`: `sum_m b(m) x*(m)` with the
     /// certificate's proved `x*`, rounded up, at most 1.
     fn informed_bound(&self, i: usize) -> f64 {
         let entries = &self.beliefs[i].entries;
+        let denominator = entries.iter().map(|(_, w)| w).sum();
         let scale = Scale {
             exponent: 0,
-            denominator: entries.iter().map(|(_, w)| w).sum(),
+            denominator: &denominator,
         };
         let sum: f64 = (entries.iter())
             .map(|(m, w)| scale.nearest(w) * self.analysis.result.upper[*m])
@@ -693,13 +778,13 @@ impl<'a> Exploration<'a> {
             builder.add_action([(absorbing, 1.0)]);
             builder.end_state();
         }
-        add_move(&mut builder, &self.root);
+        add_move(&mut builder, &self.root, &BigUint::one());
         builder.end_state();
         for expansion in &self.expansions {
             match expansion {
-                Expansion::Expanded(moves) => {
+                Expansion::Expanded { denominator, moves } => {
                     for step in moves {
-                        add_move(&mut builder, step);
+                        add_move(&mut builder, step, denominator);
                     }
                 }
                 Expansion::Frontier(bound) => {
@@ -734,7 +819,9 @@ impl<'a> Exploration<'a> {
         y[WON] == 1.0
             && at_most(ROOT, &self.root)
             && (self.expansions.iter().enumerate()).all(|(i, expansion)| match expansion {
-                Expansion::Expanded(moves) => moves.iter().all(|step| at_most(belief(i), step)),
+                Expansion::Expanded { moves, .. } => {
+                    moves.iter().all(|step| at_most(belief(i), step))
+                }
                 Expansion::Frontier(bound) => *bound <= y[belief(i)],
             })
     }
@@ -746,10 +833,10 @@ impl<'a> Exploration<'a> {
 /// normalised). In integers: every double as `mantissa * 2^exponent`, the
 /// masses' common denominator cancelled.
 fn holds(step: &Move, y_at: f64, y_won: f64, y: impl Fn(usize) -> f64) -> bool {
-    let observed = step.scale.exponent + step.observed_exponent;
-    let masses = [(&step.won, step.scale.exponent, y_won)]
+    let observed = step.exponent + step.observed_exponent;
+    let masses = [(&step.won, step.exponent, y_won)]
         .into_iter()
-        .chain([(&step.lost, step.scale.exponent, 0.0)])
+        .chain([(&step.lost, step.exponent, 0.0)])
         .chain((step.next.iter()).map(|(j, m)| (m, observed, y(*j))));
     // `(mass * y, mass)` as `(integer, exponent)` pairs.
     let mut weighted: Vec<(BigUint, i64)> = Vec::new();
@@ -791,15 +878,16 @@ pub fn check_below_belief(lower: &Bound, belief: &BeliefBound) -> Result<(), Cer
     check_values_consistent((lower.value, lower.error_bound), (belief.value, 0.0))
 }
 
-/// Adds `step` as an action of the current state (beliefs after [`ROOT`]),
-/// its probabilities rounded up to doubles but the lost one (rounded to
-/// the nearest: it counts nothing where [`WON`] is the target).
-fn add_move(builder: &mut MdpBuilder, step: &Move) {
-    let observed = step.observed_scale();
+/// Adds `step`, a move of a belief of weights summing to `denominator`,
+/// as an action of the current state (beliefs after [`ROOT`]), its
+/// probabilities rounded up to doubles but the lost one (rounded to the
+/// nearest: it counts nothing where [`WON`] is the target).
+fn add_move(builder: &mut MdpBuilder, step: &Move, denominator: &BigUint) {
+    let (scale, observed) = (step.scale(denominator), step.observed_scale(denominator));
     let beliefs = (step.next.iter()).map(|(j, mass)| (ROOT + 1 + j, observed.above(mass)));
     let ends = [
-        (WON, step.scale.above(&step.won)),
-        (LOST, step.scale.nearest(&step.lost)),
+        (WON, scale.above(&step.won)),
+        (LOST, scale.nearest(&step.lost)),
     ];
     builder.add_action(ends.into_iter().chain(beliefs));
 }
@@ -888,10 +976,7 @@ mod tests {
         let mass = |d: Dyadic| BigUint::from(d.mantissa) << (d.exponent - least) as usize;
         Move {
             next: vec![(0, mass(a)), (1, mass(b))],
-            scale: Scale {
-                exponent: least,
-                denominator: BigUint::one(),
-            },
+            exponent: least,
             ..Move::default()
         }
     }
@@ -996,9 +1081,9 @@ mod tests {
             let mass = BigUint::new(mass) << halves;
             let denominator = BigUint::new(denominator);
             proptest::prop_assume!(!mass.is_zero() && !denominator.is_zero());
-            let scale = Scale { exponent, denominator: denominator.clone() };
+            let scale = Scale { exponent, denominator: &denominator };
             let power = BigRational::from_integer(BigInt::from(2)).pow(exponent as i32);
-            let ratio = BigRational::new(BigInt::from(mass.clone()), BigInt::from(denominator)) * power;
+            let ratio = BigRational::new(BigInt::from(mass.clone()), BigInt::from(denominator.clone())) * power;
             for (x, rounding) in [(scale.nearest(&mass), Rounding::Nearest), (scale.above(&mass), Rounding::Up)] {
                 if x == 0.0 {
                     proptest::prop_assert!(rounding == Rounding::Nearest);
@@ -1034,7 +1119,8 @@ mod tests {
             denominator in 1u64..SMALL_DENOMINATOR,
             exponent in -1150i64..40,
         ) {
-            let scale = Scale { exponent, denominator: BigUint::from(denominator) };
+            let denominator = BigUint::from(denominator);
+            let scale = Scale { exponent, denominator: &denominator };
             assert_small_is_big(&scale, mass);
         }
     }
@@ -1044,9 +1130,10 @@ mod tests {
     #[test]
     fn the_widest_small_ratios_round_as_in_big_integers() {
         for denominator in [1, 3, SMALL_DENOMINATOR - 1] {
+            let denominator = BigUint::from(denominator);
             let scale = Scale {
                 exponent: -60,
-                denominator: BigUint::from(denominator),
+                denominator: &denominator,
             };
             for mass in [1, 2, u64::MAX, u64::MAX - 1, 1 << 63] {
                 assert_small_is_big(&scale, mass);
@@ -1061,7 +1148,7 @@ mod tests {
         let one = BigUint::one();
         let scale = Scale {
             exponent: -53,
-            denominator: one.clone(),
+            denominator: &one,
         };
         let eps = f64::EPSILON;
         for (odd, nearest, up) in [
