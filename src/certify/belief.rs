@@ -830,44 +830,57 @@ impl<'a> Exploration<'a> {
 /// Whether `won * y_won + sum_j next_j y(j) <= y_at` for `step`'s exact
 /// probabilities, each mass over the step's exact total (a game's doubles
 /// may sum to 1 plus an ulp: the exact belief MDP is the one of the rows
-/// normalised). In integers: every double as `mantissa * 2^exponent`, the
-/// masses' common denominator cancelled.
+/// normalised). In integers: every double as `mantissa * 2^exponent`, both
+/// sides on the least power of 2 (the masses' common denominator
+/// cancelled).
 fn holds(step: &Move, y_at: f64, y_won: f64, y: impl Fn(usize) -> f64) -> bool {
-    let observed = step.exponent + step.observed_exponent;
-    let masses = [(&step.won, step.exponent, y_won)]
-        .into_iter()
-        .chain([(&step.lost, step.exponent, 0.0)])
-        .chain((step.next.iter()).map(|(j, m)| (m, observed, y(*j))));
-    // `(mass * y, mass)` as `(integer, exponent)` pairs.
-    let mut weighted: Vec<(BigUint, i64)> = Vec::new();
-    let mut total: Vec<(BigUint, i64)> = Vec::new();
-    for (mass, exponent, value) in masses {
-        if mass.is_zero() {
-            continue;
-        }
-        total.push((mass.clone(), exponent));
-        if value > 0.0 {
-            let d = Dyadic::of_nonnegative(value);
-            weighted.push((mass * d.mantissa, exponent + d.exponent));
+    let at = Dyadic::of_nonnegative(y_at);
+    let sides = |term| both_sides(term, at);
+    let least = (step_terms(step, y_won, &y).flat_map(sides))
+        .filter(|part| part.1 != 0)
+        .map(|part| part.2)
+        .min()
+        .unwrap_or(0);
+    let (mut left, mut right) = (BigUint::zero(), BigUint::zero());
+    for [weighted, total] in step_terms(step, y_won, &y).map(sides) {
+        for ((mass, mantissa, exponent), side) in [(weighted, &mut left), (total, &mut right)] {
+            if mantissa != 0 {
+                *side += scaled(mass, mantissa, exponent - least);
+            }
         }
     }
-    let at = Dyadic::of_nonnegative(y_at);
-    let scaled_total: Vec<(BigUint, i64)> = (total.into_iter())
-        .map(|(m, e)| (m * at.mantissa, e + at.exponent))
-        .collect();
-    exact_sum_at_most(&weighted, &scaled_total)
+    left <= right
 }
 
-/// Whether `sum left <= sum right`, each term `integer * 2^exponent`.
-fn exact_sum_at_most(left: &[(BigUint, i64)], right: &[(BigUint, i64)]) -> bool {
-    let least = left.iter().chain(right).map(|t| t.1).min().unwrap_or(0);
-    let sum = |terms: &[(BigUint, i64)]| -> BigUint {
-        terms
-            .iter()
-            .map(|(value, exponent)| value << (exponent - least) as usize)
-            .sum()
-    };
-    sum(left) <= sum(right)
+/// A term `(mass, exponent, value)` of [`step_terms`] as its parts of the
+/// two sides of [`holds`], `mass value` and `mass y_at`: `(mass, mantissa,
+/// exponent)` each.
+fn both_sides(
+    (mass, exponent, value): (&BigUint, i64, f64),
+    at: Dyadic,
+) -> [(&BigUint, u64, i64); 2] {
+    let d = Dyadic::of_nonnegative(value);
+    [
+        (mass, d.mantissa, exponent + d.exponent),
+        (mass, at.mantissa, exponent + at.exponent),
+    ]
+}
+
+/// A move's masses with the value each leads to: `(mass, exponent,
+/// value)`, the mass times `2^exponent`, the masses positive.
+fn step_terms<'s>(
+    step: &'s Move,
+    y_won: f64,
+    y: &'s impl Fn(usize) -> f64,
+) -> impl Iterator<Item = (&'s BigUint, i64, f64)> + 's {
+    let observed = step.exponent + step.observed_exponent;
+    [
+        (&step.won, step.exponent, y_won),
+        (&step.lost, step.exponent, 0.0),
+    ]
+    .into_iter()
+    .chain((step.next.iter()).map(move |(j, m)| (m, observed, y(*j))))
+    .filter(|t| !t.0.is_zero())
 }
 
 /// Checks that the certified lower bound `lower` of some defender is at
@@ -994,6 +1007,68 @@ mod tests {
         let uneven = [0.75, 0.5];
         assert!(holds(&step, 0.7001, 1.0, |j| uneven[j]));
         assert!(!holds(&step, 0.6999, 1.0, |j| uneven[j]));
+    }
+
+    /// `sum mass value <= y_at sum mass` for `step`, in exact rationals.
+    fn holds_exactly(step: &Move, y_at: f64, y_won: f64, y: &[f64]) -> bool {
+        let rational = |mass: &BigUint, exponent: i64| {
+            let two = BigRational::from_integer(BigInt::from(2));
+            BigRational::from_integer(BigInt::from(mass.clone())) * two.pow(exponent as i32)
+        };
+        let observed = step.exponent + step.observed_exponent;
+        let terms: Vec<(BigRational, f64)> = [
+            (&step.won, step.exponent, y_won),
+            (&step.lost, step.exponent, 0.0),
+        ]
+        .into_iter()
+        .chain(step.next.iter().map(|(j, m)| (m, observed, y[*j])))
+        .map(|(m, e, v)| (rational(m, e), v))
+        .collect();
+        let left: BigRational = terms.iter().map(|(m, v)| m * exact(*v)).sum();
+        let right: BigRational = terms.iter().map(|(m, _)| m * exact(y_at)).sum();
+        left <= right
+    }
+
+    proptest::proptest! {
+        /// A move holds exactly where it holds in rationals, on random
+        /// masses, powers of 2 and values, with `y_at` a few ulps from the
+        /// expected value or anywhere.
+        #[test]
+        fn a_move_holds_as_in_rationals(
+            won in 0u64..1 << 20,
+            lost in 0u64..4,
+            next in proptest::collection::vec((1u64.., 0.0f64..=1.0), 1..5),
+            exponent in -80i64..10,
+            observed_exponent in -70i64..=0,
+            y_won in 0.5f64..=1.0,
+            ulps in -3i64..=3,
+            anywhere in 0.0f64..=1.0,
+            near in proptest::prelude::any::<bool>(),
+        ) {
+            let y: Vec<f64> = next.iter().map(|t| t.1).collect();
+            let step = Move {
+                won: BigUint::from(won),
+                lost: BigUint::from(lost),
+                next: next.iter().enumerate().map(|(j, t)| (j, BigUint::from(t.0))).collect(),
+                exponent,
+                observed_exponent,
+            };
+            // The expected value in doubles, then `ulps` ulps away.
+            let (mut weighted, mut total) = (0.0, 0.0);
+            for (mass, e, value) in step_terms(&step, y_won, &|j| y[j]) {
+                let x = mass.to_f64().unwrap() * 2f64.powi((e - exponent) as i32);
+                weighted += x * value;
+                total += x;
+            }
+            let expected = weighted / total;
+            let y_at = if near {
+                f64::from_bits((expected.to_bits() as i64 + ulps).max(0) as u64)
+            } else {
+                anywhere
+            };
+            let truth = holds_exactly(&step, y_at, y_won, &y);
+            proptest::prop_assert_eq!(holds(&step, y_at, y_won, |j| y[j]), truth);
+        }
     }
 
     /// A game with an adversary that chooses has no belief bound.
