@@ -522,17 +522,23 @@ fn scaled(mass: &BigUint, factor: u64, shift: i64) -> BigUint {
 }
 
 /// Divides `weights` by their greatest common divisor (nothing where it
-/// is 1, as it mostly is).
+/// is 1, as it mostly is): in machine integers where every weight fits
+/// 64 bits, as most do.
 fn make_coprime(weights: &mut [(usize, BigUint)]) {
-    let mut divisor = BigUint::zero();
-    for (_, w) in weights.iter() {
-        divisor = divisor.gcd(w);
-        if divisor.is_one() {
-            return;
+    let small = (weights.iter()).try_fold(0u64, |divisor, (_, w)| Some(divisor.gcd(&w.to_u64()?)));
+    match small {
+        Some(0 | 1) => {}
+        Some(divisor) => weights.iter_mut().for_each(|(_, w)| *w /= divisor),
+        None => {
+            let mut divisor = BigUint::zero();
+            for (_, w) in weights.iter() {
+                divisor = divisor.gcd(w);
+                if divisor.is_one() {
+                    return;
+                }
+            }
+            weights.iter_mut().for_each(|(_, w)| *w /= &divisor);
         }
-    }
-    for (_, w) in weights {
-        *w /= &divisor;
     }
 }
 
@@ -1233,6 +1239,38 @@ mod tests {
             let numerator = (&one << 53) + odd;
             assert_eq!(scale.nearest(&numerator), nearest, "{odd}");
             assert_eq!(scale.above(&numerator), up, "{odd}");
+        }
+    }
+
+    /// Weights lose their common factor, in machine integers or big ones:
+    /// `(6, 9)` becomes `(2, 3)`, so does `(6, 9) 2^100`, and `(6, 9 b)`
+    /// (`b = 2^100 + 1`, odd) becomes `(2, 3 b)`; coprime weights stay.
+    #[test]
+    fn weights_lose_their_common_factor() {
+        let big = (BigUint::one() << 100usize) + 1u32;
+        let weights = |a: BigUint, b: BigUint| vec![(0, a), (1, b)];
+        let six = BigUint::from(6u32);
+        let nine = BigUint::from(9u32);
+        for (mut given, expected) in [
+            (
+                weights(six.clone(), nine.clone()),
+                weights(2u32.into(), 3u32.into()),
+            ),
+            (
+                weights(&six * &big, &nine * &big),
+                weights(2u32.into(), 3u32.into()),
+            ),
+            (
+                weights(six.clone(), &nine * &big),
+                weights(2u32.into(), 3u32 * &big),
+            ),
+            (
+                weights(5u32.into(), &nine * &big),
+                weights(5u32.into(), &nine * &big),
+            ),
+        ] {
+            make_coprime(&mut given);
+            assert_eq!(given, expected);
         }
     }
 
