@@ -13,7 +13,28 @@ use std::process::ExitCode;
 #[global_allocator]
 static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
+/// mimalloc's option `destroy_on_exit` (index 22 of `mi_option_e`, kept
+/// stable across mimalloc 2 and 3 by its deprecated placeholders).
+#[cfg(feature = "mimalloc")]
+const MI_OPTION_DESTROY_ON_EXIT: libmimalloc_sys::mi_option_t = 22;
+
+/// Skips mimalloc's teardown at exit (`destroy_on_exit` = 2: its process
+/// exit handler returns at once): it would free every heap and hand the
+/// memory back to the operating system piecewise, work the kernel does at
+/// once when the process ends. On PRISM's grid-avoid-4-0 that teardown
+/// was about 0.5 ms of an 11 ms run, and on a virtual machine the pages
+/// it returned made the runs that followed 3-5 times slower when they
+/// came back cold (results/README.md, stop 54).
+#[cfg(feature = "mimalloc")]
+fn skip_allocator_teardown() {
+    // SAFETY: sets one of mimalloc's options, an integer it reads at exit
+    // (no allocation, no pointer); this runs before any other thread.
+    unsafe { libmimalloc_sys::mi_option_set(MI_OPTION_DESTROY_ON_EXIT, 2) }
+}
+
 fn main() -> ExitCode {
+    #[cfg(feature = "mimalloc")]
+    skip_allocator_teardown();
     let args = cli::parse();
     match cli::run(args) {
         Ok(()) => ExitCode::SUCCESS,
