@@ -140,7 +140,7 @@ pub fn belief_upper_bound(
 /// budget, computed when first asked for and then kept: a `solve` run
 /// asks for it in the SAT source and for each structure's upper bound
 /// (method.md section 6), and the exploration is most of a small POMDP's
-/// run (3,008 beliefs, 6 ms on a 2-core EPYC, on PRISM's grid-avoid-4-0).
+/// run (3,008 beliefs, 4 ms on a 2-core EPYC, on PRISM's grid-avoid-4-0).
 pub struct BeliefBoundOnce<'a> {
     game: &'a Posg,
     dra_phi: &'a Dra,
@@ -219,7 +219,7 @@ const ROOT: usize = 2;
 /// with positive probability (increasing), each with a positive integer
 /// weight, the weights without a common factor: the belief is the weights
 /// over their sum, and equal beliefs have equal weights.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, PartialEq, Eq)]
 struct Belief {
     /// The observation the defender has just seen.
     observation: usize,
@@ -616,6 +616,7 @@ impl<'a> Exploration<'a> {
     /// is spent.
     fn explore(mut self) -> Self {
         let mut scratch = std::mem::take(&mut self.scratch);
+        // The root: the initial distribution, as the terms of one weight 1.
         let start = [(0, BigUint::one())];
         scratch.terms.clear();
         (scratch.terms).extend((self.analysis.initial.iter()).map(|&(m, p)| (m, 0, Dyadic::of(p))));
