@@ -24,12 +24,25 @@ const MI_OPTION_DESTROY_ON_EXIT: libmimalloc_sys::mi_option_t = 22;
 /// once when the process ends. On PRISM's grid-avoid-4-0 that teardown
 /// was about 0.5 ms of an 11 ms run, and on a virtual machine the pages
 /// it returned made the runs that followed 3-5 times slower when they
-/// came back cold (results/README.md, stop 54).
+/// came back cold (results/README.md, stop 54). Not where the user asked
+/// mimalloc for statistics or messages at exit (`MIMALLOC_SHOW_STATS`,
+/// `MIMALLOC_VERBOSE`, which the teardown prints) or set
+/// `MIMALLOC_DESTROY_ON_EXIT` themselves.
 #[cfg(feature = "mimalloc")]
 fn skip_allocator_teardown() {
-    // SAFETY: sets one of mimalloc's options, an integer it reads at exit
-    // (no allocation, no pointer); this runs before any other thread.
-    unsafe { libmimalloc_sys::mi_option_set(MI_OPTION_DESTROY_ON_EXIT, 2) }
+    use libmimalloc_sys::{mi_option_get, mi_option_is_enabled, mi_option_set};
+    use libmimalloc_sys::{mi_option_show_stats, mi_option_verbose};
+    // SAFETY: reads and sets mimalloc's integer options (no allocation, no
+    // pointer; an index out of range is ignored); this runs before any
+    // other thread.
+    unsafe {
+        let asked = mi_option_is_enabled(mi_option_show_stats)
+            || mi_option_is_enabled(mi_option_verbose)
+            || mi_option_get(MI_OPTION_DESTROY_ON_EXIT) != 0;
+        if !asked {
+            mi_option_set(MI_OPTION_DESTROY_ON_EXIT, 2);
+        }
+    }
 }
 
 fn main() -> ExitCode {

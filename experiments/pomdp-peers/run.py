@@ -122,10 +122,11 @@ def git_show(repo, path):
 def prepare(models_dir, repo):
     """Writes each model as DIR/NAME/sketch.templ (PRISM), sketch.props and
     model.drn (stormpy's export, choice labels kept); returns the state counts.
-    A model is built once and its count kept in DIR/NAME/states.json: building
-    the eight models in this process right before the first timed run left
-    memory the next runs got back cold (on this host's VM, 3-5x the CPU of a
-    run of 10 ms; stop 54)."""
+    A model is built once for its sources: its count is kept in
+    DIR/NAME/states.json with a hash of sketch.templ and sketch.props.
+    Building the eight models in this process right before the first timed
+    run left memory the next runs got back cold (on this host's VM, 3-5x
+    the CPU of a run of 10 ms; stop 54)."""
     states = {}
     for name, (path, prop, extra) in MODELS.items():
         directory = os.path.join(models_dir, name)
@@ -137,20 +138,27 @@ def prepare(models_dir, repo):
             handle.write(prism)
         with open(os.path.join(directory, "sketch.props"), "w") as handle:
             handle.write(prop + "\n")
-        counted = cached(os.path.join(directory, "states.json"), lambda: export_model(directory))
+        source = hashlib.sha256((prism + "\n" + prop).encode()).hexdigest()
+        kept = os.path.join(directory, "states.json")
+        counted = {}
+        if os.path.exists(kept):
+            with open(kept) as handle:
+                counted = json.load(handle)
+        if counted.get("source") != source:
+            counted = {"source": source, "states": export_model(directory)}
+            with open(kept, "w") as handle:
+                json.dump(counted, handle, indent=1)
         states[name] = counted["states"]
     return states
 
 
 def export_model(directory):
-    """Builds the model of `directory`, writes model.drn where missing, and
-    returns its state count."""
+    """Builds the model of `directory`, writes it as model.drn, and returns
+    its state count."""
     import stormpy
     model = build_pomdp(directory)
-    drn = os.path.join(directory, "model.drn")
-    if not os.path.exists(drn):
-        stormpy.io.export_to_drn(model, drn)
-    return {"states": model.nr_states}
+    stormpy.io.export_to_drn(model, os.path.join(directory, "model.drn"))
+    return model.nr_states
 
 
 def build_pomdp(directory):

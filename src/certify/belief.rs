@@ -255,6 +255,7 @@ struct BeliefKey<'e> {
 }
 
 impl Equivalent<Belief> for BeliefKey<'_> {
+    /// Whether the key is `belief`'s: the same observation and entries.
     fn equivalent(&self, belief: &Belief) -> bool {
         self.observation == belief.observation && self.entries == belief.entries.as_slice()
     }
@@ -387,29 +388,15 @@ impl Scale<'_> {
         }
         match (mass.to_u64(), self.denominator.to_u64()) {
             (Some(mass), Some(denominator)) if denominator < SMALL_DENOMINATOR => {
-                self.rounded_small(mass, denominator, rounding)
+                rounded_small(mass, denominator, self.exponent, rounding)
             }
             _ => self.rounded_big(mass, rounding),
         }
     }
 
-    /// [`Scale::rounded`] of a mass of at most 64 bits over this scale's
-    /// denominator, `denominator` (below [`SMALL_DENOMINATOR`]): the
-    /// shifted mass has at most `66 + 62` bits.
-    fn rounded_small(&self, mass: u64, denominator: u64, rounding: Rounding) -> f64 {
-        let bits = |x: u64| i64::from(64 - x.leading_zeros());
-        // At least 3: `mass` has at most 63 more bits than `denominator`.
-        let shift = 66 - (bits(mass) - bits(denominator));
-        let numerator = u128::from(mass) << shift;
-        let denominator = u128::from(denominator);
-        let (quotient, remainder) = (numerator / denominator, numerator % denominator);
-        rounded_double(quotient, remainder == 0, self.exponent - shift, rounding)
-    }
-
     /// [`Scale::rounded`] in big integers.
     fn rounded_big(&self, mass: &BigUint, rounding: Rounding) -> f64 {
-        // `mass 2^shift / denominator` lies in [2^65, 2^67).
-        let shift = 66 - (mass.bits() as i64 - self.denominator.bits() as i64);
+        let shift = quotient_shift(mass.bits(), self.denominator.bits());
         let (quotient, remainder) = if shift >= 0 {
             (mass << shift as usize).div_rem(self.denominator)
         } else {
@@ -428,8 +415,28 @@ impl Scale<'_> {
 }
 
 /// Denominators below `2^62` divide in machine integers
-/// ([`Scale::rounded_small`]).
+/// ([`rounded_small`]).
 const SMALL_DENOMINATOR: u64 = 1 << 62;
+
+/// The power of 2 that puts `mass 2^shift / denominator` in `[2^65,
+/// 2^67)`, from the bits of `mass` and of `denominator`: a quotient of 66
+/// or 67 bits, at least 54 ([`rounded_double`]).
+fn quotient_shift(mass_bits: u64, denominator_bits: u64) -> i64 {
+    66 - (mass_bits as i64 - denominator_bits as i64)
+}
+
+/// `mass 2^exponent / denominator` rounded as `rounding` says
+/// ([`Scale::rounded`]) in machine integers: `mass` of at most 64 bits,
+/// `denominator` positive and below [`SMALL_DENOMINATOR`], so that the
+/// shift is at least 3 and the shifted mass has at most `66 + 62` bits.
+fn rounded_small(mass: u64, denominator: u64, exponent: i64, rounding: Rounding) -> f64 {
+    let bits = |x: u64| u64::from(64 - x.leading_zeros());
+    let shift = quotient_shift(bits(mass), bits(denominator));
+    let numerator = u128::from(mass) << shift;
+    let denominator = u128::from(denominator);
+    let (quotient, remainder) = (numerator / denominator, numerator % denominator);
+    rounded_double(quotient, remainder == 0, exponent - shift, rounding)
+}
 
 /// How an exact number becomes a double.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -525,8 +532,7 @@ fn scaled(mass: &BigUint, factor: u64, shift: i64) -> BigUint {
 /// is 1, as it mostly is): in machine integers where every weight fits
 /// 64 bits, as most do.
 fn make_coprime(weights: &mut [(usize, BigUint)]) {
-    let small = (weights.iter()).try_fold(0u64, |divisor, (_, w)| Some(divisor.gcd(&w.to_u64()?)));
-    match small {
+    match small_divisor(weights) {
         Some(0 | 1) => {}
         Some(divisor) => weights.iter_mut().for_each(|(_, w)| *w /= divisor),
         None => {
@@ -542,7 +548,20 @@ fn make_coprime(weights: &mut [(usize, BigUint)]) {
     }
 }
 
-/// Buffers an exploration reuses from move to move (cleared before each
+/// The greatest common divisor of `weights` where each fits 64 bits (1
+/// as soon as it is 1), `None` where one does not.
+fn small_divisor(weights: &[(usize, BigUint)]) -> Option<u64> {
+    let mut divisor = 0u64;
+    for (_, w) in weights {
+        divisor = divisor.gcd(&w.to_u64()?);
+        if divisor == 1 {
+            return Some(1);
+        }
+    }
+    Some(divisor)
+}
+
+/// Buffers the exploration reuses from move to move (cleared before each
 /// use), so that a move allocates only what it keeps.
 #[derive(Default)]
 struct Scratch {
@@ -590,8 +609,6 @@ struct Exploration<'a> {
     entries: usize,
     /// The bits of those entries' weights.
     bits: u64,
-    /// Buffers reused from move to move.
-    scratch: Scratch,
 }
 
 impl<'a> Exploration<'a> {
@@ -608,22 +625,14 @@ impl<'a> Exploration<'a> {
             expansions: Vec::new(),
             entries: 0,
             bits: 0,
-            scratch: Scratch::default(),
         }
     }
 
     /// Explores from `p0` until every belief met is expanded or the budget
     /// is spent.
     fn explore(mut self) -> Self {
-        let mut scratch = std::mem::take(&mut self.scratch);
-        // The root: the initial distribution, as the terms of one weight 1.
-        let start = [(0, BigUint::one())];
-        scratch.terms.clear();
-        (scratch.terms).extend((self.analysis.initial.iter()).map(|&(m, p)| (m, 0, Dyadic::of(p))));
-        scratch.masses.clear();
-        let exponent = integer_terms(&mut scratch.terms, &start, &mut scratch.masses);
-        self.root = self.split(&scratch.masses, exponent, &mut scratch.split);
-        self.scratch = scratch;
+        let mut scratch = Scratch::default();
+        self.root = self.root_move(&mut scratch);
         while self.expansions.len() < self.beliefs.len() {
             let i = self.expansions.len();
             let within = i < self.budget.beliefs
@@ -631,13 +640,24 @@ impl<'a> Exploration<'a> {
                 && self.bits <= self.budget.bits
                 && self.small_weights(&self.beliefs[i]);
             let expansion = if within {
-                self.expand(i)
+                self.expand(i, &mut scratch)
             } else {
                 Expansion::Frontier(self.informed_bound(i))
             };
             self.expansions.push(expansion);
         }
         self
+    }
+
+    /// The root's move: the initial distribution `p0` (the terms of one
+    /// weight 1) split by observation.
+    fn root_move(&mut self, scratch: &mut Scratch) -> Move {
+        let one = [(0, BigUint::one())];
+        scratch.terms.clear();
+        (scratch.terms).extend((self.analysis.initial.iter()).map(|&(m, p)| (m, 0, Dyadic::of(p))));
+        scratch.masses.clear();
+        let exponent = integer_terms(&mut scratch.terms, &one, &mut scratch.masses);
+        self.split(&scratch.masses, exponent, &mut scratch.split)
     }
 
     /// Whether every belief met was expanded.
@@ -656,8 +676,7 @@ impl<'a> Exploration<'a> {
     /// The moves of belief `i`: one per action its observation enables
     /// (each enabled in every state of the belief: a state is in it only
     /// where it shows that observation).
-    fn expand(&mut self, i: usize) -> Expansion {
-        let mut scratch = std::mem::take(&mut self.scratch);
+    fn expand(&mut self, i: usize, scratch: &mut Scratch) -> Expansion {
         let belief = &self.beliefs[i];
         let denominator: BigUint = belief.entries.iter().map(|(_, w)| w).sum();
         scratch.masses.clear();
@@ -683,7 +702,6 @@ impl<'a> Exploration<'a> {
             moves.push(self.split(&scratch.masses[start..end], exponent, &mut scratch.split));
             start = end;
         }
-        self.scratch = scratch;
         Expansion::Expanded { denominator, moves }
     }
 
@@ -1038,18 +1056,18 @@ mod tests {
 
     proptest::proptest! {
         /// A move holds exactly where it holds in rationals, on random
-        /// masses, powers of 2 and values, with `y_at` a few ulps from the
-        /// expected value or anywhere.
+        /// masses, powers of 2 and values (0 among them), with `y_at` a few
+        /// ulps from the expected value or anywhere (0 among it).
         #[test]
         fn a_move_holds_as_in_rationals(
             won in 0u64..1 << 20,
             lost in 0u64..4,
-            next in proptest::collection::vec((1u64.., 0.0f64..=1.0), 1..5),
+            next in proptest::collection::vec((1u64.., proptest::prop_oneof![proptest::strategy::Just(0.0), 0.0f64..=1.0]), 1..5),
             exponent in -80i64..10,
             observed_exponent in -70i64..=0,
             y_won in 0.5f64..=1.0,
             ulps in -3i64..=3,
-            anywhere in 0.0f64..=1.0,
+            anywhere in proptest::prop_oneof![proptest::strategy::Just(0.0), 0.0f64..=1.0],
             near in proptest::prelude::any::<bool>(),
         ) {
             let y: Vec<f64> = next.iter().map(|t| t.1).collect();
@@ -1182,7 +1200,7 @@ mod tests {
     fn assert_small_is_big(scale: &Scale, mass: u64) {
         let denominator = scale.denominator.to_u64().expect("a small denominator");
         for rounding in [Rounding::Nearest, Rounding::Up] {
-            let small = scale.rounded_small(mass, denominator, rounding);
+            let small = rounded_small(mass, denominator, scale.exponent, rounding);
             let big = scale.rounded_big(&BigUint::from(mass), rounding);
             assert_eq!(
                 small.to_bits(),
@@ -1194,14 +1212,19 @@ mod tests {
 
     proptest::proptest! {
         /// Masses of at most 64 bits over denominators below
-        /// [`SMALL_DENOMINATOR`] round in machine integers as in big ones.
+        /// [`SMALL_DENOMINATOR`], of every bit length (each drawn shifted
+        /// right by a random count), round in machine integers as in big
+        /// ones.
         #[test]
         fn a_small_ratio_rounds_as_in_big_integers(
-            mass in 1u64..,
+            mass in proptest::prelude::any::<u64>(),
+            mass_shift in 0u32..64,
             denominator in 1u64..SMALL_DENOMINATOR,
+            denominator_shift in 0u32..62,
             exponent in -1150i64..40,
         ) {
-            let denominator = BigUint::from(denominator);
+            let mass = (mass >> mass_shift).max(1);
+            let denominator = BigUint::from((denominator >> denominator_shift).max(1));
             let scale = Scale { exponent, denominator: &denominator };
             assert_small_is_big(&scale, mass);
         }
@@ -1243,9 +1266,10 @@ mod tests {
         }
     }
 
-    /// Weights lose their common factor, in machine integers or big ones:
-    /// `(6, 9)` becomes `(2, 3)`, so does `(6, 9) 2^100`, and `(6, 9 b)`
-    /// (`b = 2^100 + 1`, odd) becomes `(2, 3 b)`; coprime weights stay.
+    /// Weights lose their common factor, in machine integers or big ones
+    /// (`b = 2^100 + 1`, odd): `(6, 9)` becomes `(2, 3)`, so does `(6 b, 9
+    /// b)`, `(6, 9 b)` becomes `(2, 3 b)`, a single weight becomes 1;
+    /// coprime weights stay.
     #[test]
     fn weights_lose_their_common_factor() {
         let big = (BigUint::one() << 100usize) + 1u32;
@@ -1272,6 +1296,11 @@ mod tests {
         ] {
             make_coprime(&mut given);
             assert_eq!(given, expected);
+        }
+        for single in [six.clone(), &nine * &big] {
+            let mut given = vec![(0, single)];
+            make_coprime(&mut given);
+            assert_eq!(given, vec![(0, BigUint::one())]);
         }
     }
 
