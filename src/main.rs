@@ -22,7 +22,7 @@ const MI_OPTION_DESTROY_ON_EXIT: libmimalloc_sys::mi_option_t = 22;
 /// exit handler returns at once): it would free every heap and hand the
 /// memory back to the operating system piecewise, work the kernel does at
 /// once when the process ends. On PRISM's grid-avoid-4-0 that teardown
-/// was about 0.5 ms of an 11 ms run, and on a virtual machine the pages
+/// was about 0.4 ms of an 11 ms run, and on a virtual machine the pages
 /// it returned made the runs that followed 3-5 times slower when they
 /// came back cold (results/README.md, stop 54). Not where the user asked
 /// mimalloc for statistics or messages at exit (`MIMALLOC_SHOW_STATS`,
