@@ -115,7 +115,12 @@ pub fn solve_into(
     let iterations = job.settings.max_iterations;
     let bars = (progress == ProgressMode::Bars).then(MultiProgress::new);
     let outcome = directory.solve(job, |slot| {
-        structure_progress(progress, bars.as_ref(), &slot.structure.name, iterations)
+        let name = if slot.final_size {
+            slot.structure.name.clone()
+        } else {
+            format!("{} nodes: {}", slot.defender_nodes, slot.structure.name)
+        };
+        structure_progress(progress, bars.as_ref(), &name, iterations)
             .unwrap_or_else(|| Box::new(()))
     })?;
     if let Some(error) = &outcome.certification_error {

@@ -46,6 +46,7 @@ mod ascent;
 mod best_response;
 mod cancel;
 mod guarantee;
+mod informed;
 mod local_search;
 mod objective;
 mod observer;

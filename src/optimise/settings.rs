@@ -161,6 +161,12 @@ pub struct Settings {
     /// (`--no-single-player-ascent`): gradient play runs on them too.
     #[arg(long = "no-single-player-ascent", action = clap::ArgAction::SetFalse)]
     pub single_player_ascent: bool,
+    /// A defender of `K > 1` nodes is grown from 1 node: each size is
+    /// optimised warm-started from the one before and kept at least as good,
+    /// so more memory never certifies less (method.md section 4); off
+    /// (`--no-grow`): only size `K` is optimised, from the uniform start.
+    #[arg(long = "no-grow", action = clap::ArgAction::SetFalse)]
+    pub grow_defender: bool,
     /// At the end, also evaluate the argmax-rounded defender and its partial
     /// roundings (entries below a threshold dropped) and keep whichever
     /// scores best (the unrounded one included); off: `--no-round`.
@@ -269,6 +275,7 @@ impl Default for Settings {
             stall_tolerance: 1e-5,
             gap_tolerance: 1e-4,
             single_player_ascent: true,
+            grow_defender: true,
             round: true,
             local_search: true,
             local_search_restarts: 16,

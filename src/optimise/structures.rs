@@ -1,10 +1,12 @@
 //! Where the support structures that `solve` optimises on come from, and
 //! the choice among their results.
 //!
-//! Three sources ([`StructureSource`]):
+//! Four sources ([`StructureSource`]):
 //!
 //! * `full`: every `(g', u)` in every block ([`Structure::full`]), or the
 //!   controllers the user started from;
+//! * `informed`: the fully informed defender's optimal strategy projected
+//!   onto the observations (`informed.rs`, method.md section 4);
 //! * `sat`: a defender support found by SAT (method.md section 7,
 //!   [`crate::synthesis`]): almost-sure winning when one exists (its value is
 //!   then certified to be 1), otherwise positive winning, maximised; the
@@ -20,6 +22,7 @@ use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
 
+use super::informed::informed;
 use super::{OptimiseError, Settings, Structure, StructureOutcome};
 use crate::automaton::Dra;
 use crate::certify::almost_sure_win_possible;
@@ -35,6 +38,8 @@ use crate::synthesis::{self, Mode, SynthesisError};
 pub enum StructureSource {
     /// The starting structure: the full support or the user's controllers.
     Full,
+    /// The fully informed defender's strategy projected onto the observations.
+    Informed,
     /// Support synthesis by SAT.
     Sat,
     /// The paper's Algorithm 1.
@@ -43,12 +48,13 @@ pub enum StructureSource {
 
 impl StructureSource {
     /// Every source, in the order their structures are listed.
-    pub const ALL: [Self; 3] = [Self::Full, Self::Sat, Self::Paper];
+    pub const ALL: [Self; 4] = [Self::Full, Self::Informed, Self::Sat, Self::Paper];
 
     /// The name used in settings and messages.
     pub fn name(self) -> &'static str {
         match self {
             Self::Full => "full",
+            Self::Informed => "informed",
             Self::Sat => "sat",
             Self::Paper => "paper",
         }
@@ -116,6 +122,7 @@ pub fn candidate_structures(
         let clock = Instant::now();
         let (found, note) = match source {
             StructureSource::Full => (vec![start.clone()], format!("the {} structure", start.name)),
+            StructureSource::Informed => informed(game, dra, &start, settings)?,
             StructureSource::Sat => synthesised(game, (dra, negated), &start, settings, belief)?,
             StructureSource::Paper => pruned(game, dra, &start, settings)?,
         };
@@ -310,6 +317,9 @@ pub fn best_by_certified_lower(outcomes: &[StructureOutcome]) -> Option<usize> {
 pub fn described(name: &str) -> String {
     let words = match name {
         "full" => "the full support".to_string(),
+        "informed" => {
+            "the informed support (the defender that sees the state, projected)".to_string()
+        }
         "from-files" => "the controllers given".to_string(),
         "sat-almost-sure" => "the SAT support, winning almost surely".to_string(),
         "sat-positive" => "the SAT support, winning with positive probability".to_string(),
@@ -393,6 +403,7 @@ pub fn why_others_lost(
 fn source_in_words(source: StructureSource) -> &'static str {
     match source {
         StructureSource::Full => "the full support",
+        StructureSource::Informed => "the informed projection",
         StructureSource::Sat => "SAT support synthesis",
         StructureSource::Paper => "the paper's Algorithm 1",
     }

@@ -5,18 +5,16 @@
 //! `curve-<name>.csv`/`.svg`, the best one's copied to
 //! `curve.csv`/`curve.svg`).
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use serde::Serialize;
 
-use super::{Automata, Job, Outcome, PipelineError, Slot, run};
+use super::{Automata, Job, Outcome, PipelineError, SizeResult, Slot, run};
 use crate::certify::Bracket;
 use crate::controller::{self, Fsc};
 use crate::game::Posg;
 use crate::optimise::StructureOutcome;
-use crate::optimise::{
-    IterationRecord, Observer, ObserverError, SearchRecord, Settings, SourceNote, StructureReport,
-};
+use crate::optimise::{IterationRecord, Observer, Settings, SourceNote, StructureReport};
 use crate::output::{
     CurveCsv, CurvePlot, OutputError, PlotFormat, Returned, Title, create_dir, plot_curve,
     write_file,
@@ -53,36 +51,38 @@ pub struct SolveDirectory<'a> {
 }
 
 impl SolveDirectory<'_> {
-    /// Runs `job` ([`run`]) with the curve tables and `observers(slot)` as
-    /// each structure's observers, then draws the curves and writes the
-    /// other files.
+    /// Runs `job` ([`run`]) with `observers(slot)` as each structure's
+    /// observers, then writes the curve tables, draws the curves and writes
+    /// the other files.
     pub fn solve<F>(&self, job: Job, observers: F) -> Result<Outcome, PipelineError>
     where
         F: Fn(Slot) -> Box<dyn Observer + Send> + Sync,
     {
         create_dir(self.path)?;
         let (game, automata, settings) = (job.game, job.automata, job.settings);
-        let outcome = run(job, |slot| {
-            let mut list = self.curve_observers(slot);
-            list.push(observers(slot));
-            Box::new(list) as Box<dyn Observer + Send>
-        })?;
+        let outcome = run(job, observers)?;
         self.write(game, automata, settings, &outcome)?;
         Ok(outcome)
     }
 
-    /// The CSV writer of the structure in `slot`: `curve.csv` when it is
-    /// the only one, else `curve-<name>.csv`.
-    fn curve_observers(&self, slot: Slot) -> Vec<Box<dyn Observer + Send>> {
-        let table = self.path.join(format!(
-            "{}.csv",
-            curve_stem(slot.count, &slot.structure.name)
-        ));
-        let csv: Box<dyn Observer + Send> = match CurveCsv::create(&table) {
-            Ok(csv) => Box::new(Named(table, csv)),
-            Err(error) => Box::new(Failed(Some(error.into()))),
-        };
-        vec![csv]
+    /// Each structure's curve table: `curve.csv` when it is the only one,
+    /// else `curve-<name>.csv` (of the last size a grown run optimised;
+    /// `summary.json`'s `sizes` has every size's result).
+    fn write_tables(&self, outcome: &Outcome) -> Result<(), PipelineError> {
+        let count = outcome.curves.len();
+        for curve in &outcome.curves {
+            let path = self
+                .path
+                .join(format!("{}.csv", curve_stem(count, &curve.structure)));
+            let mut table = CurveCsv::create(&path)?;
+            for record in &curve.records {
+                table.observe(record);
+            }
+            table.finish().map_err(|e| {
+                OutputError::io("writing", &path, std::io::Error::other(e.to_string()))
+            })?;
+        }
+        Ok(())
     }
 
     /// Draws each structure's curve with what it returned (the best one's
@@ -147,6 +147,7 @@ impl SolveDirectory<'_> {
         settings: &Settings,
         outcome: &Outcome,
     ) -> Result<(), PipelineError> {
+        self.write_tables(outcome)?;
         self.draw_curves(game, automata, outcome)?;
         let best = outcome.best();
         let best_curve = |ext: &str| self.path.join(format!("curve-{}.{ext}", best.report.name));
@@ -183,6 +184,7 @@ impl SolveDirectory<'_> {
             synthesis_seconds: outcome.synthesis_seconds,
             structure_choice: &outcome.structure_choice,
             sources: &outcome.sources,
+            sizes: &outcome.sizes,
             structures: outcome
                 .solution
                 .structures
@@ -228,6 +230,9 @@ struct Summary<'a> {
     structure_choice: &'a [String],
     /// What each source of structures found, proved or why it gave none.
     sources: &'a [SourceNote],
+    /// Every defender size optimised (a grown run has one per size from 1
+    /// node up), with its certified bracket.
+    sizes: &'a [SizeResult],
     structures: Vec<&'a StructureReport>,
     files: Vec<String>,
 }
@@ -287,35 +292,5 @@ fn plot_title(game: &Posg, automata: &Automata, best: &StructureOutcome, name: &
             name,
             game.num_states()
         ),
-    }
-}
-
-/// An observer writing the file at `.0`, whose failure names that file.
-struct Named<O>(PathBuf, O);
-
-impl<O: Observer> Observer for Named<O> {
-    fn observe(&mut self, record: &IterationRecord) {
-        self.1.observe(record);
-    }
-
-    fn searched(&mut self, record: &SearchRecord) {
-        self.1.searched(record);
-    }
-
-    fn finish(&mut self) -> Result<(), ObserverError> {
-        self.1
-            .finish()
-            .map_err(|e| format!("writing {}: {e}", self.0.display()).into())
-    }
-}
-
-/// An observer that could not be created: reports its error at the end.
-struct Failed(Option<ObserverError>);
-
-impl Observer for Failed {
-    fn observe(&mut self, _record: &IterationRecord) {}
-
-    fn finish(&mut self) -> Result<(), ObserverError> {
-        self.0.take().map_or(Ok(()), Err)
     }
 }

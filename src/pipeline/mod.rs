@@ -32,6 +32,7 @@ pub use propositions::{PropositionCheck, check_propositions};
 use std::sync::{Arc, Mutex, PoisonError};
 use std::time::Instant;
 
+use serde::Serialize;
 use thiserror::Error;
 
 use crate::automaton::Dra;
@@ -133,6 +134,17 @@ impl<'a> Job<'a> {
         })
     }
 
+    /// Whether [`run`] grows the defender from 1 node: where the settings ask
+    /// for it ([`Settings::grow_defender`]), the defender has more than one
+    /// node, and the job starts from the full support structure with no
+    /// floor of its own (not from the user's controllers, not a warm start).
+    pub fn grows(&self) -> bool {
+        self.settings.grow_defender
+            && self.floor.is_none()
+            && self.start.name == "full"
+            && self.start.defender.num_nodes() > 1
+    }
+
     /// The job warm-started from `smaller`, the best outcome of a smaller
     /// defender size ([`optimise::warm_started`]), and kept at least as good.
     pub fn warm_started(self, smaller: &'a StructureOutcome) -> Result<Self, PipelineError> {
@@ -158,6 +170,28 @@ pub struct Slot<'a> {
     pub count: usize,
     /// The structure.
     pub structure: &'a Structure,
+    /// The defender's size in this run: a grown run ([`Settings::grow_defender`])
+    /// optimises every smaller size first.
+    pub defender_nodes: usize,
+    /// Whether this is the job's own size (else a smaller size of a grown run,
+    /// whose outcome only warm-starts and floors the next).
+    pub final_size: bool,
+}
+
+/// One defender size of a run ([`Outcome::sizes`]): a grown run
+/// ([`Settings::grow_defender`]) has one per size from 1 node up, each
+/// warm-started from and at least as good as the one before.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct SizeResult {
+    /// The defender's nodes.
+    pub defender_nodes: usize,
+    /// The best defender's certified bracket at this size (as
+    /// [`Outcome::certified`]).
+    pub certified: Option<Bracket>,
+    /// Its worst-case estimate.
+    pub worst_case: f64,
+    /// Wall-clock seconds of this size's run.
+    pub seconds: f64,
 }
 
 /// One structure's curve: the records its observers received, every
@@ -192,6 +226,8 @@ pub struct Outcome {
     /// Why the best structure won, then why each other structure or source
     /// lost (one sentence each).
     pub structure_choice: Vec<String>,
+    /// Every defender size optimised, smallest first, the job's own last.
+    pub sizes: Vec<SizeResult>,
     /// Wall-clock seconds of the whole job.
     pub seconds: f64,
     /// Seconds of support synthesis (the `sat` source).
@@ -266,8 +302,90 @@ where
 
 /// Runs `job`: gathers the structures, optimises on each (each reporting to
 /// `observers(slot)`), keeps the best (at least as good as `job.floor`),
-/// certifies its bracket.
+/// certifies its bracket. Where the job grows ([`Job::grows`]), every
+/// smaller defender size runs first, from 1 node up, each warm-started from
+/// and floored by the one before ([`Job::warm_started`]): the result then
+/// certifies at least what any smaller size would under the same settings
+/// (method.md section 4, "Memory that never hurts").
 pub fn run<F>(job: Job, observers: F) -> Result<Outcome, PipelineError>
+where
+    F: Fn(Slot) -> Box<dyn Observer + Send> + Sync,
+{
+    if !job.grows() {
+        return run_size(job, &observers, true);
+    }
+    let clock = Instant::now();
+    let nodes = job.start.defender.num_nodes();
+    let adversary = job.start.adversary.num_nodes();
+    let mut sizes = Vec::with_capacity(nodes);
+    let mut smaller: Option<Outcome> = None;
+    for k in 1..=nodes {
+        if let Some(previous) = smaller.as_mut() {
+            if let Some(reason) = why_growth_stops(previous, &job) {
+                pad_defenders(previous, nodes, reason)?;
+                break;
+            }
+        }
+        let sized = Job::full(
+            job.game,
+            job.automata,
+            Sizes {
+                defender: k,
+                adversary,
+            },
+            job.settings,
+        )?;
+        let sized = Job {
+            cancel: job.cancel.clone(),
+            ..sized
+        };
+        let sized = match &smaller {
+            Some(previous) => sized.warm_started(previous.best())?,
+            None => sized,
+        };
+        let mut outcome = run_size(sized, &observers, k == nodes)?;
+        sizes.extend(smaller.take().map(|o| o.sizes).unwrap_or_default());
+        sizes.extend(outcome.sizes.drain(..));
+        outcome.sizes = std::mem::take(&mut sizes);
+        smaller = Some(outcome);
+    }
+    let mut outcome = smaller.ok_or(OptimiseError::NoStructure)?;
+    outcome.seconds = clock.elapsed().as_secs_f64();
+    Ok(outcome)
+}
+
+/// Why a grown run stops at the size of `outcome`, if it does: its
+/// certified gap to the game upper bound is closed (no defender of any size
+/// certifies more), or the job was cancelled.
+fn why_growth_stops(outcome: &Outcome, job: &Job) -> Option<&'static str> {
+    if job.cancel.is_cancelled() {
+        return Some("the run was cancelled");
+    }
+    outcome
+        .certified
+        .filter(|b| job.settings.gap_closed(b.certified_lower, b.upper_bound))
+        .map(|_| "its certified gap to the game upper bound was closed: no larger defender certifies more")
+}
+
+/// Every structure's defender of `outcome` padded to `nodes` nodes with the
+/// same behaviour ([`optimise::pad`]): the result of a grown run that stopped
+/// at a smaller size for `reason`, at the job's size.
+fn pad_defenders(outcome: &mut Outcome, nodes: usize, reason: &str) -> Result<(), PipelineError> {
+    for structure in &mut outcome.solution.structures {
+        structure.defender = optimise::pad(&structure.defender, nodes)?;
+    }
+    let stopped_at = outcome.sizes.last().map_or(0, |s| s.defender_nodes);
+    outcome.structure_choice.push(format!(
+        "Grown from 1 node, stopped at {}: {reason}; its defender is padded to {nodes} nodes \
+         with the same behaviour.",
+        crate::output::counted(stopped_at, "node")
+    ));
+    Ok(())
+}
+
+/// [`run`] at the job's size alone; `final_size` tells the observers
+/// whether it is the job's own size or a smaller one of a grown run.
+fn run_size<F>(job: Job, observers: &F, final_size: bool) -> Result<Outcome, PipelineError>
 where
     F: Fn(Slot) -> Box<dyn Observer + Send> + Sync,
 {
@@ -297,6 +415,8 @@ where
                 index,
                 count,
                 structure,
+                defender_nodes: structure.defender.num_nodes(),
+                final_size,
             });
             let recorder = Recorder(Arc::clone(&records[index]));
             Box::new(vec![given, Box::new(recorder)]) as Box<dyn Observer + Send>
@@ -318,7 +438,15 @@ where
             records: std::mem::take(&mut *records.lock().unwrap_or_else(PoisonError::into_inner)),
         })
         .collect();
+    let best = solution.best();
+    let sizes = vec![SizeResult {
+        defender_nodes: best.defender.num_nodes(),
+        certified,
+        worst_case: best.report.worst_case,
+        seconds: clock.elapsed().as_secs_f64(),
+    }];
     Ok(Outcome {
+        sizes,
         structure_choice: structure_choice(&solution, &candidates.notes),
         synthesis_seconds: candidates
             .notes
