@@ -321,15 +321,15 @@ fn same_seed_and_settings_give_the_same_curve_except_wall_clock_seconds() {
             let curve = curve_without_seconds(&path);
             assert_eq!(
                 curve.len(),
-                iterations + 1,
-                "one row per iteration of every start"
+                iterations + 2,
+                "one row per iteration of every start, and the returned defender's"
             );
             curve
         })
         .collect();
     assert_eq!(
         curves[0][0],
-        "start,iteration,value,defender_gradient_norm,adversary_gradient_norm,defender_step,adversary_step,worst_case,certified_lower,upper_bound,logit_bound"
+        "start,iteration,value,defender_gradient_norm,adversary_gradient_norm,defender_step,adversary_step,worst_case,certified_lower,upper_bound,logit_bound,source,returned"
     );
     assert_eq!(curves[0], curves[1]);
 }
@@ -452,6 +452,7 @@ fn solve_also_optimises_on_pruned_structures_and_picks_the_best() {
     let dra = common::recurrent_goal_safe();
     let settings = Settings {
         max_iterations: 10,
+        structures: vec![StructureSource::Full, StructureSource::Paper],
         ..Settings::default()
     };
     let found = common::solve_one_node(&g, &dra, None, &settings).unwrap();

@@ -173,6 +173,7 @@ fn outpaced_starts_stop_early_and_the_race_is_reproducible() {
     let paper_loop = Settings {
         guarantee_ascent: false,
         local_search: false,
+        grow_defender: false,
         ..Settings::default()
     };
     let grid = GridSpec {

@@ -45,6 +45,7 @@ const HEADINGS: &[(&str, &[&str])] = &[
             "initial_spread",
             "initial_logit_bound",
             "optimise_initial",
+            "grow_defender",
         ],
     ),
     (

@@ -9,7 +9,7 @@ use std::time::{Duration, Instant};
 
 use clap::Args;
 use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
-use posg_fsc::optimise::{IterationRecord, Observer, ObserverError, SearchRecord};
+use posg_fsc::optimise::{IterationRecord, Observer, ObserverError, RecordSource, SearchRecord};
 
 /// Output options shared by `solve` and `sweep`.
 #[derive(Debug, Clone, Args)]
@@ -77,18 +77,25 @@ struct Latest {
     lower: Option<f64>,
     upper: Option<f64>,
     seconds: f64,
+    /// The part that made the returned defender, once it is known.
+    returned: Option<RecordSource>,
 }
 
 impl Latest {
     fn update(&mut self, record: &IterationRecord) {
+        self.seconds = self.seconds.max(record.seconds);
+        self.lower = max_of(self.lower, record.certified_lower);
+        self.upper = min_of(self.upper, record.upper_bound);
+        if record.returned {
+            self.returned = Some(record.source);
+            self.worst_case = record.worst_case;
+            return;
+        }
         self.start = record.start;
         self.iteration = record.iteration;
         self.furthest = self.furthest.max(record.iteration + 1);
         self.value = record.value;
-        self.seconds = self.seconds.max(record.seconds);
         self.worst_case = record.worst_case.or(self.worst_case);
-        self.lower = max_of(self.lower, record.certified_lower);
-        self.upper = min_of(self.upper, record.upper_bound);
     }
 
     /// Counts the bound of the local search before the race as certified.
@@ -104,6 +111,14 @@ impl Latest {
             (Some(l), Some(u)) => format!("; best certified [{l:.6}, {u:.6}]"),
             _ => String::new(),
         };
+        if let Some(source) = self.returned {
+            let source = serde_json::to_value(source).ok();
+            let source = source.as_ref().and_then(|s| s.as_str()).unwrap_or("?");
+            return format!(
+                "returned the {source} defender after {}: worst case {worst}{bracket}",
+                posg_fsc::output::counted(self.furthest, "iteration")
+            );
+        }
         format!(
             "start {} at iteration {}: value {:.6}, worst case {worst}{bracket}",
             self.start,
@@ -223,11 +238,14 @@ impl LineProgress {
     fn print(&mut self) {
         self.unprinted = false;
         self.last_line = Instant::now();
+        let cap = match self.latest.returned {
+            None => format!(" (at most {} iterations)", self.iterations),
+            Some(_) => String::new(),
+        };
         eprintln!(
-            "[{}] {} (at most {} iterations); {:.1} s",
+            "[{}] {}{cap}; {:.1} s",
             self.label,
             self.latest.describe(),
-            self.iterations,
             self.latest.seconds
         );
     }
@@ -235,6 +253,15 @@ impl LineProgress {
 
 impl Observer for LineProgress {
     fn observe(&mut self, record: &IterationRecord) {
+        if record.returned {
+            // The last iterations' line, then the returned defender's, at once.
+            if self.unprinted {
+                self.print();
+            }
+            self.latest.update(record);
+            self.print();
+            return;
+        }
         self.latest.update(record);
         self.unprinted = true;
         if self.last_line.elapsed() >= self.interval {

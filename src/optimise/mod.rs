@@ -63,7 +63,7 @@ mod warm_start;
 pub(crate) use best_response::{Starts, final_best_response};
 pub use cancel::Cancel;
 pub use objective::{GmcSize, Objective, Point};
-pub use observer::{IterationRecord, Observer, ObserverError, SearchRecord};
+pub use observer::{IterationRecord, Observer, ObserverError, RecordSource, SearchRecord};
 pub(crate) use optimiser::{Certifier, Optimiser, PhaseSeconds, RunOutcome};
 pub use rounding::{TRUNCATION_THRESHOLDS, rounded_candidates, truncated};
 pub use settings::{MAX_LOGIT_BOUND, Settings, UpdateRule};
@@ -721,7 +721,6 @@ impl<'a> StructuresRun<'a> {
             .filter_map(|r| r.outcome.upper_bound)
             .reduce(f64::min);
         let mut run = runs.swap_remove(best_start);
-        observer.finish().map_err(OptimiseError::Observer)?;
         let chosen = finalise(
             game,
             dra,
@@ -732,6 +731,13 @@ impl<'a> StructuresRun<'a> {
             (method, clock, &self.memo, self.belief),
             &mut phases,
         )?;
+        observer.observe(&returned_record(
+            &chosen,
+            &run.outcome,
+            indices[best_start],
+            clock.elapsed().as_secs_f64(),
+        ));
+        observer.finish().map_err(OptimiseError::Observer)?;
         // Whichever candidate closed it, a closed bracket is why the run ended.
         let status = if chosen.bracket_closed(settings) {
             Status::GapClosed
@@ -774,6 +780,39 @@ impl<'a> StructuresRun<'a> {
             defender: chosen.defender,
             adversary: chosen.adversary,
         })
+    }
+}
+
+/// The record of the defender a structure's run returns ([`IterationRecord::returned`]):
+/// `chosen`, after the kept start `start`'s `outcome`, `seconds` into the run.
+fn returned_record(
+    chosen: &Chosen,
+    outcome: &RunOutcome,
+    start: usize,
+    seconds: f64,
+) -> IterationRecord {
+    let source = match chosen.name.as_str() {
+        "unrounded" => RecordSource::Gradient,
+        "local-search" => RecordSource::LocalSearch,
+        _ => RecordSource::Rounding,
+    };
+    IterationRecord {
+        start,
+        iteration: outcome.iterations,
+        seconds,
+        value: chosen.worst_case,
+        defender_gradient_norm: 0.0,
+        adversary_gradient_norm: 0.0,
+        defender_step: 0.0,
+        adversary_step: 0.0,
+        worst_case: Some(chosen.worst_case),
+        certified_lower: chosen.certified_lower,
+        upper_bound: chosen
+            .upper_bound
+            .filter(|_| chosen.certified_lower.is_some()),
+        logit_bound: outcome.logit_bound,
+        source,
+        returned: true,
     }
 }
 

@@ -5,9 +5,24 @@
 
 use serde::Serialize;
 
+/// Which part of the optimiser made a record's defender (method.md
+/// section 4, "One engine").
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum RecordSource {
+    /// An iterate of gradient play or of the single-player ascent (at a
+    /// check, possibly raised by the guarantee ascent).
+    Gradient,
+    /// The local search on the supports.
+    LocalSearch,
+    /// A rounding of the loop's best defender.
+    Rounding,
+}
+
 /// One outer iteration of the max-min optimiser (method.md section 4), or
 /// one quasi-Newton iteration of the single-player ascent (where the
-/// adversary fields are 0 and `worst_case` is the exact value).
+/// adversary fields are 0 and `worst_case` is the exact value); the last
+/// record of a structure's run, `returned`, is the defender it returns.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct IterationRecord {
     /// The start (of a structure's parallel starts) the record is from:
@@ -43,6 +58,14 @@ pub struct IterationRecord {
     /// The logit bound `c` in force (method.md section 3): it widens from
     /// `initial_logit_bound` towards `logit_bound` in the max-min loop.
     pub logit_bound: f64,
+    /// The part of the optimiser that made this record's defender.
+    pub source: RecordSource,
+    /// Whether this is the structure's returned defender, after rounding
+    /// and local search (one record, the last of the kept start; `iteration`
+    /// is then the number of iterations run, `value` its worst-case
+    /// estimate, the gradient fields 0): the largest `certified_lower` of a
+    /// structure's records is the one it returns.
+    pub returned: bool,
 }
 
 /// What the local search on the supports before a structure's max-min

@@ -64,7 +64,7 @@ use serde::Serialize;
 
 use super::ascent::Ascent;
 use super::objective::Objective;
-use super::observer::{IterationRecord, Observer};
+use super::observer::{IterationRecord, Observer, RecordSource};
 use super::play::{GradientPlay, Iterate, PlayState, perturbed};
 use super::{Cancel, Method, OptimiseError, Settings, Status};
 use crate::automaton::Dra;
@@ -823,6 +823,8 @@ fn record(
         certified_lower: check.and_then(|c| c.certified_lower),
         upper_bound: upper_bound.filter(|_| check.is_some_and(|c| c.certified_lower.is_some())),
         logit_bound: state.iterate.bound,
+        source: RecordSource::Gradient,
+        returned: false,
     }
 }
 

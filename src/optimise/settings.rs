@@ -163,7 +163,7 @@ pub struct Settings {
     pub single_player_ascent: bool,
     /// A defender of `K > 1` nodes is grown from 1 node: each size is
     /// optimised warm-started from the one before and kept at least as good,
-    /// so more memory never certifies less (method.md section 4); off
+    /// so more memory never certifies less (docs/method.md section 4); off
     /// (`--no-grow`): only size `K` is optimised, from the uniform start.
     #[arg(long = "no-grow", action = clap::ArgAction::SetFalse)]
     pub grow_defender: bool,

@@ -1107,6 +1107,8 @@ mod tests {
             certified_lower: None,
             upper_bound: None,
             logit_bound: 4.0,
+            source: crate::optimise::RecordSource::Gradient,
+            returned: false,
         }
     }
 

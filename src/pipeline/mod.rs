@@ -192,6 +192,9 @@ pub struct SizeResult {
     pub worst_case: f64,
     /// Wall-clock seconds of this size's run.
     pub seconds: f64,
+    /// Seconds into this size's run when some structure first certified a
+    /// lower bound above 0 (its curve's first such record); `None` if none did.
+    pub first_positive_seconds: Option<f64>,
 }
 
 /// One structure's curve: the records its observers received, every
@@ -344,6 +347,9 @@ where
             None => sized,
         };
         let mut outcome = run_size(sized, &observers, k == nodes)?;
+        if let Some(previous) = &smaller {
+            keep_kept_curve(&mut outcome, previous);
+        }
         sizes.extend(smaller.take().map(|o| o.sizes).unwrap_or_default());
         sizes.extend(outcome.sizes.drain(..));
         outcome.sizes = std::mem::take(&mut sizes);
@@ -352,6 +358,27 @@ where
     let mut outcome = smaller.ok_or(OptimiseError::NoStructure)?;
     outcome.seconds = clock.elapsed().as_secs_f64();
     Ok(outcome)
+}
+
+/// Where `outcome` kept the result of the smaller size `previous` (named
+/// `from-<k>-nodes`, [`optimise::keep_better`]), adds that result's curve
+/// under that name, so that the returned defender has its curve.
+fn keep_kept_curve(outcome: &mut Outcome, previous: &Outcome) {
+    let kept = &outcome.best().report.name;
+    let previous_best = &previous.best().report.name;
+    if kept != &format!("from-{}-nodes", previous.best().defender.num_nodes()) {
+        return;
+    }
+    if let Some(curve) = previous
+        .curves
+        .iter()
+        .find(|c| &c.structure == previous_best)
+    {
+        outcome.curves.push(Curve {
+            structure: kept.clone(),
+            records: curve.records.clone(),
+        });
+    }
 }
 
 /// Why a grown run stops at the size of `outcome`, if it does: its
@@ -429,7 +456,7 @@ where
         optimise::keep_better(&mut solution, floor, nodes)?;
     }
     let (certified, certification_error) = certify_best(game, automata, &solution)?;
-    let curves = candidates
+    let curves: Vec<Curve> = candidates
         .structures
         .iter()
         .zip(records)
@@ -444,6 +471,7 @@ where
         certified,
         worst_case: best.report.worst_case,
         seconds: clock.elapsed().as_secs_f64(),
+        first_positive_seconds: first_positive_seconds(&curves),
     }];
     Ok(Outcome {
         sizes,
@@ -542,6 +570,16 @@ fn structure_choice(solution: &Solution, notes: &[SourceNote]) -> Vec<String> {
         &solution.failed,
     ))
     .collect()
+}
+
+/// The earliest `seconds` of a record certifying a lower bound above 0 in
+/// any of `curves`.
+fn first_positive_seconds(curves: &[Curve]) -> Option<f64> {
+    (curves.iter())
+        .flat_map(|c| &c.records)
+        .filter(|r| r.certified_lower.is_some_and(|l| l > 0.0))
+        .map(|r| r.seconds)
+        .reduce(f64::min)
 }
 
 /// An observer keeping every record in a shared list.
