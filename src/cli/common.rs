@@ -42,7 +42,7 @@ pub struct ObjectiveArgs {
     /// Time budget of the translation of --ltl (and of its negation) into an
     /// automaton, in seconds; a formula that needs more is an error naming
     /// the subformula that blew up.
-    #[arg(long, default_value_t = posg_fsc::ltl::DEFAULT_TRANSLATION_SECONDS, value_parser = positive_tolerance)]
+    #[arg(long, default_value_t = posg_fsc::ltl::DEFAULT_TRANSLATION_SECONDS, value_parser = posg_fsc::seconds::parse_positive)]
     pub translate_seconds: f64,
 }
 
