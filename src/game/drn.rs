@@ -167,6 +167,16 @@ struct Lines<'a> {
 }
 
 impl<'a> Lines<'a> {
+    /// The limit on transition triples ([`crate::limits::transition_triples`])
+    /// for `states` states and the players' action counts, checked before
+    /// the tables of that size are allocated: an error naming the file.
+    fn check_size(&self, states: usize, nu: usize, nv: usize) -> Result<(), ModelError> {
+        match crate::limits::transition_triples(states, nu, nv) {
+            Some(message) => Err(ModelError::new(self.file_name, message)),
+            None => Ok(()),
+        }
+    }
+
     fn new(text: &'a str, file_name: &'a str) -> Self {
         Self {
             file_name,
@@ -546,6 +556,7 @@ impl Model {
                 return Err(error(state.line, "a state without choices".into()));
             }
         }
+        lines.check_size(states.len(), actions.len(), 1)?;
         let (observations, observe, observation_of) = self.observations(header.model_type, &states);
         let enabled = self.enabled(
             &observation_of,

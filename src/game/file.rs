@@ -788,19 +788,7 @@ impl<'a, 'r> Builder<'a, 'r> {
         }
         let keyed = Keyed::new(keys, game.states.len());
         let (nu, nv) = (game.defender.num_actions(), game.adversary.num_actions());
-        let triples = [game.states.len(), nu, nv]
-            .into_iter()
-            .fold(1u128, |product, n| product.saturating_mul(n as u128));
-        if let Some(message) = limits::exceeded(
-            &format!(
-                "{} states x {nu} defender actions x {nv} adversary actions",
-                game.states.len()
-            ),
-            triples,
-            limits::MAX_TRANSITION_TRIPLES,
-            "transition triples",
-            "MAX_TRANSITION_TRIPLES",
-        ) {
+        if let Some(message) = limits::transition_triples(game.states.len(), nu, nv) {
             return Err(at.error(message));
         }
         game.transition_offsets = Vec::with_capacity(game.states.len() * nu * nv + 1);

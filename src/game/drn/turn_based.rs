@@ -73,6 +73,11 @@ impl Model {
         let turns = self.turns(options.defender_player.unwrap_or(0), lines)?;
         let defender_actions = self.actions_of(&turns, true, lines)?;
         let adversary_actions = self.actions_of(&turns, false, lines)?;
+        lines.check_size(
+            self.states.len(),
+            defender_actions.len(),
+            adversary_actions.len(),
+        )?;
         let states: Vec<String> = (0..self.states.len()).map(|k| format!("s{k}")).collect();
         let defender = if header.model_type == ModelType::Posmg {
             self.partially_observing_defender(&turns, defender_actions, lines)?
