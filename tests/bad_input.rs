@@ -141,3 +141,88 @@ fn drn_sizes_are_checked_before_allocation() {
     let message = error_of(&posg_fsc(&["check", &claims.display().to_string()]));
     assert!(message.contains("declares 1000000000000000000 states, the model has 2"), "{message}");
 }
+
+const DRN: &str = "tests/data/drn";
+
+/// `text` with a UTF-8 byte-order mark in front, written to `dir/name`.
+fn with_bom(dir: &Path, name: &str, text: &str) -> String {
+    let path = dir.join(name);
+    std::fs::write(&path, format!("\u{feff}{text}")).unwrap();
+    path.display().to_string()
+}
+
+/// Issue 57: a byte-order mark made every text input "expected value at
+/// line 1 column 1"; each reader skips it now.
+#[test]
+fn a_byte_order_mark_is_skipped_by_every_text_reader() {
+    let dir = scratch("bom");
+    let read = |file: &str| std::fs::read_to_string(file).unwrap();
+    let game = with_bom(&dir, "grid.posg.json", &read(&grid(&dir)));
+    let drn = with_bom(&dir, "coin.drn", &read(&format!("{DRN}/coin.drn")));
+    let props = with_bom(&dir, "coin.props", &read(&format!("{DRN}/coin.props")));
+    let hoa = posg_fsc(&["translate", "F goal", "--hoa"]);
+    let hoa = with_bom(&dir, "f.hoa", &String::from_utf8(hoa.stdout).unwrap());
+    let runs: [&[&str]; 4] = [
+        &["check", &game],
+        &["check", &drn],
+        &["eval", &drn, "--props", &props],
+        &["eval", &game, "--automaton", &hoa],
+    ];
+    for args in runs {
+        let output = posg_fsc(args);
+        assert!(output.status.success(), "{args:?}: {}", stderr(&output));
+    }
+    let controller = r#"{"fsc": 1, "player": "defender", "nodes": 1, "initial": [1.0],
+        "rules": [], "default": "uniform"}"#;
+    let controller = with_bom(&dir, "d.fsc.json", controller);
+    let args = ["eval", &game, "--ltl", "F goal", "--defender", &controller];
+    let output = posg_fsc(&args);
+    assert!(output.status.success(), "{args:?}: {}", stderr(&output));
+}
+
+/// Issue 57: a DRN file without its `@type` line was read as JSON
+/// ("expected value at line 1 column 1").
+#[test]
+fn a_drn_file_without_its_type_is_named_as_a_drn_missing_its_header() {
+    let dir = scratch("no-type");
+    let text = std::fs::read_to_string(format!("{DRN}/coin.drn")).unwrap();
+    let path = dir.join("coin.drn");
+    std::fs::write(&path, text.replace("@type: POMDP\n", "")).unwrap();
+    let message = error_of(&posg_fsc(&["check", &path.display().to_string()]));
+    assert!(
+        message.contains("coin.drn: line") && message.contains("no `@type` line"),
+        "{message}"
+    );
+}
+
+/// Issue 57: `<<P>>` naming a player the model lacks was an error on the
+/// DRN file; it names the props file, line and column of `<<P>>`.
+#[test]
+fn a_props_player_the_model_lacks_names_the_props_file_line_and_column() {
+    let dir = scratch("props-player");
+    let seven = dir.join("seven.props");
+    std::fs::write(&seven, "// a player the game lacks\n  <<7>> Pmax=? [F \"goal\"]\n").unwrap();
+    let seven = seven.display().to_string();
+    for command in ["eval", "import-drn"] {
+        let args = [command, "tests/data/drn/pennies.drn", "--props", &seven];
+        let message = error_of(&posg_fsc(&args));
+        assert!(
+            message.contains("seven.props: line 2, column 3: in tests/data/drn/pennies.drn, the defender, player <7>, owns no state"),
+            "{args:?}: {message}"
+        );
+    }
+    // A game file fixes its defender: `<<P>>` is ignored, with a warning.
+    let game = grid(&dir);
+    let output = posg_fsc(&["eval", &game, "--props", &seven]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    assert!(stderr(&output).contains("seven.props: line 2, column 3: `<<7>>` is ignored"));
+    let zero = dir.join("zero.props");
+    std::fs::write(&zero, "<<0>> Pmax=? [F \"goal\"]\n").unwrap();
+    let zero = zero.display().to_string();
+    let message = error_of(&posg_fsc(&["eval", "tests/data/drn/coin.drn", "--props", &zero]));
+    assert!(
+        message.contains("zero.props: line 1, column 1: in tests/data/drn/coin.drn")
+            && message.contains("this POMDP has no players"),
+        "{message}"
+    );
+}

@@ -57,6 +57,7 @@ pub fn from_json_str(text: &str, file_name: &str) -> Result<Posg, ModelError> {
 /// [`from_json_str`] on the bytes of a file. Bytes that are not UTF-8 give
 /// the error of `read_text` ("cannot read the file: ...").
 pub fn from_json_slice(bytes: &[u8], file_name: &str) -> Result<Posg, ModelError> {
+    let bytes = bytes_without_bom(bytes);
     let raw: RawGame = match serde_json::from_slice(bytes) {
         Ok(raw) => raw,
         Err(_) => {
@@ -88,10 +89,29 @@ pub fn write(path: &Path, game: &Posg) -> Result<(), ModelError> {
     write_text(path, &to_json_string(game))
 }
 
-/// Reads a whole file; an I/O failure becomes a [`ModelError`] on the file.
+/// Reads a whole file, without a leading byte-order mark
+/// ([`without_bom`]); an I/O failure becomes a [`ModelError`] on the file.
 pub(crate) fn read_text(path: &Path, file_name: &str) -> Result<String, ModelError> {
-    std::fs::read_to_string(path)
-        .map_err(|e| ModelError::new(file_name, format!("cannot read the file: {e}")))
+    let mut text = std::fs::read_to_string(path)
+        .map_err(|e| ModelError::new(file_name, format!("cannot read the file: {e}")))?;
+    if text.starts_with(BOM) {
+        text.drain(..BOM.len_utf8());
+    }
+    Ok(text)
+}
+
+/// The UTF-8 byte-order mark that some editors write at the start of a file.
+const BOM: char = '\u{feff}';
+
+/// `text` without a leading byte-order mark: every text reader (game,
+/// controller, strategy, DRN, props, HOA) skips one (formats.md, top).
+pub(crate) fn without_bom(text: &str) -> &str {
+    text.strip_prefix(BOM).unwrap_or(text)
+}
+
+/// [`without_bom`] on the bytes of a file.
+pub(crate) fn bytes_without_bom(bytes: &[u8]) -> &[u8] {
+    bytes.strip_prefix("\u{feff}".as_bytes()).unwrap_or(bytes)
 }
 
 /// Writes a whole file; an I/O failure becomes a [`ModelError`] on the file.
@@ -119,6 +139,7 @@ pub(crate) fn parse<T: for<'de> Deserialize<'de>>(
     text: &str,
     file_name: &str,
 ) -> Result<T, ModelError> {
+    let text = without_bom(text);
     match serde_json::from_str(text) {
         Ok(value) => Ok(value),
         Err(_) => parse_tracking_paths(text, file_name),
