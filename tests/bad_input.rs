@@ -226,3 +226,40 @@ fn a_props_player_the_model_lacks_names_the_props_file_line_and_column() {
         "{message}"
     );
 }
+
+/// A one-node defender controller for two observations and two actions
+/// whose block for observation 1 is `row`.
+fn controller_with_row(row: [f64; 2]) -> Result<posg_fsc::controller::Fsc, String> {
+    use posg_fsc::controller::{Choice, Fsc, Role};
+    let block = |probabilities: [f64; 2]| {
+        (0..2)
+            .map(|action| Choice {
+                next: 0,
+                action,
+                probability: probabilities[action],
+                logit: None,
+            })
+            .collect()
+    };
+    let blocks = vec![block([0.5, 0.5]), block(row)];
+    Fsc::new(Role::Defender, 1, 2, 2, vec![1.0], blocks).map_err(|e| e.to_string())
+}
+
+/// Issue 57: `Controller.from_probabilities` (Python, through `Fsc::new`)
+/// kept a row summing to 1 + 1e-7 as it was: the controller was not a
+/// distribution. Within the tolerance (1e-6) it is rescaled; beyond, it is
+/// refused with the node, the observation and the sum.
+#[test]
+fn controller_rows_are_rescaled_within_the_tolerance_and_refused_beyond() {
+    let fsc = controller_with_row([0.5, 0.5 + 1e-7]).unwrap();
+    let sum: f64 = fsc.choices(0, 1).iter().map(|c| c.probability).sum();
+    assert!((sum - 1.0).abs() <= 2.0 * f64::EPSILON, "{sum}");
+    assert_eq!(fsc.choices(0, 0)[0].probability, 0.5);
+    let message = controller_with_row([0.5, 0.5 + 1e-5]).unwrap_err();
+    assert!(
+        message.contains("node 0, observation 1")
+            && message.contains("sum to 1.00001")
+            && message.contains("tolerance 1e-6"),
+        "{message}"
+    );
+}

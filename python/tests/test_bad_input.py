@@ -27,3 +27,18 @@ def test_a_time_budget_beyond_the_clock_means_no_limit(name):
         assert 0.0 <= result.worst_case <= 1.0
     with pytest.raises(posg_fsc.SettingsError, match="time_budget"):
         posg_fsc.solve(game, FORMULA, max_iterations=2, **{name: float("nan")})
+
+
+def test_a_row_within_the_tolerance_is_rescaled_and_beyond_it_refused():
+    # A row summing to 1 + 1e-7 was kept as it was: not a distribution.
+    game = posg_fsc.example_grid()
+    weights = np.zeros((1, len(game.defender_observations), 1, len(game.defender_actions)))
+    weights[0, :, 0, :2] = 0.5
+    weights[0, 1, 0, 1] += 1e-7
+    fsc = posg_fsc.Controller.from_probabilities(game, "defender", weights)
+    assert abs(fsc.probabilities[0, 1].sum() - 1.0) <= 2 * np.finfo(float).eps
+    weights[0, 1, 0, 1] += 1e-5
+    with pytest.raises(posg_fsc.GameFormatError) as raised:
+        posg_fsc.Controller.from_probabilities(game, "defender", weights)
+    message = str(raised.value)
+    assert "node 0, observation 1" in message and "tolerance 1e-6" in message, message

@@ -245,7 +245,7 @@ pub(super) fn normalisation(
 ) -> Result<Option<f64>, ModelError> {
     let shown = (total * 1e9).round() / 1e9 + 0.0;
     super::check_total(total, shown, "probabilities").map_err(|message| at.error(message))?;
-    Ok(((total - 1.0).abs() > len as f64 * f64::EPSILON).then_some(total))
+    Ok(super::rescale_by(total, len))
 }
 
 /// The distribution written as the object at `at` over outcomes found by
