@@ -96,7 +96,10 @@ mod tests {
     fn nan_infinity_negative_and_words_are_refused_by_name() {
         for text in ["NaN", "inf", "-inf", "-1"] {
             let message = parse(text).unwrap_err();
-            assert!(message.contains("finite, non-negative"), "{text}: {message}");
+            assert!(
+                message.contains("finite, non-negative"),
+                "{text}: {message}"
+            );
         }
         assert!(parse("soon").unwrap_err().contains("'soon'"));
         assert!(parse_positive("0").unwrap_err().contains("positive"));

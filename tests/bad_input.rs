@@ -27,13 +27,21 @@ fn stderr(output: &Output) -> String {
 /// a panic (101) or an abort (134).
 fn error_of(output: &Output) -> String {
     let code = output.status.code();
-    assert!(matches!(code, Some(1 | 2)), "exit {code:?}: {}", stderr(output));
+    assert!(
+        matches!(code, Some(1 | 2)),
+        "exit {code:?}: {}",
+        stderr(output)
+    );
     stderr(output)
 }
 
 fn grid(dir: &Path) -> String {
     let game = dir.join("grid.posg.json").display().to_string();
-    assert!(posg_fsc(&["example", "grid", "--out", &game]).status.success());
+    assert!(
+        posg_fsc(&["example", "grid", "--out", &game])
+            .status
+            .success()
+    );
     game
 }
 
@@ -50,8 +58,24 @@ fn durations_beyond_the_clock_mean_no_limit() {
         &["solve", "--time-budget", "1e20"],
         &["solve", "--synthesis-time-budget", "1e20"],
         &["solve", "--translate-seconds", "1e308"],
-        &["sweep", "--time-budget", "1e308", "--def-nodes", "1", "--adv-nodes", "1"],
-        &["sweep", "--synthesis-time-budget", "1e308", "--def-nodes", "1", "--adv-nodes", "1"],
+        &[
+            "sweep",
+            "--time-budget",
+            "1e308",
+            "--def-nodes",
+            "1",
+            "--adv-nodes",
+            "1",
+        ],
+        &[
+            "sweep",
+            "--synthesis-time-budget",
+            "1e308",
+            "--def-nodes",
+            "1",
+            "--adv-nodes",
+            "1",
+        ],
         &["support", "--synthesis-time-budget", "1e20"],
     ];
     for (k, case) in cases.iter().enumerate() {
@@ -106,7 +130,13 @@ fn a_huge_grid_is_refused_with_its_size_and_the_limit() {
         height: 1 << 40,
         ..Default::default()
     };
-    assert!(library.build().unwrap_err().to_string().contains("MAX_TRANSITION_TRIPLES"));
+    assert!(
+        library
+            .build()
+            .unwrap_err()
+            .to_string()
+            .contains("MAX_TRANSITION_TRIPLES")
+    );
 }
 
 /// An MDP in DRN with `n` states, each with its own action label: `n^2`
@@ -135,11 +165,15 @@ fn drn_sizes_are_checked_before_allocation() {
             && message.contains("MAX_TRANSITION_TRIPLES"),
         "{message}"
     );
-    let claimed = distinct_labels_drn(2).replace("@nr_states\n2", "@nr_states\n1000000000000000000");
+    let claimed =
+        distinct_labels_drn(2).replace("@nr_states\n2", "@nr_states\n1000000000000000000");
     let claims = dir.join("claims.drn");
     std::fs::write(&claims, claimed).unwrap();
     let message = error_of(&posg_fsc(&["check", &claims.display().to_string()]));
-    assert!(message.contains("declares 1000000000000000000 states, the model has 2"), "{message}");
+    assert!(
+        message.contains("declares 1000000000000000000 states, the model has 2"),
+        "{message}"
+    );
 }
 
 const DRN: &str = "tests/data/drn";
@@ -201,7 +235,11 @@ fn a_drn_file_without_its_type_is_named_as_a_drn_missing_its_header() {
 fn a_props_player_the_model_lacks_names_the_props_file_line_and_column() {
     let dir = scratch("props-player");
     let seven = dir.join("seven.props");
-    std::fs::write(&seven, "// a player the game lacks\n  <<7>> Pmax=? [F \"goal\"]\n").unwrap();
+    std::fs::write(
+        &seven,
+        "// a player the game lacks\n  <<7>> Pmax=? [F \"goal\"]\n",
+    )
+    .unwrap();
     let seven = seven.display().to_string();
     for command in ["eval", "import-drn"] {
         let args = [command, "tests/data/drn/pennies.drn", "--props", &seven];
@@ -219,7 +257,12 @@ fn a_props_player_the_model_lacks_names_the_props_file_line_and_column() {
     let zero = dir.join("zero.props");
     std::fs::write(&zero, "<<0>> Pmax=? [F \"goal\"]\n").unwrap();
     let zero = zero.display().to_string();
-    let message = error_of(&posg_fsc(&["eval", "tests/data/drn/coin.drn", "--props", &zero]));
+    let message = error_of(&posg_fsc(&[
+        "eval",
+        "tests/data/drn/coin.drn",
+        "--props",
+        &zero,
+    ]));
     assert!(
         message.contains("zero.props: line 1, column 1: in tests/data/drn/coin.drn")
             && message.contains("this POMDP has no players"),
