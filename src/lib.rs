@@ -86,6 +86,7 @@ pub mod output;
 pub mod pipeline;
 mod product;
 pub mod prune;
+pub mod seconds;
 mod sensitivity;
 mod simulate;
 mod solver;

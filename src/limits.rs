@@ -71,12 +71,31 @@ pub fn exceeded(what: &str, size: u128, limit: u128, unit: &str, name: &str) -> 
     })
 }
 
+/// The product of `sizes`, saturating (never overflows).
+fn product(sizes: &[usize]) -> u128 {
+    sizes
+        .iter()
+        .fold(1u128, |product, &n| product.saturating_mul(n as u128))
+}
+
+/// `states * defender actions * adversary actions` against
+/// [`MAX_TRANSITION_TRIPLES`]: `Some(message)` when too large. Every game
+/// reader and generator checks it before it allocates the transition table
+/// (or the per-state tables of the same size).
+pub fn transition_triples(states: usize, nu: usize, nv: usize) -> Option<String> {
+    exceeded(
+        &format!("{states} states x {nu} defender actions x {nv} adversary actions"),
+        product(&[states, nu, nv]),
+        MAX_TRANSITION_TRIPLES,
+        "transition triples",
+        "MAX_TRANSITION_TRIPLES",
+    )
+}
+
 /// `nodes * observations * nodes * actions` against
 /// [`MAX_CONTROLLER_CHOICES`]: `Some(message)` when too large.
 pub fn uniform_controller(nodes: usize, observations: usize, actions: usize) -> Option<String> {
-    let choices = [nodes, nodes, observations, actions]
-        .into_iter()
-        .fold(1u128, |product, n| product.saturating_mul(n as u128));
+    let choices = product(&[nodes, nodes, observations, actions]);
     exceeded(
         &format!(
             "a full-support controller of {nodes} nodes ({observations} observations, {actions} actions)"
@@ -100,5 +119,7 @@ mod tests {
         assert!(uniform_controller(100_000, 4, 4).is_some());
         assert!(uniform_controller(10, 4, 4).is_none());
         assert!(uniform_controller(usize::MAX, usize::MAX, usize::MAX).is_some());
+        assert!(transition_triples(usize::MAX, 2, 2).is_some());
+        assert!(transition_triples(1000, 4, 2).is_none());
     }
 }

@@ -160,6 +160,7 @@ fn player_one_as_the_defender_swaps_the_roles() {
         Path::new(PENNIES),
         &DrnOptions {
             defender_player: Some(1),
+            ..Default::default()
         },
     )
     .unwrap()
@@ -590,6 +591,7 @@ fn malformed_player_and_observation_annotations_name_the_line() {
     let text = std::fs::read_to_string(PENNIES).unwrap();
     let absent = DrnOptions {
         defender_player: Some(7),
+        ..Default::default()
     };
     let error = from_drn_str_with(&text, "m.drn", None, &absent)
         .unwrap_err()
@@ -612,6 +614,7 @@ fn malformed_player_and_observation_annotations_name_the_line() {
     let pomdp = std::fs::read_to_string("tests/data/drn/dark-corridor.drn").unwrap();
     let player = DrnOptions {
         defender_player: Some(0),
+        ..Default::default()
     };
     let error = from_drn_str_with(&pomdp, "m.drn", None, &player)
         .unwrap_err()

@@ -140,7 +140,12 @@ class Controller:
         initial: Optional[npt.ArrayLike] = None,
     ) -> Controller:
         """The controller with these probabilities (axes (node, observation,
-        next_node, action)) and initial distribution (default: node 0)."""
+        next_node, action)) and initial distribution (default: node 0).
+        Each probabilities[g, o] and the initial distribution must sum to 1
+        within 1e-6 (the tolerance of docs/formats.md section 1) and are
+        then rescaled to sum to 1 exactly; a row further off raises
+        GameFormatError naming the node, the observation (its index) and
+        the sum."""
     def to_json(self) -> str:
         """The controller file's JSON text."""
     def save(self, path: Path) -> None:

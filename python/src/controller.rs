@@ -148,7 +148,11 @@ impl Controller {
     /// array (or nested lists) with axes `(node, observation, next_node,
     /// action)` as `Controller.probabilities`, and the initial node
     /// distribution (default: node 0). Zero entries are outside the
-    /// support; each `probabilities[g, o]` must sum to 1.
+    /// support; each `probabilities[g, o]` and the initial distribution
+    /// must sum to 1 within 1e-6 (the tolerance of docs/formats.md
+    /// section 1) and are then rescaled to sum to 1 exactly; a row further
+    /// off raises `GameFormatError` naming the node, the observation (its
+    /// index) and the sum.
     #[staticmethod]
     #[pyo3(signature = (game, role, probabilities, initial = None))]
     fn from_probabilities(

@@ -10,6 +10,7 @@ use posg_fsc::automaton::read_hoa_dra;
 use posg_fsc::controller::{Fsc, Role};
 use posg_fsc::game::Posg;
 use posg_fsc::game::drn::DrnOptions;
+use posg_fsc::ltl::props::Property;
 use posg_fsc::output::PlotFormat;
 use posg_fsc::value::{DEFAULT_LU_LIMIT, DEFAULT_TOLERANCE, SolverMethod, SolverSettings};
 use serde::Serialize;
@@ -42,21 +43,14 @@ pub struct ObjectiveArgs {
     /// Time budget of the translation of --ltl (and of its negation) into an
     /// automaton, in seconds; a formula that needs more is an error naming
     /// the subformula that blew up.
-    #[arg(long, default_value_t = posg_fsc::ltl::DEFAULT_TRANSLATION_SECONDS, value_parser = positive_tolerance)]
+    #[arg(long, default_value_t = posg_fsc::ltl::DEFAULT_TRANSLATION_SECONDS, value_parser = posg_fsc::seconds::parse_positive)]
     pub translate_seconds: f64,
 }
 
 impl ObjectiveArgs {
     /// The query of `--props`, if given.
-    pub fn property(&self) -> anyhow::Result<Option<posg_fsc::ltl::props::Property>> {
-        let Some(path) = &self.props else {
-            return Ok(None);
-        };
-        let text = std::fs::read_to_string(path)
-            .with_context(|| format!("cannot read {}", path.display()))?;
-        let property = posg_fsc::ltl::props::parse_props(&text)
-            .with_context(|| format!("in {}", path.display()))?;
-        Ok(Some(property))
+    pub fn property(&self) -> anyhow::Result<Option<Property>> {
+        self.props.as_deref().map(read_props).transpose()
     }
 
     /// The text of phi: `--ltl`, or the objective of `--props`; `None` for
@@ -75,6 +69,13 @@ impl ObjectiveArgs {
         };
         Ok(posg_fsc::ltl::translate_within(formula, &budget)?)
     }
+}
+
+/// The query of the property file at `path`.
+pub fn read_props(path: &Path) -> anyhow::Result<Property> {
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+    posg_fsc::ltl::props::parse_props(&text).with_context(|| format!("in {}", path.display()))
 }
 
 /// The two controllers.
@@ -157,8 +158,22 @@ pub fn read_game(path: &Path) -> anyhow::Result<Posg> {
 /// [`read_game`] for a command with an objective: the player `<<P>>` of a
 /// `--props` query is the defender of a turn-based DRN game.
 pub fn read_game_for(path: &Path, objective: &ObjectiveArgs) -> anyhow::Result<Posg> {
-    let defender_player = objective.property()?.and_then(|p| p.player);
-    read_game_as(path, &DrnOptions { defender_player })
+    let property = objective.property()?;
+    let props = objective.props.as_deref();
+    read_game_as(path, &drn_options(props.zip(property.as_ref())))
+}
+
+/// The import options of a DRN game for the query of the property file,
+/// if any: its player `<<P>>` is the defender, and errors about that
+/// player name the file, line and column of `<<P>>`.
+pub fn drn_options(query: Option<(&Path, &Property)>) -> DrnOptions {
+    let Some((file, property)) = query.filter(|(_, p)| p.player.is_some()) else {
+        return DrnOptions::default();
+    };
+    DrnOptions {
+        defender_player: property.player,
+        defender_source: Some(property.position(&file.display().to_string())),
+    }
 }
 
 /// Reads a game; a DRN model (recognised by its content) is imported with
@@ -166,6 +181,13 @@ pub fn read_game_for(path: &Path, objective: &ObjectiveArgs) -> anyhow::Result<P
 fn read_game_as(path: &Path, options: &DrnOptions) -> anyhow::Result<Posg> {
     let bytes = std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))?;
     if !posg_fsc::game::drn::is_drn(&bytes) {
+        if let (Some(player), Some(source)) = (options.defender_player, &options.defender_source) {
+            eprintln!(
+                "warning: {source}: `<<{player}>>` is ignored: the game file {} fixes its \
+                 defender (docs/formats.md section 6)",
+                path.display()
+            );
+        }
         return Ok(posg_fsc::game::file::read(path)?);
     }
     let import = posg_fsc::game::drn::read_with(path, options)?;

@@ -4,11 +4,10 @@
 
 use std::path::PathBuf;
 
-use anyhow::Context;
 use clap::Args;
 use posg_fsc::game::drn::DrnOptions;
 
-use super::common::print_text;
+use super::common::{self, print_text};
 
 /// Arguments of `import-drn`.
 #[derive(Debug, Args)]
@@ -33,9 +32,7 @@ pub struct ImportDrnArgs {
 
 /// Reads the model, prints what was dropped on stderr and writes the game.
 pub fn run(args: ImportDrnArgs) -> anyhow::Result<()> {
-    let options = DrnOptions {
-        defender_player: defender_player(&args)?,
-    };
+    let options = options(&args)?;
     let import = posg_fsc::game::drn::read_with(&args.model, &options)?;
     for warning in &import.warnings {
         eprintln!("warning: {warning}");
@@ -46,27 +43,24 @@ pub fn run(args: ImportDrnArgs) -> anyhow::Result<()> {
     }
 }
 
-/// `--defender-player`, or the player of the `--props` query; the two must agree.
-fn defender_player(args: &ImportDrnArgs) -> anyhow::Result<Option<u64>> {
-    let from_props = match &args.props {
-        Some(path) => {
-            let text = std::fs::read_to_string(path)
-                .with_context(|| format!("cannot read {}", path.display()))?;
-            posg_fsc::ltl::props::parse_props(&text)
-                .with_context(|| format!("in {}", path.display()))?
-                .player
-        }
-        None => None,
-    };
-    match (args.defender_player, from_props) {
+/// The import options: `--defender-player`, or the player of the `--props`
+/// query (then errors about it name the query); the two must agree.
+fn options(args: &ImportDrnArgs) -> anyhow::Result<DrnOptions> {
+    let property = args.props.as_deref().map(common::read_props).transpose()?;
+    let from_props = common::drn_options(args.props.as_deref().zip(property.as_ref()));
+    match (args.defender_player, from_props.defender_player) {
         (Some(given), Some(named)) if given != named => anyhow::bail!(
             "--defender-player {given} disagrees with the query of {}, which optimises for \
              player {named}",
-            args.props
-                .as_ref()
+            from_props
+                .defender_source
+                .as_deref()
                 .expect("a player from --props")
-                .display()
         ),
-        (given, named) => Ok(given.or(named)),
+        (Some(given), None) => Ok(DrnOptions {
+            defender_player: Some(given),
+            defender_source: None,
+        }),
+        _ => Ok(from_props),
     }
 }

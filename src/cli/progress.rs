@@ -21,20 +21,11 @@ pub struct OutputArgs {
     pub quiet: bool,
     /// Seconds between two progress lines when stderr is not a terminal
     /// (logs, pipes, cluster jobs).
-    #[arg(long, default_value_t = 5.0, value_parser = positive_seconds)]
+    #[arg(long, default_value_t = 5.0, value_parser = posg_fsc::seconds::parse_positive)]
     pub progress_every: f64,
     /// Label the top of curve.svg with the seconds elapsed.
     #[arg(long)]
     pub seconds_axis: bool,
-}
-
-/// A positive, finite number of seconds.
-fn positive_seconds(text: &str) -> Result<f64, String> {
-    match text.parse::<f64>() {
-        Ok(seconds) if seconds.is_finite() && seconds > 0.0 => Ok(seconds),
-        Ok(_) => Err("must be a positive number of seconds".into()),
-        Err(error) => Err(error.to_string()),
-    }
 }
 
 /// How progress is shown.
@@ -50,14 +41,15 @@ pub enum ProgressMode {
 
 impl ProgressMode {
     /// Bars on a terminal, lines (every `args.progress_every` seconds)
-    /// elsewhere, nothing with `--quiet`.
+    /// elsewhere (only the final one when the interval is beyond the
+    /// clock), nothing with `--quiet`.
     pub fn detect(args: &OutputArgs) -> Self {
         if args.quiet {
             Self::Quiet
         } else if std::io::stderr().is_terminal() {
             Self::Bars
         } else {
-            Self::Lines(Duration::from_secs_f64(args.progress_every))
+            Self::Lines(posg_fsc::seconds::duration(args.progress_every).unwrap_or(Duration::MAX))
         }
     }
 }

@@ -13,7 +13,7 @@ mod support;
 pub(crate) use mixture::Mixture;
 pub use support::{Probabilities, Support};
 
-use crate::game::{ModelError, Player, Posg, check_total};
+use crate::game::{ModelError, Player, Posg, check_total, rescale_by};
 
 /// Which player a controller belongs to.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
@@ -83,6 +83,9 @@ pub struct Fsc {
 impl Fsc {
     /// Builds a controller after checking that every block is a distribution
     /// over valid `(next, action)` pairs; `blocks[g * num_observations + o]`.
+    /// The initial distribution and each block must sum to 1 within
+    /// [`crate::game::DISTRIBUTION_TOLERANCE`] (an error names the node, the
+    /// observation and the sum) and are then rescaled to sum to 1.
     pub fn new(
         role: Role,
         num_nodes: usize,
@@ -91,7 +94,7 @@ impl Fsc {
         initial: Vec<f64>,
         blocks: Vec<Vec<Choice>>,
     ) -> Result<Self, ModelError> {
-        let fsc = Self {
+        let mut fsc = Self {
             role,
             num_nodes,
             num_observations,
@@ -100,7 +103,23 @@ impl Fsc {
             blocks,
         };
         fsc.check()?;
+        fsc.rescale();
         Ok(fsc)
+    }
+
+    /// Divides the initial distribution and every block by their sums, which
+    /// [`Self::check`] found within [`crate::game::DISTRIBUTION_TOLERANCE`]
+    /// of 1, so that each sums to 1 exactly (formats.md section 1).
+    fn rescale(&mut self) {
+        if let Some(total) = rescale_by(self.initial.iter().sum(), self.initial.len()) {
+            self.initial.iter_mut().for_each(|p| *p /= total);
+        }
+        for block in &mut self.blocks {
+            let total = block.iter().map(|c| c.probability).sum();
+            if let Some(total) = rescale_by(total, block.len()) {
+                block.iter_mut().for_each(|c| c.probability /= total);
+            }
+        }
     }
 
     /// The controller with `num_nodes` nodes that starts in node 0 and is

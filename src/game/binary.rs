@@ -446,16 +446,7 @@ impl<'a> Reader<'a> {
             game.defender.num_actions(),
             game.adversary.num_actions(),
         );
-        let triples = [ns, nu, nv]
-            .into_iter()
-            .fold(1u128, |product, n| product.saturating_mul(n as u128));
-        if let Some(message) = limits::exceeded(
-            &format!("{ns} states x {nu} defender actions x {nv} adversary actions"),
-            triples,
-            limits::MAX_TRANSITION_TRIPLES,
-            "transition triples",
-            "MAX_TRANSITION_TRIPLES",
-        ) {
+        if let Some(message) = limits::transition_triples(ns, nu, nv) {
             return Err(at.error(message));
         }
         let triples = ns * nu * nv;

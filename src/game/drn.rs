@@ -33,18 +33,33 @@ use std::path::Path;
 
 use rustc_hash::FxHashMap;
 
-use super::file::{is_valid_name, is_valid_proposition, read_text};
+use super::file::{bytes_without_bom, is_valid_name, is_valid_proposition, read_text, without_bom};
 use super::{Distribution, ModelError, Player, Posg};
 
 pub mod turn_based;
 
 /// How a DRN model becomes a game.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub struct DrnOptions {
     /// In a turn-based game (`SMG`, `POSMG`), the player `<p>` who is the
     /// defender (the other player is the adversary); `None` means player 0.
     /// Giving it for a POMDP, MDP or DTMC is an error.
     pub defender_player: Option<u64>,
+    /// Where `defender_player` was named, when in a file (a property
+    /// file's `<<P>>`: [`crate::ltl::props::Property::position`]): an
+    /// error about that player names it, and the DRN file in its message.
+    pub defender_source: Option<String>,
+}
+
+impl DrnOptions {
+    /// The error `message` about the defender player of the DRN file
+    /// `file_name`: at [`Self::defender_source`] if known, else at the file.
+    fn player_error(&self, file_name: &str, message: String) -> ModelError {
+        match &self.defender_source {
+            Some(source) => ModelError::new(source, format!("in {file_name}, {message}")),
+            None => ModelError::new(file_name, message),
+        }
+    }
 }
 
 /// A game imported from DRN and what was dropped on the way.
@@ -72,15 +87,18 @@ pub fn read_with(path: &Path, options: &DrnOptions) -> Result<DrnImport, ModelEr
     from_drn_str_with(&text, &file_name, name, options)
 }
 
-/// Whether `bytes` look like a DRN file: the first line that is neither
-/// empty nor a `//` comment starts with `@type:` (a JSON game starts with
-/// `{`, a binary one with its magic).
+/// Whether `bytes` look like a DRN file: after a byte-order mark, if any,
+/// the first line that is neither empty nor a `//` comment starts with `@`,
+/// as every line of a DRN header does (a JSON game starts with `{`, a
+/// binary one with its magic). A DRN file that lacks its `@type` line is
+/// still one, and its error says so.
 pub fn is_drn(bytes: &[u8]) -> bool {
+    let bytes = bytes_without_bom(bytes);
     let text = String::from_utf8_lossy(&bytes[..bytes.len().min(4096)]);
     text.lines()
         .map(str::trim)
         .find(|line| !line.is_empty() && !line.starts_with("//"))
-        .is_some_and(|line| line.starts_with("@type:"))
+        .is_some_and(|line| line.starts_with('@'))
 }
 
 /// Parses a DRN model (module documentation) into a POMDP game named
@@ -100,7 +118,7 @@ pub fn from_drn_str_with(
     name: Option<String>,
     options: &DrnOptions,
 ) -> Result<DrnImport, ModelError> {
-    let mut lines = Lines::new(text, file_name);
+    let mut lines = Lines::new(without_bom(text), file_name);
     let header = Header::parse(&mut lines)?;
     let model = Model::parse(&mut lines, &header)?;
     let mut warnings = Vec::new();
@@ -112,11 +130,12 @@ pub fn from_drn_str_with(
     let game = if header.model_type.is_turn_based() {
         model.into_turn_based_game(&header, name, &lines, options)?
     } else if let Some(player) = options.defender_player {
-        return Err(ModelError::new(
+        return Err(options.player_error(
             file_name,
             format!(
                 "a defender player ({player}) applies to turn-based games (SMG, POSMG) only; \
-                 this model has no players"
+                 this {} has no players",
+                header.model_type
             ),
         ));
     } else {
@@ -167,6 +186,16 @@ struct Lines<'a> {
 }
 
 impl<'a> Lines<'a> {
+    /// The limit on transition triples ([`crate::limits::transition_triples`])
+    /// for `states` states and the players' action counts, checked before
+    /// the tables of that size are allocated: an error naming the file.
+    fn check_size(&self, states: usize, nu: usize, nv: usize) -> Result<(), ModelError> {
+        match crate::limits::transition_triples(states, nu, nv) {
+            Some(message) => Err(ModelError::new(self.file_name, message)),
+            None => Ok(()),
+        }
+    }
+
     fn new(text: &'a str, file_name: &'a str) -> Self {
         Self {
             file_name,
@@ -221,8 +250,13 @@ impl Header {
         while let Some((n, line)) = lines.next_content() {
             match line {
                 "@model" => {
-                    let model_type = model_type
-                        .ok_or_else(|| lines.error(n, "`@type` must come before `@model`"))?;
+                    let model_type = model_type.ok_or_else(|| {
+                        lines.error(
+                            n,
+                            "this DRN file's header has no `@type` line (for example \
+                             `@type: POMDP`) before `@model`",
+                        )
+                    })?;
                     let states = states
                         .ok_or_else(|| lines.error(n, "`@nr_states` must come before `@model`"))?;
                     return Ok(Self {
@@ -546,6 +580,7 @@ impl Model {
                 return Err(error(state.line, "a state without choices".into()));
             }
         }
+        lines.check_size(states.len(), actions.len(), 1)?;
         let (observations, observe, observation_of) = self.observations(header.model_type, &states);
         let enabled = self.enabled(
             &observation_of,

@@ -57,6 +57,7 @@ pub fn from_json_str(text: &str, file_name: &str) -> Result<Posg, ModelError> {
 /// [`from_json_str`] on the bytes of a file. Bytes that are not UTF-8 give
 /// the error of `read_text` ("cannot read the file: ...").
 pub fn from_json_slice(bytes: &[u8], file_name: &str) -> Result<Posg, ModelError> {
+    let bytes = bytes_without_bom(bytes);
     let raw: RawGame = match serde_json::from_slice(bytes) {
         Ok(raw) => raw,
         Err(_) => {
@@ -88,10 +89,29 @@ pub fn write(path: &Path, game: &Posg) -> Result<(), ModelError> {
     write_text(path, &to_json_string(game))
 }
 
-/// Reads a whole file; an I/O failure becomes a [`ModelError`] on the file.
+/// Reads a whole file, without a leading byte-order mark
+/// ([`without_bom`]); an I/O failure becomes a [`ModelError`] on the file.
 pub(crate) fn read_text(path: &Path, file_name: &str) -> Result<String, ModelError> {
-    std::fs::read_to_string(path)
-        .map_err(|e| ModelError::new(file_name, format!("cannot read the file: {e}")))
+    let mut text = std::fs::read_to_string(path)
+        .map_err(|e| ModelError::new(file_name, format!("cannot read the file: {e}")))?;
+    if text.starts_with(BOM) {
+        text.drain(..BOM.len_utf8());
+    }
+    Ok(text)
+}
+
+/// The UTF-8 byte-order mark that some editors write at the start of a file.
+const BOM: char = '\u{feff}';
+
+/// `text` without a leading byte-order mark: every text reader (game,
+/// controller, strategy, DRN, props, HOA) skips one (formats.md, top).
+pub(crate) fn without_bom(text: &str) -> &str {
+    text.strip_prefix(BOM).unwrap_or(text)
+}
+
+/// [`without_bom`] on the bytes of a file.
+pub(crate) fn bytes_without_bom(bytes: &[u8]) -> &[u8] {
+    bytes.strip_prefix("\u{feff}".as_bytes()).unwrap_or(bytes)
 }
 
 /// Writes a whole file; an I/O failure becomes a [`ModelError`] on the file.
@@ -119,6 +139,7 @@ pub(crate) fn parse<T: for<'de> Deserialize<'de>>(
     text: &str,
     file_name: &str,
 ) -> Result<T, ModelError> {
+    let text = without_bom(text);
     match serde_json::from_str(text) {
         Ok(value) => Ok(value),
         Err(_) => parse_tracking_paths(text, file_name),
@@ -224,7 +245,7 @@ pub(super) fn normalisation(
 ) -> Result<Option<f64>, ModelError> {
     let shown = (total * 1e9).round() / 1e9 + 0.0;
     super::check_total(total, shown, "probabilities").map_err(|message| at.error(message))?;
-    Ok(((total - 1.0).abs() > len as f64 * f64::EPSILON).then_some(total))
+    Ok(super::rescale_by(total, len))
 }
 
 /// The distribution written as the object at `at` over outcomes found by
@@ -788,19 +809,7 @@ impl<'a, 'r> Builder<'a, 'r> {
         }
         let keyed = Keyed::new(keys, game.states.len());
         let (nu, nv) = (game.defender.num_actions(), game.adversary.num_actions());
-        let triples = [game.states.len(), nu, nv]
-            .into_iter()
-            .fold(1u128, |product, n| product.saturating_mul(n as u128));
-        if let Some(message) = limits::exceeded(
-            &format!(
-                "{} states x {nu} defender actions x {nv} adversary actions",
-                game.states.len()
-            ),
-            triples,
-            limits::MAX_TRANSITION_TRIPLES,
-            "transition triples",
-            "MAX_TRANSITION_TRIPLES",
-        ) {
+        if let Some(message) = limits::transition_triples(game.states.len(), nu, nv) {
             return Err(at.error(message));
         }
         game.transition_offsets = Vec::with_capacity(game.states.len() * nu * nv + 1);

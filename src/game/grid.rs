@@ -165,11 +165,8 @@ impl GridSpec {
                 self.width, self.height
             ));
         }
-        if self.width.checked_mul(self.height).is_none() {
-            return err(format!(
-                "a {}x{} grid is too large",
-                self.width, self.height
-            ));
+        if let Some(message) = self.size_exceeded() {
+            return err(message);
         }
         let named = [
             ("initial", std::slice::from_ref(&self.initial)),
@@ -197,6 +194,28 @@ impl GridSpec {
             }
         }
         Ok(())
+    }
+
+    /// `Some(message)` when the grid is larger than the limits of every
+    /// game ([`crate::limits`]): its `W H` cells times 4 defender and 2
+    /// adversary actions against the transition triples, and the at most 5
+    /// successors of each triple against the transition entries. Checked
+    /// before anything of the grid's size is allocated.
+    fn size_exceeded(&self) -> Option<String> {
+        let cells = (self.width as u128).saturating_mul(self.height as u128);
+        let cells = usize::try_from(cells).unwrap_or(usize::MAX);
+        let triples = crate::limits::transition_triples(cells, MOVES.len(), 2);
+        let entries = || {
+            crate::limits::exceeded(
+                &format!("{cells} cells"),
+                (cells as u128).saturating_mul(MOVES.len() as u128 * 2 * 5),
+                crate::limits::MAX_TRANSITION_ENTRIES,
+                "transition entries",
+                "MAX_TRANSITION_ENTRIES",
+            )
+        };
+        let message = triples.or_else(entries)?;
+        Some(format!("a {}x{} grid: {message}", self.width, self.height))
     }
 
     /// `N(c)`: the cells one step right, left, up and down of `c` inside the grid.

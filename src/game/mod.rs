@@ -57,6 +57,14 @@ pub(crate) fn check_total(total: f64, shown: f64, subject: &str) -> Result<(), S
     Ok(())
 }
 
+/// What weights summing to `total` (already checked by [`check_total`])
+/// are divided by to sum to 1: `None` when `total` is 1 up to the rounding
+/// of adding `len` numbers (the weights are then kept bit for bit, so that
+/// writing and reading a model gives back the same numbers).
+pub(crate) fn rescale_by(total: f64, len: usize) -> Option<f64> {
+    ((total - 1.0).abs() > len as f64 * f64::EPSILON).then_some(total)
+}
+
 /// A defender action `u in U_def`: an index into the defender's
 /// [`Player::actions`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]

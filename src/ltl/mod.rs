@@ -214,9 +214,7 @@ pub fn translate_within(
     budget: &TranslationBudget,
 ) -> Result<Dra, TranslateError> {
     let propositions = checked_propositions(formula)?;
-    let deadline = std::time::Instant::now().checked_add(
-        std::time::Duration::try_from_secs_f64(budget.seconds).unwrap_or(std::time::Duration::MAX),
-    );
+    let deadline = crate::seconds::after(std::time::Instant::now(), budget.seconds);
     let _deadline = construct::budget::Deadline::set(deadline, budget.seconds);
     if is_boolean(formula) {
         return boolean_automaton(formula, propositions);

@@ -33,6 +33,17 @@ pub struct Property {
     pub objective: Formula,
     /// The 1-based line of the query.
     pub line: usize,
+    /// The 1-based column (in characters) where the query starts after its
+    /// name: that of `<<P>>` when it names a player.
+    pub column: usize,
+}
+
+impl Property {
+    /// Where the query is in the property file `file`, as errors name it:
+    /// `FILE: line L, column C`.
+    pub fn position(&self, file: &str) -> String {
+        format!("{file}: line {}, column {}", self.line, self.column)
+    }
 }
 
 /// Why a text is not a property file posg-fsc can solve.
@@ -47,9 +58,11 @@ pub struct PropsError {
     pub message: String,
 }
 
-/// Reads the one query of a property file (module documentation).
+/// Reads the one query of a property file (module documentation); a
+/// leading byte-order mark is skipped.
 pub fn parse_props(text: &str) -> Result<Property, PropsError> {
     let mut found: Option<Property> = None;
+    let text = crate::game::file::without_bom(text);
     for (i, raw) in text.lines().enumerate() {
         let line = i + 1;
         let content = raw.split("//").next().unwrap_or("");
@@ -134,6 +147,8 @@ impl<'a> Cursor<'a> {
 fn query(text: &str, line: usize) -> Result<Property, PropsError> {
     let mut cursor = Cursor { text, at: 0, line };
     skip_name(&mut cursor)?;
+    cursor.skip_blanks();
+    let column = cursor.column();
     let player = coalition(&mut cursor)?;
     cursor.skip_blanks();
     let maximise = if cursor.eat("Pmax=?") {
@@ -183,6 +198,7 @@ fn query(text: &str, line: usize) -> Result<Property, PropsError> {
         path,
         objective,
         line,
+        column,
     })
 }
 

@@ -1,11 +1,12 @@
 //! [`Settings`]: every number the optimiser uses, with its default, checked
 //! once by [`Settings::validate`] and recorded verbatim in `summary.json`.
 
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
 
 use super::{OptimiseError, StructureSource};
+use crate::seconds;
 use crate::solver::{DEFAULT_LU_LIMIT, SolverMethod, SolverSettings};
 
 /// How a player turns its logit gradient into a step (docs/method.md section 4).
@@ -75,7 +76,7 @@ pub struct Settings {
     #[arg(long, default_value_t = Settings::default().starts)]
     pub starts: usize,
     /// Wall-clock budget in seconds for one structure (0: none).
-    #[arg(long, default_value_t = Settings::default().time_budget)]
+    #[arg(long, default_value_t = Settings::default().time_budget, value_parser = crate::seconds::parse)]
     pub time_budget: f64,
     /// Adversary descent steps per defender ascent step (the fast time scale).
     #[arg(long, default_value_t = Settings::default().adversary_steps)]
@@ -316,12 +317,11 @@ impl Settings {
     /// With a time budget, when the final best responses of a structure whose
     /// run began at `started` must end: at the end of the budget, or a tenth
     /// of the budget from `now` if that is later (`None` without a budget).
+    /// A budget beyond the clock is no budget ([`crate::seconds`]).
     pub fn final_deadline(&self, started: Instant, now: Instant) -> Option<Instant> {
-        (self.time_budget > 0.0).then(|| {
-            let budget = Duration::from_secs_f64(self.time_budget);
-            let share = Duration::from_secs_f64(self.time_budget * FINAL_SHARE_OF_BUDGET);
-            (started + budget).max(now + share)
-        })
+        let end = seconds::deadline(started, self.time_budget)?;
+        let share = seconds::after(now, self.time_budget * FINAL_SHARE_OF_BUDGET)?;
+        Some(end.max(share))
     }
 
     /// Whether the certified gap between a lower bound `lower` and an upper
@@ -360,8 +360,7 @@ impl Settings {
     /// run one after another), so that the races keep the rest (`None`
     /// without a budget).
     pub fn search_deadline(&self, started: Instant) -> Option<Instant> {
-        (self.time_budget > 0.0)
-            .then(|| started + Duration::from_secs_f64(self.time_budget * SEARCH_SHARE_OF_BUDGET))
+        seconds::deadline(started, self.time_budget * SEARCH_SHARE_OF_BUDGET)
     }
 
     /// The linear solver's settings: [`Self::solver`], [`Self::solver_tolerance`]
@@ -417,7 +416,6 @@ impl Settings {
         }
         let non_negative = [
             ("initial_spread", self.initial_spread),
-            ("time_budget", self.time_budget),
             ("max_work", self.max_work),
             ("defender_decay", self.defender_decay),
             ("stall_tolerance", self.stall_tolerance),
@@ -433,6 +431,7 @@ impl Settings {
                 ));
             }
         }
+        seconds::check(self.time_budget).map_err(|problem| invalid("time_budget", problem))?;
         if self.initial_spread > self.initial_logit_bound {
             return Err(invalid(
                 "initial_spread",
@@ -487,6 +486,7 @@ fn invalid(field: &'static str, problem: String) -> OptimiseError {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::time::Duration;
 
     /// Small GMCs keep every iteration; a large one gets what `max_work`
     /// pays for its starts together (3.5e6 / (2 * 24,384 * 6) = 11.96 on
@@ -503,6 +503,22 @@ mod tests {
             ..Settings::default()
         };
         assert_eq!(uncapped.final_best_response_iterations(10_000_000, 6), 100);
+    }
+
+    /// Issue 57: `solve --time-budget 1e20` panicked in
+    /// `Duration::from_secs_f64`; a budget beyond the clock is no deadline.
+    #[test]
+    fn a_time_budget_beyond_the_clock_is_valid_and_sets_no_deadline() {
+        let now = Instant::now();
+        for time_budget in [1e20, 1e308] {
+            let settings = Settings {
+                time_budget,
+                ..Settings::default()
+            };
+            assert!(settings.validate().is_ok());
+            assert_eq!(settings.final_deadline(now, now), None);
+            assert_eq!(settings.search_deadline(now), None);
+        }
     }
 
     #[test]

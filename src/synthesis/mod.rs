@@ -103,7 +103,7 @@ mod witness;
 pub use confirm::Confirmation;
 pub use ranks::RankEncoding;
 
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
@@ -211,7 +211,8 @@ pub struct Settings {
         id = "synthesis_time_budget",
         long = "synthesis-time-budget",
         value_name = "SYNTHESIS_TIME_BUDGET",
-        default_value_t = Settings::default().time_budget
+        default_value_t = Settings::default().time_budget,
+        value_parser = crate::seconds::parse
     )]
     pub time_budget: f64,
 }
@@ -240,10 +241,10 @@ impl Settings {
                 problem: "must be at least 1".into(),
             });
         }
-        if !(self.time_budget.is_finite() && self.time_budget >= 0.0) {
+        if let Err(problem) = crate::seconds::check(self.time_budget) {
             return Err(SynthesisError::Settings {
                 field: "time_budget",
-                problem: format!("must be non-negative and finite, got {}", self.time_budget),
+                problem,
             });
         }
         Ok(())
@@ -402,8 +403,7 @@ pub fn synthesise(
             .into();
         return Ok(synthesis);
     }
-    let deadline =
-        (settings.time_budget > 0.0).then(|| clock + Duration::from_secs_f64(settings.time_budget));
+    let deadline = crate::seconds::deadline(clock, settings.time_budget);
     let mut cnf = Cnf::new(settings.clause_budget);
     let mut vars = SupportVariables::new(&mut cnf, game, moves, defender_nodes)?;
     let mut oracle = Oracle::new(game, dra_not_phi, moves, defender_nodes, settings.mode);

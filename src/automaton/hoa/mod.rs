@@ -73,9 +73,10 @@ pub enum HoaError {
 }
 
 /// Reads a deterministic, complete HOA v1 or v1.1 automaton (see the
-/// module documentation for what is supported).
+/// module documentation for what is supported); a leading byte-order mark
+/// is skipped.
 pub fn parse_hoa(text: &str) -> Result<EmersonLeiAutomaton, HoaError> {
-    let tokens = lex::tokenize(text)?;
+    let tokens = lex::tokenize(crate::game::file::without_bom(text))?;
     let (header, states, end) = parse::parse(tokens)?;
     build::build(&header, &states, end)
 }

@@ -70,9 +70,14 @@ impl Model {
                 return Err(lines.error(state.line, "a state without choices"));
             }
         }
-        let turns = self.turns(options.defender_player.unwrap_or(0), lines)?;
+        let turns = self.turns(options, lines)?;
         let defender_actions = self.actions_of(&turns, true, lines)?;
         let adversary_actions = self.actions_of(&turns, false, lines)?;
+        lines.check_size(
+            self.states.len(),
+            defender_actions.len(),
+            adversary_actions.len(),
+        )?;
         let states: Vec<String> = (0..self.states.len()).map(|k| format!("s{k}")).collect();
         let defender = if header.model_type == ModelType::Posmg {
             self.partially_observing_defender(&turns, defender_actions, lines)?
@@ -99,7 +104,8 @@ impl Model {
 
     /// Who moves where; an error for a third player, or a defender that
     /// owns no state.
-    fn turns(&self, defender: u64, lines: &Lines) -> Result<Turns, ModelError> {
+    fn turns(&self, options: &DrnOptions, lines: &Lines) -> Result<Turns, ModelError> {
+        let defender = options.defender_player.unwrap_or(0);
         let mut players: Vec<(u64, usize)> = Vec::new();
         for state in &self.states {
             let player = state.player.expect("a turn-based state has a player");
@@ -120,7 +126,7 @@ impl Model {
         }
         if !players.iter().any(|&(p, _)| p == defender) {
             let owners: Vec<String> = players.iter().map(|(p, _)| format!("<{p}>")).collect();
-            return Err(ModelError::new(
+            return Err(options.player_error(
                 lines.file_name,
                 format!(
                     "the defender, player <{defender}>, owns no state (the states belong to {})",
