@@ -344,7 +344,8 @@ proptest! {
         let chain = with_memory(&moves, &goal, &fail, nodes);
         let reference = exact_solution(&chain);
         let exact = super::exact::solve_exactly(
-            &chain.pattern, &chain.values, &chain.exits, &chain.b, usize::MAX,
+            &chain.pattern, &chain.values, &chain.exits, &chain.b,
+            &super::exact::ExactBudget::unlimited(),
         )
         .unwrap();
         for (i, exact_value) in reference.iter().enumerate() {
