@@ -480,7 +480,7 @@ fn nearest_double(value: &BigRational) -> f64 {
 }
 
 /// The double next to the finite `x` in the direction of `sign`.
-fn next_double(x: f64, sign: f64) -> f64 {
+pub(super) fn next_double(x: f64, sign: f64) -> f64 {
     if x == 0.0 {
         return sign * f64::from_bits(1);
     }
@@ -525,6 +525,57 @@ mod tests {
         assert!(solution.error_bound > 0.0 && solution.error_bound < 2e-16);
     }
 
+    proptest::proptest! {
+        /// The rounding of `N / D` against the reference (the nearest
+        /// double by search), across the range of doubles, subnormals
+        /// included.
+        #[test]
+        fn quotients_round_to_the_nearest_double_with_a_sound_error(
+            numerator in proptest::num::i128::ANY,
+            denominator in 1u128..,
+            shift in -1200i32..1200,
+        ) {
+            let (mut num, mut den) = (BigInt::from(numerator), BigUint::from(denominator));
+            if shift >= 0 {
+                num <<= shift as u32;
+            } else {
+                den <<= (-shift) as u32;
+            }
+            let exact = BigRational::new(num.clone(), BigInt::from(den.clone()));
+            let (nearest, error) = nearest_with_error(&num, &den);
+            if nearest.is_finite() {
+                let reference = nearest_double(&exact);
+                let distance = (rational(nearest) - &exact).abs();
+                let reference_distance = (rational(reference) - &exact).abs();
+                proptest::prop_assert!(distance <= reference_distance, "{} {}", nearest, reference);
+                proptest::prop_assert!(rational(error) >= distance);
+                proptest::prop_assert!(error <= rounded_up(&distance) * (1.0 + 1e-14) + f64::from_bits(2));
+            } else {
+                proptest::prop_assert!(exact.abs() > rational(f64::MAX));
+            }
+        }
+    }
+
+    #[test]
+    fn ties_round_to_even_and_tiny_values_to_subnormals() {
+        let power = |k: u32| BigUint::one() << k;
+        let int = |k: u32, plus: i64| (BigInt::one() << k) + plus;
+        // 1 + 2^-53, halfway between 1 and 1 + 2^-52: the even one, 1.
+        let (nearest, error) = nearest_with_error(&int(53, 1), &power(53));
+        assert_eq!(nearest, 1.0);
+        assert!(error >= 2f64.powi(-53) && error < 2f64.powi(-53) * (1.0 + 1e-14));
+        // 1 + 3 2^-54 is nearer 1 + 2^-52.
+        assert_eq!(nearest_with_error(&int(54, 3), &power(54)).0, 1.0 + f64::EPSILON);
+        // 2^-1075, halfway between 0 and the smallest subnormal: 0.
+        assert_eq!(nearest_with_error(&BigInt::one(), &power(1075)).0, 0.0);
+        // 3/4 of the smallest subnormal: the smallest subnormal.
+        let three = BigInt::from(3);
+        assert_eq!(nearest_with_error(&three, &power(1076)).0, f64::from_bits(1));
+        assert_eq!(nearest_with_error(&-BigInt::one(), &BigUint::from(3u8)).0, -1.0 / 3.0);
+        let (huge, error) = nearest_with_error(&int(1100, 0), &BigUint::one());
+        assert!(huge == f64::INFINITY && error == f64::INFINITY);
+    }
+
     #[test]
     fn fill_beyond_the_budget_is_refused() {
         let pattern = SparsePattern {
@@ -547,7 +598,7 @@ mod tests {
         };
         let refused = solve_exactly(&pattern, &values, &[0.5, 0.75], &[1.0, 0.0], &budget);
         assert!(
-            matches!(refused, Err(ExactRefusal::TooMuchWork { limit: 10, bits: 0 })),
+            matches!(refused, Err(ExactRefusal::TooMuchWork { limit: 10, bits: 1 })),
             "{refused:?}"
         );
     }
