@@ -87,6 +87,8 @@ struct Lifting<'a> {
     residual: Vec<u64>,
     /// `2^(64 width) mod p`.
     wrap: u64,
+    /// `2^(64 j) mod p` in Montgomery form, for each limb `j`.
+    limb_weights: Vec<u64>,
     /// Digit `t` of row `i` at `t n + i`.
     digits: Vec<u64>,
     /// `sum_i c_i d_{t,i}` for the random weights `c`: the digits of the
@@ -138,6 +140,12 @@ impl<'a> Lifting<'a> {
         let wrap = ((BigUint::one() << (64 * width)) % modulus.p)
             .to_u64()
             .unwrap_or(0);
+        let limb_weights = (0..width)
+            .map(|j| {
+                let weight = ((BigUint::one() << (64 * j)) % modulus.p).to_u64().unwrap_or(0);
+                modulus.to_montgomery(weight)
+            })
+            .collect();
         let mut seed = 0x9e37_79b9_7f4a_7c15u64;
         let weights = (0..n)
             .map(|_| {
@@ -157,6 +165,7 @@ impl<'a> Lifting<'a> {
             width,
             residual,
             wrap,
+            limb_weights,
             digits: Vec::new(),
             combined: Vec::new(),
             weights,
@@ -196,10 +205,8 @@ impl<'a> Lifting<'a> {
                     let a = &self.magnitudes[offset..offset + self.entry_width];
                     multiply_add(&mut accumulator, a, digit[j], negative);
                 }
-                if !divide_exactly(&mut accumulator, p) {
-                    // Cannot happen: A d = r mod p by construction.
-                    return Err(LiftFailure::Singular(i));
-                }
+                // p divides r - A d: A d = r mod p by construction.
+                divide_exactly(&mut accumulator, p, self.modulus.inverse_mod_word);
                 self.residual[i * w..(i + 1) * w].copy_from_slice(&accumulator);
             }
             self.combined.push(
@@ -228,14 +235,14 @@ impl<'a> Lifting<'a> {
     fn residue_of_row(&self, i: usize) -> u64 {
         let w = self.width;
         let limbs = &self.residual[i * w..(i + 1) * w];
-        let p = u128::from(self.modulus.p);
+        let m = self.modulus;
         let remainder = limbs
             .iter()
-            .rev()
-            .fold(0u128, |r, &limb| ((r << 64) | u128::from(limb)) % p) as u64;
+            .zip(&self.limb_weights)
+            .fold(0, |sum, (&limb, &weight)| m.add(sum, m.mul_montgomery(weight, limb)));
         if limbs[w - 1] >> 63 == 1 {
             // The limbs read as unsigned are r + 2^(64 w).
-            self.modulus.sub(remainder, self.wrap)
+            m.sub(remainder, self.wrap)
         } else {
             remainder
         }
@@ -244,38 +251,72 @@ impl<'a> Lifting<'a> {
     /// Rational reconstruction from the first `steps` digits (modulo
     /// `modulus = p^steps`), checked exactly.
     fn attempt(&self, modulus: &BigUint, steps: usize, work: &mut u64) -> Option<RationalSolution> {
-        let n = self.system.rows.len();
         let powers = powers(self.modulus.p, steps);
         let combined = from_digits(&self.combined, &powers) % modulus;
-        let (_, mut denominator) = reconstruct(&combined, modulus)?;
+        let (combined_numerator, denominator) = reconstruct(&combined, modulus)?;
+        // The numerators are sought first modulo a shorter power of p,
+        // enough for numerators up to the combination's (its weights are
+        // at least 1, so it is the largest when the entries share a sign):
+        // about half the digits.
+        let bits = combined_numerator.bits() + MARGIN + 2;
+        let short = steps.min(bits.div_ceil(61) as usize + 1);
+        if short < steps {
+            let found = self.numerators(short, &powers, denominator.clone(), false, work);
+            if found.is_some() {
+                return found;
+            }
+        }
+        self.numerators(steps, &powers, denominator, true, work)
+    }
+
+    /// The numerators `N = D x` for the denominator `denominator` from the
+    /// first `steps` digits, checked exactly. If `extend`, an entry whose
+    /// `D x mod p^steps` is not small has its own denominator
+    /// reconstructed and multiplied into `D` (the combination of the
+    /// entries may have lost a factor).
+    fn numerators(
+        &self,
+        steps: usize,
+        powers: &[BigUint],
+        mut denominator: BigUint,
+        extend: bool,
+        work: &mut u64,
+    ) -> Option<RationalSolution> {
+        let n = self.system.rows.len();
+        let modulus = BigUint::from(self.modulus.p).pow(steps as u32);
         let limbs = modulus.bits().div_ceil(64);
-        *work = work.saturating_add(n as u64 * limbs * (steps.ilog2() as u64 + 4));
+        *work = work.saturating_add(n as u64 * limbs * (steps.ilog2() as u64 + 8));
         let values: Vec<BigUint> = (0..n)
             .map(|i| {
                 let column: Vec<u128> = (0..steps)
                     .map(|t| u128::from(self.digits[t * n + i]))
                     .collect();
-                from_digits(&column, &powers)
+                from_digits(&column, powers)
             })
             .collect();
-        let half = modulus >> 1u32;
-        // A denominator found for one entry (its combination with the
-        // others may have lost a factor) is carried to the others.
+        let half = &modulus >> 1u32;
         'passes: for _ in 0..4 {
             let mut numerators = Vec::with_capacity(n);
             for value in &values {
-                let scaled = (value * &denominator) % modulus;
+                let scaled = (value * &denominator) % &modulus;
                 let numerator = if scaled > half {
-                    BigInt::from_biguint(Sign::Minus, modulus - &scaled)
+                    BigInt::from_biguint(Sign::Minus, &modulus - &scaled)
                 } else {
                     BigInt::from(scaled)
                 };
-                if small_enough(&numerator, &denominator, modulus) {
-                    numerators.push(numerator);
+                let small = if extend {
+                    small_enough(&numerator, &denominator, &modulus)
                 } else {
-                    let (_, extra) = reconstruct(&(value * &denominator % modulus), modulus)?;
+                    numerator.bits() + MARGIN < modulus.bits()
+                };
+                if small {
+                    numerators.push(numerator);
+                } else if extend {
+                    let (_, extra) = reconstruct(&(value * &denominator % &modulus), &modulus)?;
                     denominator *= extra;
                     continue 'passes;
+                } else {
+                    return None;
                 }
             }
             return self
@@ -412,23 +453,19 @@ fn multiply_add(acc: &mut [u64], a: &[u64], d: u64, add: bool) {
     }
 }
 
-/// `x <- x / p` if `p` divides the two's complement `x`; whether it did.
-fn divide_exactly(x: &mut [u64], p: u64) -> bool {
-    let negative = x.last().is_some_and(|&top| top >> 63 == 1);
-    if negative {
-        negate(x);
+/// `x <- x / p` for a two's complement `x` that `p` (odd) divides: the
+/// product `x p^-1` modulo `2^(64 len)`, limb by limb from the lowest
+/// (exact division by Hensel's inverse, no remainder computed).
+/// `inverse = p^-1 mod 2^64`.
+fn divide_exactly(x: &mut [u64], p: u64, inverse: u64) {
+    let mut borrow = 0u64;
+    for limb in x.iter_mut() {
+        let (s, under) = limb.overflowing_sub(borrow);
+        let q = s.wrapping_mul(inverse);
+        *limb = q;
+        // q p = s + (borrow out) 2^64.
+        borrow = ((u128::from(q) * u128::from(p)) >> 64) as u64 + u64::from(under);
     }
-    let p = u128::from(p);
-    let mut remainder = 0u128;
-    for limb in x.iter_mut().rev() {
-        let current = (remainder << 64) | u128::from(*limb);
-        *limb = (current / p) as u64;
-        remainder = current % p;
-    }
-    if negative {
-        negate(x);
-    }
-    remainder == 0
 }
 
 #[cfg(test)]
@@ -447,11 +484,12 @@ mod tests {
         assert_eq!(acc, limbs(&expected, 5));
         multiply_add(&mut acc, &a.magnitude().to_u64_digits(), d, true);
         assert_eq!(acc, limbs(&r, 5));
-        let mut multiple = limbs(&(&expected * p), 5);
-        assert!(divide_exactly(&mut multiple, p));
-        assert_eq!(multiple, limbs(&expected, 5));
-        let mut not_multiple = limbs(&(&expected * p + 1), 5);
-        assert!(!divide_exactly(&mut not_multiple, p));
+        let inverse = Modulus::new(p).inverse_mod_word;
+        for value in [expected.clone(), -expected.clone(), BigInt::from(-1), BigInt::zero()] {
+            let mut multiple = limbs(&(&value * p), 5);
+            divide_exactly(&mut multiple, p, inverse);
+            assert_eq!(multiple, limbs(&value, 5));
+        }
     }
 
     #[test]

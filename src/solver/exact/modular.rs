@@ -55,24 +55,63 @@ fn is_prime(n: u64) -> bool {
     true
 }
 
-/// Residues modulo an odd `p < 2^63`, kept in `[0, p)`.
+/// Residues modulo an odd `p < 2^62`, kept in `[0, p)`, with Montgomery
+/// multiplication (`R = 2^64`) for the lifting's inner loops.
 #[derive(Debug, Clone, Copy)]
 pub(super) struct Modulus {
     /// The modulus.
     pub p: u64,
+    /// `p^-1 mod 2^64`.
+    pub inverse_mod_word: u64,
+    /// `R^2 mod p`.
+    r_squared: u64,
 }
 
 impl Modulus {
     pub fn new(p: u64) -> Self {
-        Self { p }
+        // Newton's iteration doubles the correct low bits: 3, 6, ..., 96.
+        let mut inverse = p;
+        for _ in 0..5 {
+            inverse = inverse.wrapping_mul(2u64.wrapping_sub(p.wrapping_mul(inverse)));
+        }
+        let r = (1u128 << 64) % u128::from(p);
+        Self {
+            p,
+            inverse_mod_word: inverse,
+            r_squared: ((r * r) % u128::from(p)) as u64,
+        }
     }
 
     pub fn mul(self, a: u64, b: u64) -> u64 {
         ((u128::from(a) * u128::from(b)) % u128::from(self.p)) as u64
     }
 
+    /// `t R^-1 mod p` for `t < p 2^64` (Montgomery's reduction).
+    pub fn reduce(self, t: u128) -> u64 {
+        let m = (t as u64).wrapping_mul(self.inverse_mod_word.wrapping_neg());
+        let sum = (t + u128::from(m) * u128::from(self.p)) >> 64;
+        let sum = sum as u64;
+        if sum >= self.p { sum - self.p } else { sum }
+    }
+
+    /// `a b R^-1 mod p` for `a < 2^64`, `b < p`: with `a` in Montgomery
+    /// form (`a = a' R mod p`), the plain product `a' b mod p`.
+    pub fn mul_montgomery(self, a: u64, b: u64) -> u64 {
+        self.reduce(u128::from(a) * u128::from(b))
+    }
+
+    /// `a R mod p`, the Montgomery form of `a < p`.
+    pub fn to_montgomery(self, a: u64) -> u64 {
+        self.mul_montgomery(a, self.r_squared)
+    }
+
     pub fn sub(self, a: u64, b: u64) -> u64 {
         if a >= b { a - b } else { a + self.p - b }
+    }
+
+    pub fn add(self, a: u64, b: u64) -> u64 {
+        let sum = a + b;
+        if sum >= self.p { sum - self.p } else { sum }
     }
 
     pub fn pow(self, mut base: u64, mut exponent: u64) -> u64 {
@@ -183,6 +222,13 @@ impl ModLu {
                 return Err(ModLuFailure::TooMuchFill);
             }
         }
+        // The solves multiply by Montgomery's reduction.
+        for (_, value) in lu.lower.iter_mut().chain(lu.upper.iter_mut()) {
+            *value = modulus.to_montgomery(*value);
+        }
+        for value in &mut lu.inverse_pivots {
+            *value = modulus.to_montgomery(*value);
+        }
         Ok(lu)
     }
 
@@ -197,16 +243,16 @@ impl ModLu {
         for i in 0..x.len() {
             let mut sum = x[i];
             for &(k, l_ik) in &self.lower[self.lower_offsets[i]..self.lower_offsets[i + 1]] {
-                sum = m.sub(sum, m.mul(l_ik, x[k]));
+                sum = m.sub(sum, m.mul_montgomery(l_ik, x[k]));
             }
             x[i] = sum;
         }
         for i in (0..x.len()).rev() {
             let mut sum = x[i];
             for &(j, u_ij) in &self.upper[self.upper_offsets[i]..self.upper_offsets[i + 1]] {
-                sum = m.sub(sum, m.mul(u_ij, x[j]));
+                sum = m.sub(sum, m.mul_montgomery(u_ij, x[j]));
             }
-            x[i] = m.mul(sum, self.inverse_pivots[i]);
+            x[i] = m.mul_montgomery(self.inverse_pivots[i], sum);
         }
     }
 }
@@ -223,6 +269,11 @@ mod tests {
         // 2^62 - 57 is the largest prime below 2^62.
         assert_eq!(found[0], (1 << 62) - 57);
         assert!(!is_prime(561) && !is_prime(3215031751) && is_prime(1_000_000_007));
+        let m = Modulus::new(found[0]);
+        assert_eq!(m.p.wrapping_mul(m.inverse_mod_word), 1);
+        let (a, b) = (found[1], u64::MAX);
+        assert_eq!(m.mul_montgomery(m.to_montgomery(a % m.p), 12345), m.mul(a % m.p, 12345));
+        assert_eq!(m.mul_montgomery(b, m.to_montgomery(1)), b % m.p);
     }
 
     #[test]
