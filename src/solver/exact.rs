@@ -49,19 +49,21 @@ pub const DEFAULT_EXACT_LIMIT: usize = 1_000;
 /// exact solve, which would be slow, with an error instead.
 pub const EXACT_ENTRIES_PER_UNKNOWN: usize = 40;
 
-/// The most word operations (estimated: multiplications and additions of
-/// 64-bit words, about a nanosecond each here) of one exact solve, per
-/// unknown of the limit: with [`DEFAULT_EXACT_LIMIT`], about 2e10, some
-/// ten seconds, several times what the largest stiff walks of
-/// `results/exact-fallback.csv` need.
-pub const EXACT_WORK_PER_UNKNOWN: u64 = 20_000_000;
+/// The most units of work of one exact solve, per unknown of the limit.
+/// A unit is an estimated word operation of the lifting (a product or sum
+/// of 64-bit words, counted from the sizes of the LU, the matrix and the
+/// numbers): measured at 3 to 5 ns each on a shared 2-core machine
+/// (`examples/exact_fallback.rs`), so that with [`DEFAULT_EXACT_LIMIT`]
+/// the budget of 3e9 units is some ten seconds, several times what the
+/// stiff walks of `results/exact-fallback.csv` need up to 3,000 unknowns.
+pub const EXACT_WORK_PER_UNKNOWN: u64 = 3_000_000;
 
 /// What an exact solve may spend before it refuses.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct ExactBudget {
     /// The most entries of the LU modulo a prime.
     pub entries: usize,
-    /// The most word operations (estimated).
+    /// The most units of work ([`EXACT_WORK_PER_UNKNOWN`]).
     pub work: u64,
 }
 
@@ -103,10 +105,10 @@ pub enum ExactRefusal {
         /// The budget on the entries.
         limit: usize,
     },
-    /// The solve used its budget of word operations without finding the
+    /// The solve used its budget of work units without finding the
     /// solution: its numbers are longer than `bits` bits.
     TooMuchWork {
-        /// The budget of word operations.
+        /// The budget of work units ([`EXACT_WORK_PER_UNKNOWN`]).
         limit: u64,
         /// The bits of the modulus `p^t` reached: the exact solution's
         /// numerators and denominator have about half as many bits or more.

@@ -1087,8 +1087,8 @@ impl LinearSolver {
                 self.exact_limit
             ))),
             Err(exact::ExactRefusal::TooMuchWork { limit, bits }) => Err(too_large(format!(
-                "stopped on this system of {n} unknowns after its budget of {limit:e} word \
-                 operations ({} per unknown of the limit of {} unknowns, some seconds), its \
+                "stopped on this system of {n} unknowns after its budget of {limit:e} units of \
+                 work ({} per unknown of the limit of {} unknowns, about ten seconds), its \
                  numbers past {bits} bits without a solution",
                 exact::EXACT_WORK_PER_UNKNOWN,
                 self.exact_limit

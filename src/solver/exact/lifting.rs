@@ -223,7 +223,7 @@ impl<'a> Lifting<'a> {
                 next_check = steps + (steps * 2 / 5).max(1);
                 let limbs = modulus.bits().div_ceil(64);
                 // Conversion and reconstruction of the combination.
-                work = work.saturating_add(limbs * limbs + 2 * limbs * 64);
+                work = work.saturating_add(4 * limbs * limbs + 2 * limbs * 64);
                 if let Some(solution) = self.attempt(&modulus, steps, &mut work) {
                     return Ok(solution);
                 }
@@ -285,7 +285,8 @@ impl<'a> Lifting<'a> {
         let n = self.system.rows.len();
         let modulus = BigUint::from(self.modulus.p).pow(steps as u32);
         let limbs = modulus.bits().div_ceil(64);
-        *work = work.saturating_add(n as u64 * limbs * (steps.ilog2() as u64 + 8));
+        // Conversions, products and reductions modulo p^steps.
+        *work = work.saturating_add(n as u64 * limbs * (steps.ilog2() as u64 + 8 + limbs / 2));
         let values: Vec<BigUint> = (0..n)
             .map(|i| {
                 let column: Vec<u128> = (0..steps)
@@ -352,10 +353,26 @@ fn reconstruct(x: &BigUint, modulus: &BigUint) -> Option<(BigInt, BigUint)> {
     let (mut r0, mut r1) = (BigInt::from(modulus.clone()), BigInt::from(x.clone()));
     let (mut s0, mut s1) = (BigInt::zero(), BigInt::one());
     while r1 >= bound {
-        let (q, r) = r0.div_rem(&r1);
-        (r0, r1) = (r1, r);
-        let s = s0 - &q * &s1;
-        (s0, s1) = (s1, s);
+        // Far from the bound, Lehmer's steps: the quotients that the
+        // leading 63 bits determine, applied at once (Knuth, TAOCP 2,
+        // 4.5.2, Algorithm L); near it, or where they determine none, one
+        // step in full precision, so that the loop stops at the first
+        // remainder below the bound.
+        let batch = (r1.bits() > bound.bits() + 130)
+            .then(|| lehmer_cofactors(&r0, &r1))
+            .flatten();
+        match batch {
+            Some([a, b, c, d]) => {
+                (r0, r1) = (&r0 * a + &r1 * b, &r0 * c + &r1 * d);
+                (s0, s1) = (&s0 * a + &s1 * b, &s0 * c + &s1 * d);
+            }
+            None => {
+                let (q, r) = r0.div_rem(&r1);
+                (r0, r1) = (r1, r);
+                let s = s0 - &q * &s1;
+                (s0, s1) = (s1, s);
+            }
+        }
     }
     if s1.is_zero() {
         return None;
@@ -369,6 +386,31 @@ fn reconstruct(x: &BigUint, modulus: &BigUint) -> Option<(BigInt, BigUint)> {
     (BigInt::from(denominator.clone()) < bound
         && small_enough(&numerator, &denominator, modulus))
     .then_some((numerator, denominator))
+}
+
+/// The cofactors `[a, b, c, d]` of the Euclidean steps on `(r0, r1)`
+/// (`r0 > r1 > 0`) that their leading 63 bits determine: the remainders
+/// after them are `a r0 + b r1` and `c r0 + d r1`; `None` if they determine
+/// no step.
+fn lehmer_cofactors(r0: &BigInt, r1: &BigInt) -> Option<[i64; 4]> {
+    let shift = r0.bits().saturating_sub(63);
+    let leading = |r: &BigInt| (r >> shift).to_i128().unwrap_or(0);
+    let (mut x, mut y) = (leading(r0), leading(r1));
+    let (mut a, mut b, mut c, mut d) = (1i128, 0i128, 0i128, 1i128);
+    while y + c > 0 && y + d > 0 {
+        let q = (x + a) / (y + c);
+        if q != (x + b) / (y + d) {
+            break;
+        }
+        (a, c) = (c, a - q * c);
+        (b, d) = (d, b - q * d);
+        (x, y) = (y, x - q * y);
+    }
+    let fits = |v: i128| i64::try_from(v).ok();
+    if b == 0 {
+        return None;
+    }
+    Some([fits(a)?, fits(b)?, fits(c)?, fits(d)?])
 }
 
 /// `p^(2^j)` for `2^j <= steps`.
@@ -489,6 +531,67 @@ mod tests {
             let mut multiple = limbs(&(&value * p), 5);
             divide_exactly(&mut multiple, p, inverse);
             assert_eq!(multiple, limbs(&value, 5));
+        }
+    }
+
+    /// The extended Euclidean algorithm in full precision, stopped at the
+    /// first remainder below `bound`: `(r, s)` with `r = s x mod M`.
+    fn plain_euclid(x: &BigUint, modulus: &BigUint, bound: &BigInt) -> (BigInt, BigInt) {
+        let (mut r0, mut r1) = (BigInt::from(modulus.clone()), BigInt::from(x.clone()));
+        let (mut s0, mut s1) = (BigInt::zero(), BigInt::one());
+        while &r1 >= bound {
+            let (q, r) = r0.div_rem(&r1);
+            (r0, r1) = (r1, r);
+            let s = s0 - &q * &s1;
+            (s0, s1) = (s1, s);
+        }
+        (r1, s1)
+    }
+
+    proptest::proptest! {
+        /// Lehmer's steps stop where the plain algorithm stops, and find
+        /// what it finds.
+        #[test]
+        fn reconstruction_with_lehmer_steps_matches_the_plain_algorithm(
+            numerator in proptest::collection::vec(proptest::num::u64::ANY, 1..12),
+            denominator in proptest::collection::vec(proptest::num::u64::ANY, 1..12),
+            extra_digits in 0usize..8,
+        ) {
+            let p = (1u64 << 62) - 57;
+            let numerator = BigUint::new(numerator.iter().flat_map(|&d| [d as u32, (d >> 32) as u32]).collect());
+            let denominator = BigUint::new(denominator.iter().flat_map(|&d| [d as u32, (d >> 32) as u32]).collect()) | BigUint::one();
+            let steps = ((numerator.bits() + denominator.bits() + MARGIN + 2) / 62 + 1) as u32 + extra_digits as u32;
+            let modulus = BigUint::from(p).pow(steps);
+            let Some(inverse) = denominator.modinv(&modulus) else {
+                return Ok(());
+            };
+            let x = &numerator * inverse % &modulus;
+            let bound = BigInt::from((&modulus >> 1u32).sqrt());
+            let (r, s) = plain_euclid(&x, &modulus, &bound);
+            let found = reconstruct(&x, &modulus);
+            if let Some((n, d)) = &found {
+                // The same stop: (r, s) up to the sign.
+                let sign = if s.is_negative() { -1 } else { 1 };
+                proptest::prop_assert_eq!(n, &(&r * sign));
+                proptest::prop_assert_eq!(BigInt::from(d.clone()), &s * sign);
+            }
+            let fits = BigInt::from(numerator.clone()) < bound && BigInt::from(denominator.clone()) < bound
+                && numerator.bits() + denominator.bits() + MARGIN < modulus.bits();
+            if fits {
+                let g = num_integer::Integer::gcd(&numerator, &denominator);
+                proptest::prop_assert_eq!(
+                    found,
+                    Some((BigInt::from(&numerator / &g), &denominator / &g))
+                );
+            }
+            // Random x: lehmer and plain agree on the stop as well.
+            let y = (&x * 3u8 + 12345u32) % &modulus;
+            let (r, s) = plain_euclid(&y, &modulus, &bound);
+            if let Some((n, d)) = reconstruct(&y, &modulus) {
+                let sign = if s.is_negative() { -1 } else { 1 };
+                proptest::prop_assert_eq!(n, &r * sign);
+                proptest::prop_assert_eq!(BigInt::from(d), &s * sign);
+            }
         }
     }
 
