@@ -27,10 +27,12 @@
 //! with the same factors while that bound exceeds the tolerance, and
 //! reports the bound as [`SolveReport::error_bound`]. Where double
 //! precision cannot prove the bound (or the residual), a system of at most
-//! [`SolverSettings::exact_limit`] unknowns is solved again exactly in
-//! rationals ([`exact`]) and its value reported to the last bit; on a
-//! larger system the bound that cannot be proved is an error
-//! ([`SolverError::Unbounded`], [`SolverError::TooLargeForExact`]).
+//! [`SolverSettings::exact_limit`] unknowns is solved again exactly
+//! ([`exact`]: p-adic lifting, rational reconstruction, an exact check in
+//! integers) within a work budget and its value reported to the last bit;
+//! on a larger system, or past the budget, the bound that cannot be proved
+//! is an error ([`SolverError::Unbounded`],
+//! [`SolverError::TooLargeForExact`]).
 
 pub mod bound;
 pub mod exact;
