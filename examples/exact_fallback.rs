@@ -138,14 +138,9 @@ fn main() {
             );
             if args.get(4).map(String::as_str) == Some("old") {
                 let start = Instant::now();
-                let old = exact::solve_by_rational_elimination(
-                    &pattern,
-                    &values,
-                    &exits,
-                    &b,
-                    usize::MAX,
-                )
-                .expect("a transient chain is solved");
+                let old =
+                    exact::solve_by_rational_elimination(&pattern, &values, &exits, &b, usize::MAX)
+                        .expect("a transient chain is solved");
                 let old_seconds = start.elapsed().as_secs_f64();
                 print!(",{old_seconds:.4},{}", old.x == solution.x);
             } else {
@@ -160,7 +155,8 @@ fn main() {
             let uniform = |role, k: usize| {
                 posg_fsc::controller::file::resolve(&format!("uniform:{k}"), &game, role).unwrap()
             };
-            let (defender, adversary) = (uniform(Role::Defender, nodes), uniform(Role::Adversary, 1));
+            let (defender, adversary) =
+                (uniform(Role::Defender, nodes), uniform(Role::Adversary, 1));
             let start = Instant::now();
             let outcome = evaluate_controllers(
                 &game,

@@ -137,8 +137,8 @@ pub fn solve_exactly(
             error_bound: 0.0,
         });
     }
-    let solution = lifting::solve(&system, budget.entries, budget.work).map_err(|failure| {
-        match failure {
+    let solution =
+        lifting::solve(&system, budget.entries, budget.work).map_err(|failure| match failure {
             lifting::LiftFailure::Singular(row) => ExactRefusal::Solver(SolverError::Singular(
                 format!("the exact solve found the matrix singular (at row {row})"),
             )),
@@ -149,8 +149,7 @@ pub fn solve_exactly(
                 limit: budget.work,
                 bits,
             },
-        }
-    })?;
+        })?;
     let mut x = Vec::with_capacity(solution.numerators.len());
     let mut error_bound: f64 = 0.0;
     for numerator in &solution.numerators {
@@ -162,7 +161,12 @@ pub fn solve_exactly(
 }
 
 /// The sizes and finiteness that both exact solves require.
-fn check(pattern: &SparsePattern, values: &[f64], exits: &[f64], b: &[f64]) -> Result<(), SolverError> {
+fn check(
+    pattern: &SparsePattern,
+    values: &[f64],
+    exits: &[f64],
+    b: &[f64],
+) -> Result<(), SolverError> {
     let n = pattern.n;
     let finite = |v: &f64| v.is_finite();
     if values.len() != pattern.nnz() || exits.len() != n || b.len() != n {
@@ -194,7 +198,12 @@ fn dyadic(value: f64) -> (i64, i32) {
 /// entries, exit and `b_i`) times `2^-e` for the smallest exponent `e` of
 /// its nonzero doubles; the diagonal is the exit minus the off-diagonal
 /// entries, exactly.
-fn integer_system(pattern: &SparsePattern, values: &[f64], exits: &[f64], b: &[f64]) -> lifting::IntegerSystem {
+fn integer_system(
+    pattern: &SparsePattern,
+    values: &[f64],
+    exits: &[f64],
+    b: &[f64],
+) -> lifting::IntegerSystem {
     let mut rows = Vec::with_capacity(pattern.n);
     let mut rhs = Vec::with_capacity(pattern.n);
     for row in 0..pattern.n {
@@ -305,7 +314,9 @@ fn nearest_with_error(numerator: &BigInt, denominator: &BigUint) -> (f64, f64) {
     let nearest = kept.to_f64().unwrap_or(f64::INFINITY) * power_of_two(lowest);
     // |nearest - x| 2^shift = |kept 2^drop d' - q d' - r| / d'.
     let above = BigInt::from(&kept << drop) - BigInt::from(q);
-    let distance = (above * BigInt::from(d.clone()) - BigInt::from(r)).magnitude().clone();
+    let distance = (above * BigInt::from(d.clone()) - BigInt::from(r))
+        .magnitude()
+        .clone();
     let error = if nearest.is_infinite() {
         f64::INFINITY
     } else {
@@ -516,7 +527,8 @@ mod tests {
         };
         let values = [0.0, -0.5, -0.25, 0.0];
         let budget = ExactBudget::unlimited();
-        let solution = solve_exactly(&pattern, &values, &[0.5, 0.75], &[1.0, 0.0], &budget).unwrap();
+        let solution =
+            solve_exactly(&pattern, &values, &[0.5, 0.75], &[1.0, 0.0], &budget).unwrap();
         let reference =
             solve_by_rational_elimination(&pattern, &values, &[0.5, 0.75], &[1.0, 0.0], 100);
         assert_eq!(reference.unwrap().x, solution.x);
@@ -567,13 +579,22 @@ mod tests {
         assert_eq!(nearest, 1.0);
         assert!(error >= 2f64.powi(-53) && error < 2f64.powi(-53) * (1.0 + 1e-14));
         // 1 + 3 2^-54 is nearer 1 + 2^-52.
-        assert_eq!(nearest_with_error(&int(54, 3), &power(54)).0, 1.0 + f64::EPSILON);
+        assert_eq!(
+            nearest_with_error(&int(54, 3), &power(54)).0,
+            1.0 + f64::EPSILON
+        );
         // 2^-1075, halfway between 0 and the smallest subnormal: 0.
         assert_eq!(nearest_with_error(&BigInt::one(), &power(1075)).0, 0.0);
         // 3/4 of the smallest subnormal: the smallest subnormal.
         let three = BigInt::from(3);
-        assert_eq!(nearest_with_error(&three, &power(1076)).0, f64::from_bits(1));
-        assert_eq!(nearest_with_error(&-BigInt::one(), &BigUint::from(3u8)).0, -1.0 / 3.0);
+        assert_eq!(
+            nearest_with_error(&three, &power(1076)).0,
+            f64::from_bits(1)
+        );
+        assert_eq!(
+            nearest_with_error(&-BigInt::one(), &BigUint::from(3u8)).0,
+            -1.0 / 3.0
+        );
         let (huge, error) = nearest_with_error(&int(1100, 0), &BigUint::one());
         assert!(huge == f64::INFINITY && error == f64::INFINITY);
     }
@@ -592,7 +613,8 @@ mod tests {
         };
         let refused = solve_exactly(&pattern, &values, &[0.5, 0.75], &[1.0, 0.0], &budget);
         assert_eq!(refused, Err(ExactRefusal::TooMuchFill { limit: 2 }));
-        let refused = solve_by_rational_elimination(&pattern, &values, &[0.5, 0.75], &[1.0, 0.0], 2);
+        let refused =
+            solve_by_rational_elimination(&pattern, &values, &[0.5, 0.75], &[1.0, 0.0], 2);
         assert_eq!(refused, Err(ExactRefusal::TooMuchFill { limit: 2 }));
         let budget = ExactBudget {
             entries: 100,
@@ -600,7 +622,10 @@ mod tests {
         };
         let refused = solve_exactly(&pattern, &values, &[0.5, 0.75], &[1.0, 0.0], &budget);
         assert!(
-            matches!(refused, Err(ExactRefusal::TooMuchWork { limit: 10, bits: 1 })),
+            matches!(
+                refused,
+                Err(ExactRefusal::TooMuchWork { limit: 10, bits: 1 })
+            ),
             "{refused:?}"
         );
     }

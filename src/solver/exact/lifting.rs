@@ -142,7 +142,9 @@ impl<'a> Lifting<'a> {
             .unwrap_or(0);
         let limb_weights = (0..width)
             .map(|j| {
-                let weight = ((BigUint::one() << (64 * j)) % modulus.p).to_u64().unwrap_or(0);
+                let weight = ((BigUint::one() << (64 * j)) % modulus.p)
+                    .to_u64()
+                    .unwrap_or(0);
                 modulus.to_montgomery(weight)
             })
             .collect();
@@ -176,7 +178,9 @@ impl<'a> Lifting<'a> {
     fn step_work(&self) -> u64 {
         let n = self.system.rows.len() as u64;
         let entries = self.entries.iter().map(Vec::len).sum::<usize>() as u64;
-        (2 * self.lu.entries() as u64) + entries * (self.entry_width as u64 + 2) + 4 * n * self.width as u64
+        (2 * self.lu.entries() as u64)
+            + entries * (self.entry_width as u64 + 2)
+            + 4 * n * self.width as u64
     }
 
     fn run(mut self, work_limit: u64) -> Result<RationalSolution, LiftFailure> {
@@ -239,7 +243,9 @@ impl<'a> Lifting<'a> {
         let remainder = limbs
             .iter()
             .zip(&self.limb_weights)
-            .fold(0, |sum, (&limb, &weight)| m.add(sum, m.mul_montgomery(weight, limb)));
+            .fold(0, |sum, (&limb, &weight)| {
+                m.add(sum, m.mul_montgomery(weight, limb))
+            });
         if limbs[w - 1] >> 63 == 1 {
             // The limbs read as unsigned are r + 2^(64 w).
             m.sub(remainder, self.wrap)
@@ -383,9 +389,8 @@ fn reconstruct(x: &BigUint, modulus: &BigUint) -> Option<(BigInt, BigUint)> {
         (r1, s1)
     };
     let denominator = denominator.to_biguint()?;
-    (BigInt::from(denominator.clone()) < bound
-        && small_enough(&numerator, &denominator, modulus))
-    .then_some((numerator, denominator))
+    (BigInt::from(denominator.clone()) < bound && small_enough(&numerator, &denominator, modulus))
+        .then_some((numerator, denominator))
 }
 
 /// The cofactors `[a, b, c, d]` of the Euclidean steps on `(r0, r1)`
@@ -437,7 +442,8 @@ fn from_digits(digits: &[u128], powers: &[BigUint]) -> BigUint {
         len => {
             let level = (len - 1).ilog2() as usize;
             let half = 1usize << level;
-            from_digits(&digits[..half], powers) + from_digits(&digits[half..], powers) * &powers[level]
+            from_digits(&digits[..half], powers)
+                + from_digits(&digits[half..], powers) * &powers[level]
         }
     }
 }
@@ -527,7 +533,12 @@ mod tests {
         multiply_add(&mut acc, &a.magnitude().to_u64_digits(), d, true);
         assert_eq!(acc, limbs(&r, 5));
         let inverse = Modulus::new(p).inverse_mod_word;
-        for value in [expected.clone(), -expected.clone(), BigInt::from(-1), BigInt::zero()] {
+        for value in [
+            expected.clone(),
+            -expected.clone(),
+            BigInt::from(-1),
+            BigInt::zero(),
+        ] {
             let mut multiple = limbs(&(&value * p), 5);
             divide_exactly(&mut multiple, p, inverse);
             assert_eq!(multiple, limbs(&value, 5));

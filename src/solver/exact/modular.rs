@@ -272,7 +272,10 @@ mod tests {
         let m = Modulus::new(found[0]);
         assert_eq!(m.p.wrapping_mul(m.inverse_mod_word), 1);
         let (a, b) = (found[1], u64::MAX);
-        assert_eq!(m.mul_montgomery(m.to_montgomery(a % m.p), 12345), m.mul(a % m.p, 12345));
+        assert_eq!(
+            m.mul_montgomery(m.to_montgomery(a % m.p), 12345),
+            m.mul(a % m.p, 12345)
+        );
         assert_eq!(m.mul_montgomery(b, m.to_montgomery(1)), b % m.p);
     }
 
