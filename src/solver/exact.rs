@@ -139,9 +139,12 @@ pub fn solve_exactly(
     }
     let solution =
         lifting::solve(&system, budget.entries, budget.work).map_err(|failure| match failure {
-            lifting::LiftFailure::Singular(row) => ExactRefusal::Solver(SolverError::Singular(
-                format!("the exact solve found the matrix singular (at row {row})"),
-            )),
+            lifting::LiftFailure::Singular(row) => {
+                ExactRefusal::Solver(SolverError::Singular(format!(
+                    "the exact solve met a zero pivot at row {row} modulo each prime it \
+                     tried: the matrix is singular, or needs pivoting (not a chain's M-matrix)"
+                )))
+            }
             lifting::LiftFailure::TooMuchFill => ExactRefusal::TooMuchFill {
                 limit: budget.entries,
             },

@@ -139,9 +139,9 @@ pub enum SolverError {
         "the error bound {error_bound:e} (the best proved in double precision) exceeds the \
          tolerance {tolerance:e}: the chain spends up to {expected_time:e} expected steps in \
          the transient states, too many for double precision to prove the value within the \
-         tolerance, and the exact solve that proves such values {refusal}; the value is not \
-         reported (remedies: a larger `--tolerance`, which accepts the looser bound and \
-         reports it with the value, or smaller controllers or a smaller game)"
+         tolerance, and the exact rational solve that proves such values {refusal}; the value \
+         is not reported (remedies: a larger `--tolerance`, which accepts the looser bound \
+         and reports it with the value, or smaller controllers or a smaller game)"
     )]
     TooLargeForExact {
         /// The smallest bound reached in double precision.
