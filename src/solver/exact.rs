@@ -39,9 +39,9 @@ use super::{SolverError, SparsePattern};
 
 /// The most unknowns solved exactly by default ([`super::SolverSettings::exact_limit`]).
 /// Measured (`examples/exact_fallback.rs`, `results/exact-fallback.csv`) on
-/// stiff lazy walks with full-precision random probabilities split by a
-/// 3-node memory: the p-adic solve takes about a second at this size on a
-/// shared 2-core machine.
+/// stiff lazy walks with full-precision random probabilities split by 1-
+/// to 3-node memories: the p-adic solve takes 0.2 to 2.3 s of CPU at this
+/// size on a shared 2-core machine.
 pub const DEFAULT_EXACT_LIMIT: usize = 1_000;
 
 /// The most entries of the LU modulo a prime, per unknown of the limit:
@@ -55,7 +55,7 @@ pub const EXACT_ENTRIES_PER_UNKNOWN: usize = 40;
 /// numbers): measured at 3 to 5 ns each on a shared 2-core machine
 /// (`examples/exact_fallback.rs`), so that with [`DEFAULT_EXACT_LIMIT`]
 /// the budget of 3e9 units is some ten seconds, several times what the
-/// stiff walks of `results/exact-fallback.csv` need up to 3,000 unknowns.
+/// stiff walks of `results/exact-fallback.csv` need up to 1,000 unknowns.
 pub const EXACT_WORK_PER_UNKNOWN: u64 = 3_000_000;
 
 /// What an exact solve may spend before it refuses.
