@@ -27,10 +27,12 @@
 //! with the same factors while that bound exceeds the tolerance, and
 //! reports the bound as [`SolveReport::error_bound`]. Where double
 //! precision cannot prove the bound (or the residual), a system of at most
-//! [`SolverSettings::exact_limit`] unknowns is solved again exactly in
-//! rationals ([`exact`]) and its value reported to the last bit; on a
-//! larger system the bound that cannot be proved is an error
-//! ([`SolverError::Unbounded`], [`SolverError::TooLargeForExact`]).
+//! [`SolverSettings::exact_limit`] unknowns is solved again exactly
+//! ([`exact`]: p-adic lifting, rational reconstruction, an exact check in
+//! integers) within a work budget and its value reported to the last bit;
+//! on a larger system, or past the budget, the bound that cannot be proved
+//! is an error ([`SolverError::Unbounded`],
+//! [`SolverError::TooLargeForExact`]).
 
 pub mod bound;
 pub mod exact;
@@ -131,15 +133,15 @@ pub enum SolverError {
         expected_time: f64,
     },
     /// Double precision could not prove the bound, and the system is too
-    /// large for the exact rational solve ([`exact`]).
+    /// large for the exact solve ([`exact`]), or its solution too long for
+    /// the exact solve's budget.
     #[error(
-        "the error bound {error_bound:e} exceeds the tolerance {tolerance:e}: the chain spends \
-         up to {expected_time:e} expected steps in the transient states, too many for double \
-         precision to prove the value within the tolerance, and the exact rational solve that \
-         proves such values runs only on systems of at most {exact_limit} unknowns ({fill}); \
-         this one has {unknowns}; the value is not reported (remedies: a larger `--tolerance`, \
-         which accepts the looser bound and reports it with the value, or smaller controllers \
-         or a smaller game)"
+        "the error bound {error_bound:e} (the best proved in double precision) exceeds the \
+         tolerance {tolerance:e}: the chain spends up to {expected_time:e} expected steps in \
+         the transient states, too many for double precision to prove the value within the \
+         tolerance, and the exact rational solve that proves such values {refusal}; the value \
+         is not reported (remedies: a larger `--tolerance`, which accepts the looser bound \
+         and reports it with the value, or smaller controllers or a smaller game)"
     )]
     TooLargeForExact {
         /// The smallest bound reached in double precision.
@@ -152,8 +154,9 @@ pub enum SolverError {
         unknowns: usize,
         /// [`SolverSettings::exact_limit`].
         exact_limit: usize,
-        /// Whether the size or the fill of the elimination stopped it, in words.
-        fill: String,
+        /// What stopped the exact solve (the size, the fill of its LU or its
+        /// work budget), in words.
+        refusal: String,
     },
     /// The tolerance is not a finite positive number.
     #[error("the tolerance must be finite and positive, not {0}")]
@@ -1044,22 +1047,22 @@ impl LinearSolver {
             _ => return solved,
         };
         let n = self.pattern().n;
-        let too_large = |fill: String| SolverError::TooLargeForExact {
+        let too_large = |refusal: String| SolverError::TooLargeForExact {
             error_bound,
             tolerance: self.tolerance,
             expected_time,
             unknowns: n,
             exact_limit: self.exact_limit,
-            fill,
+            refusal,
         };
-        let entry_limit = exact::EXACT_ENTRIES_PER_UNKNOWN * self.exact_limit;
         if n > self.exact_limit {
             return Err(too_large(format!(
-                "and whose elimination holds at most {entry_limit} entries"
+                "runs only on systems of at most {} unknowns, and this one has {n}",
+                self.exact_limit
             )));
         }
-        let exact =
-            exact::solve_exactly(self.pattern(), self.values(), &self.exits, b, entry_limit);
+        let budget = exact::ExactBudget::for_limit(self.exact_limit);
+        let exact = exact::solve_exactly(self.pattern(), self.values(), &self.exits, b, &budget);
         match exact {
             Ok(solution) if solution.error_bound > self.tolerance => Err(SolverError::Unbounded {
                 error_bound: solution.error_bound,
@@ -1080,7 +1083,17 @@ impl LinearSolver {
                 })
             }
             Err(exact::ExactRefusal::TooMuchFill { limit }) => Err(too_large(format!(
-                "whose elimination holds at most {limit} entries: this one needs more"
+                "stopped on this system of {n} unknowns: its LU modulo a prime would hold more \
+                 than its budget of {limit} entries ({} per unknown of the limit of {} unknowns)",
+                exact::EXACT_ENTRIES_PER_UNKNOWN,
+                self.exact_limit
+            ))),
+            Err(exact::ExactRefusal::TooMuchWork { limit, bits }) => Err(too_large(format!(
+                "stopped on this system of {n} unknowns after its budget of {limit:e} units of \
+                 work ({} per unknown of the limit of {} unknowns, about ten seconds), its \
+                 numbers past {bits} bits without a solution",
+                exact::EXACT_WORK_PER_UNKNOWN,
+                self.exact_limit
             ))),
             Err(exact::ExactRefusal::Solver(error)) => Err(error),
         }

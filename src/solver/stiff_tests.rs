@@ -12,6 +12,7 @@ use super::{LinearSolver, SolverError, SolverMethod, SolverSettings, SparsePatte
 
 /// A chain's transient system as the library builds it: off-diagonal
 /// `-Q`, row sums `exits` (the probabilities of leaving `T`) and `b`.
+#[derive(Debug)]
 struct Chain {
     pattern: SparsePattern,
     values: Vec<f64>,
@@ -344,7 +345,8 @@ proptest! {
         let chain = with_memory(&moves, &goal, &fail, nodes);
         let reference = exact_solution(&chain);
         let exact = super::exact::solve_exactly(
-            &chain.pattern, &chain.values, &chain.exits, &chain.b, usize::MAX,
+            &chain.pattern, &chain.values, &chain.exits, &chain.b,
+            &super::exact::ExactBudget::unlimited(),
         )
         .unwrap();
         for (i, exact_value) in reference.iter().enumerate() {
@@ -389,4 +391,158 @@ fn the_exact_solution_is_exact() {
     // x1 = 0.5; x0 = (0.25 + 0.25 x1) / 1 = 0.375.
     assert_eq!(x[1], BigRational::new(BigInt::from(1), BigInt::from(2)));
     assert_eq!(x[0], BigRational::new(BigInt::from(3), BigInt::from(8)));
+}
+
+/// Issue 57's case: a 60-state lazy walk (58 transient states) whose
+/// escape probabilities are full-precision random doubles of about
+/// `1e-15`, split by a 3-node memory: 174 unknowns, beyond double
+/// precision. The exact solve gives the same doubles as the reference
+/// elimination in rationals, and the solver reports them with a bound
+/// below `1e-16`.
+#[test]
+fn a_stiff_walk_with_full_precision_escapes_is_solved_exactly() {
+    use rand::{Rng, SeedableRng};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(57);
+    let walk = 58;
+    let mut draw = || 1e-15 * (0.5 + rng.random::<f64>());
+    let escapes: Vec<(f64, f64)> = (0..walk).map(|_| (draw(), draw())).collect();
+    let moves: Vec<Vec<(usize, f64)>> = (0..walk)
+        .map(|s| {
+            let (left, right) = escapes[s];
+            let mut row = Vec::new();
+            if s > 0 {
+                row.push((s - 1, left));
+            }
+            if s + 1 < walk {
+                row.push((s + 1, right));
+            }
+            row
+        })
+        .collect();
+    let goal: Vec<f64> = (0..walk)
+        .map(|s| if s + 1 == walk { escapes[s].1 } else { 0.0 })
+        .collect();
+    let fail: Vec<f64> = (0..walk)
+        .map(|s| if s == 0 { escapes[s].0 } else { 0.0 })
+        .collect();
+    let chain = with_memory(&moves, &goal, &fail, 3);
+    assert_eq!(chain.pattern.n, 174);
+    // Double precision alone cannot prove it.
+    assert!(!solved_within_bound(&chain, SolverMethod::Lu));
+    let reference = super::exact::solve_by_rational_elimination(
+        &chain.pattern,
+        &chain.values,
+        &chain.exits,
+        &chain.b,
+        usize::MAX,
+    )
+    .unwrap();
+    let exact = super::exact::solve_exactly(
+        &chain.pattern,
+        &chain.values,
+        &chain.exits,
+        &chain.b,
+        &super::exact::ExactBudget::for_limit(super::exact::DEFAULT_EXACT_LIMIT),
+    )
+    .unwrap();
+    assert_eq!(exact.x, reference.x);
+    assert!(exact.error_bound <= reference.error_bound * (1.0 + 1e-12));
+    assert!(exact.error_bound > 0.0 && exact.error_bound < 1e-16);
+    // Through the solver, with the default settings.
+    let mut solver = LinearSolver::new(chain.pattern.clone(), &SolverSettings::default()).unwrap();
+    solver
+        .factorize_with(|values, exits| {
+            values.copy_from_slice(&chain.values);
+            exits.copy_from_slice(&chain.exits);
+        })
+        .unwrap();
+    let mut x = vec![0.0; chain.pattern.n];
+    let report = solver.solve(&chain.b, &mut x).unwrap();
+    assert_eq!(x, reference.x);
+    assert_eq!(report.error_bound, Some(exact.error_bound));
+    assert!(solver.reason().contains("exact"), "{}", solver.reason());
+    // A work budget too small for it is a refusal naming the budget.
+    let refused = super::exact::solve_exactly(
+        &chain.pattern,
+        &chain.values,
+        &chain.exits,
+        &chain.b,
+        &super::exact::ExactBudget {
+            entries: usize::MAX,
+            work: 1_000_000,
+        },
+    );
+    assert!(
+        matches!(
+            refused,
+            Err(super::exact::ExactRefusal::TooMuchWork { limit: 1_000_000, bits }) if bits > 0
+        ),
+        "{refused:?}"
+    );
+}
+
+/// Random full-precision systems, not only chains: dense-ish random
+/// off-diagonal entries of either sign, positive exits, `b` of either sign.
+fn random_system() -> impl Strategy<Value = Chain> {
+    (1usize..7).prop_flat_map(|n| {
+        let entry = (any::<bool>(), -40i32..2, 1.0f64..2.0).prop_map(|(present, e, m)| {
+            if present { -m * 2f64.powi(e) } else { 0.0 }
+        });
+        (
+            proptest::collection::vec(entry, n * n),
+            proptest::collection::vec((-60i32..2, 1.0f64..2.0), n),
+            proptest::collection::vec(-2.0f64..2.0, n),
+        )
+            .prop_map(move |(entries, exits, b)| {
+                let mut row_offsets = vec![0];
+                let mut columns = Vec::new();
+                let mut values = Vec::new();
+                for i in 0..n {
+                    for j in 0..n {
+                        if i == j || entries[i * n + j] != 0.0 {
+                            columns.push(j);
+                            values.push(if i == j { 0.0 } else { entries[i * n + j] });
+                        }
+                    }
+                    row_offsets.push(columns.len());
+                }
+                Chain {
+                    pattern: SparsePattern {
+                        n,
+                        row_offsets,
+                        columns,
+                    },
+                    values,
+                    exits: exits.into_iter().map(|(e, m)| m * 2f64.powi(e)).collect(),
+                    b,
+                }
+            })
+    })
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(200))]
+    #[test]
+    fn random_systems_are_solved_as_by_rational_elimination(chain in random_system()) {
+        let reference = exact_solution(&chain);
+        let solution = super::exact::solve_exactly(
+            &chain.pattern, &chain.values, &chain.exits, &chain.b,
+            &super::exact::ExactBudget::unlimited(),
+        )
+        .unwrap();
+        let old = super::exact::solve_by_rational_elimination(
+            &chain.pattern, &chain.values, &chain.exits, &chain.b, usize::MAX,
+        )
+        .unwrap();
+        prop_assert_eq!(&solution.x, &old.x);
+        for (i, exact_value) in reference.iter().enumerate() {
+            let error = (exact(solution.x[i]) - exact_value).abs();
+            prop_assert!(distance(solution.x[i], exact_value) <= solution.error_bound * (1.0 + 1e-14));
+            // Nearest: no neighbouring double is closer.
+            for neighbour in [-1.0, 1.0].map(|sign| super::exact::next_double(solution.x[i], sign)) {
+                prop_assert!((exact(neighbour) - exact_value).abs() >= error, "x[{}]", i);
+            }
+        }
+        prop_assert!(solution.error_bound <= old.error_bound * (1.0 + 1e-12) + f64::from_bits(2));
+    }
 }
