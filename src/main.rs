@@ -49,12 +49,19 @@ fn main() -> ExitCode {
     #[cfg(feature = "mimalloc")]
     skip_allocator_teardown();
     let args = cli::parse();
-    match cli::run(args) {
+    cli::interrupt::install();
+    let result = cli::run(args);
+    match result {
+        Ok(()) if cli::interrupt::received() => ExitCode::from(cli::interrupt::INTERRUPTED),
         Ok(()) => ExitCode::SUCCESS,
         Err(error) if is_broken_pipe(&error) => ExitCode::SUCCESS,
         Err(error) => {
             eprintln!("error: {error:#}");
-            ExitCode::from(2)
+            if cli::interrupt::received() {
+                ExitCode::from(cli::interrupt::INTERRUPTED)
+            } else {
+                ExitCode::from(2)
+            }
         }
     }
 }

@@ -641,6 +641,9 @@ fn property_files_become_the_defenders_objective() {
     assert_eq!(p.objective.to_string(), "!(!crash U goal)");
     let p = parse_props("Pmin=? [G F \"a\" & F \"b\"]").unwrap();
     assert_eq!(p.objective.to_string(), "!(G F a & F b)");
+    // Storm ends its queries with `;` (the SAYNT benchmarks' files do).
+    let p = parse_props("Pmax=? [\"notbad\" U \"goal\"];\n").unwrap();
+    assert_eq!(p.objective.to_string(), "notbad U goal");
 }
 
 #[test]
@@ -679,6 +682,10 @@ fn property_files_posg_fsc_cannot_solve_are_errors_with_line_and_column() {
         (
             "<<0>> Pmax=? [F \"a\"] extra",
             "line 1, column 22: unexpected `extra` after the query",
+        ),
+        (
+            "Pmax=? [F \"a\"];;",
+            "line 1, column 16: unexpected `;` after the query",
         ),
         (
             "const int N = 3;",

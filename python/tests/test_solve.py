@@ -155,3 +155,63 @@ def test_the_example_script_writes_its_table(tmp_path):
     assert [int(r["defender_nodes"]) for r in rows] == [1, 2]
     for row in rows:
         assert 0 <= float(row["certified_lower"]) <= float(row["upper_bound"]) <= 1
+
+
+def test_eight_threads_at_once_give_the_results_of_one():
+    # Every call releases the GIL while Rust computes; shared games and
+    # concurrent solves, evaluations and certificates must not change a digit.
+    game = posg_fsc.example_grid(width=5, height=4, unsafe=[7], goal=[19])
+    settings = dict(QUICK, structures=["full"])
+
+    def work(seed):
+        solved = posg_fsc.solve(game, FORMULA, 2, 1, seed=seed, **settings)
+        value = game.evaluate(FORMULA, defender=solved.defender, adversary=solved.adversary).value
+        certified = posg_fsc.certify(game, FORMULA, solved.defender)
+        return solved.defender.to_json(), value, certified["certified_lower"]
+
+    seeds = [1, 2, 3, 4, 1, 2, 3, 4]
+    alone = {seed: work(seed) for seed in set(seeds)}
+    results = [None] * len(seeds)
+    errors = []
+
+    def thread(k):
+        try:
+            results[k] = work(seeds[k])
+        except BaseException as error:  # noqa: BLE001 - reported below
+            errors.append(error)
+
+    threads = [threading.Thread(target=thread, args=(k,)) for k in range(len(seeds))]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert not errors, errors
+    assert results == [alone[seed] for seed in seeds]
+    assert len({alone[seed][0] for seed in alone}) > 1, "the seeds gave one defender: vacuous"
+
+
+def test_ctrl_c_leaves_out_complete_or_untouched(tmp_path):
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    game = posg_fsc.example_grid()
+    out = tmp_path / "run"
+    seen = []
+
+    def on_iteration(record):
+        seen.append(record)
+        if len(seen) == 3:
+            _thread.interrupt_main()
+
+    started = time.monotonic()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            posg_fsc.solve(game, FORMULA, 2, 1, on_iteration=on_iteration, out=str(out), **LONG)
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    assert time.monotonic() - started < 60
+    # Nothing half-written beside the target: no staging directory, no lock.
+    assert sorted(p.name for p in tmp_path.iterdir()) in ([], ["run"])
+    if out.exists():
+        summary = json.loads((out / "summary.json").read_text())
+        # Cancelled, unless the defender it had already closed the bracket.
+        assert summary["structures"][0]["status"] in ("cancelled", "gap-closed")
+        assert (out / "defender.fsc.json").is_file() and (out / "curve.csv").is_file()

@@ -12,6 +12,7 @@ mod example;
 mod export_gmc;
 mod help;
 mod import_drn;
+pub(crate) mod interrupt;
 mod progress;
 mod prune;
 mod simulate;

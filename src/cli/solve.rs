@@ -194,10 +194,14 @@ pub fn run(args: SolveArgs) -> anyhow::Result<()> {
         agree("--adv-nodes", args.adv_nodes, spec, &job.start.adversary)?;
     }
     let out = OutputDirectory::create(&args.out, args.force)?;
+    super::interrupt::stop_gracefully(&job.cancel);
     let progress = ProgressMode::detect(&args.output);
     let format = args.plot.format;
     let outcome = solve_into(job, out.path(), progress, args.output.seconds_axis, format)?;
     out.commit()?;
+    if super::interrupt::received() {
+        eprintln!("interrupted: the results below are those of the defender found before it");
+    }
     for line in &outcome.structure_choice {
         eprintln!("{line}");
     }

@@ -3,8 +3,8 @@
 //! (formats.md section 6).
 //!
 //! A file holds one query `<<P>> Pmax=? [ PATH ]` or `<<P>> Pmin=? [ PATH ]`,
-//! optionally named (`"name": ...`), with `//` comments and blank lines
-//! around it. `<<P>>` names the player who optimises (the defender of a
+//! optionally named (`"name": ...`) and ended by `;` as Storm writes it,
+//! with `//` comments and blank lines around it. `<<P>>` names the player who optimises (the defender of a
 //! turn-based game read from DRN); without it the query is a POMDP's or an
 //! MDP's. `PATH` is any LTL path formula the parser of [`super::parse`]
 //! accepts (labels in double quotes, as Storm writes them: `F "goal"`,
@@ -143,7 +143,7 @@ impl<'a> Cursor<'a> {
     }
 }
 
-/// `["name":] [<<P>>] P(max|min)=? [ PATH ]` on one line.
+/// `["name":] [<<P>>] P(max|min)=? [ PATH ] [;]` on one line.
 fn query(text: &str, line: usize) -> Result<Property, PropsError> {
     let mut cursor = Cursor { text, at: 0, line };
     skip_name(&mut cursor)?;
@@ -183,6 +183,7 @@ fn query(text: &str, line: usize) -> Result<Property, PropsError> {
         message: format!("in the path formula: {}", e.message),
     })?;
     cursor.at = close + 1;
+    cursor.eat(";");
     cursor.skip_blanks();
     if !cursor.rest().is_empty() {
         return Err(cursor.error(format!("unexpected {} after the query", cursor.found())));

@@ -42,6 +42,7 @@ use crate::certify::{
 };
 use crate::controller::{Choice, Fsc, Role, Support};
 use crate::game::{AdversaryAction, DefenderAction, Posg};
+use crate::optimise::Cancel;
 use crate::solver::SolverSettings;
 
 /// A move counts as an improvement only when the bound rises by more
@@ -63,10 +64,10 @@ pub struct Climbed {
 /// How long the search goes on: each climb until its bound evaluations
 /// have counted products of `work` states in all (at least one evaluation
 /// beyond the start's; a move passed over counts as evaluated), every
-/// climb until `deadline` (with a time budget), and the rounds of restarts
-/// and kicks until a climb reaches `enough`.
+/// climb until `deadline` (with a time budget) or until `cancel` is set,
+/// and the rounds of restarts and kicks until a climb reaches `enough`.
 #[derive(Debug, Clone, Copy)]
-pub struct Effort {
+pub struct Effort<'c> {
     /// The product states (reachable, summed over evaluations) one climb
     /// may count.
     pub work: usize,
@@ -76,12 +77,16 @@ pub struct Effort {
     /// more than an upper bound, so one within the gap tolerance of it is
     /// enough (`f64::INFINITY`: none known).
     pub enough: f64,
+    /// The run's cancellation (Ctrl-C, a callback): every climb ends at
+    /// once when it is set, as at the deadline.
+    pub cancel: Option<&'c Cancel>,
 }
 
-impl Effort {
-    /// Whether the deadline (if any) has passed.
+impl Effort<'_> {
+    /// Whether the deadline (if any) has passed or the run was cancelled.
     fn past_deadline(&self) -> bool {
         self.deadline.is_some_and(|end| Instant::now() >= end)
+            || self.cancel.is_some_and(Cancel::is_cancelled)
     }
 }
 
@@ -234,7 +239,7 @@ struct Search<'a> {
     not_phi: &'a Dra,
     universe: &'a Fsc,
     support: Support,
-    effort: Effort,
+    effort: Effort<'a>,
     known: Arc<Evaluations>,
     /// Whether the sweeps pass over the moves the adversary's best
     /// response does not meet ([`sweep`]); off only where a test judges
@@ -249,7 +254,7 @@ impl<'a> Search<'a> {
     /// The search over the defenders whose blocks play `universe`'s
     /// pairs, each climb with `effort`, nothing evaluated yet.
     #[cfg(test)]
-    fn new(game: &'a Posg, not_phi: &'a Dra, universe: &'a Fsc, effort: Effort) -> Self {
+    fn new(game: &'a Posg, not_phi: &'a Dra, universe: &'a Fsc, effort: Effort<'a>) -> Self {
         Self::sharing(game, not_phi, universe, effort, &SearchMemo::default())
     }
 
@@ -260,7 +265,7 @@ impl<'a> Search<'a> {
         game: &'a Posg,
         not_phi: &'a Dra,
         universe: &'a Fsc,
-        effort: Effort,
+        effort: Effort<'a>,
         memo: &SearchMemo,
     ) -> Self {
         Self {
@@ -829,7 +834,7 @@ pub fn climb_with_restarts(
     start: &Fsc,
     restarts: usize,
     rng: &mut ChaCha8Rng,
-    effort: Effort,
+    effort: Effort<'_>,
     memo: &SearchMemo,
 ) -> Result<Climbed, CertifyError> {
     let universe = Fsc::uniform_enabled(Role::Defender, start.num_nodes(), game.defender());
@@ -1066,10 +1071,11 @@ mod tests {
         DefenderSteps::new(game).blocks_in_use(fsc)
     }
 
-    const UNLIMITED: Effort = Effort {
+    const UNLIMITED: Effort<'static> = Effort {
         work: usize::MAX,
         deadline: None,
         enough: f64::INFINITY,
+        cancel: None,
     };
 
     fn grid_4x4() -> Posg {

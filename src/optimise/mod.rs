@@ -728,7 +728,7 @@ impl<'a> StructuresRun<'a> {
             &mut run,
             (upper_bound, presolved, informed),
             settings,
-            (method, clock, &self.memo, self.belief),
+            (method, clock, &self.memo, self.belief, self.cancel),
             &mut phases,
         )?;
         observer.observe(&returned_record(
@@ -871,6 +871,7 @@ fn search_supports(
             work: settings.local_search_work,
             deadline: settings.search_deadline(run.started),
             enough: upper - settings.gap_tolerance,
+            cancel: Some(run.cancel),
         },
         &run.memo,
     )?))
@@ -1043,8 +1044,9 @@ type Scored = (f64, Option<(f64, Fsc)>);
 /// informed bound, with a certifier, which the race's ceiling computed).
 /// Its best
 /// responses end at the [`Settings::final_deadline`] of the run, begun at
-/// `started`; its local search shares the run's `memo`; a single player's
-/// belief bound comes from the run's `belief`.
+/// `started`; its local search shares the run's `memo` and ends when
+/// `cancel` is set; a single player's belief bound comes from the run's
+/// `belief`.
 #[allow(clippy::too_many_arguments)]
 fn finalise(
     game: &Posg,
@@ -1053,11 +1055,12 @@ fn finalise(
     run: &mut StartRun,
     (upper_bound, presolved, informed): (Option<f64>, Option<local_search::Climbed>, Option<f64>),
     settings: &Settings,
-    (method, started, memo, belief): (
+    (method, started, memo, belief, cancel): (
         Method,
         Instant,
         &local_search::SearchMemo,
         &BeliefBoundOnce<'_>,
+        &Cancel,
     ),
     phases: &mut PhaseSeconds,
 ) -> Result<Chosen, OptimiseError> {
@@ -1149,6 +1152,7 @@ fn finalise(
                         enough: chosen
                             .upper_bound
                             .map_or(f64::INFINITY, |u| u - settings.gap_tolerance),
+                        cancel: Some(cancel),
                     },
                     memo,
                 )?

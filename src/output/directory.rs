@@ -14,11 +14,16 @@
 //! is cleaned up by the next run, under the lock: its staging directory is
 //! removed, and old results it had moved aside (`.NAME.old-PID`, between
 //! the two renames of a commit) are put back if the target is missing.
-//! Every error names the path it concerns.
+//! A process that must stop at once (the command line's second Ctrl-C)
+//! calls [`abandon_uncommitted`]: it removes every staging directory and
+//! lock of this process and keeps any later commit from starting, so that
+//! each target is either committed whole or untouched, with nothing left
+//! beside it. Every error names the path it concerns.
 
 use std::fs::{self, OpenOptions};
 use std::io::Write;
 use std::path::{Path, PathBuf};
+use std::sync::{Mutex, MutexGuard, PoisonError};
 
 use thiserror::Error;
 
@@ -85,6 +90,35 @@ impl OutputError {
     }
 }
 
+/// The staging directories and locks of this process's uncommitted
+/// [`OutputDirectory`]s. A commit holds it while it renames, so that
+/// [`abandon_uncommitted`] sees each directory either before or after.
+static UNCOMMITTED: Mutex<Vec<(PathBuf, PathBuf)>> = Mutex::new(Vec::new());
+
+/// [`UNCOMMITTED`], held (a panic elsewhere does not stop the clean-up).
+fn uncommitted() -> MutexGuard<'static, Vec<(PathBuf, PathBuf)>> {
+    UNCOMMITTED.lock().unwrap_or_else(PoisonError::into_inner)
+}
+
+/// Held while the process stops: no [`OutputDirectory::commit`] starts.
+pub struct Abandoned {
+    _held: MutexGuard<'static, Vec<(PathBuf, PathBuf)>>,
+}
+
+/// Removes the staging directory and the lock of every uncommitted
+/// [`OutputDirectory`] of this process, leaving their targets as they
+/// were, and blocks every commit while the returned guard is held: hold
+/// it until the process exits. A commit under way finishes first (its
+/// target is then complete).
+pub fn abandon_uncommitted() -> Abandoned {
+    let mut open = uncommitted();
+    for (staging, lock) in open.drain(..) {
+        let _ = fs::remove_dir_all(&staging);
+        let _ = fs::remove_file(&lock);
+    }
+    Abandoned { _held: open }
+}
+
 /// Writes `contents` to `path`, naming the path in any error.
 pub fn write_file(path: &Path, contents: impl AsRef<[u8]>) -> Result<(), OutputError> {
     fs::write(path, contents).map_err(|e| OutputError::io("writing", path, e))
@@ -146,8 +180,11 @@ impl OutputDirectory {
             fs::remove_dir_all(&directory.staging)
                 .map_err(|e| OutputError::io("removing", &directory.staging, e))?;
         }
+        let mut open = uncommitted();
         fs::create_dir(&directory.staging)
             .map_err(|e| OutputError::io("creating", &directory.staging, e))?;
+        open.push((directory.staging.clone(), directory.lock.clone()));
+        drop(open);
         Ok(directory)
     }
 
@@ -169,6 +206,7 @@ impl OutputDirectory {
     /// Renames the staging directory to the target (replacing an old
     /// target whole when allowed) and releases the lock.
     pub fn commit(mut self) -> Result<PathBuf, OutputError> {
+        let mut open = uncommitted();
         check_target(&self.target, self.replace)?;
         if is_empty_dir(&self.target) {
             fs::remove_dir(&self.target)
@@ -187,6 +225,7 @@ impl OutputDirectory {
             self.rename_staging()?;
         }
         self.committed = true;
+        open.retain(|(staging, _)| *staging != self.staging);
         Ok(self.target.clone())
     }
 
@@ -201,6 +240,8 @@ impl OutputDirectory {
 
 impl Drop for OutputDirectory {
     fn drop(&mut self) {
+        let mut open = uncommitted();
+        open.retain(|(staging, _)| *staging != self.staging);
         if !self.committed {
             let _ = fs::remove_dir_all(&self.staging);
         }

@@ -22,7 +22,9 @@ mod plot;
 pub mod shard;
 pub mod slurm;
 
-pub use directory::{OutputDirectory, OutputError, create_dir, write_file};
+pub use directory::{
+    Abandoned, OutputDirectory, OutputError, abandon_uncommitted, create_dir, write_file,
+};
 pub use plot::{CurvePlot, PlotFormat, Returned, SweepPoint, Title, plot_curve, plot_sweep};
 
 use std::fs::File;
