@@ -7,7 +7,7 @@ mod common;
 
 use posg_fsc::game::file::from_json_str;
 use posg_fsc::game::grid::{GridSpec, RandomUnsafe};
-use posg_fsc::optimise::{RecordSource, Settings, Structure, StructureSource};
+use posg_fsc::optimise::{RecordSource, Settings, Status, Structure, StructureSource};
 use posg_fsc::pipeline::{self, Automata, Sizes};
 use posg_fsc::value::evaluate_controllers;
 
@@ -197,4 +197,47 @@ fn the_curve_ends_at_the_returned_certified_value_on_random_games() {
         let game = from_json_str(&common::random::game_json(seed), "random.posg.json").unwrap();
         returned_curve(&game, "GF goal & G !unsafe", &quick_settings(false));
     }
+}
+
+#[test]
+fn a_support_on_which_the_value_is_identically_zero_stops_the_loop_at_once() {
+    let side = 12;
+    let game = GridSpec {
+        width: side,
+        height: side,
+        unsafe_cells: Vec::new(),
+        goal_cells: vec![side * side - 1],
+        random_unsafe: Some(RandomUnsafe {
+            count: side * side / 10,
+            seed: 1,
+        }),
+        ..GridSpec::default()
+    }
+    .build()
+    .unwrap();
+    let settings = Settings {
+        structures: vec![StructureSource::Full],
+        max_iterations: 64,
+        starts: 1,
+        ..quick_settings(false)
+    };
+    let sizes = Sizes {
+        defender: 1,
+        adversary: 1,
+    };
+    let status_and_iterations = |formula: &str| -> Vec<(String, Status, usize)> {
+        let automata = Automata::from_ltl(formula).unwrap();
+        let outcome = pipeline::solve(&game, &automata, sizes, &settings, |_| Box::new(())).unwrap();
+        (outcome.solution.structures.iter())
+            .map(|s| (s.report.name.clone(), s.report.status, s.report.iterations))
+            .collect()
+    };
+    // Every action possible: an unsafe cell is reached almost surely, so
+    // no phi-feasible BSCC is reachable on the full support.
+    let safe = status_and_iterations("GF goal & G !unsafe");
+    let full = &safe[0];
+    assert_eq!((full.1, full.2), (Status::ZeroOnSupport, 1), "{safe:?}");
+    // Reaching the goal first is possible on the full support: it runs.
+    let reach = status_and_iterations("!unsafe U goal");
+    assert!(reach.iter().all(|(_, status, _)| *status != Status::ZeroOnSupport), "{reach:?}");
 }

@@ -192,6 +192,12 @@ pub enum Status {
     Converged,
     /// A [`Cancel`] flag asked the run to stop.
     Cancelled,
+    /// The structure's GMC reaches no phi-feasible BSCC on its supports:
+    /// the value is 0 at every point the loop can reach, and so is every
+    /// defender's certified lower bound there, so the loop stops at its
+    /// first check (the final rounding and the local search, which change
+    /// the support, still run).
+    ZeroOnSupport,
     /// Another start of the portfolio (or the local search before the
     /// race) was ahead by more than this one gained over the second half of
     /// its run, or closed the certified gap or met the single player's

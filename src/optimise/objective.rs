@@ -108,6 +108,18 @@ impl Objective {
         &self.adversary
     }
 
+    /// Whether the value is 0 at every point of the two supports: every
+    /// initial GMC state is [`StateClass::Zero`] (method.md section 3),
+    /// reaching no phi-feasible BSCC whatever probabilities the supports
+    /// carry, so every gradient is 0 as well.
+    pub fn identically_zero(&self) -> bool {
+        let classes = &self.evaluator.recurrence().classes;
+        self.evaluator
+            .gmc()
+            .initial()
+            .all(|(m, p)| p == 0.0 || classes[m] == StateClass::Zero)
+    }
+
     /// The size of the GMC and of its linear system.
     pub fn gmc_size(&self) -> GmcSize {
         let classes = &self.evaluator.recurrence().classes;

@@ -569,7 +569,12 @@ impl<'a> Optimiser<'a> {
         let work = self.objective.work();
         let check_clock = Instant::now();
         let mut status = budget_spent(&self.settings, t, work, seconds, &self.cancel)
-            .or_else(|| solver.converged().then_some(Status::Converged));
+            .or_else(|| solver.converged().then_some(Status::Converged))
+            .or_else(|| {
+                self.objective
+                    .identically_zero()
+                    .then_some(Status::ZeroOnSupport)
+            });
         let check = if self.check_due(state.iterate.iteration, status) {
             let deep = books.checks % self.settings.best_response_every == 0;
             let mut check = self.check(state, books, deep)?;
@@ -628,11 +633,15 @@ impl<'a> Optimiser<'a> {
             && self.below_floor(score, score - window_start);
         let stall_judged =
             window_ends(iteration) && books.history.len() + 1 >= self.settings.stall_checks;
-        let out_of_time = matches!(status, Some(Status::TimeBudget | Status::Cancelled));
+        // Nothing to ascend where the value is 0 on the whole support.
+        let nothing_to_ascend = matches!(
+            status,
+            Some(Status::TimeBudget | Status::Cancelled | Status::ZeroOnSupport)
+        );
         // A probe alone puts the incumbent back where the start goes on.
         let probe_alone = probes_floor && !stall_judged && status.is_none();
         let before_probe = probe_alone.then(|| (books.best.clone(), check.certified_lower));
-        let ascends = (stall_judged || probes_floor || status.is_some()) && !out_of_time;
+        let ascends = (stall_judged || probes_floor || status.is_some()) && !nothing_to_ascend;
         if ascends {
             let steps = probe_alone.then_some(FLOOR_PROBE_STEPS);
             if let Some(ascended) = self.ascend_guarantee(iterate, books, now(), steps)? {
