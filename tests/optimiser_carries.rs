@@ -227,7 +227,8 @@ fn a_support_on_which_the_value_is_identically_zero_stops_the_loop_at_once() {
     };
     let status_and_iterations = |formula: &str| -> Vec<(String, Status, usize)> {
         let automata = Automata::from_ltl(formula).unwrap();
-        let outcome = pipeline::solve(&game, &automata, sizes, &settings, |_| Box::new(())).unwrap();
+        let outcome =
+            pipeline::solve(&game, &automata, sizes, &settings, |_| Box::new(())).unwrap();
         (outcome.solution.structures.iter())
             .map(|s| (s.report.name.clone(), s.report.status, s.report.iterations))
             .collect()
@@ -239,5 +240,10 @@ fn a_support_on_which_the_value_is_identically_zero_stops_the_loop_at_once() {
     assert_eq!((full.1, full.2), (Status::ZeroOnSupport, 1), "{safe:?}");
     // Reaching the goal first is possible on the full support: it runs.
     let reach = status_and_iterations("!unsafe U goal");
-    assert!(reach.iter().all(|(_, status, _)| *status != Status::ZeroOnSupport), "{reach:?}");
+    assert!(
+        reach
+            .iter()
+            .all(|(_, status, _)| *status != Status::ZeroOnSupport),
+        "{reach:?}"
+    );
 }

@@ -19,8 +19,17 @@ CPU seconds and its peak memory. Seeds are split: `--tune` seeds (1 by
 default) are the ones the informed source was developed on; the others
 are held out, and the CSV says which half each row is in.
 
+With `--pomdps REPO` (a git directory of randriu/synthesis; run with a
+Python that has stormpy), it also runs PAYNT's POMDPs with 1, 2 and 3
+defender nodes from their property files: the models of
+experiments/pomdp-peers (tuned: the project's POMDP benchmarks) and four
+it never ran before issue 62 (held out: refuel-08, drone-4-2 and drone-8-2
+of archive/cav23-saynt, geo-2-8 of models/pomdp/large), exported to DRN by
+stormpy as experiments/pomdp-peers does.
+
     python3 experiments/ablation/run.py [--sizes 32,48,64] [--seeds 1,2,3]
-        [--configs gradient,+informed,+local-search,+grow] [--out results/ablation.csv]
+        [--configs gradient,+informed,+local-search,+grow] [--pomdps REPO]
+        [--models NAME,...] [--no-grids] [--out results/ablation.csv]
 
 Writes the CSV (appending rows to an existing file of the same columns, so
 runs can be split) with the command, the binary's version and git commit in
@@ -77,10 +86,42 @@ def first_positive(curve):
     return None
 
 
-def run(game, formula, nodes, config, directory):
+# PAYNT's POMDPs never run before issue 62: name -> (path, property).
+HELD_OUT_POMDPS = {
+    "refuel-08": ("models/archive/cav23-saynt/refuel-08", 'Pmax=? ["notbad" U "goal"]'),
+    "drone-4-2": ("models/archive/cav23-saynt/drone-4-2", 'Pmax=? ["notbad" U "goal"]'),
+    "drone-8-2": ("models/archive/cav23-saynt/drone-8-2", 'Pmax=? ["notbad" U "goal"]'),
+    "geo-2-8": ("models/pomdp/large/geo-2-8", 'Pmax=? ["notbad" U "goal"]'),
+}
+
+
+def pomdp_cases(repo, directory, only):
+    """(name, half, model.drn, --props args) of every POMDP, exported once."""
+    sys.path.insert(0, os.path.join(HERE, "..", "pomdp-peers"))
+    import run as peers  # noqa: E402 - experiments/pomdp-peers/run.py
+    models = {name: (path, prop, "tuned") for name, (path, prop, _) in peers.MODELS.items()}
+    models.update({name: (path, prop, "held-out")
+                   for name, (path, prop) in HELD_OUT_POMDPS.items()})
+    cases = []
+    for name, (path, prop, half) in models.items():
+        if only and name not in only:
+            continue
+        model_dir = os.path.join(directory, name)
+        os.makedirs(model_dir, exist_ok=True)
+        with open(os.path.join(model_dir, "sketch.templ"), "w") as handle:
+            handle.write(peers.git_show(repo, f"{path}/sketch.templ"))
+        with open(os.path.join(model_dir, "sketch.props"), "w") as handle:
+            handle.write(prop + "\n")
+        peers.export_model(model_dir)
+        cases.append((name, half, os.path.join(model_dir, "model.drn"),
+                      ["--props", os.path.join(model_dir, "sketch.props")]))
+    return cases
+
+
+def run(game, objective, nodes, config, directory):
     out = os.path.join(directory, "out")
-    command = [BINARY, "solve", game, "--ltl", formula, "--def-nodes", str(nodes),
-               "--adv-nodes", "1", "--out", out, "--force", "--quiet", *CONFIGS[config]]
+    command = [BINARY, "solve", game, *objective, "--def-nodes", str(nodes),
+               "--out", out, "--force", "--quiet", *CONFIGS[config]]
     started = time.time()
     child = subprocess.Popen(command, stdout=subprocess.DEVNULL)
     _, status, usage = os.wait4(child.pid, 0)
@@ -118,6 +159,9 @@ def main():
     parser.add_argument("--tune", default="1", help="seeds tuned on (the rest are held out)")
     parser.add_argument("--configs", default=",".join(CONFIGS))
     parser.add_argument("--no-paper", action="store_true")
+    parser.add_argument("--no-grids", action="store_true")
+    parser.add_argument("--pomdps", metavar="REPO", help="git directory of randriu/synthesis")
+    parser.add_argument("--models", default="", help="only these POMDPs (comma-separated)")
     parser.add_argument("--out", default=os.path.join(ROOT, "results", "ablation.csv"))
     args = parser.parse_args()
     build()
@@ -134,18 +178,24 @@ def main():
         if fresh:
             writer.writeheader()
         cases = []
+        one_adversary_node = ["--adv-nodes", "1"]
         if not args.no_paper:
             for nodes in (1, 2):
-                cases.append(("paper-3x2", "tuned", paper(directory), "!unsafe U goal", nodes))
-        for side in map(int, args.sizes.split(",")):
+                cases.append(("paper-3x2", "tuned", paper(directory),
+                              ["--ltl", "!unsafe U goal", *one_adversary_node], nodes))
+        for side in map(int, args.sizes.split(",")) if not args.no_grids else []:
             for seed in map(int, args.seeds.split(",")):
                 half = "tuned" if seed in tune else "held-out"
                 cases.append((f"grid{side}-seed{seed}", half, grid(directory, side, seed),
-                              "GF goal & G !unsafe", 2))
-        for name, half, game, formula, nodes in cases:
+                              ["--ltl", "GF goal & G !unsafe", *one_adversary_node], 2))
+        if args.pomdps:
+            only = {m for m in args.models.split(",") if m}
+            for name, half, model, objective in pomdp_cases(args.pomdps, directory, only):
+                cases.extend((name, half, model, objective, k) for k in (1, 2, 3))
+        for name, half, game, objective, nodes in cases:
             for config in configs:
                 row = {"case": name, "half": half, "config": config,
-                       **run(game, formula, nodes, config, directory)}
+                       **run(game, objective, nodes, config, directory)}
                 writer.writerow(row)
                 handle.flush()
                 print(json.dumps(row), flush=True)

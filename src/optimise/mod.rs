@@ -428,11 +428,21 @@ where
     let presolved: Vec<_> = (structures.iter().zip(&mut watchers))
         .map(|(structure, watcher)| run.presolve(structure, watcher.as_mut()))
         .collect();
+    // Every structure's race sees the best bound any search proved: a
+    // start that cannot reach it is outpaced on every structure alike.
+    let proved = (presolved.iter())
+        .filter_map(|p| p.as_ref().ok()?.climbed.as_ref().map(|c| c.bound))
+        .reduce(f64::max);
     let outcomes = (structures.par_iter().zip(watchers.par_iter_mut()))
         .zip(presolved)
         .enumerate()
         .map(|(index, ((structure, watcher), presolved))| {
-            run.race(structure, index as u64, watcher.as_mut(), presolved?)
+            run.race(
+                structure,
+                index as u64,
+                watcher.as_mut(),
+                (presolved?, proved),
+            )
         })
         .collect::<Vec<_>>();
     if outcomes.is_empty() {
@@ -488,7 +498,7 @@ pub fn optimise_structure(
         &belief,
     );
     let presolved = run.presolve(structure, observer)?;
-    run.race(structure, stream, observer, presolved)
+    run.race(structure, stream, observer, (presolved, None))
 }
 
 /// The random stream of the local search before the race of the structure
@@ -612,13 +622,15 @@ impl<'a> StructuresRun<'a> {
     }
 
     /// `structure`'s race after its search `presolved`, with random stream
-    /// `stream` ([`optimise_structure`]).
+    /// `stream` ([`optimise_structure`]); `proved` is the best certified
+    /// lower bound the searches of the other structures proved, which the
+    /// race's floor includes.
     fn race(
         &self,
         structure: &Structure,
         stream: u64,
         observer: &mut (dyn Observer + Send),
-        presolved: Presolved,
+        (presolved, proved): (Presolved, Option<f64>),
     ) -> Result<StructureOutcome, OptimiseError> {
         let StructuresRun {
             game,
@@ -646,7 +658,10 @@ impl<'a> StructuresRun<'a> {
         // The single-player ascent is certified once, at the end (`finalise`):
         // its checks' value is exact already.
         let run_certifier = certifier.filter(|_| method == Method::MaxMin);
-        let floor = presolved.as_ref().map(|climbed| climbed.bound);
+        let floor = (presolved.as_ref().map(|climbed| climbed.bound))
+            .into_iter()
+            .chain(proved)
+            .reduce(f64::max);
         // A single player's upper bound before its race (its ceiling): the
         // fully informed optimum, or the belief bound where the SAT source
         // explored it and it is lower.
