@@ -75,7 +75,10 @@ impl ObjectiveArgs {
 pub fn read_props(path: &Path) -> anyhow::Result<Property> {
     let text =
         std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
-    posg_fsc::ltl::props::parse_props(&text).with_context(|| format!("in {}", path.display()))
+    Ok(posg_fsc::ltl::props::from_props_str(
+        &text,
+        &path.display().to_string(),
+    )?)
 }
 
 /// The two controllers.

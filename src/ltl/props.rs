@@ -13,11 +13,13 @@
 //! `G !goal`), since minimising the probability of `PATH` is maximising
 //! that of `!PATH`. Everything else (reward and time queries, bounds such
 //! as `P>=0.5`, several queries, constants, bounded operators such as
-//! `F<=10`) is an error naming the line and column.
+//! `F<=10`) is an error naming the line and column ([`parse_props`]), and
+//! the file too ([`from_props_str`], as the command line reports it).
 
 use thiserror::Error;
 
 use super::{Formula, parse};
+use crate::game::ModelError;
 
 /// The query of a property file.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -65,7 +67,7 @@ pub fn parse_props(text: &str) -> Result<Property, PropsError> {
     let text = crate::game::file::without_bom(text);
     for (i, raw) in text.lines().enumerate() {
         let line = i + 1;
-        let content = raw.split("//").next().unwrap_or("");
+        let content = without_comment(raw);
         if content.trim().is_empty() {
             continue;
         }
@@ -85,6 +87,32 @@ pub fn parse_props(text: &str) -> Result<Property, PropsError> {
         line: 1,
         column: 1,
         message: "the file holds no property (expected `<<P>> Pmax=? [ PATH ]`)".into(),
+    })
+}
+
+/// `line` up to its `//` comment, if any: a `//` outside double quotes
+/// (inside them it belongs to a name or a label).
+fn without_comment(line: &str) -> &str {
+    let mut quoted = false;
+    for (i, c) in line.char_indices() {
+        match c {
+            '"' => quoted = !quoted,
+            '/' if !quoted && line[i + 1..].starts_with('/') => return &line[..i],
+            _ => {}
+        }
+    }
+    line
+}
+
+/// [`parse_props`] for the property file `file_name`: an error names the
+/// file, the line and the column as [`Property::position`] does
+/// (`FILE: line L, column C: message`).
+pub fn from_props_str(text: &str, file_name: &str) -> Result<Property, ModelError> {
+    parse_props(text).map_err(|error| {
+        ModelError::new(
+            format!("{file_name}: line {}, column {}", error.line, error.column),
+            error.message,
+        )
     })
 }
 

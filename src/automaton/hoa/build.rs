@@ -9,7 +9,8 @@
 //! out of range, a state defined twice, labelled and unlabelled edges mixed,
 //! a labelled state with labelled edges, more implicit edges than letters, two
 //! edges on one letter (nondeterminism), a letter without an edge
-//! (incompleteness), and a table larger than `MAX_TABLE_ENTRIES`;
+//! (incompleteness: also a state without a `State:` block, found before the
+//! table is allocated), and a table larger than `MAX_TABLE_ENTRIES`;
 //! [`HoaError::Automaton`] if [`EmersonLeiAutomaton::new`] refuses the result.
 
 use super::HoaError;
@@ -124,6 +125,21 @@ pub(super) fn build(
     if start >= num_states as u64 {
         return error_at(start_pos, format!("initial state {start} out of range"));
     }
+    // The states are checked before the table is allocated: a `States:`
+    // count far beyond the body (`States: 16777216` over one state) would
+    // otherwise allocate a table of that many rows.
+    for state in states {
+        state_index(state.id, state.pos, num_states)?;
+    }
+    if let Some(q) = first_undefined(states, num_states) {
+        return error_at(
+            end,
+            format!(
+                "incomplete automaton: state {q} has no edge on letter {}",
+                evaluator.letter_text(0)
+            ),
+        );
+    }
     let letters = evaluator.num_letters();
     let mut table: Vec<Option<Edge>> = vec![None; num_states * letters];
     let mut defined = vec![false; num_states];
@@ -174,6 +190,18 @@ fn state_count(header: &Header, states: &[RawState], start: u64) -> Result<usize
         );
     }
     Ok(count as usize)
+}
+
+/// The first state below `num_states` without a `State:` block, if the
+/// body has fewer blocks than states (such a state has no edges).
+fn first_undefined(states: &[RawState], num_states: usize) -> Option<u64> {
+    if states.len() >= num_states {
+        return None;
+    }
+    let mut ids: Vec<u64> = states.iter().map(|s| s.id).collect();
+    ids.sort_unstable();
+    ids.dedup();
+    (0..).find(|q| ids.binary_search(q).is_err())
 }
 
 /// `id` as a state index below `num_states`.
