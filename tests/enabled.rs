@@ -245,7 +245,7 @@ fn a_warm_start_embeds_into_the_enabled_actions_only() {
     let smaller = resolve("uniform:1", &g, Role::Defender).unwrap();
     let full = Structure::full(&g, 2, 1, false);
     let started = warm_started(full.clone(), &smaller, false).unwrap();
-    let (defender, support) = (&started.defender, &full.defender);
+    let (defender, support) = (started.warm.as_ref().unwrap(), &full.defender);
     assert_eq!(defender.check_fits(g.defender()), Ok(()));
     let pairs = |choices: &[Choice]| -> Vec<(usize, usize)> {
         choices.iter().map(|c| (c.next, c.action)).collect()

@@ -378,6 +378,7 @@ fn a_run_resumes_from_the_logits_it_wrote() {
         name: "resumed".into(),
         defender: best.defender.clone(),
         adversary: best.adversary.clone(),
+        warm: None,
     };
     let still = Settings {
         initial_spread: 0.0,

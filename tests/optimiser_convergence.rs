@@ -547,3 +547,81 @@ fn the_structures_of_a_run_search_one_after_another_alike() {
         assert_eq!(bound.to_bits(), alone[0].1.to_bits(), "{both:?} {alone:?}");
     }
 }
+
+/// The first iterate's value of every start on `structure`.
+fn first_values(g: &Posg, phi: &Dra, structure: &Structure, settings: &Settings) -> Vec<f64> {
+    use std::sync::{Arc, Mutex};
+    struct First(Arc<Mutex<Vec<(usize, f64)>>>);
+    impl Observer for First {
+        fn observe(&mut self, record: &IterationRecord) {
+            if record.iteration == 0 {
+                self.0.lock().unwrap().push((record.start, record.value));
+            }
+        }
+    }
+    let seen = Arc::new(Mutex::new(Vec::new()));
+    let belief = BeliefBoundOnce::new(g, phi, settings.solver_settings());
+    posg_fsc::optimise::optimise_structures(
+        g,
+        (phi, None),
+        std::slice::from_ref(structure),
+        settings,
+        |_, _| Box::new(First(Arc::clone(&seen))),
+        &posg_fsc::optimise::Cancel::new(),
+        &belief,
+    )
+    .unwrap();
+    let mut seen = seen.lock().unwrap().clone();
+    seen.sort_by_key(|&(start, _)| start);
+    seen.into_iter().map(|(_, value)| value).collect()
+}
+
+/// A warm start moves the first start only: the others begin where they
+/// would without it, so growing the defender keeps their reach.
+#[test]
+fn a_warm_start_is_the_first_starts_point_and_leaves_the_others() {
+    let g = posg_fsc::game::grid::GridSpec::default().build().unwrap();
+    let (phi, _) = automata("!unsafe U goal");
+    let settings = Settings {
+        max_iterations: 1,
+        starts: 3,
+        local_search: false,
+        round: false,
+        structures: vec![posg_fsc::optimise::StructureSource::Full],
+        ..Settings::default()
+    };
+    let uniform = Fsc::uniform_enabled(Role::Defender, 1, g.defender());
+    // A deterministic smaller defender (each block's first choice), so that
+    // its embedding differs from the uniform starting point.
+    let blocks = (0..uniform.num_observations())
+        .map(|o| {
+            vec![Choice {
+                probability: 1.0,
+                ..uniform.choices(0, o)[0]
+            }]
+        })
+        .collect();
+    let smaller = Fsc::new(
+        Role::Defender,
+        1,
+        uniform.num_observations(),
+        uniform.num_actions(),
+        vec![1.0],
+        blocks,
+    )
+    .unwrap();
+    let cold = Structure::full(&g, 2, 1, false);
+    let warm = warm_started(cold.clone(), &smaller, false).unwrap();
+    assert_eq!(
+        warm.defender, cold.defender,
+        "the structure's own start is kept"
+    );
+    let (from_cold, from_warm) = (
+        first_values(&g, &phi, &cold, &settings),
+        first_values(&g, &phi, &warm, &settings),
+    );
+    assert_eq!(from_cold.len(), 3);
+    assert!(from_cold.iter().all(|&v| v > 0.0), "{from_cold:?}");
+    assert_eq!(from_cold[1..], from_warm[1..]);
+    assert_ne!(from_cold[0], from_warm[0]);
+}

@@ -72,6 +72,7 @@ pub(crate) fn informed(
             name: "informed".into(),
             defender,
             adversary: start.adversary.clone(),
+            warm: None,
         }],
         note,
     ))

@@ -260,6 +260,11 @@ pub struct Structure {
     pub defender: Fsc,
     /// The adversary's starting controller.
     pub adversary: Fsc,
+    /// Where the first start begins instead of `defender` (on the same
+    /// support): the best defender of the next smaller size embedded, in a
+    /// grown run ([`warm_started`]); the other starts begin from `defender`,
+    /// so growing keeps the fresh starts' reach.
+    pub warm: Option<Fsc>,
 }
 
 impl Structure {
@@ -285,6 +290,7 @@ impl Structure {
             name: "full".into(),
             defender: make(Role::Defender, defender_nodes),
             adversary: make(Role::Adversary, adversary_nodes),
+            warm: None,
         }
     }
 }
@@ -674,11 +680,17 @@ impl<'a> StructuresRun<'a> {
         };
         let ceiling = informed.map(|u| self.belief_before.map_or(u, |b| b.min(u)));
         let ceiling_seconds = clock_ceiling.elapsed().as_secs_f64();
+        let warm = structure.warm.as_ref().map(|defender| Structure {
+            defender: defender.clone(),
+            warm: None,
+            ..structure.clone()
+        });
         let racers = (0..settings.starts)
             .into_par_iter()
             .map(|i| {
+                let begins = warm.as_ref().filter(|_| i == 0).unwrap_or(structure);
                 let optimiser =
-                    start_optimiser((game, dra), (method, run_certifier), structure, &start(i))?;
+                    start_optimiser((game, dra), (method, run_certifier), begins, &start(i))?;
                 Racer::new(
                     optimiser.with_cancel(cancel).with_floor(floor),
                     live(i),
@@ -879,7 +891,8 @@ fn search_supports(
     if settings.gap_closed(lower, upper) {
         return Ok(None);
     }
-    let start = rounding::truncated(&structure.defender, f64::INFINITY)?;
+    let from = structure.warm.as_ref().unwrap_or(&structure.defender);
+    let start = rounding::truncated(from, f64::INFINITY)?;
     let mut rng = ChaCha8Rng::seed_from_u64(settings.seed);
     rng.set_stream(run.search_stream);
     Ok(Some(local_search::climb_with_restarts(

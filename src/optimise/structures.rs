@@ -241,6 +241,7 @@ fn synthesised(
                         name: format!("sat-{}", mode.name()),
                         defender,
                         adversary: start.adversary.clone(),
+                        warm: None,
                     };
                     return Ok((vec![structure], reasons.join("; ")));
                 }
@@ -287,6 +288,7 @@ fn pruned(
             name: format!("pruned-{}", k + 1),
             defender: kept.defender,
             adversary: kept.adversary,
+            warm: None,
         })
         .collect();
     Ok((structures, note))

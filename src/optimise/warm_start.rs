@@ -142,16 +142,22 @@ pub fn pad(fsc: &Fsc, nodes: usize) -> Result<Fsc, ModelError> {
     )
 }
 
-/// `structure` with its defender replaced by `previous` embedded into it
-/// ([`embed`] onto the structure's defender, uniform weight
-/// [`WARM_START_MIX`]): the optimisation of `n` nodes starts from the best
-/// smaller defender, on the structure's support.
+/// `structure` with `previous` embedded into its defender ([`embed`],
+/// uniform weight [`WARM_START_MIX`]) as its [`Structure::warm`] start: the
+/// first start of the optimisation of `n` nodes begins from the best
+/// smaller defender, on the structure's support, the others where they
+/// would without it.
 pub fn warm_started(
     mut structure: Structure,
     previous: &Fsc,
     mix_initial: bool,
 ) -> Result<Structure, ModelError> {
-    structure.defender = embed(previous, &structure.defender, WARM_START_MIX, mix_initial)?;
+    structure.warm = Some(embed(
+        previous,
+        &structure.defender,
+        WARM_START_MIX,
+        mix_initial,
+    )?);
     Ok(structure)
 }
 

@@ -351,7 +351,7 @@ where
             keep_kept_curve(&mut outcome, previous);
         }
         sizes.extend(smaller.take().map(|o| o.sizes).unwrap_or_default());
-        sizes.extend(outcome.sizes.drain(..));
+        sizes.append(&mut outcome.sizes);
         outcome.sizes = std::mem::take(&mut sizes);
         smaller = Some(outcome);
     }
