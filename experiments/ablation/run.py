@@ -42,6 +42,7 @@ import os
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -56,7 +57,7 @@ CONFIGS = {
 }
 COLUMNS = ["case", "half", "config", "def_nodes", "gmc_states", "certified_lower", "upper_bound",
            "ratio", "first_positive_seconds", "returned_source", "structure_used", "wall_seconds",
-           "cpu_seconds", "peak_mb"]
+           "cpu_seconds", "peak_mb", "status"]
 
 
 def grid(directory, side, seed):
@@ -118,17 +119,23 @@ def pomdp_cases(repo, directory, only):
     return cases
 
 
-def run(game, objective, nodes, config, directory):
+def run(game, objective, nodes, config, directory, limit):
     out = os.path.join(directory, "out")
     command = [BINARY, "solve", game, *objective, "--def-nodes", str(nodes),
                "--out", out, "--force", "--quiet", *CONFIGS[config]]
     started = time.time()
     child = subprocess.Popen(command, stdout=subprocess.DEVNULL)
+    timer = threading.Timer(limit, child.kill)
+    timer.start()
     _, status, usage = os.wait4(child.pid, 0)
+    timer.cancel()
     wall = time.time() - started
+    cpu = usage.ru_utime + usage.ru_stime
+    if wall >= limit:
+        return {"def_nodes": nodes, "status": f"killed after {limit} s", "wall_seconds": round(wall, 2),
+                "cpu_seconds": round(cpu, 2), "peak_mb": round(usage.ru_maxrss / 1024, 1)}
     if os.waitstatus_to_exitcode(status) != 0:
         raise RuntimeError(f"{' '.join(command)} failed")
-    cpu = usage.ru_utime + usage.ru_stime
     with open(os.path.join(out, "summary.json")) as handle:
         summary = json.load(handle)
     certified = summary["certified"] or {}
@@ -149,6 +156,7 @@ def run(game, objective, nodes, config, directory):
         "wall_seconds": round(wall, 2),
         "cpu_seconds": round(cpu, 2),
         "peak_mb": round(usage.ru_maxrss / 1024, 1),
+        "status": "done",
     }
 
 
@@ -162,6 +170,8 @@ def main():
     parser.add_argument("--no-grids", action="store_true")
     parser.add_argument("--pomdps", metavar="REPO", help="git directory of randriu/synthesis")
     parser.add_argument("--models", default="", help="only these POMDPs (comma-separated)")
+    parser.add_argument("--limit", type=float, default=1800, help="kill a run after this many "
+                        "wall seconds (the row says so)")
     parser.add_argument("--out", default=os.path.join(ROOT, "results", "ablation.csv"))
     args = parser.parse_args()
     build()
@@ -195,7 +205,7 @@ def main():
         for name, half, game, objective, nodes in cases:
             for config in configs:
                 row = {"case": name, "half": half, "config": config,
-                       **run(game, objective, nodes, config, directory)}
+                       **run(game, objective, nodes, config, directory, args.limit)}
                 writer.writerow(row)
                 handle.flush()
                 print(json.dumps(row), flush=True)
