@@ -56,13 +56,22 @@ fn solve_writes_a_titled_curve_with_the_certified_band_and_a_controller_picture(
         "solve",
         &game,
         "--ltl",
-        "F goal & G !unsafe",
+        "!unsafe U goal",
         "--def-nodes",
         "2",
         "--out",
         &out,
+        // 30 iterations: no local search, stall or gap rule ends it sooner
+        // (on `F goal & G !unsafe` the full support's value is 0, and the
+        // loop stops at once: zero-on-support).
         "--max-iterations",
         "30",
+        "--no-local-search",
+        "--gap-tolerance",
+        "0",
+        "--stall-checks",
+        "0",
+        "--no-grow",
         "--structures",
         "full",
         "--seconds-axis",
@@ -70,7 +79,7 @@ fn solve_writes_a_titled_curve_with_the_certified_band_and_a_controller_picture(
     let svg = read(dir.join("out/curve.svg"));
     let texts = texts(&svg);
     for text in [
-        "grid-3x2: F goal &amp; G !unsafe",
+        "grid-3x2: !unsafe U goal",
         "defender 2 nodes, adversary 1 node, structure full, game of 6 states",
         "certified bracket",
         "worst-case estimate",
