@@ -37,6 +37,24 @@ fn certified(
     outcome.certified.map(|b| b.certified_lower)
 }
 
+/// Issue 62's grid family: `side` x `side`, the goal in the last cell and
+/// a tenth of the cells unsafe at random (seed 1).
+fn issue_grid(side: usize) -> posg_fsc::game::Posg {
+    GridSpec {
+        width: side,
+        height: side,
+        unsafe_cells: Vec::new(),
+        goal_cells: vec![side * side - 1],
+        random_unsafe: Some(RandomUnsafe {
+            count: side * side / 10,
+            seed: 1,
+        }),
+        ..GridSpec::default()
+    }
+    .build()
+    .unwrap()
+}
+
 #[test]
 fn a_larger_defender_certifies_at_least_what_a_smaller_one_does_on_random_games() {
     let settings = quick_settings(true);
@@ -88,20 +106,7 @@ fn a_grown_run_reports_every_size_and_returns_the_size_asked() {
 
 #[test]
 fn the_informed_start_sees_the_goal_on_a_48_by_48_grid() {
-    let side = 48;
-    let game = GridSpec {
-        width: side,
-        height: side,
-        unsafe_cells: Vec::new(),
-        goal_cells: vec![side * side - 1],
-        random_unsafe: Some(RandomUnsafe {
-            count: side * side / 10,
-            seed: 1,
-        }),
-        ..GridSpec::default()
-    }
-    .build()
-    .unwrap();
+    let game = issue_grid(48);
     let automata = Automata::from_ltl("GF goal & G !unsafe").unwrap();
     let solver = Settings::default().solver_settings();
     // The full support's value is exactly 0 there (every action is
@@ -201,20 +206,7 @@ fn the_curve_ends_at_the_returned_certified_value_on_random_games() {
 
 #[test]
 fn a_support_on_which_the_value_is_identically_zero_stops_the_loop_at_once() {
-    let side = 12;
-    let game = GridSpec {
-        width: side,
-        height: side,
-        unsafe_cells: Vec::new(),
-        goal_cells: vec![side * side - 1],
-        random_unsafe: Some(RandomUnsafe {
-            count: side * side / 10,
-            seed: 1,
-        }),
-        ..GridSpec::default()
-    }
-    .build()
-    .unwrap();
+    let game = issue_grid(12);
     let settings = Settings {
         structures: vec![StructureSource::Full],
         max_iterations: 64,
