@@ -56,7 +56,15 @@ fn endless(command: &str, game: &Path, out: &Path, extra: &[&str]) -> Child {
     posg_fsc()
         .arg(command)
         .arg(game)
-        .args(["--ltl", "GF goal & G !unsafe", "--adv-nodes", "1"])
+        // A support with a positive value (on `GF goal & G !unsafe` the full
+        // support's is 0 and the loop stops at once), no local search.
+        .args([
+            "--ltl",
+            "!unsafe U goal",
+            "--adv-nodes",
+            "1",
+            "--no-local-search",
+        ])
         .args(["--structures", "full", "--starts", "1"])
         .args([
             "--max-iterations",

@@ -125,13 +125,19 @@ def run(game, objective, nodes, config, directory, limit):
                "--out", out, "--force", "--quiet", *CONFIGS[config]]
     started = time.time()
     child = subprocess.Popen(command, stdout=subprocess.DEVNULL)
-    timer = threading.Timer(limit, child.kill)
+    killed = threading.Event()
+
+    def kill():
+        killed.set()
+        child.kill()
+
+    timer = threading.Timer(limit, kill)
     timer.start()
     _, status, usage = os.wait4(child.pid, 0)
     timer.cancel()
     wall = time.time() - started
     cpu = usage.ru_utime + usage.ru_stime
-    if wall >= limit:
+    if killed.is_set():
         return {"def_nodes": nodes, "status": f"killed after {limit} s", "wall_seconds": round(wall, 2),
                 "cpu_seconds": round(cpu, 2), "peak_mb": round(usage.ru_maxrss / 1024, 1)}
     if os.waitstatus_to_exitcode(status) != 0:

@@ -867,7 +867,8 @@ fn settle(
 }
 
 /// The local search on the supports (`local_search.rs`) before the
-/// max-min race: from the argmax rounding of the structure's defender and
+/// max-min race: from the argmax rounding of the structure's defender (its
+/// warm start, where it has one) and
 /// `local_search_restarts` seeded random memoryless ones, on the run's
 /// search stream ([`search_stream`]), sharing the run's memo, each climb
 /// bounded by `local_search_work` and, with a time budget, by
@@ -875,8 +876,8 @@ fn settle(
 /// the restarts and kicks end once
 /// a climb is within `gap_tolerance` of the upper bound against the
 /// structure's starting adversary. Its end point's
-/// bound is the race's floor ([`race`]) and the end point a candidate of
-/// the final rounding. `None` where the structure's starting defender
+/// bound is the race's floor ([`race`]; the best over the structures) and
+/// the end point a candidate of the final rounding. `None` where the structure's starting defender
 /// already certifies within `gap_tolerance` of that upper bound (the race
 /// ends at its first check; on PAYNT's pursuit-evasion only randomised
 /// defenders win, and the search cost 17 s there).
@@ -886,12 +887,12 @@ fn search_supports(
     run: &StructuresRun<'_>,
 ) -> Result<Option<local_search::Climbed>, OptimiseError> {
     let (game, settings) = (run.game, run.settings);
+    let from = structure.warm.as_ref().unwrap_or(&structure.defender);
     let upper = upper_value_or_trivial(game, certifier.phi, &structure.adversary)?;
-    let lower = lower_value_or_trivial(game, certifier.not_phi, &structure.defender)?;
+    let lower = lower_value_or_trivial(game, certifier.not_phi, from)?;
     if settings.gap_closed(lower, upper) {
         return Ok(None);
     }
-    let from = structure.warm.as_ref().unwrap_or(&structure.defender);
     let start = rounding::truncated(from, f64::INFINITY)?;
     let mut rng = ChaCha8Rng::seed_from_u64(settings.seed);
     rng.set_stream(run.search_stream);

@@ -114,10 +114,12 @@ impl Objective {
     /// carry, so every gradient is 0 as well.
     pub fn identically_zero(&self) -> bool {
         let classes = &self.evaluator.recurrence().classes;
+        // Every initial state, whatever its probability now: the initial
+        // node distribution may be a parameter too.
         self.evaluator
             .gmc()
             .initial()
-            .all(|(m, p)| p == 0.0 || classes[m] == StateClass::Zero)
+            .all(|(m, _)| classes[m] == StateClass::Zero)
     }
 
     /// The size of the GMC and of its linear system.

@@ -412,7 +412,8 @@ impl<'a> Optimiser<'a> {
     }
 
     /// The run with `floor`, a certified lower bound proved for a
-    /// defender outside the run (the local search's before the race).
+    /// defender outside the run (the best of the structures' local
+    /// searches before the races).
     pub fn with_floor(mut self, floor: Option<f64>) -> Self {
         self.floor = floor;
         self

@@ -89,8 +89,8 @@ pub const CEILING_MET: f64 = 1e-8;
 /// Runs every start (an error in place of a start that failed to begin
 /// or failed later) until each stops; returns each start's optimiser and
 /// outcome, or its error. `floor` is a certified lower bound already
-/// proved for a defender outside the race (the local search's, run before
-/// it): once it is within `gap_tolerance` of a start's upper bound, the
+/// proved for a defender outside the race (the best of the local
+/// searches of every structure, run before the races): once it is within `gap_tolerance` of a start's upper bound, the
 /// race is over. `ceiling` is an upper bound on every defender's score
 /// proved before the race (a single player's, whose starts check no
 /// upper bound of their own): once a start's best score meets it

@@ -164,10 +164,15 @@ impl OutputDirectory {
         create_dir(&parent)?;
         check_target(target, replace)?;
         let lock = parent.join(format!(".{name}.lock"));
-        take_lock(target, &lock)?;
-        recover_leftovers(&parent, &name, target)?;
         let staging = parent.join(format!(".{name}.partial-{}", std::process::id()));
         let old = parent.join(format!(".{name}.old-{}", std::process::id()));
+        // The lock is registered as soon as it is taken, so that an
+        // abandon removes it, and an error from here on drops `directory`,
+        // which removes it too.
+        let mut open = uncommitted();
+        take_lock(target, &lock)?;
+        open.push((staging.clone(), lock.clone()));
+        drop(open);
         let directory = Self {
             target: target.to_path_buf(),
             staging,
@@ -176,15 +181,13 @@ impl OutputDirectory {
             replace,
             committed: false,
         };
+        recover_leftovers(&parent, &name, target)?;
         if directory.staging.exists() {
             fs::remove_dir_all(&directory.staging)
                 .map_err(|e| OutputError::io("removing", &directory.staging, e))?;
         }
-        let mut open = uncommitted();
         fs::create_dir(&directory.staging)
             .map_err(|e| OutputError::io("creating", &directory.staging, e))?;
-        open.push((directory.staging.clone(), directory.lock.clone()));
-        drop(open);
         Ok(directory)
     }
 
@@ -204,7 +207,8 @@ impl OutputDirectory {
     }
 
     /// Renames the staging directory to the target (replacing an old
-    /// target whole when allowed) and releases the lock.
+    /// target whole when allowed, and putting the old one back if the
+    /// rename fails) and releases the lock, all under [`UNCOMMITTED`].
     pub fn commit(mut self) -> Result<PathBuf, OutputError> {
         let mut open = uncommitted();
         check_target(&self.target, self.replace)?;
@@ -212,20 +216,28 @@ impl OutputDirectory {
             fs::remove_dir(&self.target)
                 .map_err(|e| OutputError::io("replacing", &self.target, e))?;
         }
-        if self.target.exists() {
+        let replaced = self.target.exists();
+        if replaced {
             let old = &self.old;
             if old.exists() {
                 fs::remove_dir_all(old).map_err(|e| OutputError::io("removing", old, e))?;
             }
             fs::rename(&self.target, old)
                 .map_err(|e| OutputError::io("moving aside", &self.target, e))?;
-            self.rename_staging()?;
-            fs::remove_dir_all(old).map_err(|e| OutputError::io("removing", old, e))?;
-        } else {
-            self.rename_staging()?;
+        }
+        if let Err(error) = self.rename_staging() {
+            if replaced {
+                let _ = fs::rename(&self.old, &self.target);
+            }
+            return Err(error);
         }
         self.committed = true;
         open.retain(|(staging, _)| *staging != self.staging);
+        let _ = fs::remove_file(&self.lock);
+        drop(open);
+        if replaced {
+            fs::remove_dir_all(&self.old).map_err(|e| OutputError::io("removing", &self.old, e))?;
+        }
         Ok(self.target.clone())
     }
 
@@ -239,12 +251,15 @@ impl OutputDirectory {
 }
 
 impl Drop for OutputDirectory {
+    /// Without a commit: removes the staging directory and the lock (a
+    /// commit released the lock itself, which another run may hold now).
     fn drop(&mut self) {
+        if self.committed {
+            return;
+        }
         let mut open = uncommitted();
         open.retain(|(staging, _)| *staging != self.staging);
-        if !self.committed {
-            let _ = fs::remove_dir_all(&self.staging);
-        }
+        let _ = fs::remove_dir_all(&self.staging);
         let _ = fs::remove_file(&self.lock);
     }
 }
