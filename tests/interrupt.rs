@@ -138,6 +138,24 @@ fn finish(mut child: Child, signalled: Instant) -> (Option<i32>, String, Duratio
     (output.status.code(), stderr, took)
 }
 
+/// Runs `command` on `game` into `out` until it is running, sends it
+/// `signals` in order, and waits for it: its exit code, stderr and how
+/// long it took after the first signal.
+fn interrupted(
+    (command, extra): (&str, &[&str]),
+    game: &Path,
+    out: &Path,
+    signals: &[&str],
+) -> (Option<i32>, String, Duration) {
+    let mut child = endless(command, game, out, extra);
+    wait_until_running(out, &mut child);
+    let signalled = Instant::now();
+    for name in signals {
+        signal(&child, name);
+    }
+    finish(child, signalled)
+}
+
 /// The names in `dir`, sorted.
 fn names(dir: &Path) -> Vec<String> {
     let mut names: Vec<String> = std::fs::read_dir(dir)
@@ -153,11 +171,7 @@ fn a_first_ctrl_c_writes_the_best_defender_so_far_and_exits_130() {
     let dir = scratch("graceful");
     let game = grid(&dir);
     let out = dir.join("run");
-    let mut child = endless("solve", &game, &out, SOLVE);
-    wait_until_running(&out, &mut child);
-    let signalled = Instant::now();
-    signal(&child, "INT");
-    let (code, stderr, took) = finish(child, signalled);
+    let (code, stderr, took) = interrupted(("solve", SOLVE), &game, &out, &["INT"]);
     assert_eq!(code, Some(130), "{stderr}");
     assert!(stderr.contains("interrupted"), "{stderr}");
     eprintln!("stopped {took:?} after the signal");
@@ -183,11 +197,7 @@ fn sigterm_stops_solve_as_ctrl_c_does() {
     let dir = scratch("term");
     let game = grid(&dir);
     let out = dir.join("run");
-    let mut child = endless("solve", &game, &out, SOLVE);
-    wait_until_running(&out, &mut child);
-    let signalled = Instant::now();
-    signal(&child, "TERM");
-    let (code, stderr, _) = finish(child, signalled);
+    let (code, stderr, _) = interrupted(("solve", SOLVE), &game, &out, &["TERM"]);
     assert_eq!(code, Some(130), "{stderr}");
     assert!(out.join("summary.json").is_file());
 }
@@ -201,17 +211,8 @@ fn a_second_ctrl_c_quits_at_once_and_leaves_out_untouched() {
     // (--force), stay as they were.
     std::fs::create_dir(&out).unwrap();
     std::fs::write(out.join("old.txt"), "earlier results").unwrap();
-    let mut child = endless(
-        "solve",
-        &game,
-        &out,
-        &["--def-nodes", "2", "--no-grow", "--force"],
-    );
-    wait_until_running(&out, &mut child);
-    let signalled = Instant::now();
-    signal(&child, "INT");
-    signal(&child, "INT");
-    let (code, stderr, _) = finish(child, signalled);
+    let replacing: &[&str] = &["--def-nodes", "2", "--no-grow", "--force"];
+    let (code, stderr, _) = interrupted(("solve", replacing), &game, &out, &["INT", "INT"]);
     assert_eq!(code, Some(130), "{stderr}");
     assert!(stderr.contains("nothing written"), "{stderr}");
     assert_eq!(names(&dir), ["grid.posg.json", "run"]);
@@ -223,11 +224,8 @@ fn ctrl_c_stops_a_sweep_at_once_leaving_out_untouched() {
     let dir = scratch("sweep");
     let game = grid(&dir);
     let out = dir.join("sweep");
-    let mut child = endless("sweep", &game, &out, &["--def-nodes", "1..3"]);
-    wait_until_running(&out, &mut child);
-    let signalled = Instant::now();
-    signal(&child, "INT");
-    let (code, stderr, _) = finish(child, signalled);
+    let sizes: &[&str] = &["--def-nodes", "1..3"];
+    let (code, stderr, _) = interrupted(("sweep", sizes), &game, &out, &["INT"]);
     assert_eq!(code, Some(130), "{stderr}");
     assert_eq!(names(&dir), ["grid.posg.json"]);
 }

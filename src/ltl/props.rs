@@ -4,13 +4,13 @@
 //!
 //! A file holds one query `<<P>> Pmax=? [ PATH ]` or `<<P>> Pmin=? [ PATH ]`,
 //! optionally named (`"name": ...`) and ended by `;` as Storm writes it,
-//! with `//` comments and blank lines around it. `<<P>>` names the player who optimises (the defender of a
-//! turn-based game read from DRN); without it the query is a POMDP's or an
-//! MDP's. `PATH` is any LTL path formula the parser of [`super::parse`]
-//! accepts (labels in double quotes, as Storm writes them: `F "goal"`,
-//! `G !"crash" & F "goal"`). `Pmax` makes `PATH` the defender's objective;
-//! `Pmin` makes its complement the objective (`F "goal"` becomes
-//! `G !goal`), since minimising the probability of `PATH` is maximising
+//! with `//` comments and blank lines around it. `<<P>>` names the player
+//! who optimises (the defender of a turn-based game read from DRN);
+//! without it the query is a POMDP's or an MDP's. `PATH` is any LTL path
+//! formula the parser of [`super::parse`] accepts (labels in double
+//! quotes, as Storm writes them: `F "goal"`, `G !"crash" & F "goal"`).
+//! `Pmax` makes `PATH` the defender's objective; `Pmin` makes its
+//! complement the objective (`F "goal"` becomes `G !goal`), since minimising the probability of `PATH` is maximising
 //! that of `!PATH`. Everything else (reward and time queries, bounds such
 //! as `P>=0.5`, several queries, constants, bounded operators such as
 //! `F<=10`) is an error naming the line and column ([`parse_props`]), and

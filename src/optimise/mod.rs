@@ -877,8 +877,8 @@ fn settle(
 /// a climb is within `gap_tolerance` of the upper bound against the
 /// structure's starting adversary. Its end point's
 /// bound is the race's floor ([`race`]; the best over the structures) and
-/// the end point a candidate of the final rounding. `None` where the structure's starting defender
-/// already certifies within `gap_tolerance` of that upper bound (the race
+/// the end point a candidate of the final rounding. `None` where the
+/// search's start already certifies within `gap_tolerance` of that upper bound (the race
 /// ends at its first check; on PAYNT's pursuit-evasion only randomised
 /// defenders win, and the search cost 17 s there).
 fn search_supports(

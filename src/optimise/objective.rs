@@ -39,6 +39,8 @@ pub struct Objective {
     largest_error_bound: f64,
     /// The GMC states solved so far: its reachable states per evaluation.
     work: f64,
+    /// [`Objective::identically_zero`].
+    identically_zero: bool,
 }
 
 /// The size of a structure's GMC.
@@ -74,7 +76,13 @@ impl Objective {
             &Support::of(adversary.template()),
             solver,
         )?;
+        let classes = &evaluator.recurrence().classes;
+        // Every initial state, whatever its probability now: the initial
+        // node distribution may be a parameter too.
+        let identically_zero =
+            (evaluator.gmc().initial()).all(|(m, _)| classes[m] == StateClass::Zero);
         Ok(Self {
+            identically_zero,
             evaluator,
             defender,
             adversary,
@@ -111,15 +119,10 @@ impl Objective {
     /// Whether the value is 0 at every point of the two supports: every
     /// initial GMC state is [`StateClass::Zero`] (method.md section 3),
     /// reaching no phi-feasible BSCC whatever probabilities the supports
-    /// carry, so every gradient is 0 as well.
+    /// carry, so every gradient is 0 as well. Decided once, when the
+    /// supports are analysed.
     pub fn identically_zero(&self) -> bool {
-        let classes = &self.evaluator.recurrence().classes;
-        // Every initial state, whatever its probability now: the initial
-        // node distribution may be a parameter too.
-        self.evaluator
-            .gmc()
-            .initial()
-            .all(|(m, _)| classes[m] == StateClass::Zero)
+        self.identically_zero
     }
 
     /// The size of the GMC and of its linear system.
