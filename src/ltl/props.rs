@@ -10,11 +10,12 @@
 //! formula the parser of [`super::parse`] accepts (labels in double
 //! quotes, as Storm writes them: `F "goal"`, `G !"crash" & F "goal"`).
 //! `Pmax` makes `PATH` the defender's objective; `Pmin` makes its
-//! complement the objective (`F "goal"` becomes `G !goal`), since minimising the probability of `PATH` is maximising
-//! that of `!PATH`. Everything else (reward and time queries, bounds such
-//! as `P>=0.5`, several queries, constants, bounded operators such as
-//! `F<=10`) is an error naming the line and column ([`parse_props`]), and
-//! the file too ([`from_props_str`], as the command line reports it).
+//! complement the objective (`F "goal"` becomes `G !goal`), since
+//! minimising the probability of `PATH` is maximising that of `!PATH`.
+//! Everything else (reward and time queries, bounds such as `P>=0.5`,
+//! several queries, constants, bounded operators such as `F<=10`) is an
+//! error naming the line and column ([`parse_props`]), and the file too
+//! ([`from_props_str`], as the command line reports it).
 
 use thiserror::Error;
 
