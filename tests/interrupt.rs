@@ -203,7 +203,7 @@ fn sigterm_stops_solve_as_ctrl_c_does() {
 }
 
 #[test]
-fn a_second_ctrl_c_quits_at_once_and_leaves_out_untouched() {
+fn a_second_signal_quits_at_once_and_leaves_out_untouched() {
     let dir = scratch("twice");
     let game = grid(&dir);
     let out = dir.join("run");
@@ -212,7 +212,10 @@ fn a_second_ctrl_c_quits_at_once_and_leaves_out_untouched() {
     std::fs::create_dir(&out).unwrap();
     std::fs::write(out.join("old.txt"), "earlier results").unwrap();
     let replacing: &[&str] = &["--def-nodes", "2", "--no-grow", "--force"];
-    let (code, stderr, _) = interrupted(("solve", replacing), &game, &out, &["INT", "INT"]);
+    // Two different signals, sent at once: the kernel merges a second
+    // SIGINT that arrives while the first is still pending (on a loaded
+    // machine it did), where a person's second Ctrl-C comes later.
+    let (code, stderr, _) = interrupted(("solve", replacing), &game, &out, &["INT", "TERM"]);
     assert_eq!(code, Some(130), "{stderr}");
     assert!(stderr.contains("nothing written"), "{stderr}");
     assert_eq!(names(&dir), ["grid.posg.json", "run"]);

@@ -90,6 +90,10 @@ struct LastAnalysis {
     strategy: Vec<usize>,
 }
 
+/// The most states of a product that [`LowerBoundGradients::forget_if_large`]
+/// keeps between checks (about 25 MB with its analysis).
+pub const KEPT_PRODUCT_STATES: usize = 1 << 14;
+
 impl LastAnalysis {
     /// Whether the product of `defender` explored from `seeds` is the last
     /// one refilled (the recipe fits and refilled it).
@@ -132,6 +136,23 @@ impl<'a> LowerBoundGradients<'a> {
     /// solve).
     pub fn work(&self) -> f64 {
         self.work
+    }
+
+    /// Drops the last product and its analysis, which the next bound would
+    /// otherwise reuse where its graph is the same, if it has more than
+    /// [`KEPT_PRODUCT_STATES`] states: between a run's checks, so that the
+    /// starts of a race do not each hold a large product between them (on
+    /// the 96x96 grid of issue 62, about 150 MB each; the 2-node run's peak
+    /// fell from 2.0 to 1.3 GB). A smaller one is kept, so that small games
+    /// are solved as before.
+    pub fn forget_if_large(&mut self) {
+        if self
+            .last
+            .as_ref()
+            .is_some_and(|last| last.product.mdp.num_states() > KEPT_PRODUCT_STATES)
+        {
+            self.last = None;
+        }
     }
 
     /// The lower bound of `defender` and its gradient.

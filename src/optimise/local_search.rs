@@ -598,6 +598,11 @@ fn first_improving_split(
     };
     let improves = |end: &Climbed| end.bound > current.bound + IMPROVEMENT;
     for split in splits(&landscape.search.steps, &current.defender) {
+        // Checked before the next split is built: each is a copy of the
+        // whole defender, and a spent effort stays spent.
+        if landscape.exhausted() {
+            return Ok(None);
+        }
         if let Some(first) = guided_step(landscape, &from(split))? {
             let end = climb_by_single_moves(landscape, first)?;
             if improves(&end) {

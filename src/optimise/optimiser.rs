@@ -581,6 +581,9 @@ impl<'a> Optimiser<'a> {
             let mut check = self.check(state, books, deep)?;
             let timing = (status, seconds, check_clock);
             status = self.after_check(&mut check, timing, &mut state.iterate, books)?;
+            if let Some(bounds) = self.lower_bounds.as_mut() {
+                bounds.forget_if_large();
+            }
             Some(check)
         } else {
             None
