@@ -133,10 +133,14 @@ fn trailing_bytes_and_other_versions_are_errors() {
     bytes.push(0);
     assert!(error_of(&bytes).message.contains("1 bytes after the end"));
     let mut bytes = to_bytes(&small_pomdp());
-    bytes[8] = 2;
+    bytes[8] = 3;
     let error = error_of(&bytes);
     assert_eq!(error.path, format!("{FILE}: posg"));
-    assert!(error.message.contains("unsupported format version 2"));
+    assert!(
+        error
+            .message
+            .contains("unsupported format version 3 (expected 1 or 2)")
+    );
 }
 
 /// The offset of the last transition's probability (the final 8 bytes).

@@ -1,6 +1,7 @@
 //! A bounded, seeded mutation fuzzer over the inputs (issues 13 and 57):
-//! games in JSON and in Storm's DRN (a POMDP, turn-based games: POSMG and
-//! SMG), controllers, property files, HOA automata and LTL formulas,
+//! games in JSON (one with reward models) and in Storm's DRN (POMDPs, one
+//! with SAYNT's labels and rewards, turn-based games: POSMG and SMG),
+//! controllers, property files, HOA automata and LTL formulas,
 //! mutated byte- and token-wise from valid seeds. Every mutant must give a
 //! value or an error that names the input (file name, JSON path, line or
 //! column), never a panic and never a huge allocation: a global allocator
@@ -108,6 +109,8 @@ unsafe impl GlobalAlloc for Largest {
 static ALLOCATOR: Largest = Largest;
 
 const GRID: &str = include_str!("data/valid/grid-3x2.posg.json");
+/// A game with reward models, wildcards in their `actions`.
+const REWARDED: &str = include_str!("data/valid/rewarded-pennies.posg.json");
 const HOA: &[&str] = &[
     include_str!("data/ltl/examples/fg_stable.dra.hoa"),
     include_str!("data/ltl/examples/gfa_and_gfb.dgra.hoa"),
@@ -257,11 +260,14 @@ fn largest_allocation(input: &str, run: impl FnOnce()) -> usize {
 
 #[test]
 fn mutated_games_are_read_or_refused_with_the_file_and_path() {
-    without_panics(mutants(GRID, 1500, 1), |text| {
-        if let Err(error) = posg_fsc::game::file::from_json_str(text, "fuzz.posg.json") {
-            assert!(error.to_string().contains("fuzz.posg.json"), "{error}");
-        }
-    });
+    for (k, (seed, count)) in [(GRID, 1500), (REWARDED, 600)].into_iter().enumerate() {
+        without_panics(mutants(seed, count, 1 + 100 * k as u64), |text| {
+            match posg_fsc::game::file::from_json_str(text, "fuzz.posg.json") {
+                Ok(game) => assert_valid(&game),
+                Err(error) => assert!(error.to_string().contains("fuzz.posg.json"), "{error}"),
+            }
+        });
+    }
 }
 
 #[test]
@@ -328,6 +334,8 @@ fn a_very_long_left_nested_chain_neither_overflows_nor_hangs() {
 const COIN: &str = include_str!("data/drn/coin.drn");
 const PENNIES: &str = include_str!("data/drn/pennies.drn");
 const PAYNT_GAME: &str = include_str!("data/paynt/test-game.drn");
+/// SAYNT-style labels `(n)` and two reward models.
+const REWARDS: &str = include_str!("data/drn/rewards.drn");
 
 /// Tokens of DRN: header lines, state, action and transition lines, their
 /// annotations, and numbers too large for the tables they size.
@@ -341,6 +349,14 @@ const DRN_TOKENS: &[&str] = &[
     "@parameters\np",
     "@placeholders",
     "@reward_models\nr",
+    "@reward_models\nr r",
+    "@reward_models\n\n",
+    "action (init)",
+    "(n)",
+    "[-0.04]",
+    "[1/0]",
+    "[inf, 1]",
+    ", -1e400",
     "@nr_states\n1000000000000",
     "@nr_choices\n4294967296",
     "@model",
@@ -424,9 +440,14 @@ fn assert_valid(game: &posg_fsc::game::Posg) {
 #[test]
 fn mutated_drn_models_are_read_or_refused_with_the_file_and_line() {
     let corpus = ["smg.drn", "bom.drn", "no-type.drn", "huge-nr-states.drn"].map(corpus_file);
-    let seeds = [(COIN, 600), (PENNIES, 600), (PAYNT_GAME, 600)]
-        .into_iter()
-        .chain(corpus.iter().map(|text| (text.as_str(), 150)));
+    let seeds = [
+        (COIN, 600),
+        (PENNIES, 600),
+        (PAYNT_GAME, 600),
+        (REWARDS, 600),
+    ]
+    .into_iter()
+    .chain(corpus.iter().map(|text| (text.as_str(), 150)));
     let player_1 = DrnOptions {
         defender_player: Some(1),
         defender_source: None,

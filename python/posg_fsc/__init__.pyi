@@ -56,8 +56,9 @@ class Game:
     @staticmethod
     def from_drn(path: Path) -> Game:
         """Imports a POMDP, MDP or DTMC from Storm's DRN format as a game
-        without adversary (docs/formats.md section 6); what the game cannot
-        keep (rewards) is reported as a warning."""
+        without adversary (docs/formats.md section 6), with its rewards;
+        action labels renamed because they are not names (SAYNT's `(init)`
+        is `_init_`) are reported as a warning."""
     def to_json(self) -> str:
         """The game as JSON text, which Game.from_json reads back."""
     def save(self, path: Path, binary: bool = False) -> None:

@@ -54,8 +54,8 @@ impl Game {
 
     /// Imports a POMDP, MDP or DTMC from Storm's DRN format as a game
     /// without adversary (docs/formats.md section 6), as `posg-fsc
-    /// import-drn` does; what the game cannot keep (rewards) is reported as
-    /// a Python warning.
+    /// import-drn` does; action labels renamed because they are not names
+    /// (SAYNT's `(init)` is `_init_`) are reported as a Python warning.
     #[staticmethod]
     fn from_drn(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
         let import = compute(py, || posg_fsc::game::drn::read(&path))?;

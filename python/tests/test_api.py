@@ -1,6 +1,8 @@
 """The shape of the API: numpy axes as documented, every exception class
 raised by a bad input with the CLI's message, wrong Python types."""
 
+import warnings
+
 import numpy as np
 import pytest
 
@@ -158,7 +160,8 @@ def test_a_drn_model_imports_as_the_cli_imports_it(cli, tmp_path):
 
     model = REPOSITORY / "tests" / "data" / "drn" / "dark-corridor.drn"
     run_cli(cli, "import-drn", model, "--out", tmp_path / "corridor.posg.json")
-    with pytest.warns(UserWarning, match="rewards"):
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # rewards are kept, the labels are names
         game = posg_fsc.Game.from_drn(model)
     assert game.to_json() == posg_fsc.Game.load(tmp_path / "corridor.posg.json").to_json()
     assert not game.has_adversary and game.name == "dark-corridor"

@@ -30,7 +30,8 @@ pub struct ImportDrnArgs {
     props: Option<PathBuf>,
 }
 
-/// Reads the model, prints what was dropped on stderr and writes the game.
+/// Reads the model, prints on stderr how it renamed action labels that are
+/// not names, and writes the game.
 pub fn run(args: ImportDrnArgs) -> anyhow::Result<()> {
     let options = options(&args)?;
     let import = posg_fsc::game::drn::read_with(&args.model, &options)?;

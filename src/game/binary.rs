@@ -8,19 +8,36 @@
 //! the size limits) and never trusts a count before the bytes it announces
 //! are there: a truncated or corrupt file is a [`ModelError`] naming the
 //! file, the part being read and the byte offset, never a panic.
+//!
+//! A game with action labels or reward models is written as version
+//! [`EXTENDED_VERSION`], which appends them after the transitions; every
+//! other game is written as version 1, byte for byte as before they existed.
 
 use std::path::Path;
 
 use crate::limits;
 
 use super::file::{
-    FORMAT_VERSION, Located, check_probability, index_names, is_valid_proposition, normalisation,
-    pomdp_adversary, write_bytes,
+    FORMAT_VERSION, Located, action_label_problem, check_probability, index_names,
+    is_valid_proposition, normalisation, pomdp_adversary, write_bytes,
 };
+use super::rewards::{RewardModel, invalid_reward_name, is_valid_reward_name};
 use super::{Distribution, ModelError, Player, Posg};
 
 /// The first eight bytes of a binary game file.
 pub const MAGIC: [u8; 8] = *b"POSGBIN\0";
+
+/// The version of the binary form that follows the transitions with the
+/// players' action labels and the reward models (formats.md section 11).
+pub const EXTENDED_VERSION: u32 = 2;
+
+/// Whether the game needs [`EXTENDED_VERSION`]: it has reward models, or
+/// actions renamed from their labels.
+fn is_extended(game: &Posg) -> bool {
+    !game.rewards.is_empty()
+        || !game.defender.action_labels.is_empty()
+        || !game.adversary.action_labels.is_empty()
+}
 
 /// Whether `bytes` start with [`MAGIC`] (a JSON text never does).
 pub fn is_binary(bytes: &[u8]) -> bool {
@@ -35,7 +52,12 @@ pub fn to_bytes(game: &Posg) -> Vec<u8> {
         64 + 16 * game.transition_offsets.len() + 12 * entries,
     ));
     out.0.extend_from_slice(&MAGIC);
-    out.u32(FORMAT_VERSION as u32);
+    let extended = is_extended(game);
+    out.u32(if extended {
+        EXTENDED_VERSION
+    } else {
+        FORMAT_VERSION as u32
+    });
     match &game.name {
         Some(name) => {
             out.u8(1);
@@ -57,6 +79,16 @@ pub fn to_bytes(game: &Posg) -> Vec<u8> {
     }
     for t in game.transition_offsets.windows(2) {
         out.distribution(&game.transition_entries[t[0]..t[1]]);
+    }
+    if extended {
+        out.action_labels(&game.defender);
+        if game.has_adversary {
+            out.action_labels(&game.adversary);
+        }
+        out.count(game.rewards.len());
+        for model in &game.rewards {
+            out.reward_model(model, game.num_states());
+        }
     }
     out.0
 }
@@ -80,9 +112,9 @@ pub fn from_bytes(bytes: &[u8], file_name: &str) -> Result<Posg, ModelError> {
     }
     r.pos = MAGIC.len();
     let version = r.u32(&at)?;
-    if u64::from(version) != FORMAT_VERSION {
+    if u64::from(version) != FORMAT_VERSION && version != EXTENDED_VERSION {
         return Err(r.at("posg").error(format!(
-            "unsupported format version {version} (expected {FORMAT_VERSION})"
+            "unsupported format version {version} (expected {FORMAT_VERSION} or {EXTENDED_VERSION})"
         )));
     }
     let name = match r.flag(&r.at("name"))? {
@@ -110,8 +142,12 @@ pub fn from_bytes(bytes: &[u8], file_name: &str) -> Result<Posg, ModelError> {
         has_adversary,
         transition_offsets: Vec::new(),
         transition_entries: Vec::new(),
+        rewards: Vec::new(),
     };
     r.transitions(&mut game)?;
+    if version == EXTENDED_VERSION {
+        r.extension(&mut game)?;
+    }
     if r.pos != bytes.len() {
         return Err(at.error(format!(
             "{} bytes after the end of the game (byte {})",
@@ -167,6 +203,32 @@ impl Writer {
         self.u8(u8::from(!player.enabled.is_empty()));
         self.0.extend(player.enabled.iter().map(|&e| u8::from(e)));
     }
+
+    fn f64(&mut self, value: f64) {
+        self.0.extend_from_slice(&value.to_le_bytes());
+    }
+
+    fn action_labels(&mut self, player: &Player) {
+        self.count(player.action_labels.len());
+        for (u, label) in &player.action_labels {
+            self.u32(*u as u32);
+            self.string(label);
+        }
+    }
+
+    fn reward_model(&mut self, model: &RewardModel, num_states: usize) {
+        self.string(model.name());
+        self.u8(u8::from(model.has_state_rewards()));
+        if model.has_state_rewards() {
+            (0..num_states).for_each(|s| self.f64(model.state_reward(s)));
+        }
+        let rewards = model.action_rewards_by_triple();
+        self.count(rewards.len());
+        for &(triple, reward) in rewards {
+            self.u32(triple as u32);
+            self.f64(reward);
+        }
+    }
 }
 
 /// Reads the fields of formats.md section 11 from `bytes`, checking that
@@ -214,6 +276,11 @@ impl<'a> Reader<'a> {
     fn u32(&mut self, at: &Located) -> Result<u32, ModelError> {
         let bytes = self.take(4, at)?;
         Ok(u32::from_le_bytes(bytes.try_into().expect("4 bytes")))
+    }
+
+    fn f64(&mut self, at: &Located) -> Result<f64, ModelError> {
+        let bytes = self.take(8, at)?;
+        Ok(f64::from_le_bytes(bytes.try_into().expect("8 bytes")))
     }
 
     /// A count of items of at least `item_bytes` bytes each, checked against
@@ -399,6 +466,7 @@ impl<'a> Reader<'a> {
             full_observation,
             observe,
             enabled,
+            action_labels: Vec::new(),
         })
     }
 
@@ -490,16 +558,151 @@ impl<'a> Reader<'a> {
     }
 }
 
+/// `(state `s`, defender `u`, adversary `v`)` with the names of the game.
+fn triple_text(game: &Posg, s: usize, u: usize, v: usize) -> String {
+    format!(
+        "(state `{}`, defender `{}`, adversary `{}`)",
+        game.states[s], game.defender.actions[u], game.adversary.actions[v]
+    )
+}
+
 /// Why the distribution of triple `(s, u, v)` is wrong: missing for a triple
 /// the game must define, or present for one it must not.
 fn triple_mismatch(game: &Posg, required: bool, s: usize, u: usize, v: usize) -> String {
-    let triple = format!(
-        "(state `{}`, defender `{}`, adversary `{}`)",
-        game.states[s], game.defender.actions[u], game.adversary.actions[v]
-    );
+    let triple = triple_text(game, s, u, v);
     if required {
         format!("no distribution for {triple}")
     } else {
         format!("a distribution for {triple}, whose actions no observation of the state enables")
+    }
+}
+
+impl Reader<'_> {
+    /// What [`EXTENDED_VERSION`] adds after the transitions: the players'
+    /// action labels, then the reward models, each name once.
+    fn extension(&mut self, game: &mut Posg) -> Result<(), ModelError> {
+        let at = self.at("defender").key("action_labels");
+        game.defender.action_labels = self.action_labels(&at, &game.defender.actions)?;
+        if game.has_adversary {
+            let at = self.at("adversary").key("action_labels");
+            game.adversary.action_labels = self.action_labels(&at, &game.adversary.actions)?;
+        }
+        let at = self.at("rewards");
+        let n = self.count(REWARD_MODEL_BYTES, &at)?;
+        let mut models: Vec<RewardModel> = Vec::with_capacity(n);
+        for i in 0..n {
+            let model = self.reward_model(&at.index(i), game)?;
+            if models.iter().any(|m| m.name() == model.name()) {
+                return Err(at
+                    .index(i)
+                    .error(format!("reward model `{}` appears twice", model.name())));
+            }
+            models.push(model);
+        }
+        game.rewards = models;
+        Ok(())
+    }
+
+    /// A player's action labels: `(u, label)` with `u` strictly increasing
+    /// below `|actions|`, each label as formats.md section 6 allows.
+    fn action_labels(
+        &mut self,
+        at: &Located,
+        actions: &[String],
+    ) -> Result<Vec<(usize, String)>, ModelError> {
+        let n = self.count(8, at)?;
+        let mut labels: Vec<(usize, String)> = Vec::with_capacity(n);
+        for i in 0..n {
+            let here = at.index(i);
+            let u = self.u32(&here)? as usize;
+            let label = self.string(&here)?;
+            if u >= actions.len() || labels.last().is_some_and(|&(p, _)| p >= u) {
+                return Err(here.error(format!(
+                    "action {u} out of range or not strictly increasing"
+                )));
+            }
+            if let Some(problem) = action_label_problem(actions, &labels, &label) {
+                return Err(here.error(problem));
+            }
+            labels.push((u, label));
+        }
+        Ok(labels)
+    }
+
+    /// One reward model: its name, its state rewards (a flag, then one
+    /// finite `f64` per state) and its action rewards.
+    fn reward_model(&mut self, at: &Located, game: &Posg) -> Result<RewardModel, ModelError> {
+        let name = self.string(at)?;
+        if !is_valid_reward_name(&name) {
+            return Err(at.error(invalid_reward_name(&name)));
+        }
+        let here = self.at("rewards").key(&name);
+        let states = match self.flag(&here.key("states"))? {
+            true => self.finite_values(game.num_states(), &here.key("states"))?,
+            false => Vec::new(),
+        };
+        let actions = self.action_rewards(&here.key("actions"), game)?;
+        let num_actions = (game.defender.num_actions(), game.adversary.num_actions());
+        Ok(RewardModel::new(name, states, actions, num_actions))
+    }
+
+    /// `n` finite `f64`s (rewards), value `i` at `at[i]`.
+    fn finite_values(&mut self, n: usize, at: &Located) -> Result<Vec<f64>, ModelError> {
+        let bytes = self.take(n.saturating_mul(8), at)?;
+        bytes
+            .chunks_exact(8)
+            .enumerate()
+            .map(|(i, b)| {
+                finite(
+                    f64::from_le_bytes(b.try_into().expect("8 bytes")),
+                    &at.index(i),
+                )
+            })
+            .collect()
+    }
+
+    /// A count and that many `(u32 triple, f64 reward)`: triples strictly
+    /// increasing, each one the game defines, rewards finite.
+    fn action_rewards(
+        &mut self,
+        at: &Located,
+        game: &Posg,
+    ) -> Result<Vec<(usize, f64)>, ModelError> {
+        let n = self.count(ENTRY_BYTES, at)?;
+        let (nu, nv) = (game.defender.num_actions(), game.adversary.num_actions());
+        let triples = game.num_states() * nu * nv;
+        let mut rewards: Vec<(usize, f64)> = Vec::with_capacity(n);
+        for i in 0..n {
+            let here = at.index(i);
+            let t = self.u32(&here)? as usize;
+            let reward = finite(self.f64(&here)?, &here)?;
+            if t >= triples || rewards.last().is_some_and(|&(p, _)| p >= t) {
+                return Err(here.error(format!(
+                    "triple {t} out of range or not strictly increasing"
+                )));
+            }
+            let (s, u, v) = (t / (nu * nv), t / nv % nu, t % nv);
+            if !super::file::triple_required(game, s, u, v) {
+                return Err(here.error(format!(
+                    "a reward for {}, whose actions no observation of the state enables",
+                    triple_text(game, s, u, v)
+                )));
+            }
+            rewards.push((t, reward));
+        }
+        Ok(rewards)
+    }
+}
+
+/// The fewest bytes of a reward model: an empty name (`u32`), the state
+/// rewards' flag and the action rewards' count.
+const REWARD_MODEL_BYTES: usize = 9;
+
+/// `value` if it is finite (a reward), else an error at `at`.
+fn finite(value: f64, at: &Located) -> Result<f64, ModelError> {
+    if value.is_finite() {
+        Ok(value)
+    } else {
+        Err(at.error(format!("reward {value} is not finite")))
     }
 }

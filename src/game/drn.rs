@@ -17,13 +17,15 @@
 //! carries its player `<p>`) into a concurrent game ([`turn_based`]; the
 //! player [`DrnOptions::defender_player`] is the defender): state `k` is named `s{k}`; a POMDP's observation
 //! `k` becomes the defender's observation `o{k}` (observed with probability
-//! 1), an MDP or DTMC is fully observed; each choice label is an action, and
+//! 1), an MDP or DTMC is fully observed; each choice label is an action
+//! (renamed when it is not a valid name: [`labels`]), and
 //! the `enabled` actions of each observation (or, fully observed, of each
 //! state) are the labels of its choices (formats.md section 6), so no
 //! transition has to be invented for actions a state does not offer. The
 //! states labelled `init` are the initial distribution (uniform if several);
-//! the other labels, except `deadlock`, are propositions. Rewards are dropped
-//! with a warning. Everything the game format cannot say is an error naming
+//! the other labels, except `deadlock`, are propositions. State and action
+//! rewards become the game's reward models ([`rewards`]). Everything the game
+//! format cannot say is an error naming
 //! the line: continuous time, parameters and placeholders, intervals, two
 //! choices of one state with the same label, a state whose choices differ
 //! from those of another state with its observation, a label that is not a
@@ -33,9 +35,12 @@ use std::path::Path;
 
 use rustc_hash::FxHashMap;
 
-use super::file::{bytes_without_bom, is_valid_name, is_valid_proposition, read_text, without_bom};
+use super::file::{bytes_without_bom, is_valid_proposition, read_text, without_bom};
 use super::{Distribution, ModelError, Player, Posg};
+use rewards::Arity;
 
+pub mod labels;
+pub mod rewards;
 pub mod turn_based;
 
 /// How a DRN model becomes a game.
@@ -62,12 +67,13 @@ impl DrnOptions {
     }
 }
 
-/// A game imported from DRN and what was dropped on the way.
+/// A game imported from DRN and what changed on the way.
 #[derive(Debug, Clone, PartialEq)]
 pub struct DrnImport {
     /// The game: no adversary, the defender as the POMDP's agent.
     pub game: Posg,
-    /// What the game does not keep (rewards), one sentence each.
+    /// What the import changed (the names given to action labels that are
+    /// not valid names), one sentence each.
     pub warnings: Vec<String>,
 }
 
@@ -120,12 +126,11 @@ pub fn from_drn_str_with(
 ) -> Result<DrnImport, ModelError> {
     let mut lines = Lines::new(without_bom(text), file_name);
     let header = Header::parse(&mut lines)?;
-    let model = Model::parse(&mut lines, &header)?;
+    let mut model = Model::parse(&mut lines, &header)?;
+    model.rename_actions();
     let mut warnings = Vec::new();
-    if header.reward_models || model.rewards {
-        warnings.push(format!(
-            "{file_name}: rewards are ignored (the game format has none)"
-        ));
+    if !model.renamed.is_empty() {
+        warnings.push(labels::renaming_warning(file_name, &model.renamed));
     }
     let game = if header.model_type.is_turn_based() {
         model.into_turn_based_game(&header, name, &lines, options)?
@@ -237,7 +242,8 @@ struct Header {
     choices: Option<usize>,
     /// The lines of the `@nr_states` and `@nr_choices` values (0 if absent).
     count_lines: (usize, usize),
-    reward_models: bool,
+    /// The names on the `@reward_models` line and its number (0 if absent).
+    reward_models: (Vec<String>, usize),
 }
 
 impl Header {
@@ -246,7 +252,7 @@ impl Header {
         let mut states = None;
         let mut choices = None;
         let mut count_lines = (0, 0);
-        let mut reward_models = false;
+        let mut reward_models = (Vec::new(), 0);
         while let Some((n, line)) = lines.next_content() {
             match line {
                 "@model" => {
@@ -280,8 +286,9 @@ impl Header {
                     return Err(lines.error(n, "placeholders (`$name` values) cannot be imported"));
                 }
                 "@reward_models" => {
-                    let (_, value) = value_line(lines, n, line)?;
-                    reward_models |= !value.is_empty();
+                    let (m, value) = value_line(lines, n, line)?;
+                    let names = rewards::parse_names(value).map_err(|e| lines.error(m, e))?;
+                    reward_models = (names, m);
                 }
                 "@nr_states" => {
                     states = Some(count_line(lines, n, line)?);
@@ -352,21 +359,26 @@ fn parse_type(kind: &str, n: usize, lines: &Lines) -> Result<ModelType, ModelErr
     }
 }
 
-/// One choice of a state: its label, the line it starts on, its successors.
+/// One choice of a state: its label (as written, then its action name:
+/// [`Model::rename_actions`]), the line it starts on, its rewards (one per
+/// reward model, or none) and its successors.
 #[derive(Debug)]
 struct Choice {
     label: String,
     line: usize,
+    rewards: Vec<f64>,
     successors: Vec<(usize, f64)>,
 }
 
-/// One state: its DRN observation, labels, line and choices.
+/// One state: its DRN observation, rewards (one per reward model, or
+/// none), labels, line and choices.
 #[derive(Debug)]
 struct State {
     line: usize,
     observation: Option<u64>,
     /// The player who moves here (`<p>`, SMG and POSMG only).
     player: Option<u64>,
+    rewards: Vec<f64>,
     labels: Vec<String>,
     choices: Vec<Choice>,
 }
@@ -375,16 +387,22 @@ struct State {
 #[derive(Debug)]
 struct Model {
     states: Vec<State>,
-    rewards: bool,
+    /// How many values a reward annotation carries.
+    arity: Arity,
+    /// `(label, name)` for each choice label that is not a valid action
+    /// name, as [`labels::renamed_labels`] names it.
+    renamed: Vec<(String, String)>,
 }
 
 impl Model {
     fn parse(lines: &mut Lines, header: &Header) -> Result<Self, ModelError> {
         // The declared count is only a hint: room grows with the states
         // actually read, so a huge `@nr_states` allocates nothing.
+        let (names, line) = &header.reward_models;
         let mut model = Self {
             states: Vec::with_capacity(header.states.min(MAX_RESERVED_STATES)),
-            rewards: false,
+            arity: Arity::of_header(names, *line),
+            renamed: Vec::new(),
         };
         while let Some((n, line)) = lines.next_content() {
             if let Some(rest) = line.strip_prefix("state ") {
@@ -461,8 +479,12 @@ impl Model {
             player = Some(id);
             rest = after;
         }
+        let mut rewards = Vec::new();
         if let Some((inside, after)) = bracketed(rest, '[', ']') {
-            self.rewards |= !inside.trim().is_empty();
+            rewards = self
+                .arity
+                .annotation(inside, n)
+                .map_err(|m| lines.error(n, m))?;
             rest = after;
         }
         let labels = parse_labels(rest).map_err(|m| lines.error(n, m))?;
@@ -470,24 +492,23 @@ impl Model {
             line: n,
             observation,
             player,
+            rewards,
             labels,
             choices: Vec::new(),
         })
     }
 
-    /// `action LABEL [[REWARDS]]`.
+    /// `action LABEL [[REWARDS]]`: any label without whitespace.
     fn action_line(&mut self, rest: &str, n: usize, lines: &Lines) -> Result<(), ModelError> {
         let (label, after) = split_word(rest);
+        let mut rewards = Vec::new();
         if let Some((inside, _)) = bracketed(after, '[', ']') {
-            self.rewards |= !inside.trim().is_empty();
+            rewards = self
+                .arity
+                .annotation(inside, n)
+                .map_err(|m| lines.error(n, m))?;
         } else if !after.is_empty() {
             return Err(lines.error(n, format!("unexpected `{after}` after the action label")));
-        }
-        if !is_valid_name(label) {
-            return Err(lines.error(
-                n,
-                format!("action label `{label}` is not a valid action name ([A-Za-z0-9_.:-]+)"),
-            ));
         }
         let state = self
             .states
@@ -506,6 +527,7 @@ impl Model {
         state.choices.push(Choice {
             label: label.to_string(),
             line: n,
+            rewards,
             successors: Vec::new(),
         });
         Ok(())
@@ -608,7 +630,13 @@ impl Model {
                 transition_offsets.push(transition_entries.len());
             }
         }
+        let rewards = self.reward_models(
+            self.arity.names(&header.reward_models.0),
+            (nu, 1),
+            |_, choice| (action_index[choice.label.as_str()], 0),
+        );
         let defender = Player {
+            action_labels: self.action_labels(&actions),
             actions,
             observations,
             full_observation: header.model_type != ModelType::Pomdp,
@@ -626,6 +654,7 @@ impl Model {
             has_adversary: false,
             transition_offsets,
             transition_entries,
+            rewards,
         })
     }
 
@@ -803,16 +832,22 @@ fn parse_labels(text: &str) -> Result<Vec<String>, String> {
     Ok(labels)
 }
 
+/// A number written as a decimal (`0.25`, `-1e-3`) or a rational (`1/4`),
+/// as DRN writes probabilities and rewards; `None` for anything else.
+fn parse_value(text: &str) -> Option<f64> {
+    match text.split_once('/') {
+        Some((numerator, denominator)) => {
+            let numerator: f64 = numerator.trim().parse().ok()?;
+            let denominator: f64 = denominator.trim().parse().ok()?;
+            Some(numerator / denominator)
+        }
+        None => text.parse().ok(),
+    }
+}
+
 /// A probability written as a decimal (`0.25`, `1e-3`) or a rational (`1/4`).
 fn parse_probability(text: &str) -> Result<f64, String> {
-    let value = match text.split_once('/') {
-        Some((numerator, denominator)) => {
-            let numerator: f64 = numerator.trim().parse().map_err(|_| bad_number(text))?;
-            let denominator: f64 = denominator.trim().parse().map_err(|_| bad_number(text))?;
-            numerator / denominator
-        }
-        None => text.parse().map_err(|_| bad_number(text))?,
-    };
+    let value = parse_value(text).ok_or_else(|| bad_number(text))?;
     if value.is_finite() && (0.0..=1.0).contains(&value) {
         Ok(value)
     } else {

@@ -7,14 +7,17 @@
 //! [`serde_path_to_error`] only when the first fails). The second pass
 //! checks what JSON cannot say (names, distributions, the actions `enabled`
 //! per observation, the coverage of every `(s, u_def, u_adv)` triple whose
-//! actions some observation of `s` enables by the `"*"` wildcards) and
-//! builds the [`Posg`], building the JSON path of a value only for an error.
+//! actions some observation of `s` enables by the `"*"` wildcards, the
+//! reward models of `rewards`) and builds the [`Posg`], building the JSON
+//! path of a value only for an error.
 //! Every error is a [`ModelError`] whose path is `FILE: JSON.path`, e.g.
 //! `grid.posg.json: transitions[17].next.s9`.
 //!
 //! The helpers shared with the controller files (`parse`, `Located`,
 //! `distribution`) live here too. [`read`] also reads the optional binary
 //! form of [`super::binary`] (formats.md section 11), told apart by its magic bytes.
+
+mod rewards;
 
 use std::borrow::Cow;
 use std::fmt;
@@ -30,6 +33,7 @@ use serde::ser::{SerializeMap, Serializer};
 use serde::{Deserialize, Serialize};
 
 use super::{AdversaryAction, DefenderAction, Distribution, ModelError, Player, Posg};
+use rewards::{RawRewardModel, raw_rewards};
 
 /// The only format version this crate reads and writes (`"posg": 1`).
 pub const FORMAT_VERSION: u64 = 1;
@@ -499,6 +503,9 @@ struct RawGame<'a> {
     adversary: Option<RawPlayer<'a>>,
     #[serde(borrow)]
     transitions: Vec<RawTransition<'a>>,
+    /// Reward model name -> its rewards (formats.md section 1).
+    #[serde(default, skip_serializing_if = "Option::is_none", borrow)]
+    rewards: Option<UniqueMap<RawRewardModel<'a>, Name<'a>>>,
 }
 
 /// `defender` or `adversary`.
@@ -507,6 +514,10 @@ struct RawGame<'a> {
 struct RawPlayer<'a> {
     #[serde(borrow)]
     actions: Vec<Name<'a>>,
+    /// Action -> its label as written in the model it came from, where
+    /// that differs from its name (formats.md section 6).
+    #[serde(default, skip_serializing_if = "Option::is_none", borrow)]
+    action_labels: Option<UniqueMap<Name<'a>, Name<'a>>>,
     #[serde(default, skip_serializing_if = "Option::is_none", borrow)]
     observations: Option<Vec<Name<'a>>>,
     #[serde(borrow)]
@@ -638,8 +649,10 @@ impl<'a, 'r> Builder<'a, 'r> {
             has_adversary: raw.adversary.is_some(),
             transition_offsets: Vec::new(),
             transition_entries: Vec::new(),
+            rewards: Vec::new(),
         };
         self.transitions(&raw.transitions, &mut game)?;
+        game.rewards = self.rewards(raw.rewards.as_ref(), &game)?;
         Ok(game)
     }
 
@@ -730,6 +743,7 @@ impl<'a, 'r> Builder<'a, 'r> {
         let enabled = enabled(raw, observations.len(), &index, at)?;
         Ok(Player {
             actions: owned(&raw.actions),
+            action_labels: action_labels(raw, at)?,
             observations: owned(observations),
             full_observation: true,
             observe,
@@ -782,6 +796,7 @@ impl<'a, 'r> Builder<'a, 'r> {
         let enabled = enabled(raw, observations.len(), &index, at)?;
         Ok(Player {
             actions: owned(&raw.actions),
+            action_labels: action_labels(raw, at)?,
             observations: owned(observations),
             full_observation: false,
             observe,
@@ -797,7 +812,8 @@ impl<'a, 'r> Builder<'a, 'r> {
         let mut next_entries = Vec::with_capacity(raw.len() * 4);
         for (i, t) in raw.iter().enumerate() {
             let here = || at.index(i);
-            let key = self.transition_key(t, &here, game)?;
+            let key =
+                self.transition_key(&t.state, &t.defender, t.adversary.as_deref(), &here, game)?;
             keys.push((key, i));
             nexts.push(distribution_into(
                 &t.next,
@@ -820,7 +836,7 @@ impl<'a, 'r> Builder<'a, 'r> {
                 for v in 0..nv {
                     if triple_required(game, s, u, v) {
                         let entry = resolve_triple(&keyed, s, u, v)
-                            .map_err(|m| at.error(m.describe(game, s, u, v)))?;
+                            .map_err(|m| at.error(m.describe(at.path(), game, s, u, v)))?;
                         let next = &next_entries[nexts[entry].clone()];
                         let total = game.transition_entries.len() as u128 + next.len() as u128;
                         if let Some(message) = limits::exceeded(
@@ -841,21 +857,24 @@ impl<'a, 'r> Builder<'a, 'r> {
         Ok(())
     }
 
-    /// `(state, defender action or WILDCARD, adversary action or WILDCARD)`.
-    /// In a POMDP the adversary's single action is always taken as named.
-    /// The entry's position `at` is built only for an error message.
+    /// `(state, defender action or WILDCARD, adversary action or WILDCARD)`
+    /// of an entry of `transitions` (or of a reward model's `actions`) with
+    /// these fields. In a POMDP the adversary's single action is always
+    /// taken as named. The entry's position `at` is built only for an error
+    /// message.
     fn transition_key<'f>(
         &self,
-        t: &RawTransition,
+        state: &str,
+        defender: &str,
+        adversary: Option<&str>,
         at: &dyn Fn() -> Located<'f>,
         game: &Posg,
     ) -> Result<(usize, u32, u32), ModelError> {
-        let s = self.state(&t.state).ok_or_else(|| {
-            at().key("state")
-                .error(format!("unknown state `{}`", &*t.state))
-        })?;
-        let u = action_key(&t.defender, &game.defender, || at().key("defender"))?;
-        let v = match (t.adversary.as_deref(), game.has_adversary) {
+        let s = self
+            .state(state)
+            .ok_or_else(|| at().key("state").error(format!("unknown state `{state}`")))?;
+        let u = action_key(defender, &game.defender, || at().key("defender"))?;
+        let v = match (adversary, game.has_adversary) {
             (Some(v), true) => action_key(v, &game.adversary, || at().key("adversary"))?,
             (None, true) => {
                 return Err(at().error(
@@ -902,9 +921,14 @@ impl Keyed {
         }
     }
 
+    /// The entries of state `s`, sorted by key.
+    fn of_state(&self, s: usize) -> &[((usize, u32, u32), usize)] {
+        &self.sorted[self.state_offsets[s]..self.state_offsets[s + 1]]
+    }
+
     /// The entries with key `(s, a, b)`, in file order.
     fn entries(&self, s: usize, a: u32, b: u32) -> impl Iterator<Item = usize> + '_ {
-        let of_state = &self.sorted[self.state_offsets[s]..self.state_offsets[s + 1]];
+        let of_state = self.of_state(s);
         let start = of_state.partition_point(|&((_, u, v), _)| (u, v) < (a, b));
         of_state[start..]
             .iter()
@@ -968,6 +992,59 @@ fn enabled(
     Ok(table)
 }
 
+/// A player's `action_labels` (formats.md section 6) as [`Player`] holds
+/// them: each key an action, each label not empty, without whitespace, and
+/// different from every action name and from the other labels.
+fn action_labels(raw: &RawPlayer, at: &Located) -> Result<Vec<(usize, String)>, ModelError> {
+    let Some(map) = &raw.action_labels else {
+        return Ok(Vec::new());
+    };
+    let here = at.key("action_labels");
+    let mut labels: Vec<(usize, String)> = Vec::with_capacity(map.0.len());
+    for (action, label) in &map.0 {
+        let at_action = here.key(action);
+        let u = raw
+            .actions
+            .iter()
+            .position(|a| a == action)
+            .ok_or_else(|| at_action.error(format!("unknown action `{}`", &**action)))?;
+        if let Some(problem) = action_label_problem(&raw.actions, &labels, label) {
+            return Err(at_action.error(problem));
+        }
+        labels.push((u, label.to_string()));
+    }
+    labels.sort_unstable();
+    Ok(labels)
+}
+
+/// What is wrong with `label` as the label of an action of a player with
+/// `actions`, whose other labels are `earlier` (formats.md section 6):
+/// empty or with whitespace (no DRN label is), the name of an action, or
+/// the label of another action; `None` when nothing is.
+pub(super) fn action_label_problem<N: AsRef<str>>(
+    actions: &[N],
+    earlier: &[(usize, String)],
+    label: &str,
+) -> Option<String> {
+    if label.is_empty() || label.chars().any(char::is_whitespace) {
+        return Some(format!(
+            "label `{label}` is empty or has whitespace, which no DRN label has"
+        ));
+    }
+    if actions.iter().any(|a| a.as_ref() == label) {
+        return Some(format!(
+            "label `{label}` is the name of an action; labels are given only where they \
+             differ from every name"
+        ));
+    }
+    earlier.iter().find(|(_, l)| l == label).map(|&(u, _)| {
+        format!(
+            "label `{label}` is also the label of action `{}`",
+            actions[u].as_ref()
+        )
+    })
+}
+
 /// A defender or adversary field of a transition: an action index or
 /// [`WILDCARD`]. The position `at` is built only for an error message.
 fn action_key<'f>(
@@ -993,7 +1070,9 @@ enum Unresolved {
 }
 
 impl Unresolved {
-    fn describe(&self, game: &Posg, s: usize, u: usize, v: usize) -> String {
+    /// The problem with triple `(s, u, v)` of the entries of the list at
+    /// JSON path `list` (`transitions`, or a reward model's `actions`).
+    fn describe(&self, list: &str, game: &Posg, s: usize, u: usize, v: usize) -> String {
         let triple = format!(
             "(state `{}`, defender `{}`, adversary `{}`)",
             game.states[s], game.defender.actions[u], game.adversary.actions[v]
@@ -1001,7 +1080,7 @@ impl Unresolved {
         match self {
             Unresolved::Uncovered => format!("no entry covers {triple}"),
             Unresolved::Ambiguous(a, b) => format!(
-                "transitions[{a}] and transitions[{b}] both match {triple} \
+                "{list}[{a}] and {list}[{b}] both match {triple} \
                  and neither is more specific; add an entry for the triple"
             ),
         }
@@ -1060,6 +1139,7 @@ pub(crate) fn pomdp_adversary(num_states: usize) -> Player {
         full_observation: false,
         observe: vec![vec![(0, 1.0)]; num_states],
         enabled: Vec::new(),
+        action_labels: Vec::new(),
     }
 }
 
@@ -1083,6 +1163,7 @@ impl<'a> RawGame<'a> {
                 .has_adversary
                 .then(|| RawPlayer::from_player(&game.adversary, &game.states)),
             transitions: raw_transitions(game),
+            rewards: raw_rewards(game),
         }
     }
 }
@@ -1113,8 +1194,19 @@ impl<'a> RawPlayer<'a> {
                 (Name::from(player.observations[o].as_str()), actions)
             })
             .collect();
+        let labels: Vec<(Name, Name)> = player
+            .action_labels
+            .iter()
+            .map(|(u, label)| {
+                (
+                    Name::from(player.actions[*u].as_str()),
+                    Name::from(label.as_str()),
+                )
+            })
+            .collect();
         Self {
             actions: borrowed(&player.actions),
+            action_labels: (!labels.is_empty()).then_some(UniqueMap(labels)),
             observations: Some(borrowed(&player.observations)),
             observe,
             enabled: (!enabled.is_empty()).then_some(UniqueMap(enabled)),

@@ -154,6 +154,7 @@ impl GridSpec {
             has_adversary: true,
             transition_offsets,
             transition_entries,
+            rewards: Vec::new(),
         })
     }
 
@@ -319,6 +320,7 @@ impl GridSpec {
             full_observation: false,
             observe,
             enabled: Vec::new(),
+            action_labels: Vec::new(),
         }
     }
 

@@ -6,12 +6,16 @@
 //! optional binary form `*.posg.bin` (formats.md section 11), [`drn`] imports Storm's explicit DRN
 //! models (formats.md section 6) and [`grid`] builds the seed paper's grid
 //! family. Every distribution held here has positive entries only (a zero
-//! is "no edge") that sum to one exactly up to rounding.
+//! is "no edge") that sum to one exactly up to rounding. A game may carry
+//! named [`rewards`] models, which LTL objectives do not use.
 
 pub mod binary;
 pub mod drn;
 pub mod file;
 pub mod grid;
+pub mod rewards;
+
+pub use rewards::RewardModel;
 
 use thiserror::Error;
 
@@ -104,6 +108,10 @@ pub struct Player {
     /// `enabled[o * |U| + u]`: whether action `u` is enabled under
     /// observation `o`; empty when every action is enabled everywhere.
     pub(crate) enabled: Vec<bool>,
+    /// `(u, label)`: the label as written of each action `u` whose name
+    /// differs from it (a renamed DRN label, formats.md section 6), by
+    /// increasing `u`; empty when every action is named as written.
+    pub(crate) action_labels: Vec<(usize, String)>,
 }
 
 impl Player {
@@ -115,6 +123,20 @@ impl Player {
     /// The observation names `O_*`.
     pub fn observations(&self) -> &[String] {
         &self.observations
+    }
+
+    /// The label of `action` as written in the model the game came from:
+    /// its name, unless that label is not a valid name and was renamed on
+    /// import (a DRN label such as SAYNT's `(init)` is the action `_init_`,
+    /// formats.md section 6). Files and controllers use the name.
+    pub fn action_label(&self, action: usize) -> &str {
+        match self
+            .action_labels
+            .binary_search_by_key(&action, |&(u, _)| u)
+        {
+            Ok(i) => &self.action_labels[i].1,
+            Err(_) => &self.actions[action],
+        }
     }
 
     /// `|U_*|`.
@@ -175,6 +197,7 @@ impl Player {
             full_observation: false,
             observe: Vec::new(),
             enabled: Vec::new(),
+            action_labels: Vec::new(),
         }
     }
 }
@@ -194,6 +217,8 @@ pub struct Posg {
     /// entries `transition_offsets[t]..transition_offsets[t + 1]` of `transition_entries`.
     pub(crate) transition_offsets: Vec<usize>,
     pub(crate) transition_entries: Vec<(StateId, f64)>,
+    /// The reward models, in the order of the file; names are unique.
+    pub(crate) rewards: Vec<RewardModel>,
 }
 
 impl Posg {
@@ -280,6 +305,23 @@ impl Posg {
     ) -> &[(StateId, f64)] {
         let t = (s * self.defender.num_actions() + u) * self.adversary.num_actions() + v;
         &self.transition_entries[self.transition_offsets[t]..self.transition_offsets[t + 1]]
+    }
+
+    /// The game's reward models (state and action rewards, formats.md
+    /// section 1), in the order of the file; none for most games.
+    pub fn reward_models(&self) -> &[RewardModel] {
+        &self.rewards
+    }
+
+    /// The names of the reward models, in the order of the file.
+    pub fn reward_model_names(&self) -> impl Iterator<Item = &str> {
+        self.rewards.iter().map(RewardModel::name)
+    }
+
+    /// The reward model named `name` (`R{"name"}` in a Storm property), if
+    /// the game has one.
+    pub fn reward_model(&self, name: &str) -> Option<&RewardModel> {
+        self.rewards.iter().find(|r| r.name() == name)
     }
 }
 

@@ -18,7 +18,7 @@
 
 use rustc_hash::FxHashMap;
 
-use super::{DrnOptions, Header, Lines, Model, ModelType, bracketed, normalised};
+use super::{Choice, DrnOptions, Header, Lines, Model, ModelType, bracketed, normalised};
 use crate::game::{ModelError, Player, Posg};
 
 /// The action of the player who does not move in a state.
@@ -88,6 +88,11 @@ impl Model {
         let (transition_offsets, transition_entries) =
             self.transitions(&turns, &defender, &adversary, lines)?;
         let (propositions, labels, initial) = self.labels(lines)?;
+        let rewards = self.reward_models(
+            self.arity.names(&header.reward_models.0),
+            (defender.num_actions(), adversary.num_actions()),
+            |k, choice| joint_action(&turns, k, choice, &defender, &adversary),
+        );
         Ok(Posg {
             name,
             states,
@@ -99,6 +104,7 @@ impl Model {
             has_adversary: true,
             transition_offsets,
             transition_entries,
+            rewards,
         })
     }
 
@@ -211,6 +217,7 @@ impl Model {
             enabled.clear();
         }
         Player {
+            action_labels: self.action_labels(&actions),
             actions,
             observations: states.to_vec(),
             full_observation: true,
@@ -280,6 +287,7 @@ impl Model {
             enabled.clear();
         }
         Ok(Player {
+            action_labels: self.action_labels(&actions),
             actions,
             observations,
             full_observation: false,
@@ -300,19 +308,13 @@ impl Model {
         lines: &Lines,
     ) -> Result<(Vec<usize>, Vec<(usize, f64)>), ModelError> {
         let (nu, nv) = (defender.num_actions(), adversary.num_actions());
-        let idle = |player: &Player| position(&player.actions, IDLE);
         let mut offsets = Vec::with_capacity(self.states.len() * nu * nv + 1);
         offsets.push(0);
         let mut entries = Vec::new();
         for (k, state) in self.states.iter().enumerate() {
-            let moves = turns.defender_moves[k];
-            let mut rows: Vec<Option<&super::Choice>> = vec![None; nu * nv];
+            let mut rows: Vec<Option<&Choice>> = vec![None; nu * nv];
             for choice in &state.choices {
-                let (u, v) = if moves {
-                    (position(&defender.actions, &choice.label), idle(adversary))
-                } else {
-                    (idle(defender), position(&adversary.actions, &choice.label))
-                };
+                let (u, v) = joint_action(turns, k, choice, defender, adversary);
                 rows[u * nv + v] = Some(choice);
             }
             for row in rows {
@@ -325,6 +327,28 @@ impl Model {
             }
         }
         Ok((offsets, entries))
+    }
+}
+
+/// The actions `(u, v)` the game plays for `choice` of state `k`: the
+/// choice's label for the player who moves there, [`IDLE`] for the other.
+fn joint_action(
+    turns: &Turns,
+    k: usize,
+    choice: &Choice,
+    defender: &Player,
+    adversary: &Player,
+) -> (usize, usize) {
+    if turns.defender_moves[k] {
+        (
+            position(&defender.actions, &choice.label),
+            position(&adversary.actions, IDLE),
+        )
+    } else {
+        (
+            position(&defender.actions, IDLE),
+            position(&adversary.actions, &choice.label),
+        )
     }
 }
 
