@@ -397,6 +397,14 @@ impl Evaluator {
         self.system.solver.exits()
     }
 
+    /// Frees the solver's factors until the next evaluation
+    /// ([`LinearSolver::release`]): for an evaluator idle for a while (a
+    /// start of a race between its rounds), whose next evaluation
+    /// factorises anyway.
+    pub fn release(&mut self) {
+        self.system.solver.release();
+    }
+
     /// `x(m)`, the probability of phi from each GMC state, as of the last evaluation.
     pub fn state_values(&self) -> &[f64] {
         &self.values

@@ -125,6 +125,12 @@ impl Objective {
         self.identically_zero
     }
 
+    /// Frees the evaluator's factors until the next evaluation
+    /// ([`Evaluator::release`]).
+    pub fn release(&mut self) {
+        self.evaluator.release();
+    }
+
     /// The size of the GMC and of its linear system.
     pub fn gmc_size(&self) -> GmcSize {
         let classes = &self.evaluator.recurrence().classes;

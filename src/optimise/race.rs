@@ -55,11 +55,14 @@ impl<'a, O: Observer + Send> Racer<'a, O> {
         })
     }
 
-    /// Continues through iteration `last` unless the run stops first.
+    /// Continues through iteration `last` unless the run stops first, then
+    /// frees the factors it would rebuild anyway ([`Optimiser::release`]):
+    /// between rounds, only the starts that run hold them.
     fn advance(&mut self, last: usize) -> Result<(), OptimiseError> {
         self.stopped = self
             .optimiser
             .advance(&mut self.run, last, &mut self.observer)?;
+        self.optimiser.release();
         Ok(())
     }
 

@@ -179,6 +179,15 @@ impl LuSolver {
         }))
     }
 
+    /// Frees the factors' storage, keeping the symbolic analysis and the
+    /// values: the next factorisation allocates it again; until then no
+    /// solve is possible. For a solver idle between uses (a start of a race
+    /// waiting for its next round).
+    pub fn release(&mut self) {
+        self.system.lu.release();
+        self.system.factorised = false;
+    }
+
     /// The number of entries of the factors `L` and `U` (the structural
     /// fill: their dense supernode blocks counted whole), whether or not the
     /// last factorisation stored `L`.

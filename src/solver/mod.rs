@@ -851,6 +851,15 @@ impl LinearSolver {
         }
     }
 
+    /// Frees an LU's factors ([`LuSolver::release`]) until the next
+    /// factorisation; an iterative solver keeps its preconditioner (the
+    /// size of the matrix).
+    pub fn release(&mut self) {
+        if let Backend::Lu(lu) = &mut self.backend {
+            lu.release();
+        }
+    }
+
     /// Factorises `A` as `fill` writes it into the solver's own copies
     /// (holding the previous numbers on entry), without a second copy:
     /// the off-diagonal entries `-Q` into the values (aligned with the

@@ -145,28 +145,59 @@ pub(crate) struct MultifrontalLu {
 }
 
 impl MultifrontalLu {
-    /// Symbolic analysis of `pattern`: ordering, supernodes, assembly maps,
-    /// and the storage of the factors (allocated, touched only when used).
+    /// Symbolic analysis of `pattern`: ordering, supernodes, assembly maps;
+    /// the storage of the factors is allocated by the first factorisation.
     pub(crate) fn new(pattern: &SparsePattern) -> Result<Self, SolverError> {
         let structure = Structure::analyse(pattern)?;
         Ok(Self {
-            lower: vec![0.0; structure.lower_len],
-            upper: vec![0.0; structure.upper_len],
+            lower: Vec::new(),
+            upper: Vec::new(),
             pivots: Vec::new(),
             lower_kept: false,
             left: Vec::new(),
-            front: vec![0.0; structure.largest_right],
-            stack: Vec::with_capacity(structure.stack_len),
+            front: Vec::new(),
+            stack: Vec::new(),
             exits: Vec::with_capacity(structure.n),
             beyond: Vec::new(),
             structure,
         })
     }
 
+    /// Frees the numeric storage (the factors and the fronts' buffers),
+    /// keeping the symbolic analysis: the next factorisation allocates it
+    /// again. Until then there are no factors to solve with.
+    pub(crate) fn release(&mut self) {
+        self.lower = Vec::new();
+        self.upper = Vec::new();
+        self.pivots = Vec::new();
+        self.left = Vec::new();
+        self.front = Vec::new();
+        self.stack = Vec::new();
+        self.beyond = Vec::new();
+        self.lower_kept = false;
+    }
+
+    /// Allocates the factors' storage where [`Self::new`] or
+    /// [`Self::release`] left none (zeroed, so touched only when used):
+    /// `L`'s panels only where they are kept.
+    fn allocate_released(&mut self, keep_lower: bool) {
+        let zeroed = |buffer: &mut Vec<f64>, len: usize| {
+            if buffer.len() < len {
+                *buffer = vec![0.0; len];
+            }
+        };
+        if keep_lower {
+            zeroed(&mut self.lower, self.structure.lower_len);
+        }
+        zeroed(&mut self.upper, self.structure.upper_len);
+        zeroed(&mut self.front, self.structure.largest_right);
+        self.stack.reserve(self.structure.stack_len);
+    }
+
     /// Entries of `L` and `U` (a pivot block's two triangles share one
     /// square): the structural fill, whether or not `L` is kept.
     pub(crate) fn stored_entries(&self) -> usize {
-        self.lower.len() + self.upper.len()
+        self.structure.lower_len + self.structure.upper_len
     }
 
     /// Floating-point operations of one numeric factorisation, from the
@@ -228,6 +259,7 @@ impl MultifrontalLu {
         mut forward: Option<&mut [f64]>,
     ) -> Result<(), SolverError> {
         let keep_lower = forward.is_none();
+        self.allocate_released(keep_lower);
         if !keep_lower {
             self.pivots.resize(self.structure.pivots_len, 0.0);
             self.left.resize(self.structure.largest_left, 0.0);
