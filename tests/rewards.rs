@@ -255,11 +255,29 @@ fn json_rewards_resolve_wildcards_by_the_most_specific_entry() {
     assert_eq!(json["rewards"]["steps"], json!({"states": {"s": 1.0}}));
 }
 
+/// Games without rewards or action labels are written byte for byte as
+/// before rewards existed: `tests/data/unchanged/` holds what the command
+/// line of b51cef3 (the commit before them) wrote: `example grid --out`
+/// (JSON), `example grid --binary --out` and `import-drn
+/// tests/data/drn/coin.drn --out`.
 #[test]
 fn games_without_rewards_are_written_as_before() {
+    let fixture = |name: &str| std::fs::read(format!("tests/data/unchanged/{name}")).unwrap();
+    let grid_json = String::from_utf8(fixture("grid-3x2.posg.json")).unwrap();
+    let grid = from_json_str(&grid_json, "grid-3x2.posg.json").unwrap();
+    assert!(grid.reward_models().is_empty());
+    assert_eq!(to_json_string(&grid), grid_json.trim_end());
+    assert_eq!(to_bytes(&grid), fixture("grid-3x2.posg.bin"));
+    assert_eq!(
+        from_bytes(&fixture("grid-3x2.posg.bin"), "grid-3x2.posg.bin").unwrap(),
+        grid
+    );
+    let coin = read_drn(Path::new("tests/data/drn/coin.drn")).unwrap().game;
+    let coin_json = String::from_utf8(fixture("coin.posg.json")).unwrap();
+    assert_eq!(to_json_string(&coin), coin_json.trim_end());
+    assert_eq!(to_bytes(&coin)[8..12], 1u32.to_le_bytes());
     for file in ["grid-3x2", "matching-pennies", "remember-the-cue"] {
         let game = read(Path::new(&format!("tests/data/valid/{file}.posg.json"))).unwrap();
-        assert!(game.reward_models().is_empty());
         let json = to_json_string(&game);
         assert!(!json.contains("rewards") && !json.contains("action_labels"));
         assert_eq!(to_bytes(&game)[8..12], 1u32.to_le_bytes(), "{file}");
