@@ -22,6 +22,12 @@ pub const MAX_TRANSITION_TRIPLES: u128 = 50_000_000;
 /// its `"*"` wildcards are expanded.
 pub const MAX_TRANSITION_ENTRIES: u128 = 200_000_000;
 
+/// The most non-zero rewards the reward models of a game may hold together
+/// (state rewards and action rewards, JSON wildcards expanded), each about
+/// 16 bytes: this keeps them within about 800 MB. It is checked before the
+/// rewards are stored.
+pub const MAX_REWARD_ENTRIES: u128 = 50_000_000;
+
 /// The most edges (`states * 2^AP`) a deterministic automaton may have,
 /// read from HOA or built from a formula.
 pub const MAX_AUTOMATON_EDGES: u128 = 1 << 24;

@@ -51,6 +51,8 @@ struct Largest;
 
 thread_local! {
     static LARGEST: Cell<usize> = const { Cell::new(0) };
+    /// The bytes this thread has requested in all (never decreased).
+    static TOTAL: Cell<usize> = const { Cell::new(0) };
     /// The input being checked on this thread (pointer, length), for the
     /// message of a refused allocation.
     static INPUT: Cell<(*const u8, usize)> = const { Cell::new((std::ptr::null(), 0)) };
@@ -59,6 +61,7 @@ thread_local! {
 /// Notes a request of `size` bytes; `false` if it is to be refused.
 fn note(size: usize) -> bool {
     let _ = LARGEST.try_with(|largest| largest.set(largest.get().max(size)));
+    let _ = TOTAL.try_with(|total| total.set(total.get().saturating_add(size)));
     if size < REFUSED_ALLOCATION {
         return true;
     }
@@ -806,4 +809,106 @@ fn mutated_durations_are_budgets_or_refused_by_value_never_a_panic() {
             }
         });
     }
+}
+
+/// The bytes this thread requests in all while `run` runs.
+fn total_allocation(run: impl FnOnce()) -> usize {
+    let before = TOTAL.with(Cell::get);
+    run();
+    TOTAL.with(Cell::get) - before
+}
+
+/// A DRN MDP of `states` states, each with one unannotated choice, whose
+/// `@reward_models` line is `header`.
+fn drn_without_rewards(header: &str, states: usize) -> String {
+    let mut text = format!("@type: MDP\n@reward_models\n{header}\n@nr_states\n{states}\n@model\n");
+    for k in 0..states {
+        let init = if k == 0 { " init" } else { "" };
+        text += &format!("state {k}{init}\n\taction a\n\t\t{k} : 1\n");
+    }
+    text
+}
+
+/// Issue 60's review: many reward models without a single non-zero value
+/// took a state vector and a choice vector each (10^4 states x 500 models
+/// were 120 MB); now they take only the room of their names.
+#[test]
+fn declared_reward_models_without_values_take_no_room_per_state() {
+    let names: Vec<String> = (0..500).map(|i| format!("m{i}")).collect();
+    let plain = drn_without_rewards("", 10_000);
+    let declared = drn_without_rewards(&names.join(" "), 10_000);
+    let read = |text: &str| {
+        total_allocation(|| {
+            let game = from_drn_str(text, "m.drn", None).unwrap().game;
+            assert!(game.reward_models().len() <= 500);
+        })
+    };
+    let (without, with) = (read(&plain), read(&declared));
+    assert!(
+        with < without + (1 << 20),
+        "{with} bytes with 500 empty reward models, {without} without"
+    );
+}
+
+/// A JSON game of `states` states, one action each, with `models` reward
+/// models `{"states": {}}`.
+fn json_with_empty_reward_models(states: usize, models: usize) -> String {
+    let names: Vec<String> = (0..states).map(|k| format!("\"s{k}\"")).collect();
+    let transitions: Vec<String> = (0..states)
+        .map(|k| format!("{{\"state\": \"s{k}\", \"defender\": \"*\", \"next\": {{\"s{k}\": 1}}}}"))
+        .collect();
+    let rewards: Vec<String> = (0..models)
+        .map(|i| format!("\"m{i}\": {{\"states\": {{}}, \"actions\": []}}"))
+        .collect();
+    format!(
+        "{{\"posg\": 1, \"states\": [{}], \"initial\": {{\"s0\": 1}}, \
+         \"defender\": {{\"actions\": [\"a\"], \"observe\": \"full\"}}, \
+         \"transitions\": [{}], \"rewards\": {{{}}}}}",
+        names.join(", "),
+        transitions.join(", "),
+        rewards.join(", ")
+    )
+}
+
+/// The same from JSON: `"m": {"states": {}}` took a vector of every state.
+#[test]
+fn empty_json_reward_models_take_no_room_per_state() {
+    let read = |text: &str| {
+        total_allocation(|| {
+            posg_fsc::game::file::from_json_str(text, "m.posg.json").unwrap();
+        })
+    };
+    let without = read(&json_with_empty_reward_models(10_000, 0));
+    let with = read(&json_with_empty_reward_models(10_000, 500));
+    assert!(
+        with < without + (1 << 20),
+        "{with} bytes with 500 empty reward models, {without} without"
+    );
+}
+
+/// A binary game's count of reward models reserved room for that many
+/// models (about 10 times the bytes the count needs); a count backed by
+/// zeros now fails on the first model's empty name, having reserved little.
+#[test]
+fn a_binary_count_of_reward_models_reserves_little_room() {
+    let text = include_str!("data/drn/rewards.drn");
+    let game = from_drn_str(text, "m.drn", None).unwrap().game;
+    let bytes = posg_fsc::game::binary::to_bytes(&game);
+    let name = [&6u32.to_le_bytes()[..], b"reward"].concat();
+    let at = bytes.windows(name.len()).position(|w| w == name).unwrap() - 4;
+    let padding = 1 << 20;
+    let mut hostile = bytes[..at].to_vec();
+    hostile.extend_from_slice(&((padding / 9) as u32).to_le_bytes());
+    hostile.resize(hostile.len() + padding, 0);
+    let input = String::from_utf8_lossy(&hostile[..at]).into_owned();
+    let largest = largest_allocation(&input, || {
+        let error = posg_fsc::game::binary::from_bytes(&hostile, "t.posg.bin").unwrap_err();
+        assert!(
+            error.to_string().starts_with("t.posg.bin: rewards[0]: ``"),
+            "{error}"
+        );
+    });
+    // The transitions reserve room by the bytes left (1.3 times them); the
+    // models' room was 10 times.
+    assert!(largest < 2 * padding, "{largest} bytes in one allocation");
 }

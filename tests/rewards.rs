@@ -27,7 +27,9 @@ fn drn_error(text: &str) -> String {
 
 /// `r(s, u)` of a POMDP (the adversary's only action).
 fn action_reward(model: &RewardModel, s: usize, u: usize) -> f64 {
-    model.action_reward(s, DefenderAction(u), AdversaryAction(0))
+    model
+        .action_reward(s, DefenderAction(u), AdversaryAction(0))
+        .unwrap()
 }
 
 #[test]
@@ -82,7 +84,7 @@ fn saynt_labels_are_read_renamed_and_kept_as_written() {
     let import = saynt_style();
     let defender = import.game.defender();
     assert_eq!(defender.actions(), ["_init_", "_n_", "_s_", "n"]);
-    let written: Vec<&str> = (0..4).map(|u| defender.action_label(u)).collect();
+    let written: Vec<&str> = (0..4).map(|u| defender.action_label(u).unwrap()).collect();
     assert_eq!(written, ["(init)", "(n)", "(s)", "n"]);
     assert_eq!(
         import.warnings,
@@ -103,7 +105,7 @@ fn labels_that_differ_only_outside_the_name_alphabet_stay_distinct() {
     let import = from_drn_str(text, "m.drn", None).unwrap();
     let defender = import.game.defender();
     assert_eq!(defender.actions(), ["_n_.2", "_n_.3", "_n_", "__NOLABEL__"]);
-    let written: Vec<&str> = (0..4).map(|u| defender.action_label(u)).collect();
+    let written: Vec<&str> = (0..4).map(|u| defender.action_label(u).unwrap()).collect();
     assert_eq!(written, ["(n)", "[n]", "_n_", "__NOLABEL__"]);
     // Two choices of one state with the same label are still an error.
     let twice = text.replace("[n]", "(n)");
@@ -151,11 +153,17 @@ fn turn_based_rewards_belong_to_the_movers_action_against_the_idle_one() {
     let r = game.reward_model("r").unwrap();
     assert_eq!(game.defender().actions(), ["_a_", "b", "_"]);
     assert_eq!(game.adversary().actions(), ["_c_", "_"]);
-    assert_eq!(game.adversary().action_label(0), "(c)");
+    assert_eq!(game.adversary().action_label(0), Some("(c)"));
+    assert_eq!(game.adversary().action_label(2), None);
     assert_eq!((r.state_reward(0), r.state_reward(1)), (1.5, -1.0));
     let at = |s, u, v| r.action_reward(s, DefenderAction(u), AdversaryAction(v));
-    assert_eq!((at(0, 0, 1), at(0, 1, 1), at(1, 2, 0)), (-2.0, 3.0, 4.0));
-    assert_eq!((at(0, 0, 0), at(1, 0, 0)), (0.0, 0.0));
+    assert_eq!(
+        (at(0, 0, 1), at(0, 1, 1), at(1, 2, 0)),
+        (Some(-2.0), Some(3.0), Some(4.0))
+    );
+    assert_eq!((at(0, 0, 0), at(1, 0, 0)), (Some(0.0), Some(0.0)));
+    // An action out of range is no reward, not another triple's.
+    assert_eq!((at(0, 3, 0), at(0, 0, 2), at(0, 0, 5)), (None, None, None));
     assert_round_trips(&game);
 }
 
@@ -220,7 +228,11 @@ fn rewards_and_labels_survive_drn_json_and_binary() {
 fn json_rewards_resolve_wildcards_by_the_most_specific_entry() {
     let game = read(Path::new("tests/data/valid/rewarded-pennies.posg.json")).unwrap();
     let coins = game.reward_model("coins").unwrap();
-    let at = |u, v| coins.action_reward(0, DefenderAction(u), AdversaryAction(v));
+    let at = |u, v| {
+        coins
+            .action_reward(0, DefenderAction(u), AdversaryAction(v))
+            .unwrap()
+    };
     assert_eq!(
         (at(0, 0), at(0, 1), at(1, 0), at(1, 1)),
         (-0.04, -0.04, 0.5, 2.0)
@@ -243,11 +255,29 @@ fn json_rewards_resolve_wildcards_by_the_most_specific_entry() {
     assert_eq!(json["rewards"]["steps"], json!({"states": {"s": 1.0}}));
 }
 
+/// Games without rewards or action labels are written byte for byte as
+/// before rewards existed: `tests/data/unchanged/` holds what the command
+/// line of b51cef3 (the commit before them) wrote: `example grid --out`
+/// (JSON), `example grid --binary --out` and `import-drn
+/// tests/data/drn/coin.drn --out`.
 #[test]
 fn games_without_rewards_are_written_as_before() {
+    let fixture = |name: &str| std::fs::read(format!("tests/data/unchanged/{name}")).unwrap();
+    let grid_json = String::from_utf8(fixture("grid-3x2.posg.json")).unwrap();
+    let grid = from_json_str(&grid_json, "grid-3x2.posg.json").unwrap();
+    assert!(grid.reward_models().is_empty());
+    assert_eq!(to_json_string(&grid), grid_json.trim_end());
+    assert_eq!(to_bytes(&grid), fixture("grid-3x2.posg.bin"));
+    assert_eq!(
+        from_bytes(&fixture("grid-3x2.posg.bin"), "grid-3x2.posg.bin").unwrap(),
+        grid
+    );
+    let coin = read_drn(Path::new("tests/data/drn/coin.drn")).unwrap().game;
+    let coin_json = String::from_utf8(fixture("coin.posg.json")).unwrap();
+    assert_eq!(to_json_string(&coin), coin_json.trim_end());
+    assert_eq!(to_bytes(&coin)[8..12], 1u32.to_le_bytes());
     for file in ["grid-3x2", "matching-pennies", "remember-the-cue"] {
         let game = read(Path::new(&format!("tests/data/valid/{file}.posg.json"))).unwrap();
-        assert!(game.reward_models().is_empty());
         let json = to_json_string(&game);
         assert!(!json.contains("rewards") && !json.contains("action_labels"));
         assert_eq!(to_bytes(&game)[8..12], 1u32.to_le_bytes(), "{file}");
@@ -285,8 +315,8 @@ fn bad_drn_rewards_are_errors_naming_the_line() {
         ),
         (
             rewards_drn_with("[-1, 0.5]", "[-1, 0.5, 2]"),
-            "m.drn: line 23: the reward annotation `[-1, 0.5, 2]` has 3 values, but \
-             `@reward_models` (line 12) names 2 reward models",
+            "m.drn: line 23: the reward annotation `[-1, 0.5, 2]` has 3 values, but the one at \
+             line 18 has 2 values",
         ),
         (
             rewards_drn_with("[0.25, -2.5e-1]", "[0.25]"),
@@ -298,6 +328,16 @@ fn bad_drn_rewards_are_errors_naming_the_line() {
             "m.drn: line 12: reward model `reward` is named twice",
         ),
         (
+            rewards_drn_with("@reward_models\n", "@reward_models\nx\n@reward_models\n"),
+            "m.drn: line 13: a second `@reward_models` line; the first names its reward models \
+             at line 12",
+        ),
+        (
+            rewards_drn_with("reward cost ", "rew1 "),
+            "m.drn: line 12: reward model 1, unnamed here, would be named `rew1`, which \
+             `@reward_models` gives another model",
+        ),
+        (
             rewards_drn_with("reward cost ", "reward \"cost\""),
             "m.drn: line 12: `\"cost\"` is not a valid reward model name (not empty, without \
              whitespace or `\"`)",
@@ -305,7 +345,7 @@ fn bad_drn_rewards_are_errors_naming_the_line() {
         (
             rewards_drn_with("reward cost \n", "\n").replacen("[0, 1/3]", "[0]", 1),
             "m.drn: line 19: the reward annotation `[0]` has 1 value, but the one at line 18 has \
-             2 values (and `@reward_models` names no model)",
+             2 values",
         ),
     ];
     for (text, expected) in cases {
@@ -397,8 +437,8 @@ fn bad_action_labels_are_errors_naming_the_json_path() {
         pennies_with(|g| g["defender"]["action_labels"] = labels).map(|g| {
             let defender = g.defender();
             (
-                defender.action_label(0).to_string(),
-                defender.action_label(1).to_string(),
+                defender.action_label(0).unwrap().to_string(),
+                defender.action_label(1).unwrap().to_string(),
             )
         })
     };
@@ -414,7 +454,14 @@ fn bad_action_labels_are_errors_naming_the_json_path() {
     assert_json_error(
         labelled(json!({"H": "T"})),
         "defender.action_labels.H",
-        "label `T` is the name of an action",
+        "label `T` is a valid action name; labels are given only for actions renamed from a \
+         label that is not a name",
+    );
+    // A valid name is refused even when no action has it.
+    assert_json_error(
+        labelled(json!({"H": "heads"})),
+        "defender.action_labels.H",
+        "label `heads` is a valid action name",
     );
     assert_json_error(
         labelled(json!({"H": "(h)", "T": "(h)"})),
@@ -500,4 +547,92 @@ fn truncated_or_corrupt_extended_binaries_are_errors_never_panics() {
             }
         }
     }
+}
+
+/// Storm's header line is split at each space or tab: an empty piece, or
+/// no piece, leaves a model unnamed, and it is named `rew{i}`; trailing
+/// empty pieces are ignored.
+#[test]
+fn models_the_header_leaves_unnamed_are_named_rew_i() {
+    let with_header = |header: &str| {
+        let text = format!(
+            "@type: DTMC\n@reward_models\n{header}\n@nr_states\n1\n@model\n\
+             state 0 [1, 2, 3, 4] init\n\taction __NOLABEL__\n\t\t0 : 1\n"
+        );
+        let game = from_drn_str(&text, "m.drn", None).unwrap().game;
+        game.reward_model_names()
+            .map(str::to_string)
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(with_header("a  b"), ["a", "rew1", "b", "rew3"]);
+    assert_eq!(with_header("a\tb \t "), ["a", "b", "rew2", "rew3"]);
+    assert_eq!(with_header(" "), ["rew0", "rew1", "rew2", "rew3"]);
+    let game = from_drn_str(
+        "@type: DTMC\n@reward_models\na  b\n@nr_states\n1\n@model\nstate 0 init\n\
+         \taction __NOLABEL__\n\t\t0 : 1\n",
+        "m.drn",
+        None,
+    )
+    .unwrap()
+    .game;
+    assert_eq!(
+        game.reward_model_names().collect::<Vec<_>>(),
+        ["a", "rew1", "b"]
+    );
+}
+
+/// A POMDP whose states with one observation offer different renamed
+/// labels: the error shows each label as written, with its name.
+#[test]
+fn offered_labels_are_shown_as_written_with_their_names() {
+    let text = "@type: POMDP\n@nr_states\n2\n@model\nstate 0 {0} init\n\taction (n)\n\t\t1 : 1\n\
+                state 1 {0}\n\taction (s)\n\t\t0 : 1\n";
+    assert_eq!(
+        drn_error(text),
+        "m.drn: line 8: state 1 offers {(s) (read as _s_)}, but state 0 (line 5) with the same \
+         observation offers {(n) (read as _n_)}: a POMDP's states with one observation must \
+         offer the same actions"
+    );
+    let smg = "@type: POSMG\n@nr_states\n2\n@model\nstate 0 {0} <0> init\n\taction (n)\n\
+               \t\t1 : 1\nstate 1 {0} <0>\n\taction s\n\t\t0 : 1\n";
+    assert!(
+        drn_error(smg).contains(
+            "state 1 offers {s}, but state 0 (line 5) with the same \
+                                 observation offers {(n) (read as _n_)}"
+        ),
+        "{}",
+        drn_error(smg)
+    );
+}
+
+/// Wildcard action rewards that would expand to more rewards than
+/// `MAX_REWARD_ENTRIES` are refused before any is expanded, naming the
+/// model that crosses the budget.
+#[test]
+fn wildcard_action_rewards_beyond_the_budget_are_refused_before_expansion() {
+    let actions: Vec<String> = (0..2000).map(|u| format!("a{u}")).collect();
+    let models: serde_json::Map<String, Value> = (0..13)
+        .map(|i| {
+            let entry = json!({"state": "s", "defender": "*", "adversary": "*", "reward": 1.0});
+            (format!("m{i:02}"), json!({"actions": [entry]}))
+        })
+        .collect();
+    let game = json!({
+        "posg": 1, "states": ["s"], "initial": {"s": 1.0},
+        "defender": {"actions": actions, "observe": "full"},
+        "adversary": {"actions": actions, "observe": "full"},
+        "transitions": [{"state": "s", "defender": "*", "adversary": "*", "next": {"s": 1.0}}],
+        "rewards": models,
+    });
+    let start = std::time::Instant::now();
+    let error = from_json_str(&game.to_string(), FILE)
+        .unwrap_err()
+        .to_string();
+    assert_eq!(
+        error,
+        "t.posg.json: rewards.m12: the reward models with their wildcards expanded would need \
+         52000000 rewards or more, above the budget of 50000000 \
+         (posg_fsc::limits::MAX_REWARD_ENTRIES); use a smaller input"
+    );
+    assert!(start.elapsed().as_secs() < 20, "{:?}", start.elapsed());
 }

@@ -15,6 +15,8 @@
 
 use std::path::Path;
 
+use rustc_hash::{FxHashMap, FxHashSet};
+
 use crate::limits;
 
 use super::file::{
@@ -220,7 +222,11 @@ impl Writer {
         self.string(model.name());
         self.u8(u8::from(model.has_state_rewards()));
         if model.has_state_rewards() {
-            (0..num_states).for_each(|s| self.f64(model.state_reward(s)));
+            let mut given = model.state_rewards().peekable();
+            for s in 0..num_states {
+                let reward = given.next_if(|&(t, _)| t == s).map_or(0.0, |(_, r)| r);
+                self.f64(reward);
+            }
         }
         let rewards = model.action_rewards_by_triple();
         self.count(rewards.len());
@@ -589,10 +595,11 @@ impl Reader<'_> {
         }
         let at = self.at("rewards");
         let n = self.count(REWARD_MODEL_BYTES, &at)?;
-        let mut models: Vec<RewardModel> = Vec::with_capacity(n);
+        let mut models: Vec<RewardModel> = Vec::with_capacity(n.min(RESERVED_FROM_COUNT));
+        let mut names = FxHashSet::default();
         for i in 0..n {
             let model = self.reward_model(&at.index(i), game)?;
-            if models.iter().any(|m| m.name() == model.name()) {
+            if !names.insert(model.name().to_string()) {
                 return Err(at
                     .index(i)
                     .error(format!("reward model `{}` appears twice", model.name())));
@@ -611,7 +618,8 @@ impl Reader<'_> {
         actions: &[String],
     ) -> Result<Vec<(usize, String)>, ModelError> {
         let n = self.count(8, at)?;
-        let mut labels: Vec<(usize, String)> = Vec::with_capacity(n);
+        let mut labels: Vec<(usize, String)> = Vec::with_capacity(n.min(RESERVED_FROM_COUNT));
+        let mut seen: FxHashMap<String, usize> = FxHashMap::default();
         for i in 0..n {
             let here = at.index(i);
             let u = self.u32(&here)? as usize;
@@ -621,9 +629,10 @@ impl Reader<'_> {
                     "action {u} out of range or not strictly increasing"
                 )));
             }
-            if let Some(problem) = action_label_problem(actions, &labels, &label) {
+            if let Some(problem) = action_label_problem(actions, &seen, &label) {
                 return Err(here.error(problem));
             }
+            seen.insert(label.clone(), u);
             labels.push((u, label));
         }
         Ok(labels)
@@ -641,9 +650,15 @@ impl Reader<'_> {
             true => self.finite_values(game.num_states(), &here.key("states"))?,
             false => Vec::new(),
         };
+        let states = states.into_iter().enumerate().filter(|&(_, r)| r != 0.0);
         let actions = self.action_rewards(&here.key("actions"), game)?;
         let num_actions = (game.defender.num_actions(), game.adversary.num_actions());
-        Ok(RewardModel::new(name, states, actions, num_actions))
+        Ok(RewardModel::new(
+            name,
+            states.collect(),
+            actions,
+            num_actions,
+        ))
     }
 
     /// `n` finite `f64`s (rewards), value `i` at `at[i]`.
@@ -697,6 +712,12 @@ impl Reader<'_> {
 /// The fewest bytes of a reward model: an empty name (`u32`), the state
 /// rewards' flag and the action rewards' count.
 const REWARD_MODEL_BYTES: usize = 9;
+
+/// The most items room is reserved for from a count the file gives, where
+/// an item takes much more memory than its least bytes in the file (a
+/// reward model, an action label): more grow as they are read, so a count
+/// the file's bytes do not back allocates nothing.
+const RESERVED_FROM_COUNT: usize = 16;
 
 /// `value` if it is finite (a reward), else an error at `at`.
 fn finite(value: f64, at: &Located) -> Result<f64, ModelError> {

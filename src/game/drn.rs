@@ -39,8 +39,8 @@ use super::file::{bytes_without_bom, is_valid_proposition, read_text, without_bo
 use super::{Distribution, ModelError, Player, Posg};
 use rewards::Arity;
 
-pub mod labels;
-pub mod rewards;
+mod labels;
+mod rewards;
 pub mod turn_based;
 
 /// How a DRN model becomes a game.
@@ -242,8 +242,9 @@ struct Header {
     choices: Option<usize>,
     /// The lines of the `@nr_states` and `@nr_choices` values (0 if absent).
     count_lines: (usize, usize),
-    /// The names on the `@reward_models` line and its number (0 if absent).
-    reward_models: (Vec<String>, usize),
+    /// The names on the `@reward_models` line (`None` where it leaves a
+    /// model unnamed) and its number (0 if absent).
+    reward_models: (Vec<Option<String>>, usize),
 }
 
 impl Header {
@@ -286,6 +287,15 @@ impl Header {
                     return Err(lines.error(n, "placeholders (`$name` values) cannot be imported"));
                 }
                 "@reward_models" => {
+                    if reward_models.1 != 0 {
+                        return Err(lines.error(
+                            n,
+                            format!(
+                                "a second `@reward_models` line; the first names its reward models at line {}",
+                                reward_models.1
+                            ),
+                        ));
+                    }
                     let (m, value) = value_line(lines, n, line)?;
                     let names = rewards::parse_names(value).map_err(|e| lines.error(m, e))?;
                     reward_models = (names, m);
@@ -389,6 +399,8 @@ struct Model {
     states: Vec<State>,
     /// How many values a reward annotation carries.
     arity: Arity,
+    /// How many non-zero rewards the annotations have so far.
+    reward_entries: u128,
     /// `(label, name)` for each choice label that is not a valid action
     /// name, as [`labels::renamed_labels`] names it.
     renamed: Vec<(String, String)>,
@@ -402,6 +414,7 @@ impl Model {
         let mut model = Self {
             states: Vec::with_capacity(header.states.min(MAX_RESERVED_STATES)),
             arity: Arity::of_header(names, *line),
+            reward_entries: 0,
             renamed: Vec::new(),
         };
         while let Some((n, line)) = lines.next_content() {
@@ -481,10 +494,7 @@ impl Model {
         }
         let mut rewards = Vec::new();
         if let Some((inside, after)) = bracketed(rest, '[', ']') {
-            rewards = self
-                .arity
-                .annotation(inside, n)
-                .map_err(|m| lines.error(n, m))?;
+            rewards = self.reward_annotation(inside, n, lines)?;
             rest = after;
         }
         let labels = parse_labels(rest).map_err(|m| lines.error(n, m))?;
@@ -503,10 +513,7 @@ impl Model {
         let (label, after) = split_word(rest);
         let mut rewards = Vec::new();
         if let Some((inside, _)) = bracketed(after, '[', ']') {
-            rewards = self
-                .arity
-                .annotation(inside, n)
-                .map_err(|m| lines.error(n, m))?;
+            rewards = self.reward_annotation(inside, n, lines)?;
         } else if !after.is_empty() {
             return Err(lines.error(n, format!("unexpected `{after}` after the action label")));
         }
@@ -631,7 +638,7 @@ impl Model {
             }
         }
         let rewards = self.reward_models(
-            self.arity.names(&header.reward_models.0),
+            self.reward_model_names(header, lines)?,
             (nu, 1),
             |_, choice| (action_index[choice.label.as_str()], 0),
         );
@@ -712,13 +719,7 @@ impl Model {
                     first_state[o] = Some(k);
                 }
                 Some(first) if table[o * nu..(o + 1) * nu] != row[..] => {
-                    let names = |row: &[bool]| {
-                        let listed: Vec<&str> = (0..nu)
-                            .filter(|&u| row[u])
-                            .map(|u| actions[u].as_str())
-                            .collect();
-                        listed.join(", ")
-                    };
+                    let names = |row: &[bool]| self.offered(row, actions);
                     return Err(lines.error(
                         state.line,
                         format!(

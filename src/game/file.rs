@@ -19,7 +19,7 @@
 
 mod rewards;
 
-use std::borrow::Cow;
+use std::borrow::{Borrow, Cow};
 use std::fmt;
 use std::hash::Hash;
 use std::marker::PhantomData;
@@ -993,24 +993,30 @@ fn enabled(
 }
 
 /// A player's `action_labels` (formats.md section 6) as [`Player`] holds
-/// them: each key an action, each label not empty, without whitespace, and
-/// different from every action name and from the other labels.
+/// them: each key an action, each label not empty, without whitespace, not
+/// a valid name and different from the other labels.
 fn action_labels(raw: &RawPlayer, at: &Located) -> Result<Vec<(usize, String)>, ModelError> {
     let Some(map) = &raw.action_labels else {
         return Ok(Vec::new());
     };
     let here = at.key("action_labels");
+    let index: FxHashMap<&str, usize> = raw
+        .actions
+        .iter()
+        .enumerate()
+        .map(|(u, a)| (&**a, u))
+        .collect();
     let mut labels: Vec<(usize, String)> = Vec::with_capacity(map.0.len());
+    let mut seen: FxHashMap<&str, usize> = FxHashMap::default();
     for (action, label) in &map.0 {
         let at_action = here.key(action);
-        let u = raw
-            .actions
-            .iter()
-            .position(|a| a == action)
+        let u = *index
+            .get(&**action)
             .ok_or_else(|| at_action.error(format!("unknown action `{}`", &**action)))?;
-        if let Some(problem) = action_label_problem(&raw.actions, &labels, label) {
+        if let Some(problem) = action_label_problem(&raw.actions, &seen, label) {
             return Err(at_action.error(problem));
         }
+        seen.insert(label, u);
         labels.push((u, label.to_string()));
     }
     labels.sort_unstable();
@@ -1018,12 +1024,14 @@ fn action_labels(raw: &RawPlayer, at: &Located) -> Result<Vec<(usize, String)>, 
 }
 
 /// What is wrong with `label` as the label of an action of a player with
-/// `actions`, whose other labels are `earlier` (formats.md section 6):
-/// empty or with whitespace (no DRN label is), the name of an action, or
-/// the label of another action; `None` when nothing is.
-pub(super) fn action_label_problem<N: AsRef<str>>(
+/// `actions`, whose other labels are the keys of `earlier` (each with its
+/// action; formats.md section 6): empty or with whitespace (no DRN label
+/// is), a valid name (an action is named by such a label itself, so only
+/// the labels that are not names are given), or the label of another
+/// action; `None` when nothing is.
+pub(super) fn action_label_problem<N: AsRef<str>, L: Borrow<str> + Eq + Hash>(
     actions: &[N],
-    earlier: &[(usize, String)],
+    earlier: &FxHashMap<L, usize>,
     label: &str,
 ) -> Option<String> {
     if label.is_empty() || label.chars().any(char::is_whitespace) {
@@ -1031,13 +1039,13 @@ pub(super) fn action_label_problem<N: AsRef<str>>(
             "label `{label}` is empty or has whitespace, which no DRN label has"
         ));
     }
-    if actions.iter().any(|a| a.as_ref() == label) {
+    if is_valid_name(label) {
         return Some(format!(
-            "label `{label}` is the name of an action; labels are given only where they \
-             differ from every name"
+            "label `{label}` is a valid action name; labels are given only for actions \
+             renamed from a label that is not a name"
         ));
     }
-    earlier.iter().find(|(_, l)| l == label).map(|&(u, _)| {
+    earlier.get(label).map(|&u| {
         format!(
             "label `{label}` is also the label of action `{}`",
             actions[u].as_ref()

@@ -128,14 +128,15 @@ impl Player {
     /// The label of `action` as written in the model the game came from:
     /// its name, unless that label is not a valid name and was renamed on
     /// import (a DRN label such as SAYNT's `(init)` is the action `_init_`,
-    /// formats.md section 6). Files and controllers use the name.
-    pub fn action_label(&self, action: usize) -> &str {
+    /// formats.md section 6). Files and controllers use the name. `None`
+    /// when `action` is not one of the player's actions.
+    pub fn action_label(&self, action: usize) -> Option<&str> {
         match self
             .action_labels
             .binary_search_by_key(&action, |&(u, _)| u)
         {
-            Ok(i) => &self.action_labels[i].1,
-            Err(_) => &self.actions[action],
+            Ok(i) => Some(&self.action_labels[i].1),
+            Err(_) => self.actions.get(action).map(String::as_str),
         }
     }
 

@@ -16,8 +16,8 @@ use super::{AdversaryAction, DefenderAction, StateId};
 #[derive(Debug, Clone, PartialEq)]
 pub struct RewardModel {
     name: String,
-    /// `r(s)` for every state; empty when every state reward is 0.
-    state_rewards: Vec<f64>,
+    /// The non-zero `r(s)` by state, strictly increasing.
+    state_rewards: Vec<(StateId, f64)>,
     /// The non-zero `r(s, u, v)` by triple index `(s * |U_def| + u) *
     /// |U_adv| + v` (the order of [`super::Posg::transition`]), strictly
     /// increasing, only for triples the game defines.
@@ -28,20 +28,20 @@ pub struct RewardModel {
 
 impl RewardModel {
     /// The model `name` of a game whose players have `num_actions` =
-    /// `(|U_def|, |U_adv|)` actions, with state rewards `state_rewards` (one
-    /// per state, or none) and the action rewards `action_rewards` by triple
-    /// index (increasing). Zeros are dropped, so that equal rewards make
-    /// equal models whatever the file wrote.
+    /// `(|U_def|, |U_adv|)` actions, with the state rewards `state_rewards`
+    /// by state and the action rewards `action_rewards` by triple index
+    /// (each strictly increasing). Zeros are dropped, so that equal rewards
+    /// make equal models whatever the file wrote, and only the non-zero
+    /// rewards keep memory.
     pub(crate) fn new(
         name: String,
-        mut state_rewards: Vec<f64>,
-        mut action_rewards: Vec<(usize, f64)>,
+        state_rewards: Vec<(StateId, f64)>,
+        action_rewards: Vec<(usize, f64)>,
         num_actions: (usize, usize),
     ) -> Self {
-        if state_rewards.iter().all(|&r| r == 0.0) {
-            state_rewards.clear();
-        }
-        action_rewards.retain(|&(_, r)| r != 0.0);
+        let state_rewards = non_zero(state_rewards);
+        let action_rewards = non_zero(action_rewards);
+        debug_assert!(state_rewards.is_sorted_by(|a, b| a.0 < b.0));
         debug_assert!(action_rewards.is_sorted_by(|a, b| a.0 < b.0));
         Self {
             name,
@@ -60,34 +60,42 @@ impl RewardModel {
     /// `r(s)`: the reward of every step taken from state `s`, 0 unless the
     /// model gives one.
     pub fn state_reward(&self, s: StateId) -> f64 {
-        self.state_rewards.get(s).copied().unwrap_or(0.0)
+        self.state_rewards
+            .binary_search_by_key(&s, |&(t, _)| t)
+            .map_or(0.0, |i| self.state_rewards[i].1)
     }
 
     /// `r(s, u, v)`: the reward of a step from state `s` in which the
     /// defender plays `u` and the adversary `v` (in a POMDP, the adversary's
     /// only action `AdversaryAction(0)`), on top of [`Self::state_reward`];
     /// 0 unless the model gives one, and always 0 for a triple the game does
-    /// not define ([`super::Posg::transition`] is empty there).
+    /// not define ([`super::Posg::transition`] is empty there). `None` when
+    /// `u` or `v` is not an action of its player.
     pub fn action_reward(
         &self,
         s: StateId,
         DefenderAction(u): DefenderAction,
         AdversaryAction(v): AdversaryAction,
-    ) -> f64 {
+    ) -> Option<f64> {
         let (nu, nv) = self.num_actions;
-        let triple = (s * nu + u) * nv + v;
-        self.action_rewards
-            .binary_search_by_key(&triple, |&(t, _)| t)
-            .map_or(0.0, |i| self.action_rewards[i].1)
+        if u >= nu || v >= nv {
+            return None;
+        }
+        let triple = s
+            .checked_mul(nu)?
+            .checked_add(u)?
+            .checked_mul(nv)?
+            .checked_add(v)?;
+        Some(
+            self.action_rewards
+                .binary_search_by_key(&triple, |&(t, _)| t)
+                .map_or(0.0, |i| self.action_rewards[i].1),
+        )
     }
 
     /// The non-zero state rewards `(s, r(s))`, by increasing state.
     pub fn state_rewards(&self) -> impl Iterator<Item = (StateId, f64)> + '_ {
-        self.state_rewards
-            .iter()
-            .enumerate()
-            .filter(|&(_, &r)| r != 0.0)
-            .map(|(s, &r)| (s, r))
+        self.state_rewards.iter().copied()
     }
 
     /// The non-zero action rewards `(s, u, v, r(s, u, v))`, in the order of
@@ -115,6 +123,14 @@ impl RewardModel {
     pub(crate) fn action_rewards_by_triple(&self) -> &[(usize, f64)] {
         &self.action_rewards
     }
+}
+
+/// The entries of `rewards` whose reward is not 0, in their order, the
+/// room of the others given back.
+fn non_zero<K>(mut rewards: Vec<(K, f64)>) -> Vec<(K, f64)> {
+    rewards.retain(|&(_, r)| r != 0.0);
+    rewards.shrink_to_fit();
+    rewards
 }
 
 /// Whether `name` can name a reward model: not empty, without whitespace

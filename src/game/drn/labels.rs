@@ -55,6 +55,27 @@ impl Model {
     }
 }
 
+impl Model {
+    /// The actions a row of `enabled` offers, separated by commas, each as
+    /// its label is written in the file: a renamed label followed by its
+    /// name, as in `(n) (read as _n_)`.
+    pub(super) fn offered(&self, row: &[bool], actions: &[String]) -> String {
+        let labels: FxHashMap<&str, &str> = self
+            .renamed
+            .iter()
+            .map(|(label, name)| (name.as_str(), label.as_str()))
+            .collect();
+        let listed: Vec<String> = (0..actions.len())
+            .filter(|&u| row[u])
+            .map(|u| match labels.get(actions[u].as_str()) {
+                Some(label) => format!("{label} (read as {})", actions[u]),
+                None => actions[u].clone(),
+            })
+            .collect();
+        listed.join(", ")
+    }
+}
+
 /// The labels among `labels` (in file order, repeats allowed) that are not
 /// names, each once in order of first appearance, with their names.
 pub(super) fn renamed_labels<'a>(

@@ -89,7 +89,7 @@ impl Model {
             self.transitions(&turns, &defender, &adversary, lines)?;
         let (propositions, labels, initial) = self.labels(lines)?;
         let rewards = self.reward_models(
-            self.arity.names(&header.reward_models.0),
+            self.reward_model_names(header, lines)?,
             (defender.num_actions(), adversary.num_actions()),
             |k, choice| joint_action(&turns, k, choice, &defender, &adversary),
         );
@@ -274,9 +274,9 @@ impl Model {
                             "state {k} offers {{{}}}, but state {first} (line {}) with the same \
                              observation offers {{{}}}: the defender's states with one \
                              observation must offer the same actions",
-                            listed(&row, &actions),
+                            self.offered(&row, &actions),
                             self.states[first].line,
-                            listed(&enabled[o * nu..(o + 1) * nu], &actions)
+                            self.offered(&enabled[o * nu..(o + 1) * nu], &actions)
                         ),
                     ));
                 }
@@ -358,13 +358,4 @@ fn position(actions: &[String], name: &str) -> usize {
         .iter()
         .position(|a| a == name)
         .expect("the player's actions list every label of its states")
-}
-
-/// The names of the actions a row enables, separated by commas.
-fn listed(row: &[bool], actions: &[String]) -> String {
-    let names: Vec<&str> = (0..actions.len())
-        .filter(|&u| row[u])
-        .map(|u| actions[u].as_str())
-        .collect();
-    names.join(", ")
 }

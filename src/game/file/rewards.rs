@@ -7,10 +7,11 @@
 use serde::{Deserialize, Serialize};
 
 use super::{
-    Builder, Keyed, Located, Name, UniqueMap, Unresolved, resolve_triple, triple_required,
+    Builder, Keyed, Located, Name, UniqueMap, Unresolved, WILDCARD, resolve_triple, triple_required,
 };
 use crate::game::rewards::{RewardModel, invalid_reward_name, is_valid_reward_name};
 use crate::game::{ModelError, Posg};
+use crate::limits;
 
 /// One reward model of `rewards`.
 #[derive(Debug, Deserialize, Serialize)]
@@ -38,30 +39,66 @@ struct RawActionReward<'a> {
     reward: f64,
 }
 
+/// One reward model of `rewards` read but not expanded: its name, its
+/// non-zero state rewards, its `actions` and their keys.
+struct Read<'r, 'a> {
+    name: &'r str,
+    states: Vec<(usize, f64)>,
+    actions: &'r [RawActionReward<'a>],
+    keys: Vec<(Key, usize)>,
+}
+
+/// The key of an entry of `actions`: `(state, defender action or
+/// WILDCARD, adversary action or WILDCARD)`.
+type Key = (usize, u32, u32);
+
 impl Builder<'_, '_> {
     /// The reward models of `raw` (the file's `rewards`, if any) for the
-    /// game built so far, in the order of the file.
+    /// game built so far, in the order of the file. The rewards they would
+    /// hold, wildcards expanded, are counted against
+    /// [`limits::MAX_REWARD_ENTRIES`] before any is expanded.
     pub(super) fn rewards(
         &self,
         raw: Option<&UniqueMap<RawRewardModel, Name>>,
         game: &Posg,
     ) -> Result<Vec<RewardModel>, ModelError> {
         let at = self.at("rewards");
-        let num_actions = (game.defender.num_actions(), game.adversary.num_actions());
         let models = raw.map_or(&[][..], |m| m.0.as_slice());
-        models
-            .iter()
-            .map(|(name, model)| {
-                let here = at.key(name);
-                if !is_valid_reward_name(name) {
-                    return Err(here.error(invalid_reward_name(name)));
-                }
-                let states = self.state_rewards(model.states.as_ref(), &here.key("states"))?;
-                let actions = model.actions.as_deref().unwrap_or_default();
-                let actions = self.action_rewards(actions, &here.key("actions"), game)?;
+        let mut read = Vec::with_capacity(models.len());
+        let mut total: u128 = 0;
+        for (name, model) in models {
+            let here = at.key(name);
+            if !is_valid_reward_name(name) {
+                return Err(here.error(invalid_reward_name(name)));
+            }
+            let states = self.state_rewards(model.states.as_ref(), &here.key("states"))?;
+            let actions = model.actions.as_deref().unwrap_or_default();
+            let keys = self.action_keys(actions, &here.key("actions"), game)?;
+            total += states.len() as u128 + expansion_bound(&keys, game);
+            if let Some(message) = limits::exceeded(
+                "the reward models with their wildcards expanded",
+                total,
+                limits::MAX_REWARD_ENTRIES,
+                "rewards or more",
+                "MAX_REWARD_ENTRIES",
+            ) {
+                return Err(here.error(message));
+            }
+            read.push(Read {
+                name,
+                states,
+                actions,
+                keys,
+            });
+        }
+        let num_actions = (game.defender.num_actions(), game.adversary.num_actions());
+        read.into_iter()
+            .map(|model| {
+                let here = at.key(model.name).key("actions");
+                let actions = action_rewards(model.actions, model.keys, &here, game)?;
                 Ok(RewardModel::new(
-                    name.to_string(),
-                    states,
+                    model.name.to_string(),
+                    model.states,
                     actions,
                     num_actions,
                 ))
@@ -69,33 +106,35 @@ impl Builder<'_, '_> {
             .collect()
     }
 
-    /// `r(s)` for every state (none without `states`).
+    /// The non-zero `r(s)` by increasing state (none without `states`).
     fn state_rewards(
         &self,
         raw: Option<&UniqueMap<f64, Name>>,
         at: &Located,
-    ) -> Result<Vec<f64>, ModelError> {
+    ) -> Result<Vec<(usize, f64)>, ModelError> {
         let Some(map) = raw else {
             return Ok(Vec::new());
         };
-        let mut rewards = vec![0.0; self.raw.states.len()];
+        let mut rewards = Vec::new();
         for (state, reward) in &map.0 {
             let s = self
                 .state(state)
                 .ok_or_else(|| at.key(state).error(format!("unknown state `{}`", &**state)))?;
-            rewards[s] = *reward;
+            if *reward != 0.0 {
+                rewards.push((s, *reward));
+            }
         }
+        rewards.sort_unstable_by_key(|&(s, _)| s);
         Ok(rewards)
     }
 
-    /// `r(s, u, v)` by triple index for the triples the game defines, as
-    /// the most specific entry of `raw` gives it (0 where none does).
-    fn action_rewards(
+    /// The key of each entry of `raw` with its position, sorted.
+    fn action_keys(
         &self,
         raw: &[RawActionReward],
         at: &Located,
         game: &Posg,
-    ) -> Result<Vec<(usize, f64)>, ModelError> {
+    ) -> Result<Vec<(Key, usize)>, ModelError> {
         let mut keys = Vec::with_capacity(raw.len());
         for (i, entry) in raw.iter().enumerate() {
             let adversary = entry.adversary.as_deref();
@@ -108,22 +147,61 @@ impl Builder<'_, '_> {
             )?;
             keys.push((key, i));
         }
-        let keyed = Keyed::new(keys, game.num_states());
-        let (nu, nv) = (game.defender.num_actions(), game.adversary.num_actions());
-        let mut rewards = Vec::new();
-        for s in (0..game.num_states()).filter(|&s| !keyed.of_state(s).is_empty()) {
-            for u in 0..nu {
-                for v in (0..nv).filter(|&v| triple_required(game, s, u, v)) {
-                    match resolve_triple(&keyed, s, u, v) {
-                        Ok(i) => rewards.push(((s * nu + u) * nv + v, raw[i].reward)),
-                        Err(Unresolved::Uncovered) => {}
-                        Err(e) => return Err(at.error(e.describe(at.path(), game, s, u, v))),
+        keys.sort_unstable();
+        Ok(keys)
+    }
+}
+
+/// The most triples the entries with `keys` can give a reward: those each
+/// covers (a wildcard covers every action of its player), at most every
+/// triple of the game.
+fn expansion_bound(keys: &[(Key, usize)], game: &Posg) -> u128 {
+    let (nu, nv) = (game.defender.num_actions(), game.adversary.num_actions());
+    let covered = |key: u32, n: usize| if key == WILDCARD { n as u128 } else { 1 };
+    let sum: u128 = keys
+        .iter()
+        .map(|&((_, u, v), _)| covered(u, nu) * covered(v, nv))
+        .sum();
+    sum.min(game.num_states() as u128 * nu as u128 * nv as u128)
+}
+
+/// `r(s, u, v)` by triple index for the triples the game defines, as the
+/// most specific entry of `raw` (whose sorted `keys` these are) gives it (0
+/// where none does): only the states the entries name are visited.
+fn action_rewards(
+    raw: &[RawActionReward],
+    keys: Vec<(Key, usize)>,
+    at: &Located,
+    game: &Posg,
+) -> Result<Vec<(usize, f64)>, ModelError> {
+    let mut states: Vec<usize> = keys.iter().map(|&((s, _, _), _)| s).collect();
+    states.dedup();
+    // Keyed by the position of each state among `states`, so that its
+    // table is as long as the entries, not as the game.
+    let compact = keys
+        .into_iter()
+        .map(|((s, u, v), i)| {
+            let c = states.binary_search(&s).expect("every state is listed");
+            ((c, u, v), i)
+        })
+        .collect();
+    let keyed = Keyed::new(compact, states.len());
+    let (nu, nv) = (game.defender.num_actions(), game.adversary.num_actions());
+    let mut rewards = Vec::new();
+    for (c, &s) in states.iter().enumerate() {
+        for u in 0..nu {
+            for v in (0..nv).filter(|&v| triple_required(game, s, u, v)) {
+                match resolve_triple(&keyed, c, u, v) {
+                    Ok(i) if raw[i].reward != 0.0 => {
+                        rewards.push(((s * nu + u) * nv + v, raw[i].reward));
                     }
+                    Ok(_) | Err(Unresolved::Uncovered) => {}
+                    Err(e) => return Err(at.error(e.describe(at.path(), game, s, u, v))),
                 }
             }
         }
-        Ok(rewards)
     }
+    Ok(rewards)
 }
 
 /// The game's reward models as `rewards` (none when it has none).
