@@ -9,7 +9,7 @@ use std::time::Duration;
 use posg_fsc::controller::Role;
 use posg_fsc::game::Posg;
 use posg_fsc::optimise::{Cancel, IterationRecord, Observer, Settings, StructureOutcome};
-use posg_fsc::output::{OutputDirectory, PlotFormat};
+use posg_fsc::output::OutputDirectory;
 use posg_fsc::pipeline::directory::SolveDirectory;
 use posg_fsc::pipeline::{self, Automata, Job, Outcome, Sizes};
 use pyo3::prelude::*;
@@ -207,7 +207,7 @@ where
         path: directory.path(),
         seconds_axis: false,
         command_line: &command_line,
-        plot_format: PlotFormat::default(),
+        plot_format: None,
     };
     let outcome = solve.solve(job, observers).map_err(convert)?;
     directory.commit().map_err(convert)?;
@@ -493,7 +493,7 @@ pub fn sweep(
             }
             let callback = callback.as_ref().map(|c| c.clone_ref(py));
             let outcome = run_job(py, job, callback, None)?;
-            let row = posg_fsc::output::shard::SweepRow::of(n, m, &outcome, previous.as_ref());
+            let row = posg_fsc::output::sweep::SweepRow::of(n, m, &outcome, previous.as_ref());
             let row = serialised(py, &row)?.cast_into::<PyDict>()?;
             row.set_item("solved", result(py, posg, &settings, &outcome)?)?;
             rows.append(row)?;

@@ -109,7 +109,7 @@ pub fn solve_into(
     let directory = SolveDirectory {
         path,
         seconds_axis,
-        plot_format,
+        plot_format: Some(plot_format),
         command_line: &command_line,
     };
     let iterations = job.settings.max_iterations;

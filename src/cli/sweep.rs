@@ -11,11 +11,12 @@ use anyhow::Context;
 use clap::Args;
 use rayon::prelude::*;
 
+use super::shard::{self, Shard, ShardRecord, SweepPlan};
+use super::slurm::{self, SlurmSweep};
 use posg_fsc::game::Posg;
 use posg_fsc::limits;
 use posg_fsc::optimise::{Settings, StructureOutcome};
-use posg_fsc::output::shard::{self, Shard, ShardRecord, SweepPlan, SweepRow};
-use posg_fsc::output::slurm::{self, SlurmSweep};
+use posg_fsc::output::sweep::{SweepRow, sweep_table};
 use posg_fsc::output::{OutputDirectory, PlotFormat, Title, create_dir, write_file};
 use posg_fsc::pipeline::{self, Automata, Job};
 
@@ -324,7 +325,7 @@ fn run_chain(
         let row = SweepRow::of(n, m, &outcome, previous.as_ref());
         progress.finished(n, m, row.worst_case);
         if let Some(own) = own {
-            let table = shard::sweep_table(std::slice::from_ref(&row))
+            let table = sweep_table(std::slice::from_ref(&row))
                 .with_context(|| format!("writing {}", out.join(shard::ROW_FILE).display()))?;
             write_file(&out.join(shard::ROW_FILE), table)?;
             own.commit()?;

@@ -10,7 +10,8 @@ use crate::seconds;
 use crate::solver::{DEFAULT_LU_LIMIT, SolverMethod, SolverSettings};
 
 /// How a player turns its logit gradient into a step (docs/method.md section 4).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum UpdateRule {
     /// `phi <- phi +/- eta * grad`.
@@ -23,21 +24,23 @@ pub enum UpdateRule {
 
 /// The optimiser's settings. Every field has a default ([`Settings::default`]).
 ///
-/// They are also the command-line options of `solve` and `sweep` (clap's
-/// [`clap::Args`]): each field's documentation is its help text, its name
+/// With the feature `cli`, they are also the command-line options of
+/// `solve` and `sweep` (clap's `Args`): each field's documentation is its
+/// help text, its name
 /// the option (`max_iterations` is `--max-iterations`), its default the
 /// option's; the linear solver's fields come from the options `--solver`,
 /// `--lu-limit` and `--tolerance`, shared with `eval`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, clap::Args)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "cli", derive(clap::Args))]
 #[serde(deny_unknown_fields, default)]
 pub struct Settings {
     /// Seed of every random choice (initial logits, best-response restarts).
-    #[arg(long, default_value_t = Settings::default().seed)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = Settings::default().seed))]
     pub seed: u64,
     /// Logit bound `c_max`: every logit stays in `[-c_max, c_max]`, so every
     /// supported entry keeps probability at least `exp(-2 c_max) / |block|`
     /// (docs/method.md section 3): the support, hence the GMC graph, never changes.
-    #[arg(long, default_value_t = Settings::default().logit_bound)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = Settings::default().logit_bound))]
     pub logit_bound: f64,
     /// The max-min run's first logit bound `c_0 <= c_max`: without the
     /// guarantee ascent the bound doubles (up to `logit_bound`) whenever
@@ -45,18 +48,18 @@ pub struct Settings {
     /// capped only by `c_max`; the single-player ascent uses `c_max` from
     /// the start and the guarantee ascent `min(2 c_0, c_max)`, and with the
     /// guarantee ascent the loop keeps `c_0` and stops on a stall.
-    #[arg(long, default_value_t = Settings::default().initial_logit_bound)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = Settings::default().initial_logit_bound))]
     pub initial_logit_bound: f64,
     /// Initial logits are drawn uniformly from `[-spread, spread]` (0: uniform controllers).
-    #[arg(long, default_value_t = Settings::default().initial_spread)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = Settings::default().initial_spread))]
     pub initial_spread: f64,
     /// Also optimise the initial node distributions (softmax over the initial support).
-    #[arg(long)]
+    #[cfg_attr(feature = "cli", arg(long))]
     pub optimise_initial: bool,
     /// Outer iterations (one defender step, or one quasi-Newton step of the
     /// single-player ascent) at most: a cap; runs normally stop on the
     /// certified gap or on stalled progress.
-    #[arg(long, default_value_t = Settings::default().max_iterations)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = Settings::default().max_iterations))]
     pub max_iterations: usize,
     /// The most work one start's max-min loop spends, in GMC states
     /// solved: every evaluation of the value (and its gradients) on the
@@ -67,47 +70,47 @@ pub struct Settings {
     /// `max_iterations` in units that grow with the chain, so that a run on
     /// a large game ends in bounded time, at the same iteration on every
     /// machine.
-    #[arg(long, default_value_t = Settings::default().max_work)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = Settings::default().max_work))]
     pub max_work: f64,
     /// Independent starts of the optimiser per structure, run in parallel
     /// (rayon), each with its own seeded random stream; the best by
     /// certified lower bound (by worst-case estimate without an automaton
     /// for !phi) is kept.
-    #[arg(long, default_value_t = Settings::default().starts)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = Settings::default().starts))]
     pub starts: usize,
     /// Wall-clock budget in seconds for one structure (0: none).
-    #[arg(long, default_value_t = Settings::default().time_budget, value_parser = crate::seconds::parse)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = Settings::default().time_budget, value_parser = crate::seconds::parse))]
     pub time_budget: f64,
     /// Adversary descent steps per defender ascent step (the fast time scale).
-    #[arg(long, default_value_t = Settings::default().adversary_steps)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = Settings::default().adversary_steps))]
     pub adversary_steps: usize,
     /// Defender step size `eta_def` at iteration 0.
-    #[arg(long, default_value_t = Settings::default().defender_step)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = Settings::default().defender_step))]
     pub defender_step: f64,
     /// Adversary step size `eta_adv` (constant).
-    #[arg(long, default_value_t = Settings::default().adversary_step)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = Settings::default().adversary_step))]
     pub adversary_step: f64,
     /// Defender step decay `d`: `eta_def(t) = eta_def / sqrt(1 + d t)`.
-    #[arg(long, default_value_t = Settings::default().defender_decay)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = Settings::default().defender_decay))]
     pub defender_decay: f64,
     /// The max-min loop's starts are a portfolio: odd-numbered starts take
     /// defender steps this many times larger, without decay (bold steps
     /// reach near-deterministic optima in few iterations; the even starts'
     /// small decaying steps settle on mixed saddle points, where bold play
     /// cycles). The best certified start is kept. 1: every start alike.
-    #[arg(long, default_value_t = Settings::default().bold_step_factor)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = Settings::default().bold_step_factor))]
     pub bold_step_factor: f64,
     /// The update rule of both players.
-    #[arg(long, value_enum, default_value_t = Settings::default().update)]
+    #[cfg_attr(feature = "cli", arg(long, value_enum, default_value_t = Settings::default().update))]
     pub update: UpdateRule,
     /// Optimism `o` of both players' updates: each step moves along
     /// `d_t + o (d_t - d_{t-1})` (0: plain alternating play; 1: the
     /// optimistic gradient method, which converges to mixed saddle points
     /// where plain play cycles).
-    #[arg(long, default_value_t = Settings::default().optimism)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = Settings::default().optimism))]
     pub optimism: f64,
     /// A best-response check every this many outer iterations (and at the end).
-    #[arg(long, default_value_t = Settings::default().check_every)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = Settings::default().check_every))]
     pub check_every: usize,
     /// With a certified lower bound (an automaton for !phi), every this
     /// many checks is deep: the current defender also gets an L-BFGS best
@@ -115,20 +118,20 @@ pub struct Settings {
     /// response, which tightens the game upper bound (the other checks
     /// certify only: one MDP solve per candidate). Without one, every check
     /// is deep.
-    #[arg(long, default_value_t = Settings::default().best_response_every)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = Settings::default().best_response_every))]
     pub best_response_every: usize,
     /// Random restarts of the final best-response minimisation of the
     /// returned defender (besides its warm starts; of every start's best
     /// defender without an automaton for `!phi`).
-    #[arg(long, default_value_t = Settings::default().restarts)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = Settings::default().restarts))]
     pub restarts: usize,
     /// L-BFGS iterations per best-response start (fewer in a final best
     /// response on a GMC so large that its starts would spend more than
     /// `max_work`: [`Settings::final_best_response_iterations`]).
-    #[arg(long, default_value_t = Settings::default().best_response_iterations)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = Settings::default().best_response_iterations))]
     pub best_response_iterations: u64,
     /// L-BFGS memory `m`.
-    #[arg(long, default_value_t = Settings::default().lbfgs_memory)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = Settings::default().lbfgs_memory))]
     pub lbfgs_memory: usize,
     /// The max-min loop's stall rule applies once this many checks ran
     /// since the logit bound last widened (0: never): it stops (or widens
@@ -136,42 +139,42 @@ pub struct Settings {
     /// estimate without an automaton for !phi) gained at most `stall_gain`
     /// times its magnitude (at least 1e-3) over the second half of those
     /// checks.
-    #[arg(long, default_value_t = Settings::default().stall_checks)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = Settings::default().stall_checks))]
     pub stall_checks: usize,
     /// The relative gain below which the max-min loop counts as stalled
     /// (see `stall_checks`).
-    #[arg(long, default_value_t = Settings::default().stall_gain)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = Settings::default().stall_gain))]
     pub stall_gain: f64,
     /// The guarantee ascent's stall window: it stops when the certified
     /// lower bound has gained at most `stall_tolerance` times itself over
     /// this many steps (0: never).
-    #[arg(long, default_value_t = Settings::default().ascent_stall_iterations)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = Settings::default().ascent_stall_iterations))]
     pub ascent_stall_iterations: usize,
     /// The relative gain below which the guarantee ascent counts as
     /// stalled (see `ascent_stall_iterations`).
-    #[arg(long, default_value_t = Settings::default().stall_tolerance)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = Settings::default().stall_tolerance))]
     pub stall_tolerance: f64,
     /// Stop when the certified gap, the game upper bound minus the best
     /// certified lower bound (docs/method.md section 6), is at most this: the
     /// defender is then optimal within it against every adversary.
-    #[arg(long, default_value_t = Settings::default().gap_tolerance)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = Settings::default().gap_tolerance))]
     pub gap_tolerance: f64,
     /// Single-player games (the adversary has one action) are optimised by
     /// L-BFGS steps on the defender's logits, `max V`, under the same
     /// driver (a check's worst case is the value itself); off
     /// (`--no-single-player-ascent`): gradient play runs on them too.
-    #[arg(long = "no-single-player-ascent", action = clap::ArgAction::SetFalse)]
+    #[cfg_attr(feature = "cli", arg(long = "no-single-player-ascent", action = clap::ArgAction::SetFalse))]
     pub single_player_ascent: bool,
     /// A defender of `K > 1` nodes is grown from 1 node: each size is
     /// optimised warm-started from the one before and kept at least as good,
     /// so more memory never certifies less (docs/method.md section 4); off
     /// (`--no-grow`): only size `K` is optimised, from the uniform start.
-    #[arg(long = "no-grow", action = clap::ArgAction::SetFalse)]
+    #[cfg_attr(feature = "cli", arg(long = "no-grow", action = clap::ArgAction::SetFalse))]
     pub grow_defender: bool,
     /// At the end, also evaluate the argmax-rounded defender and its partial
     /// roundings (entries below a threshold dropped) and keep whichever
     /// scores best (the unrounded one included); off: `--no-round`.
-    #[arg(long = "no-round", action = clap::ArgAction::SetFalse)]
+    #[cfg_attr(feature = "cli", arg(long = "no-round", action = clap::ArgAction::SetFalse))]
     pub round: bool,
     /// With rounding and a certified lower bound: change deterministic
     /// supports one block at a time (drop a choice, play one enabled (next
@@ -190,13 +193,13 @@ pub struct Settings {
     /// candidate `local-search`. Each climb ends by itself, when it has
     /// spent `local_search_work`, or at the time budget's final deadline;
     /// off: `--no-local-search`.
-    #[arg(long = "no-local-search", action = clap::ArgAction::SetFalse)]
+    #[cfg_attr(feature = "cli", arg(long = "no-local-search", action = clap::ArgAction::SetFalse))]
     pub local_search: bool,
     /// How many random memoryless starts the local search climbs from
     /// besides the best candidate, per round (in parallel; seeded from
     /// `seed`; up to 4 rounds where climbs end early); 0 also turns its
     /// kicks off.
-    #[arg(long, default_value_t = Settings::default().local_search_restarts)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = Settings::default().local_search_restarts))]
     pub local_search_restarts: usize,
     /// The most work one climb of the local search spends, counted as the
     /// reachable product states of its bound evaluations, summed (a move
@@ -205,7 +208,7 @@ pub struct Settings {
     /// 300 evaluations on a 400-state product, 30 on a 4,000-state one. A
     /// count, not seconds, so a seed gives the same search on every
     /// machine.
-    #[arg(long, default_value_t = Settings::default().local_search_work)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = Settings::default().local_search_work))]
     pub local_search_work: usize,
     /// On games with a certified lower bound, wherever the max-min loop's
     /// stall rule is judged (see `stall_checks`) and when the loop stops,
@@ -214,35 +217,35 @@ pub struct Settings {
     /// keep the result when it certifies higher; the stall rule then judges
     /// these ascended bounds. Off (`--no-guarantee-ascent`): the paper's
     /// loop alone.
-    #[arg(long = "no-guarantee-ascent", action = clap::ArgAction::SetFalse)]
+    #[cfg_attr(feature = "cli", arg(long = "no-guarantee-ascent", action = clap::ArgAction::SetFalse))]
     pub guarantee_ascent: bool,
     /// Largest residual `max |(I - Q) x - b|` accepted from a linear solve.
-    #[arg(skip = Settings::default().solver_tolerance)]
+    #[cfg_attr(feature = "cli", arg(skip = Settings::default().solver_tolerance))]
     pub solver_tolerance: f64,
     /// How the linear systems are solved (LU, BiCGSTAB, or by size).
-    #[arg(skip = Settings::default().solver)]
+    #[cfg_attr(feature = "cli", arg(skip = Settings::default().solver))]
     pub solver: SolverMethod,
     /// With `solver` auto: the most unknowns solved by LU. Recorded in
     /// `summary.json` only when it is not [`crate::value::DEFAULT_LU_LIMIT`].
-    #[arg(skip = Settings::default().lu_limit)]
+    #[cfg_attr(feature = "cli", arg(skip = Settings::default().lu_limit))]
     #[serde(skip_serializing_if = "is_default_lu_limit")]
     pub lu_limit: usize,
     /// The sources of the structures to optimise on (in parallel):
     /// the starting structure, support synthesis by SAT (docs/method.md section
     /// 7), the paper's Algorithm 1 (docs/method.md section 5).
-    #[arg(long, value_enum, value_delimiter = ',', default_values_t = Settings::default().structures)]
+    #[cfg_attr(feature = "cli", arg(long, value_enum, value_delimiter = ',', default_values_t = Settings::default().structures))]
     pub structures: Vec<StructureSource>,
     /// Support synthesis for the `sat` source; its `mode` is not used (the
     /// source tries almost-sure winning, then positive winning).
-    #[command(flatten)]
+    #[cfg_attr(feature = "cli", command(flatten))]
     pub synthesis: crate::synthesis::Settings,
     /// Algorithm 1's lines 14-16 as printed (remove action `u` under
     /// observation `o` for all nodes) instead of only the offending entries.
-    #[arg(long)]
+    #[cfg_attr(feature = "cli", arg(long))]
     pub prune_paper_literal: bool,
     /// Run Algorithm 1's lines 18-22, which restrict the adversary's support:
     /// the worst-case estimate is then against a restricted adversary.
-    #[arg(long)]
+    #[cfg_attr(feature = "cli", arg(long))]
     pub prune_adversary: bool,
 }
 

@@ -33,7 +33,8 @@ use crate::prune::{PruneSettings, prune};
 use crate::synthesis::{self, Mode, SynthesisError};
 
 /// A source of support structures.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "kebab-case")]
 pub enum StructureSource {
     /// The starting structure: the full support or the user's controllers.

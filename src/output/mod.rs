@@ -2,25 +2,23 @@
 //! of finished results:
 //!
 //! * [`CurveCsv`]: `curve.csv`, one row per outer iteration;
-//! * [`plot_curve`]: `curve.svg` (or `.png`, [`PlotFormat`]), the value and
-//!   the worst-case estimate over the certified band, against the
-//!   iteration, with the returned defender's certified bracket;
-//! * [`plot_sweep`]: `sweep.svg` (or `.png`), a heatmap of the certified
-//!   lower bound over defender and adversary sizes;
+//! * [`plot_curve`] (cargo feature `plot`): `curve.svg` (or `.png`,
+//!   [`PlotFormat`]), the value and the worst-case estimate over the
+//!   certified band, against the iteration, with the returned defender's
+//!   certified bracket;
+//! * [`plot_sweep`] (feature `plot`): `sweep.svg` (or `.png`), a heatmap of
+//!   the certified lower bound over defender and adversary sizes;
 //! * [`dot::controller_dot`]: a Graphviz picture of a controller;
 //! * [`OutputDirectory`]: the directory a command writes its results into,
 //!   atomically, under a lock, never mixing old and new results;
-//! * [`shard`]: a sweep split into shards (`sweep --shard K/N`), one
-//!   directory per size pair, and their merge into `sweep.csv`/`sweep.svg`;
-//! * [`slurm`]: the Slurm array job and merge job of a sharded sweep;
+//! * [`sweep`]: the rows of `sweep.csv`, one per size pair;
 //! * [`counted`]: a count and its noun, as reports print them.
 
 mod directory;
 pub mod dot;
 pub mod export;
 mod plot;
-pub mod shard;
-pub mod slurm;
+pub mod sweep;
 
 pub use directory::{
     Abandoned, OutputDirectory, OutputError, abandon_uncommitted, create_dir, write_file,

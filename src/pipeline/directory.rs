@@ -20,20 +20,19 @@ use crate::output::{
     write_file,
 };
 
-/// The files of a solve directory whose plots are in `format`, as
-/// `summary.json` lists them.
-pub fn files(format: PlotFormat) -> Vec<String> {
-    let plot = format!("curve.{format}");
-    [
-        "curve.csv",
-        &plot,
-        "defender.fsc.json",
-        "defender.dot",
-        "adversary.fsc.json",
-        "summary.json",
-    ]
-    .map(String::from)
-    .to_vec()
+/// The files of a solve directory whose plots are in `format` (`None`:
+/// no plot), as `summary.json` lists them.
+pub fn files(format: Option<PlotFormat>) -> Vec<String> {
+    let plot = format.map(|format| format!("curve.{format}"));
+    let files = [
+        Some("curve.csv".to_string()),
+        plot,
+        Some("defender.fsc.json".to_string()),
+        Some("defender.dot".to_string()),
+        Some("adversary.fsc.json".to_string()),
+        Some("summary.json".to_string()),
+    ];
+    files.into_iter().flatten().collect()
 }
 
 /// Where and how a solve directory is written.
@@ -44,8 +43,9 @@ pub struct SolveDirectory<'a> {
     pub path: &'a Path,
     /// Whether `curve.svg` gets a top axis with the seconds elapsed.
     pub seconds_axis: bool,
-    /// The plots' file format.
-    pub plot_format: PlotFormat,
+    /// The plots' file format; `None`: no plot (the CSV tables hold the
+    /// same numbers). Drawing needs the cargo feature `plot`.
+    pub plot_format: Option<PlotFormat>,
     /// The command line recorded in `summary.json`.
     pub command_line: &'a [String],
 }
@@ -94,6 +94,9 @@ impl SolveDirectory<'_> {
         automata: &Automata,
         outcome: &Outcome,
     ) -> Result<(), OutputError> {
+        let Some(format) = self.plot_format else {
+            return Ok(());
+        };
         let count = outcome.curves.len();
         for curve in &outcome.curves {
             // None: dropped for numerical trouble, nothing returned.
@@ -131,8 +134,8 @@ impl SolveDirectory<'_> {
                 seconds_axis: self.seconds_axis,
             };
             let stem = curve_stem(count, &curve.structure);
-            let path = self.path.join(format!("{stem}.{}", self.plot_format));
-            plot_curve(&path, self.plot_format, &plot)?;
+            let path = self.path.join(format!("{stem}.{format}"));
+            plot_curve(&path, format, &plot)?;
         }
         Ok(())
     }
@@ -152,7 +155,8 @@ impl SolveDirectory<'_> {
         let best = outcome.best();
         let best_curve = |ext: &str| self.path.join(format!("curve-{}.{ext}", best.report.name));
         if outcome.curves.len() > 1 && best_curve("csv").exists() {
-            for ext in ["csv", self.plot_format.extension()] {
+            let plot = self.plot_format.map(PlotFormat::extension);
+            for ext in std::iter::once("csv").chain(plot) {
                 let from = best_curve(ext);
                 std::fs::copy(&from, self.path.join(format!("curve.{ext}")))
                     .map_err(|e| OutputError::io("copying", &from, e))?;

@@ -154,7 +154,8 @@ impl Mode {
 }
 
 /// How the SAT solver is used (module documentation).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "kebab-case")]
 pub enum Engine {
     /// Supports only; exact judgement and counterexample lemmas.
@@ -167,53 +168,54 @@ pub enum Engine {
 /// The synthesis settings. Every field has a default ([`Settings::default`]).
 ///
 /// Except `mode` (`support --almost-sure`; the `sat` source of `solve`
-/// chooses it itself), they are also the command-line options of `support`,
-/// `solve` and `sweep` (clap's [`clap::Args`]): each field's documentation is
-/// its help text, its default the option's.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, clap::Args)]
+/// chooses it itself), with the feature `cli` they are also the command-line
+/// options of `support`, `solve` and `sweep` (clap's `Args`): each field's
+/// documentation is its help text, its default the option's.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "cli", derive(clap::Args))]
 #[serde(deny_unknown_fields, default)]
 pub struct Settings {
     /// Positive or almost-sure winning.
-    #[arg(skip = Settings::default().mode)]
+    #[cfg_attr(feature = "cli", arg(skip = Settings::default().mode))]
     pub mode: Mode,
     /// `lazy`: SAT over supports, each judged by exact certification, losses
     /// learnt as lemmas; `certificate`: supports and their certificates in one
     /// formula (docs/method.md section 7).
-    #[arg(long, value_enum, default_value_t = Settings::default().engine)]
+    #[cfg_attr(feature = "cli", arg(long, value_enum, default_value_t = Settings::default().engine))]
     pub engine: Engine,
     /// The bound `R` on the certificates' levels and ranks (default: the
     /// number of product states `(s, q, g)`, the bound that makes the
     /// certificate complete, and "impossible" a proof, for one Rabin pair).
-    #[arg(long)]
+    #[cfg_attr(feature = "cli", arg(long))]
     pub rank_bound: Option<usize>,
     /// How levels and ranks are written in CNF.
-    #[arg(long, value_enum, default_value_t = Settings::default().rank_encoding)]
+    #[cfg_attr(feature = "cli", arg(long, value_enum, default_value_t = Settings::default().rank_encoding))]
     pub rank_encoding: RankEncoding,
     /// Enlarge the support found to an inclusion-maximal one (off with
     /// `--no-maximise`: the first support found).
-    #[arg(long = "no-maximise", action = clap::ArgAction::SetFalse)]
+    #[cfg_attr(feature = "cli", arg(long = "no-maximise", action = clap::ArgAction::SetFalse))]
     pub maximise: bool,
     /// Confirm a support found by the lazy engine with the certificate
     /// formula (docs/method.md section 7; off with `--no-confirm`,
     /// certification still checks it).
-    #[arg(long = "no-confirm", action = clap::ArgAction::SetFalse)]
+    #[cfg_attr(feature = "cli", arg(long = "no-confirm", action = clap::ArgAction::SetFalse))]
     pub confirm_certificate: bool,
     /// Refuse SAT instances with more clauses than this (CaDiCaL needs
     /// roughly 100 bytes per clause of this encoding); larger ones are an
     /// error before they are built.
-    #[arg(long, default_value_t = Settings::default().clause_budget)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = Settings::default().clause_budget))]
     pub clause_budget: usize,
     /// Seconds the SAT solver (with the lazy engine's judging) may take in
     /// all (0: no limit); running out is an error for `support`; `solve` and
     /// `sweep` give the almost-sure attempt 0.4% of it and the positive one
     /// a tenth, and note a timeout and go on without.
-    #[arg(
+    #[cfg_attr(feature = "cli", arg(
         id = "synthesis_time_budget",
         long = "synthesis-time-budget",
         value_name = "SYNTHESIS_TIME_BUDGET",
         default_value_t = Settings::default().time_budget,
         value_parser = crate::seconds::parse
-    )]
+    ))]
     pub time_budget: f64,
 }
 

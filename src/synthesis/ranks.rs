@@ -19,7 +19,8 @@ use super::SynthesisError;
 use super::cnf::{Cnf, FALSE, Lit, TRUE};
 
 /// How levels and ranks are written in CNF.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum RankEncoding {
     /// Binary numbers with comparator chains.

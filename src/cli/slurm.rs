@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use super::PlotFormat;
+use posg_fsc::output::PlotFormat;
 
 /// What the scripts run and where.
 #[derive(Debug, Clone)]
