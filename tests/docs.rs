@@ -84,17 +84,18 @@ fn the_documents_have_their_numbered_sections() {
 }
 
 #[test]
-fn the_readme_storm_recipe_is_the_script_the_cross_check_runs() {
-    let readme = std::fs::read_to_string("README.md").unwrap();
+fn the_guide_storm_recipe_is_the_script_the_cross_check_runs() {
+    let guide = std::fs::read_to_string("docs/guide.md").unwrap();
     let recipe = std::fs::read_to_string("experiments/storm-check/recipe.py").unwrap();
-    let block = readme
+    let block = guide
         .split("```python\n")
-        .nth(1)
-        .and_then(|rest| rest.split("```").next())
-        .expect("the README has a python block");
+        .skip(1)
+        .filter_map(|rest| rest.split("```").next())
+        .find(|block| block.contains("def storm_value"))
+        .expect("docs/guide.md has the Storm recipe as a python block");
     assert_eq!(
         block, recipe,
-        "README's Storm recipe differs from experiments/storm-check/recipe.py"
+        "the Storm recipe of docs/guide.md differs from experiments/storm-check/recipe.py"
     );
     let run = std::fs::read_to_string("experiments/storm-check/run.py").unwrap();
     assert!(

@@ -347,7 +347,8 @@ def main():
 
 
 def markdown(rows):
-    """The table of the README: defender's values and CPU seconds per model and k."""
+    """The table of results/README.md ("Moved from the README (stop 66)"):
+    defender's values and CPU seconds per model and k."""
     show = lambda v: "-" if v is None else f"{v:.4f}"
     lines = ["| model | states | k | PAYNT | PAYNT CPU s | posg-fsc certified | posg-fsc CPU s "
              "| fully observable | winner |", "|---|---|---|---|---|---|---|---|---|"]

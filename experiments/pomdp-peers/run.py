@@ -608,8 +608,8 @@ def write(args, rows, records):
 
 
 def markdown(rows, long_gd):
-    """The README's table: one line per model and k (`long_gd`: the limit
-    of the long GD runs)."""
+    """The table of results/README.md: one line per model and k
+    (`long_gd`: the limit of the long GD runs)."""
     show = lambda r: "-" if r is None or r["value"] is None else f"{r['value']:.4f}"
     lines = ["| model | states | k | POMDP optimum | posg-fsc | CPU s | PAYNT | CPU s | Storm GD "
              "| CPU s | GD > best + 1e-4? | best | posg-fsc CPU / GD CPU |",

@@ -1,5 +1,5 @@
 """The value of phi on a chain written by `posg-fsc export-gmc`, checked by
-Storm (the README's recipe; run.py calls it for every case).
+Storm (the recipe of docs/guide.md; run.py calls it for every case).
 
 Usage: python3 recipe.py DIR/chain.drn 'G F "goal" & G !"unsafe"'
 """

@@ -5,7 +5,7 @@ Question: does the value posg-fsc computes on the GMC equal what Storm's
 LTL model checker computes on the exported Markov chain on (s, g, h)?
 For several grids, formulas and controller pairs it runs `eval`, exports the
 chain with `export-gmc`, and checks `P=? [ X phi ]` in the fresh initial
-state of `chain.drn`, read by Storm as it is, with the README's recipe
+state of `chain.drn`, read by Storm as it is, with the recipe of docs/guide.md
 (`recipe.py`: sound mode, Eigen's sparse LU); writes results/storm-check.csv.
 
 Usage: pip install stormpy; python3 experiments/storm-check/run.py [--binary PATH]

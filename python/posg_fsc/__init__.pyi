@@ -288,8 +288,8 @@ def solve(
 
     `settings` are the command line's options with _ for - and the same
     defaults (seed=0, max_iterations=3000, starts=4, structures=["full",
-    "sat", "paper"], tolerance, solver, round, ...); an unknown keyword is a
-    TypeError. on_iteration(record) gets each iteration's record (a dict)
+    "informed", "sat", "paper"], tolerance, solver, round, ...); an unknown
+    keyword is a TypeError. on_iteration(record) gets each iteration's record (a dict)
     from the optimiser's threads; returning False stops the run, which then
     returns what it has; Ctrl-C stops it and raises KeyboardInterrupt. With
     `out`, the solve directory is written there too."""

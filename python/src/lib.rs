@@ -9,7 +9,7 @@
 //! is released while Rust computes. The compiled module is
 //! `posg_fsc._native`, re-exported by `python/posg_fsc/__init__.py`; the
 //! Python API is documented in `python/posg_fsc/__init__.pyi` (type stubs)
-//! and the README's Python section.
+//! and docs/guide.md, section "Python".
 
 mod certify;
 mod controller;

@@ -356,7 +356,7 @@ fn check_sizes(game: &Posg, defender: usize, adversary: usize) -> PyResult<()> {
 
 /// Tunes a defender controller against a worst-case adversary, as
 /// `posg-fsc solve` does: on every structure of `structures` (default
-/// `full`, `sat`, `paper`), alternating projected gradient ascent-descent
+/// `full`, `informed`, `sat`, `paper`), alternating projected gradient ascent-descent
 /// with best-response checks, the best structure kept and certified.
 ///
 /// `settings` are the command line's options with `_` for `-`

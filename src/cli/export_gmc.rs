@@ -20,8 +20,8 @@ pub struct ExportGmcArgs {
     pub controllers: ControllerArgs,
     /// Directory for chain.drn (Storm), chain.tra, chain.lab and chain.sta
     /// (PRISM's explicit format), created if needed. State 0 is a fresh
-    /// initial state: check `X phi` there (README, "Checking a value
-    /// independently").
+    /// initial state: check `X phi` there (docs/guide.md, "Check a value
+    /// independently with Storm or PRISM").
     #[arg(long)]
     pub out: PathBuf,
     /// Replace a non-empty --out whole (without it, a non-empty --out is refused).
