@@ -292,7 +292,8 @@ def solve(
     keyword is a TypeError. on_iteration(record) gets each iteration's record (a dict)
     from the optimiser's threads; returning False stops the run, which then
     returns what it has; Ctrl-C stops it and raises KeyboardInterrupt. With
-    `out`, the solve directory is written there too."""
+    `out`, the solve directory is written there too (without `curve.svg`:
+    plot `curve.csv` with matplotlib)."""
 
 def sweep(
     game: Game,

@@ -368,9 +368,10 @@ fn check_sizes(game: &Posg, defender: usize, adversary: usize) -> PyResult<()> {
 /// the optimiser's threads; returning `False` stops the run, which returns
 /// what it has. Ctrl-C stops it too (then KeyboardInterrupt is raised).
 /// With `out`, the solve directory (`curve.csv`, `summary.json`, ...) is
-/// written there too (`force=True` replaces a non-empty one). A proposition
-/// that labels no state of the game is a warning, and an error when it
-/// makes the formula unsatisfiable, unless `allow_unused_propositions=True`.
+/// written there too, without its picture (`force=True` replaces a
+/// non-empty one). A proposition that labels no state of the game is a
+/// warning, and an error when it makes the formula unsatisfiable, unless
+/// `allow_unused_propositions=True`.
 #[pyfunction]
 #[pyo3(signature = (game, ltl, def_nodes = None, adv_nodes = None, *, defender = None, adversary = None, on_iteration = None, out = None, force = false, allow_unused_propositions = false, **settings))]
 #[allow(clippy::too_many_arguments)]

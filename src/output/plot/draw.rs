@@ -1081,7 +1081,7 @@ mod tests {
             seconds_axis: true,
         };
         let path = dir.join("curve.png");
-        plot_curve(&path, PlotFormat::Png, &curve).unwrap();
+        super::curve(&path, PlotFormat::Png, &curve).unwrap();
         let bytes = std::fs::read(&path).unwrap();
         assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n");
         let decoder = png::Decoder::new(std::io::Cursor::new(bytes));
