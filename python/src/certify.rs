@@ -15,7 +15,7 @@ use crate::controller::Controller;
 use crate::convert::{serialised, settings_from_json, size, to_json};
 use crate::errors::{Kind, compute, convert, raise};
 use crate::game::Game;
-use crate::objective::Objective;
+use crate::objective;
 
 /// A bound as `posg-fsc certify` reports it (without its strategy).
 fn bound<'py>(py: Python<'py>, bound: &CertifiedBound) -> PyResult<Bound<'py, PyDict>> {
@@ -53,7 +53,7 @@ pub fn certify<'py>(
     let adversary = adversary
         .map(|a| Controller::resolve("adversary", Some(a), posg, Role::Adversary))
         .transpose()?;
-    let objective = Objective::from_ltl(py, posg, ltl, false, true)?;
+    let objective = objective::automata(py, posg, ltl, false, true)?;
     let not_phi = objective
         .not_phi
         .as_ref()
@@ -142,7 +142,7 @@ pub fn support<'py>(
         player.num_actions(),
     )
     .map_err(|e| raise(Kind::Settings, e.to_string()))?;
-    let objective = Objective::from_ltl(py, posg, ltl, false, true)?;
+    let objective = objective::automata(py, posg, ltl, false, true)?;
     let not_phi = objective
         .not_phi
         .as_ref()

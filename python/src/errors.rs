@@ -228,7 +228,9 @@ impl Classify for OptimiseError {
 impl Classify for PipelineError {
     fn kind(&self) -> Kind {
         match self {
-            PipelineError::Parse(_) | PipelineError::Translate(_) => Kind::Formula,
+            PipelineError::Parse(_)
+            | PipelineError::Translate(_)
+            | PipelineError::Propositions(_) => Kind::Formula,
             PipelineError::Model(error) => error.kind(),
             PipelineError::Optimise(error) => error.kind(),
             PipelineError::Certify(error) => error.kind(),

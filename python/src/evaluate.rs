@@ -14,7 +14,7 @@ use pyo3::prelude::*;
 use crate::controller::Controller;
 use crate::errors::compute;
 use crate::game::Game;
-use crate::objective::Objective;
+use crate::objective;
 
 /// The keyword options of `Game.evaluate`.
 pub struct Options<'a> {
@@ -131,7 +131,7 @@ pub fn evaluate(
     let settings = solver_settings(options.solver, options.tolerance, options.lu_limit)?;
     let defender = Controller::resolve("defender", defender, posg, Role::Defender)?;
     let adversary = Controller::resolve("adversary", adversary, posg, Role::Adversary)?;
-    let objective = Objective::from_ltl(py, posg, ltl, options.allow_unused_propositions, false)?;
+    let objective = objective::automata(py, posg, ltl, options.allow_unused_propositions, false)?;
     let gradient = options.gradient;
     let computed = compute(py, || {
         let mut evaluator = Evaluator::new(

@@ -20,7 +20,7 @@ use crate::controller::Controller;
 use crate::convert::{serialised, settings_from_json, size, sizes, to_json};
 use crate::errors::{Kind, convert, panicked, raise};
 use crate::game::Game;
-use crate::objective::Objective;
+use crate::objective;
 
 /// Keyword arguments with the command line's names that live elsewhere in
 /// [`Settings`]: `tolerance` is `solver_tolerance`, and the synthesis
@@ -326,32 +326,13 @@ fn result(
     })
 }
 
-/// Checks controller sizes as `posg-fsc solve` does: within the resource
-/// budget, and one adversary node for a game without an adversary.
-fn check_sizes(game: &Posg, defender: usize, adversary: usize) -> PyResult<()> {
-    for (name, nodes, role) in [
-        ("def_nodes", defender, Role::Defender),
-        ("adv_nodes", adversary, Role::Adversary),
-    ] {
-        let player = role.player(game);
-        posg_fsc::controller::Fsc::check_uniform_size(
-            name,
-            nodes,
-            player.num_observations(),
-            player.num_actions(),
-        )
-        .map_err(|e| raise(Kind::Settings, e.to_string()))?;
-    }
-    if !game.has_adversary() && adversary != 1 {
-        return Err(raise(
-            Kind::Settings,
-            format!(
-                "adv_nodes {adversary}: the game has no adversary (it is a POMDP), whose \
-                 controller has exactly one node"
-            ),
-        ));
-    }
-    Ok(())
+/// The keywords that give the controllers' sizes, as
+/// [`Sizes::check`]'s errors name them.
+const SIZE_KEYWORDS: [&str; 2] = ["def_nodes", "adv_nodes"];
+
+/// Checks controller sizes as `posg-fsc solve` does ([`Sizes::check`]).
+fn check_sizes(game: &Posg, sizes: Sizes) -> PyResult<()> {
+    (sizes.check(game, SIZE_KEYWORDS)).map_err(|e| raise(Kind::Settings, e.to_string()))
 }
 
 /// Tunes a defender controller against a worst-case adversary, as
@@ -411,8 +392,8 @@ pub fn solve(
         defender: nodes("def_nodes", def_nodes, &start_defender)?,
         adversary: nodes("adv_nodes", adv_nodes, &start_adversary)?,
     };
-    check_sizes(posg, sizes.defender, sizes.adversary)?;
-    let automata = Objective::from_ltl(py, posg, ltl, allow_unused_propositions, true)?.automata();
+    check_sizes(posg, sizes)?;
+    let automata = objective::automata(py, posg, ltl, allow_unused_propositions, true)?;
     let mut job = Job::full(posg, &automata, sizes, &settings).map_err(convert)?;
     for (start, fsc, name) in [
         (&mut job.start.defender, start_defender, "def_nodes"),
@@ -474,11 +455,14 @@ pub fn sweep(
     adversary_sizes.dedup();
     for &n in &defender_sizes {
         for &m in &adversary_sizes {
-            check_sizes(posg, n, m)?;
+            let sizes = Sizes {
+                defender: n,
+                adversary: m,
+            };
+            check_sizes(posg, sizes)?;
         }
     }
-    let automata: Automata =
-        Objective::from_ltl(py, posg, ltl, allow_unused_propositions, true)?.automata();
+    let automata: Automata = objective::automata(py, posg, ltl, allow_unused_propositions, true)?;
     let rows = PyList::empty(py);
     let callback = on_iteration;
     for &m in &adversary_sizes {

@@ -12,6 +12,7 @@ use posg_fsc::game::Posg;
 use posg_fsc::game::drn::DrnOptions;
 use posg_fsc::ltl::props::Property;
 use posg_fsc::output::PlotFormat;
+use posg_fsc::pipeline::{Automata, PipelineError};
 use posg_fsc::value::{DEFAULT_LU_LIMIT, DEFAULT_TOLERANCE, SolverMethod, SolverSettings};
 use serde::Serialize;
 
@@ -207,22 +208,48 @@ fn read_game_as(path: &Path, options: &DrnOptions) -> anyhow::Result<Posg> {
 /// unsatisfiable (every value would be 0) that is an error unless
 /// `--allow-unused-propositions`.
 pub fn objective(args: &ObjectiveArgs, game: &Posg) -> anyhow::Result<(Dra, String)> {
-    let (dra, description) = match (&args.formula_text()?, &args.automaton) {
+    match (&args.formula_text()?, &args.automaton) {
         (Some(text), _) => {
-            let formula =
-                posg_fsc::ltl::parse(text).with_context(|| format!("in the formula '{text}'"))?;
-            (args.translate(&formula)?, text.clone())
+            let automata = formula_automata(args, game, text, false)?;
+            Ok((automata.phi, automata.description))
         }
         (None, Some(path)) => {
             let text = std::fs::read_to_string(path)
                 .with_context(|| format!("cannot read {}", path.display()))?;
             let dra = read_hoa_dra(&text).with_context(|| format!("in {}", path.display()))?;
-            (dra, path.display().to_string())
+            let description = path.display().to_string();
+            check_propositions(&dra, game, &description, args.allow_unused_propositions)?;
+            Ok((dra, description))
         }
         (None, None) => anyhow::bail!("give --ltl, --props or --automaton"),
+    }
+}
+
+/// The automata of the formula `text` (and of its negation when
+/// `negation`) within `--translate-seconds`, checked against the game's
+/// propositions ([`Automata::for_game`]), the check's warnings on stderr.
+pub fn formula_automata(
+    args: &ObjectiveArgs,
+    game: &Posg,
+    text: &str,
+    negation: bool,
+) -> anyhow::Result<Automata> {
+    let budget = posg_fsc::ltl::TranslationBudget {
+        seconds: args.translate_seconds,
     };
-    check_propositions(&dra, game, &description, args.allow_unused_propositions)?;
-    Ok((dra, description))
+    let allow = args.allow_unused_propositions;
+    match Automata::for_game(game, text, &budget, negation, allow) {
+        Ok((automata, warnings)) => {
+            for warning in &warnings {
+                eprintln!("warning: {warning}");
+            }
+            Ok(automata)
+        }
+        Err(error @ PipelineError::Parse(_)) => {
+            Err(anyhow::Error::new(error).context(format!("in the formula '{text}'")))
+        }
+        Err(error) => Err(error.into()),
+    }
 }
 
 /// Warns about each proposition of `dra` that labels no state of the game

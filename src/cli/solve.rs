@@ -9,7 +9,6 @@
 
 use std::path::{Path, PathBuf};
 
-use anyhow::Context;
 use clap::Args;
 use indicatif::MultiProgress;
 
@@ -20,7 +19,9 @@ use posg_fsc::output::{OutputDirectory, PlotFormat};
 use posg_fsc::pipeline::directory::SolveDirectory;
 use posg_fsc::pipeline::{Automata, Job, Outcome, Sizes};
 
-use super::common::{ObjectiveArgs, PlotArgs, SolverArgs, objective, print_text, read_game_for};
+use super::common::{
+    ObjectiveArgs, PlotArgs, SolverArgs, formula_automata, objective, print_text, read_game_for,
+};
 use super::progress::{OutputArgs, ProgressMode, structure_progress};
 
 /// Arguments of `solve`.
@@ -79,18 +80,16 @@ pub fn settings(settings: &Settings, solver: &SolverArgs) -> anyhow::Result<Sett
 /// its negation's too, for the certified bracket).
 pub fn load(game: &Path, args: &ObjectiveArgs) -> anyhow::Result<(Posg, Automata)> {
     let game = read_game_for(game, args)?;
-    let (phi, description) = objective(args, &game)?;
-    let not_phi = match &args.formula_text()? {
-        Some(text) => Some(
-            args.translate(&posg_fsc::ltl::parse(text)?.negate())
-                .context("translating !phi")?,
-        ),
-        None => None,
-    };
-    let automata = Automata {
-        phi,
-        not_phi,
-        description,
+    let automata = match &args.formula_text()? {
+        Some(text) => formula_automata(args, &game, text, true)?,
+        None => {
+            let (phi, description) = objective(args, &game)?;
+            Automata {
+                phi,
+                not_phi: None,
+                description,
+            }
+        }
     };
     Ok((game, automata))
 }
@@ -129,31 +128,9 @@ pub fn solve_into(
     Ok(outcome)
 }
 
-/// Checks controller sizes given on the command line: at least one node,
-/// within the resource budget ([`posg_fsc::limits`]), and one adversary
-/// node for a game without an adversary (a POMDP).
-pub fn check_sizes(game: &Posg, def_nodes: usize, adv_nodes: usize) -> anyhow::Result<()> {
-    let (def, adv) = (game.defender(), game.adversary());
-    controller::Fsc::check_uniform_size(
-        "--def-nodes",
-        def_nodes,
-        def.num_observations(),
-        def.num_actions(),
-    )?;
-    controller::Fsc::check_uniform_size(
-        "--adv-nodes",
-        adv_nodes,
-        adv.num_observations(),
-        adv.num_actions(),
-    )?;
-    if !game.has_adversary() && adv_nodes != 1 {
-        anyhow::bail!(
-            "--adv-nodes {adv_nodes}: the game has no adversary (it is a POMDP), whose controller \
-             has exactly one node; drop --adv-nodes"
-        );
-    }
-    Ok(())
-}
+/// The options that give the controllers' sizes, as [`Sizes::check`]'s
+/// errors name them.
+pub const SIZE_OPTIONS: [&str; 2] = ["--def-nodes", "--adv-nodes"];
 
 /// A size option given beside a controller file must match the file.
 fn agree(
@@ -176,12 +153,11 @@ fn agree(
 pub fn run(args: SolveArgs) -> anyhow::Result<()> {
     let settings = settings(&args.settings, &args.solver)?;
     let (game, automata) = load(&args.game, &args.objective)?;
-    let (def_nodes, adv_nodes) = (args.def_nodes.unwrap_or(1), args.adv_nodes.unwrap_or(1));
-    check_sizes(&game, def_nodes, adv_nodes)?;
     let sizes = Sizes {
-        defender: def_nodes,
-        adversary: adv_nodes,
+        defender: args.def_nodes.unwrap_or(1),
+        adversary: args.adv_nodes.unwrap_or(1),
     };
+    sizes.check(&game, SIZE_OPTIONS)?;
     let mut job = Job::full(&game, &automata, sizes, &settings)?;
     if let Some(spec) = &args.defender {
         job.start.defender = controller::file::resolve(spec, &game, Role::Defender)?;

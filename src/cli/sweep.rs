@@ -22,7 +22,7 @@ use posg_fsc::pipeline::{self, Automata, Job};
 
 use super::common::{self, ObjectiveArgs, PlotArgs, SolverArgs, print_text};
 use super::progress::{OutputArgs, ProgressMode, SweepProgress};
-use super::solve::{check_sizes, load, settings, solve_into};
+use super::solve::{SIZE_OPTIONS, load, settings, solve_into};
 
 /// Arguments of `sweep`.
 #[derive(Debug, Args)]
@@ -163,7 +163,11 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
     }
     for &n in &args.def_nodes.0 {
         for &m in &args.adv_nodes.0 {
-            check_sizes(&game, n, m)?;
+            let sizes = pipeline::Sizes {
+                defender: n,
+                adversary: m,
+            };
+            sizes.check(&game, SIZE_OPTIONS)?;
         }
     }
     let mut defender_sizes = args.def_nodes.0.clone();

@@ -117,7 +117,7 @@ impl Objective {
     }
 
     /// Whether the value is 0 at every point of the two supports: every
-    /// initial GMC state is [`StateClass::Zero`] (method.md section 3),
+    /// initial GMC state is [`StateClass::Zero`] (method.md section 1),
     /// reaching no phi-feasible BSCC whatever probabilities the supports
     /// carry, so every gradient is 0 as well. Decided once, when the
     /// supports are analysed.

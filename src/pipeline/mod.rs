@@ -38,6 +38,7 @@ use thiserror::Error;
 use crate::automaton::Dra;
 use crate::certify::belief::BeliefBoundOnce;
 use crate::certify::{self, Bracket, CertifyError};
+use crate::controller::Fsc;
 use crate::game::{ModelError, Posg};
 use crate::ltl::{self, TranslateError};
 use crate::optimise::{
@@ -71,6 +72,39 @@ impl Automata {
             description: text.to_string(),
         })
     }
+
+    /// The objective of every face (`--ltl`/`--props` on the command
+    /// line, `ltl=` in Python): the automata of the LTL formula `text` and,
+    /// when `negation`, of its negation (for the certified bracket), each
+    /// translated within `budget`, with the formula's propositions checked
+    /// against `game`'s labels ([`check_propositions`], whose `allow` is
+    /// `allow_unused`). Returns the automata and the check's warnings, for
+    /// the face to show; a proposition check that fails is
+    /// [`PipelineError::Propositions`].
+    pub fn for_game(
+        game: &Posg,
+        text: &str,
+        budget: &ltl::TranslationBudget,
+        negation: bool,
+        allow_unused: bool,
+    ) -> Result<(Self, Vec<String>), PipelineError> {
+        let formula = ltl::parse(text)?;
+        let phi = ltl::translate_within(&formula, budget)?;
+        let check = check_propositions(&phi, game, text, allow_unused);
+        if let Some(error) = check.error {
+            return Err(PipelineError::Propositions(error));
+        }
+        let not_phi = match negation {
+            true => Some(ltl::translate_within(&formula.negate(), budget)?),
+            false => None,
+        };
+        let automata = Self {
+            phi,
+            not_phi,
+            description: text.to_string(),
+        };
+        Ok((automata, check.warnings))
+    }
 }
 
 /// Controller sizes: the defender's and the adversary's number of nodes.
@@ -80,6 +114,35 @@ pub struct Sizes {
     pub defender: usize,
     /// The adversary's nodes (at least 1; exactly 1 for a game without an adversary).
     pub adversary: usize,
+}
+
+impl Sizes {
+    /// Checks the sizes against `game`: at least one node each, uniform
+    /// controllers of these sizes within the resource budget
+    /// ([`crate::limits`]), and one adversary node for a game without an
+    /// adversary (a POMDP). `names` are how the caller spells the two
+    /// sizes (`--def-nodes`, `--adv-nodes` on the command line), which the
+    /// error names.
+    pub fn check(&self, game: &Posg, names: [&str; 2]) -> Result<(), ModelError> {
+        let [defender_name, adversary_name] = names;
+        for (name, nodes, player) in [
+            (defender_name, self.defender, game.defender()),
+            (adversary_name, self.adversary, game.adversary()),
+        ] {
+            let (observations, actions) = (player.num_observations(), player.num_actions());
+            Fsc::check_uniform_size(name, nodes, observations, actions)?;
+        }
+        if !game.has_adversary() && self.adversary != 1 {
+            return Err(ModelError::new(
+                format!("{adversary_name} {}", self.adversary),
+                format!(
+                    "the game has no adversary (it is a POMDP), whose controller has exactly \
+                     one node; drop {adversary_name}"
+                ),
+            ));
+        }
+        Ok(())
+    }
 }
 
 /// One run of the pipeline: what [`run`] optimises.
@@ -268,6 +331,10 @@ pub enum PipelineError {
     /// A report could not be written as JSON.
     #[error(transparent)]
     Json(#[from] serde_json::Error),
+    /// The objective's propositions label no state of the game and make it
+    /// unsatisfiable ([`check_propositions`]).
+    #[error("{0}")]
+    Propositions(String),
 }
 
 /// The main job from the full support structure: optimise a defender of

@@ -49,8 +49,9 @@ pub fn check_propositions(
     let error = (never_holds && !allow).then(|| {
         format!(
             "the objective {objective} can never hold: {} labels no state of the game, and false \
-             everywhere it makes every value 0. Fix the name, or pass \
-             --allow-unused-propositions to compute with it anyway",
+             everywhere it makes every value 0. Fix the name, or allow unused propositions \
+             (--allow-unused-propositions; allow_unused_propositions=True in Python) to \
+             compute with it anyway",
             hints.join(", ")
         )
     });
