@@ -812,12 +812,13 @@ const KICK_DIVISOR: usize = 8;
 /// A kick redraws at least this many blocks (where that many are in use).
 const MIN_KICKED_BLOCKS: usize = 2;
 
-/// [`climb`] from `start` and from random memoryless deterministic
-/// defenders (each block `(g, o)` one enabled pair `(g, u)`, `u` uniformly
-/// drawn from a stream seeded by `rng`; the climb adds memory), each until
-/// it ends or spends `effort`; then from kicks of the best end point
-/// (iterated local search). The restarts run in rounds of `restarts`
-/// climbs in parallel (the first also climbs from `start`); another round
+/// [`climb`] from each of `starts` (deterministic defenders of one size,
+/// at least one) and from random memoryless deterministic defenders (each
+/// block `(g, o)` one enabled pair `(g, u)`, `u` uniformly drawn from a
+/// stream seeded by `rng`; the climb adds memory), each until it ends or
+/// spends `effort`; then from kicks of the best end point (iterated local
+/// search). The restarts run in rounds of `restarts` climbs in parallel
+/// (the first also climbs from `starts`); another round
 /// follows while the climbs so far have spent less than a
 /// [`ROUNDS_BUDGET_DIVISOR`]-th of one round at full effort (`restarts`
 /// times `effort.work`), up to [`MAX_RESTART_ROUNDS`] rounds: where climbs
@@ -829,19 +830,22 @@ const MIN_KICKED_BLOCKS: usize = 2;
 /// defender that certifies nothing is one more random start; the last
 /// round may overshoot). Both end once a climb reaches `effort.enough`,
 /// and at the deadline. Returns the end point with the highest bound (the
-/// first such, in the order `start`, then the climbs as drawn), with its
+/// first such, in the order `starts`, then the climbs as drawn), with its
 /// certified lower bound. The rounds depend on counts and bounds only, so
 /// the search is reproducible for a seed unless a deadline cuts it; what
 /// the searches sharing `memo` evaluated costs it no solve.
 pub fn climb_with_restarts(
     game: &Posg,
     not_phi: &Dra,
-    start: &Fsc,
+    starts: &[Fsc],
     restarts: usize,
     rng: &mut ChaCha8Rng,
     effort: Effort<'_>,
     memo: &SearchMemo,
 ) -> Result<Climbed, CertifyError> {
+    let start = starts
+        .first()
+        .expect("a search climbs from at least one start");
     let universe = Fsc::uniform_enabled(Role::Defender, start.num_nodes(), game.defender());
     let mut rounds = Rounds {
         search: Search::sharing(game, not_phi, &universe, effort, memo),
@@ -849,7 +853,7 @@ pub fn climb_with_restarts(
         spent: 0,
     };
     let budget = restarts.saturating_mul(effort.work) / ROUNDS_BUDGET_DIVISOR;
-    let mut froms = vec![start.clone()];
+    let mut froms = starts.to_vec();
     for _ in 0..MAX_RESTART_ROUNDS {
         froms.extend(draws(restarts, rng, |stream| {
             random_memoryless(start, &universe, stream)
@@ -1168,7 +1172,7 @@ mod tests {
             let searched = climb_with_restarts(
                 &game,
                 &not_phi,
-                &start,
+                std::slice::from_ref(&start),
                 restarts,
                 &mut rng,
                 UNLIMITED,
@@ -1416,7 +1420,16 @@ mod tests {
         let other = random_memoryless(&first, &universe, &mut ChaCha8Rng::seed_from_u64(9));
         let search = |start: &Fsc, memo: &SearchMemo| {
             let mut rng = ChaCha8Rng::seed_from_u64(5);
-            climb_with_restarts(&game, &not_phi, start, 3, &mut rng, UNLIMITED, memo).unwrap()
+            climb_with_restarts(
+                &game,
+                &not_phi,
+                std::slice::from_ref(start),
+                3,
+                &mut rng,
+                UNLIMITED,
+                memo,
+            )
+            .unwrap()
         };
         let solved = |memo: &SearchMemo| lock(&memo.0.known).len();
         let shared = SearchMemo::default();
@@ -1446,7 +1459,16 @@ mod tests {
         let memo = SearchMemo::default();
         let search = || {
             let mut rng = ChaCha8Rng::seed_from_u64(5);
-            climb_with_restarts(&game, &not_phi, &start, 3, &mut rng, UNLIMITED, &memo).unwrap()
+            climb_with_restarts(
+                &game,
+                &not_phi,
+                std::slice::from_ref(&start),
+                3,
+                &mut rng,
+                UNLIMITED,
+                &memo,
+            )
+            .unwrap()
         };
         let first = search();
         assert!(lock(&memo.0.climbs).len() > 1, "the restarts are recorded");
@@ -1476,7 +1498,7 @@ mod tests {
             climb_with_restarts(
                 &game,
                 &not_phi,
-                &start,
+                std::slice::from_ref(&start),
                 3,
                 &mut rng,
                 UNLIMITED,

@@ -260,10 +260,11 @@ pub struct Structure {
     pub defender: Fsc,
     /// The adversary's starting controller.
     pub adversary: Fsc,
-    /// Where the first start begins instead of `defender` (on the same
-    /// support): the best defender of the next smaller size embedded, in a
-    /// grown run ([`warm_started`]); the other starts begin from `defender`,
-    /// so growing keeps the fresh starts' reach.
+    /// Where one more start begins (on the same support): the best
+    /// defender of the next smaller size embedded, in a grown run
+    /// ([`warm_started`]). It races beside the `starts` that begin from
+    /// `defender` as a run of this size alone would, and the local search
+    /// climbs from both, so growing keeps the fresh starts' reach.
     pub warm: Option<Fsc>,
 }
 
@@ -467,7 +468,8 @@ where
     })
 }
 
-/// Optimises on one structure: `settings.starts` independent starts in
+/// Optimises on one structure: `settings.starts` independent starts (one
+/// more from [`Structure::warm`] in a grown run) in
 /// parallel (rayon), start `i` with random stream `stream + (i << 32)` of
 /// `settings.seed`; each runs under the driver (`Optimiser`; the starts
 /// race in lockstep rounds and an outpaced start stops, `race.rs`) with
@@ -685,10 +687,14 @@ impl<'a> StructuresRun<'a> {
             warm: None,
             ..structure.clone()
         });
-        let racers = (0..settings.starts)
+        // A grown run's warm start races beside the starts a run of this
+        // size alone would race (the same streams), as one more start.
+        let starts = settings.starts + usize::from(warm.is_some());
+        let racers = (0..starts)
             .into_par_iter()
             .map(|i| {
-                let begins = warm.as_ref().filter(|_| i == 0).unwrap_or(structure);
+                let begins = warm.as_ref().filter(|_| i == settings.starts);
+                let begins = begins.unwrap_or(structure);
                 let optimiser =
                     start_optimiser((game, dra), (method, run_certifier), begins, &start(i))?;
                 Racer::new(
@@ -893,13 +899,18 @@ fn search_supports(
     if settings.gap_closed(lower, upper) {
         return Ok(None);
     }
-    let start = rounding::truncated(from, f64::INFINITY)?;
+    // A grown run's search also climbs from where the search of a run of
+    // this size alone would start.
+    let fresh = structure.warm.as_ref().map(|_| &structure.defender);
+    let starts = std::iter::once(from).chain(fresh);
+    let starts =
+        (starts.map(|d| rounding::truncated(d, f64::INFINITY))).collect::<Result<Vec<_>, _>>()?;
     let mut rng = ChaCha8Rng::seed_from_u64(settings.seed);
     rng.set_stream(run.search_stream);
     Ok(Some(local_search::climb_with_restarts(
         game,
         certifier.not_phi,
-        &start,
+        &starts,
         settings.local_search_restarts,
         &mut rng,
         local_search::Effort {
@@ -1178,7 +1189,7 @@ fn finalise(
                 let found = local_search::climb_with_restarts(
                     game,
                     c.not_phi,
-                    &chosen.defender,
+                    std::slice::from_ref(&chosen.defender),
                     restarts,
                     &mut run.rng,
                     local_search::Effort {
