@@ -69,6 +69,41 @@ pub struct Evaluation {
     pub error_bound: f64,
 }
 
+/// What every face reports of one evaluation (`eval`'s JSON, Python's
+/// `Evaluation`; docs/formats.md section 8): the value, the GMC's size and
+/// analysis (method.md section 1), the solver and the accuracy it proved
+/// (method.md section 8). Made by [`Evaluator::report`].
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct EvaluationReport {
+    /// `V = P(trace |= phi)`.
+    pub value: f64,
+    /// The GMC's explored states (by default the exploration stops at the
+    /// decided states).
+    pub gmc_states: usize,
+    /// Its transitions.
+    pub gmc_transitions: usize,
+    /// The explored states whose automaton state decides the formula
+    /// (value 1 or 0 whatever follows): not expanded, and in no BSCC.
+    pub decided_states: usize,
+    /// Bottom strongly connected components (recurrence classes).
+    pub bsccs: usize,
+    /// The phi-feasible ones.
+    pub feasible_bsccs: usize,
+    /// Transient states: the unknowns of `(I - Q) x = b`.
+    pub transient_states: usize,
+    /// `lu` or `krylov`.
+    pub solver: &'static str,
+    /// Why `solver` was used: the setting, `auto`'s size limits, or its
+    /// prediction from a short BiCGSTAB trial.
+    pub solver_reason: String,
+    /// `max_i |((I - Q) x - b)_i|`.
+    pub residual: f64,
+    /// A bound on `|value - exact value|` (method.md section 8).
+    pub error_bound: f64,
+    /// BiCGSTAB iterations (0 for LU).
+    pub solver_iterations: usize,
+}
+
 /// Partial derivatives of `V` with respect to every controller probability,
 /// aligned with the players' [`Support`]s.
 #[derive(Debug, Clone, PartialEq)]
@@ -383,6 +418,25 @@ impl Evaluator {
     /// limits, or its switch to LU after a slow BiCGSTAB solve.
     pub fn solver_reason(&self) -> &str {
         self.system.solver.reason()
+    }
+
+    /// The report of `evaluation`, this evaluator's last.
+    pub fn report(&self, evaluation: &Evaluation) -> EvaluationReport {
+        let recurrence = self.recurrence();
+        EvaluationReport {
+            value: evaluation.value,
+            gmc_states: self.gmc.num_states(),
+            gmc_transitions: self.gmc.num_transitions(),
+            decided_states: self.gmc.num_decided(),
+            bsccs: recurrence.bsccs.len(),
+            feasible_bsccs: recurrence.feasible().count(),
+            transient_states: recurrence.transient.len(),
+            solver: self.solver_method().name(),
+            solver_reason: self.solver_reason().to_string(),
+            residual: evaluation.residual,
+            error_bound: evaluation.error_bound,
+            solver_iterations: evaluation.iterations,
+        }
     }
 
     /// The pattern of `I - Q` on `T` and its numbers as of the last evaluation.

@@ -624,5 +624,8 @@ fn a_warm_start_is_one_more_start_and_leaves_the_others() {
     assert_eq!(from_warm.len(), 4);
     assert!(from_cold.iter().all(|&v| v > 0.0), "{from_cold:?}");
     assert_eq!(from_cold[..], from_warm[..3]);
-    assert!(from_cold.iter().all(|&v| v != from_warm[3]), "{from_warm:?}");
+    assert!(
+        from_cold.iter().all(|&v| v != from_warm[3]),
+        "{from_warm:?}"
+    );
 }

@@ -103,20 +103,6 @@ pub fn solver_settings(
     })
 }
 
-/// Numbers computed without the GIL.
-struct Computed {
-    evaluation: posg_fsc::value::Evaluation,
-    gradient: Option<posg_fsc::value::Gradient>,
-    gmc_states: usize,
-    gmc_transitions: usize,
-    decided_states: usize,
-    bsccs: usize,
-    feasible_bsccs: usize,
-    transient_states: usize,
-    solver: &'static str,
-    solver_reason: String,
-}
-
 /// `Game.evaluate`.
 pub fn evaluate(
     game: &Bound<'_, Game>,
@@ -151,39 +137,28 @@ pub fn evaluate(
         } else {
             (evaluator.evaluate(&def, &adv)?, None)
         };
-        let recurrence = evaluator.recurrence();
-        Ok::<_, posg_fsc::value::ValueError>(Computed {
-            evaluation,
-            gradient,
-            gmc_states: evaluator.gmc().num_states(),
-            gmc_transitions: evaluator.gmc().num_transitions(),
-            decided_states: evaluator.gmc().num_decided(),
-            bsccs: recurrence.bsccs.len(),
-            feasible_bsccs: recurrence.feasible().count(),
-            transient_states: recurrence.transient.len(),
-            solver: evaluator.solver_method().name(),
-            solver_reason: evaluator.solver_reason().to_string(),
-        })
+        Ok::<_, posg_fsc::value::ValueError>((evaluator.report(&evaluation), gradient))
     })?;
+    let (report, gradient) = computed;
     let dense = |fsc, values: &[f64]| -> Py<PyArray4<f64>> {
         let array: Array4<f64> = Controller::dense(fsc, values);
         array.into_pyarray(py).unbind()
     };
     let vector = |values: &[f64]| Array1::from(values.to_vec()).into_pyarray(py).unbind();
-    let g = computed.gradient.as_ref();
+    let g = gradient.as_ref();
     Ok(Evaluation {
-        value: computed.evaluation.value,
-        error_bound: computed.evaluation.error_bound,
-        residual: computed.evaluation.residual,
-        gmc_states: computed.gmc_states,
-        gmc_transitions: computed.gmc_transitions,
-        decided_states: computed.decided_states,
-        bsccs: computed.bsccs,
-        feasible_bsccs: computed.feasible_bsccs,
-        transient_states: computed.transient_states,
-        solver: computed.solver.to_string(),
-        solver_reason: computed.solver_reason,
-        solver_iterations: computed.evaluation.iterations,
+        value: report.value,
+        error_bound: report.error_bound,
+        residual: report.residual,
+        gmc_states: report.gmc_states,
+        gmc_transitions: report.gmc_transitions,
+        decided_states: report.decided_states,
+        bsccs: report.bsccs,
+        feasible_bsccs: report.feasible_bsccs,
+        transient_states: report.transient_states,
+        solver: report.solver.to_string(),
+        solver_reason: report.solver_reason,
+        solver_iterations: report.solver_iterations,
         seconds: clock.elapsed().as_secs_f64(),
         defender_gradient: g.map(|g| dense(&defender, &g.defender)),
         adversary_gradient: g.map(|g| dense(&adversary, &g.adversary)),

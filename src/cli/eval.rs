@@ -9,7 +9,7 @@ use posg_fsc::controller::Support;
 use posg_fsc::game::Posg;
 use posg_fsc::value::Gmc;
 use posg_fsc::value::Recurrence;
-use posg_fsc::value::{Evaluator, Exploration, Gradient};
+use posg_fsc::value::{EvaluationReport, Evaluator, Exploration, Gradient};
 use serde::Serialize;
 
 use super::common::{self, ControllerArgs, ObjectiveArgs, Provenance};
@@ -46,25 +46,9 @@ struct Report {
     #[serde(flatten)]
     provenance: Provenance,
     formula: String,
-    value: f64,
-    /// The states explored; without `--explain` the exploration stops at the
-    /// decided states.
-    gmc_states: usize,
-    gmc_transitions: usize,
-    /// The explored states whose automaton state decides the formula
-    /// (value 1 or 0 whatever follows): not expanded, and in no BSCC.
-    decided_states: usize,
-    bsccs: usize,
-    feasible_bsccs: usize,
-    transient_states: usize,
-    solver: &'static str,
-    /// Why `solver` was used: the setting, `auto`'s size limits, or its
-    /// prediction from a short BiCGSTAB trial.
-    solver_reason: String,
-    residual: f64,
-    /// A bound on `|value - exact value|` (method.md section 8).
-    error_bound: f64,
-    solver_iterations: usize,
+    /// With `--explain` the GMC is explored beyond the decided states.
+    #[serde(flatten)]
+    evaluation: EvaluationReport,
     seconds: f64,
     phase_seconds: PhaseSeconds,
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -195,18 +179,7 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
     let report = Report {
         provenance: Provenance::current(),
         formula,
-        value: evaluation.value,
-        gmc_states: evaluator.gmc().num_states(),
-        gmc_transitions: evaluator.gmc().num_transitions(),
-        decided_states: evaluator.gmc().num_decided(),
-        bsccs: recurrence.bsccs.len(),
-        feasible_bsccs: recurrence.feasible().count(),
-        transient_states: recurrence.transient.len(),
-        solver: evaluator.solver_method().name(),
-        solver_reason: evaluator.solver_reason().to_string(),
-        residual: evaluation.residual,
-        error_bound: evaluation.error_bound,
-        solver_iterations: evaluation.iterations,
+        evaluation: evaluator.report(&evaluation),
         seconds: common::seconds_since(start),
         phase_seconds,
         gradient: gradient.as_ref().map(GradientReport::new),
