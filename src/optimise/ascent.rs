@@ -24,9 +24,8 @@
 use std::collections::VecDeque;
 
 use super::objective::{Objective, Point};
-use super::optimiser::{Solver, norm};
-use super::play::{Iterate, PlayState};
 use super::reparam::Reparametrisation;
+use super::solver::{Iterate, PlayState, Solver, norm};
 use super::{OptimiseError, Settings};
 
 /// The largest change of any `z` coordinate in one trial step.

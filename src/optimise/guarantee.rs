@@ -13,8 +13,8 @@
 use std::time::Instant;
 
 use super::ascent::{DefenderObjective, DefenderPoint, Lbfgs};
-use super::optimiser::{budget_spent, gained_little};
 use super::softmax::Softmax;
+use super::stopping::{budget_spent, gained_little};
 use super::{Cancel, OptimiseError, Settings};
 use crate::certify::gradient::LowerBoundGradients;
 

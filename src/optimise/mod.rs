@@ -57,6 +57,8 @@ mod reparam;
 mod rounding;
 mod settings;
 mod softmax;
+mod solver;
+mod stopping;
 mod structures;
 mod warm_start;
 

@@ -65,42 +65,15 @@ use serde::Serialize;
 use super::ascent::Ascent;
 use super::objective::Objective;
 use super::observer::{IterationRecord, Observer, RecordSource};
-use super::play::{GradientPlay, Iterate, PlayState, perturbed};
+use super::play::{GradientPlay, perturbed};
+use super::solver::{Iterate, PlayState, Solver, norm};
+use super::stopping::{STALL_MAGNITUDE_FLOOR, budget_spent, stalled, window_ends};
 use super::{Cancel, Method, OptimiseError, Settings, Status};
 use crate::automaton::Dra;
 use crate::certify::gradient::LowerBoundGradients;
 use crate::controller::Fsc;
 use crate::game::Posg;
 use check::{Check, SuffixAverage};
-
-/// One outer iteration of an optimisation run, in argmin's shape: the
-/// solver owns its update rules and state between iterations, the driver
-/// ([`Optimiser`]) everything else.
-pub(super) trait Solver: Send {
-    /// Iteration 0 from `start`: the state the first check judges.
-    fn init(
-        &mut self,
-        objective: &mut Objective,
-        start: Iterate,
-    ) -> Result<PlayState, OptimiseError>;
-
-    /// Iteration `t + 1` from the state of iteration `t`.
-    fn next_iter(
-        &mut self,
-        objective: &mut Objective,
-        state: PlayState,
-    ) -> Result<PlayState, OptimiseError>;
-
-    /// The defender's and the adversary's step sizes at iteration `t`, for
-    /// the iteration record.
-    fn steps(&self, t: usize) -> (f64, f64);
-
-    /// Whether the solver found no further step (the run then stops as
-    /// [`Status::Converged`]).
-    fn converged(&self) -> bool {
-        false
-    }
-}
 
 /// The driver of an optimisation run on one structure: the method (which
 /// solver it drives), the objective, the random stream of the
@@ -251,12 +224,6 @@ impl Run {
 
 /// A logit `phi` presses on the bound `c` when `|phi| >= NEAR_BOUND * c`.
 pub const NEAR_BOUND: f64 = 0.95;
-
-/// The stall rule measures a window's gain relative to the best score's
-/// magnitude, but never relative to less than this: a probability creeping
-/// from `1e-8` to `1e-7` has stalled (it gained under `stall_gain` times
-/// this), however large its relative climb.
-pub const STALL_MAGNITUDE_FLOOR: f64 = 1e-3;
 
 /// A start is probed against the floor (the local search's certified
 /// lower bound, proved before the race) at each window end after this
@@ -855,92 +822,5 @@ fn starting_bound(method: Method, settings: &Settings) -> f64 {
     match method {
         Method::MaxMin => settings.initial_logit_bound,
         Method::Ascent => settings.logit_bound,
-    }
-}
-
-/// The budgets every loop stops on, after iteration `t` (the driver's
-/// runs and the guarantee ascent): [`Status::Cancelled`] once `cancel` is
-/// set, [`Status::MaxIterations`] after iteration `max_iterations - 1`,
-/// [`Status::WorkBudget`] once `work` (states solved) reaches a positive
-/// `max_work`, [`Status::TimeBudget`] once `seconds` reach a positive time
-/// budget.
-pub(super) fn budget_spent(
-    s: &Settings,
-    t: usize,
-    work: f64,
-    seconds: f64,
-    cancel: &Cancel,
-) -> Option<Status> {
-    if cancel.is_cancelled() {
-        Some(Status::Cancelled)
-    } else if t + 1 >= s.max_iterations {
-        Some(Status::MaxIterations)
-    } else if s.max_work > 0.0 && work >= s.max_work {
-        Some(Status::WorkBudget)
-    } else if s.time_budget > 0.0 && seconds >= s.time_budget {
-        Some(Status::TimeBudget)
-    } else {
-        None
-    }
-}
-
-/// Whether iteration `t` ends a suffix-averaging window (`t + 1` is a
-/// power of two): the windows are the second halves of the run so far.
-fn window_ends(t: usize) -> bool {
-    (t + 1).is_power_of_two()
-}
-
-/// The max-min loop's stall rule, judged where a suffix-averaging window
-/// ends: with at least `stall_checks` checks in `history` since the logit
-/// bound last widened, whether the best score gained at most `stall_gain`
-/// times its magnitude (relative, so that a climb from a small value is
-/// not taken for a stall, down to [`STALL_MAGNITUDE_FLOOR`]: gains of a
-/// probability below `stall_gain * STALL_MAGNITUDE_FLOOR` do not pay)
-/// over the last window, from the previous entry of
-/// `window_ends` (the best score at each window's end) to the last. The
-/// window is the second half of the run so far, so a run that creeps stops
-/// within about twice the iterations of its last real progress; and it
-/// counts iterations, not seconds, so a seeded run stops at the same
-/// iteration on every machine.
-pub(super) fn stalled(history: &[f64], window_ends: &[f64], s: &Settings) -> bool {
-    let n = window_ends.len();
-    s.stall_checks > 0
-        && history.len() >= s.stall_checks
-        && n > 1
-        && window_ends[n - 1] - window_ends[n - 2]
-            <= s.stall_gain * window_ends[n - 1].abs().max(STALL_MAGNITUDE_FLOOR)
-}
-
-/// Whether the last entry of `history` exceeds the one `window` entries
-/// before by less than `tolerance` times its magnitude (false while the
-/// history is shorter than the window).
-pub(super) fn gained_little(history: &[f64], window: usize, tolerance: f64) -> bool {
-    let n = history.len();
-    n > window && history[n - 1] - history[n - 1 - window] <= tolerance * history[n - 1].abs()
-}
-
-/// The Euclidean norm `|v|_2`.
-pub(super) fn norm(v: &[f64]) -> f64 {
-    v.iter().map(|x| x * x).sum::<f64>().sqrt()
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn a_window_stalls_on_a_small_relative_gain_or_a_negligible_absolute_one() {
-        let s = Settings::default();
-        let history = vec![0.0; s.stall_checks];
-        // 0.5 -> 0.5004: a relative gain of 8e-4 < stall_gain.
-        assert!(stalled(&history, &[0.5, 0.5004], &s));
-        assert!(!stalled(&history, &[0.5, 0.501], &s));
-        // A small probability climbing by 10%: progress.
-        assert!(!stalled(&history, &[0.0150, 0.0165], &s));
-        // 1e-8 -> 1e-7 climbs tenfold but gains 9e-8 < 1e-3 * 1e-3.
-        assert!(stalled(&history, &[1e-8, 1e-7], &s));
-        // Too few checks since the last widening, or a single window: no.
-        assert!(!stalled(&history[1..], &[1e-8, 1e-7], &s));
-        assert!(!stalled(&history, &[1e-7], &s));
     }
 }

@@ -21,36 +21,10 @@
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 
-use super::objective::{Objective, Point};
-use super::optimiser::{Solver, norm};
+use super::objective::Objective;
 use super::softmax::clip;
+use super::solver::{Iterate, PlayState, Solver, norm};
 use super::{OptimiseError, Settings, UpdateRule};
-
-/// The players' logits at the start of an iteration, before the adversary
-/// responds.
-pub(super) struct Iterate {
-    /// The outer iteration `t`.
-    pub iteration: usize,
-    /// `phi_def(t)`.
-    pub defender: Vec<f64>,
-    /// `phi_adv` before the adversary's steps of iteration `t`.
-    pub adversary: Vec<f64>,
-    /// The logit bound `c` of the projection (the driver widens it).
-    pub bound: f64,
-    /// The largest residual of any linear solve so far.
-    pub max_residual: f64,
-}
-
-/// The state at the end of iteration `t`: the iterate after the
-/// adversary's response and the value and gradients there.
-pub(super) struct PlayState {
-    /// `(phi_def(t), phi_adv(t))`, the bound and the residual so far.
-    pub iterate: Iterate,
-    /// `V`, `dV/dphi_def` and `dV/dphi_adv` at `(phi_def(t), phi_adv(t))`.
-    pub point: Point,
-    /// `|dV/dphi_adv|_2` before the adversary's last step of iteration `t`.
-    pub adversary_gradient_norm: f64,
-}
 
 /// Alternating projected gradient ascent (defender) and descent
 /// (adversary) on `V(softmax(phi_def), softmax(phi_adv))`: the step sizes

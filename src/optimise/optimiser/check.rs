@@ -40,8 +40,8 @@ use std::time::Instant;
 use super::super::FreshObjective;
 use super::super::best_response::{BestResponse, Starts, best_response, final_best_response};
 use super::super::guarantee::{Guarantee, ascend};
-use super::super::play::{Iterate, PlayState};
 use super::super::rounding::truncated;
+use super::super::solver::{Iterate, PlayState};
 use super::{
     Bookkeeping, Incumbent, Method, OptimiseError, Optimiser, PhaseSeconds, RunOutcome, Settings,
 };
