@@ -29,7 +29,7 @@ use serde::{Deserialize, Serialize};
 use crate::automaton::Dra;
 use crate::certify::{Bound, StrategyRule};
 use crate::controller::{Choice, Fsc, Role};
-use crate::game::file::{Located, parse, read_text, write_text};
+use crate::game::reading::{Located, parse, read_text, write_text};
 use crate::game::{ModelError, Player, Posg};
 
 /// The only format version this crate reads and writes (`"strategy": 1`).

@@ -11,7 +11,7 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 
 use super::{Choice, Fsc, Role};
-use crate::game::file::{Located, check_probability, normalise, parse, read_text, write_text};
+use crate::game::reading::{Located, check_probability, normalise, parse, read_text, write_text};
 use crate::game::{ModelError, Player, Posg};
 
 /// The only format version this crate reads and writes (`"fsc": 1`).

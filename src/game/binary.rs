@@ -19,7 +19,7 @@ use rustc_hash::{FxHashMap, FxHashSet};
 
 use crate::limits;
 
-use super::file::{
+use super::reading::{
     FORMAT_VERSION, Located, action_label_problem, check_probability, index_names,
     is_valid_proposition, normalisation, pomdp_adversary, write_bytes,
 };
@@ -541,7 +541,7 @@ impl<'a> Reader<'a> {
                     let n = self
                         .distribution_into(&at, ns, "state", &mut entries)
                         .map_err(|e| at.index(t).error(e.message))?;
-                    let required = super::file::triple_required(game, s, u, v);
+                    let required = super::reading::triple_required(game, s, u, v);
                     if required != (n > 0) {
                         return Err(at.index(t).error(triple_mismatch(game, required, s, u, v)));
                     }
@@ -697,7 +697,7 @@ impl Reader<'_> {
                 )));
             }
             let (s, u, v) = (t / (nu * nv), t / nv % nu, t % nv);
-            if !super::file::triple_required(game, s, u, v) {
+            if !super::reading::triple_required(game, s, u, v) {
                 return Err(here.error(format!(
                     "a reward for {}, whose actions no observation of the state enables",
                     triple_text(game, s, u, v)

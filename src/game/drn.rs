@@ -35,7 +35,7 @@ use std::path::Path;
 
 use rustc_hash::FxHashMap;
 
-use super::file::{bytes_without_bom, is_valid_proposition, read_text, without_bom};
+use super::reading::{bytes_without_bom, is_valid_proposition, read_text, without_bom};
 use super::{Distribution, ModelError, Player, Posg};
 use rewards::Arity;
 
@@ -655,7 +655,7 @@ impl Model {
             initial,
             propositions,
             labels,
-            adversary: super::file::pomdp_adversary(states.len()),
+            adversary: super::reading::pomdp_adversary(states.len()),
             states,
             defender,
             has_adversary: false,

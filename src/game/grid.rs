@@ -31,7 +31,7 @@ use rand::SeedableRng;
 use rand::seq::index::sample;
 use rand_chacha::ChaCha8Rng;
 
-use super::file::is_valid_proposition;
+use super::reading::is_valid_proposition;
 use super::{Distribution, ModelError, Player, Posg};
 
 /// What the players observe of the robot's cell.

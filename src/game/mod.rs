@@ -13,6 +13,7 @@ pub mod binary;
 pub mod drn;
 pub mod file;
 pub mod grid;
+pub(crate) mod reading;
 pub mod rewards;
 
 pub use rewards::RewardModel;

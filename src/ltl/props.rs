@@ -65,7 +65,7 @@ pub struct PropsError {
 /// leading byte-order mark is skipped.
 pub fn parse_props(text: &str) -> Result<Property, PropsError> {
     let mut found: Option<Property> = None;
-    let text = crate::game::file::without_bom(text);
+    let text = crate::game::reading::without_bom(text);
     for (i, raw) in text.lines().enumerate() {
         let line = i + 1;
         let content = without_comment(raw);

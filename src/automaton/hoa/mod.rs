@@ -76,7 +76,7 @@ pub enum HoaError {
 /// module documentation for what is supported); a leading byte-order mark
 /// is skipped.
 pub fn parse_hoa(text: &str) -> Result<EmersonLeiAutomaton, HoaError> {
-    let tokens = lex::tokenize(crate::game::file::without_bom(text))?;
+    let tokens = lex::tokenize(crate::game::reading::without_bom(text))?;
     let (header, states, end) = parse::parse(tokens)?;
     build::build(&header, &states, end)
 }

@@ -15,7 +15,7 @@ use rustc_hash::{FxHashMap, FxHashSet};
 
 use super::Model;
 use super::turn_based::IDLE;
-use crate::game::file::is_valid_name;
+use crate::game::reading::is_valid_name;
 
 impl Model {
     /// Gives each choice label that is not a valid name its name
