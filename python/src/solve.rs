@@ -8,10 +8,10 @@ use std::time::Duration;
 
 use posg_fsc::controller::Role;
 use posg_fsc::game::Posg;
-use posg_fsc::optimise::{Cancel, IterationRecord, Observer, Settings, StructureOutcome};
+use posg_fsc::optimise::{Cancel, IterationRecord, Observer, Settings};
 use posg_fsc::output::OutputDirectory;
 use posg_fsc::pipeline::directory::SolveDirectory;
-use posg_fsc::pipeline::{self, Automata, Job, Outcome, Sizes};
+use posg_fsc::pipeline::{self, Automata, Chain, Job, Outcome, Sizes};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 use serde_json::{Map, Value};
@@ -466,23 +466,14 @@ pub fn sweep(
     let rows = PyList::empty(py);
     let callback = on_iteration;
     for &m in &adversary_sizes {
-        let mut previous: Option<StructureOutcome> = None;
+        let mut chain = Chain::new(posg, &automata, &settings, m);
         for &n in &defender_sizes {
-            let sizes = Sizes {
-                defender: n,
-                adversary: m,
-            };
-            let mut job = Job::full(posg, &automata, sizes, &settings).map_err(convert)?;
-            if let Some(smaller) = &previous {
-                job = job.warm_started(smaller).map_err(convert)?;
-            }
+            let job = chain.job(n).map_err(convert)?;
             let callback = callback.as_ref().map(|c| c.clone_ref(py));
             let outcome = run_job(py, job, callback, None)?;
-            let row = posg_fsc::output::sweep::SweepRow::of(n, m, &outcome, previous.as_ref());
-            let row = serialised(py, &row)?.cast_into::<PyDict>()?;
+            let row = serialised(py, &chain.row(n, &outcome))?.cast_into::<PyDict>()?;
             row.set_item("solved", result(py, posg, &settings, &outcome)?)?;
             rows.append(row)?;
-            previous = Some(outcome.best().clone());
         }
     }
     Ok(rows.unbind())

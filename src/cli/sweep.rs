@@ -15,10 +15,10 @@ use super::shard::{self, Shard, ShardRecord, SweepPlan};
 use super::slurm::{self, SlurmSweep};
 use posg_fsc::game::Posg;
 use posg_fsc::limits;
-use posg_fsc::optimise::{Settings, StructureOutcome};
+use posg_fsc::optimise::Settings;
 use posg_fsc::output::sweep::{SweepRow, sweep_table};
 use posg_fsc::output::{OutputDirectory, PlotFormat, Title, create_dir, write_file};
-use posg_fsc::pipeline::{self, Automata, Job};
+use posg_fsc::pipeline::{self, Automata, Chain};
 
 use super::common::{self, ObjectiveArgs, PlotArgs, SolverArgs, print_text};
 use super::progress::{OutputArgs, ProgressMode, SweepProgress};
@@ -297,9 +297,8 @@ fn run_chain(
     place: PairPlace,
     progress: &SweepProgress,
 ) -> anyhow::Result<Vec<SweepRow>> {
-    let settings = inputs.settings;
+    let mut chain = Chain::new(inputs.game, inputs.automata, inputs.settings, m);
     let mut rows = Vec::new();
-    let mut previous: Option<StructureOutcome> = None;
     for &n in inputs.defender_sizes {
         let name = shard::pair_directory_name(n, m);
         let (own, out) = match place {
@@ -310,23 +309,15 @@ fn run_chain(
                 (Some(own), path)
             }
         };
-        let sizes = pipeline::Sizes {
-            defender: n,
-            adversary: m,
-        };
-        let mut job = Job::full(inputs.game, inputs.automata, sizes, settings)?;
-        if let Some(smaller) = &previous {
-            job = job.warm_started(smaller)?;
-        }
         let outcome = solve_into(
-            job,
+            chain.job(n)?,
             &out,
             ProgressMode::Quiet,
             inputs.seconds_axis,
             inputs.plot_format,
         )
         .with_context(|| format!("defender {n} nodes, adversary {m} nodes"))?;
-        let row = SweepRow::of(n, m, &outcome, previous.as_ref());
+        let row = chain.row(n, &outcome);
         progress.finished(n, m, row.worst_case);
         if let Some(own) = own {
             let table = sweep_table(std::slice::from_ref(&row))
@@ -335,7 +326,6 @@ fn run_chain(
             own.commit()?;
         }
         rows.push(row);
-        previous = Some(outcome.best().clone());
     }
     Ok(rows)
 }

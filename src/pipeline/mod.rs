@@ -26,8 +26,10 @@
 
 pub mod directory;
 mod propositions;
+mod sweep;
 
 pub use propositions::{PropositionCheck, check_propositions};
+pub use sweep::Chain;
 
 use std::sync::{Arc, Mutex, PoisonError};
 use std::time::Instant;
