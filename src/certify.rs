@@ -62,7 +62,9 @@ use crate::mdp::{
 use crate::solver::{SolverError, SolverSettings};
 
 pub use crate::mdp::MdpError;
+pub use certificate::{BoundSummary, Certificate, CertificateReport, certificate};
 pub mod belief;
+mod certificate;
 pub mod gradient;
 mod product;
 use product::Product;

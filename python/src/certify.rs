@@ -2,8 +2,7 @@
 //! certified bounds (docs/method.md section 6), support synthesis by SAT
 //! (section 7) and the LTL translation, as the commands of the same names.
 
-use posg_fsc::certify::belief::belief_bound_above;
-use posg_fsc::certify::{Bound as CertifiedBound, check_consistent, lower_bound, upper_bound};
+use posg_fsc::certify::certificate;
 use posg_fsc::controller::Role;
 use posg_fsc::ltl;
 use posg_fsc::synthesis::{self, Mode};
@@ -16,17 +15,6 @@ use crate::convert::{serialised, settings_from_json, size, to_json};
 use crate::errors::{Kind, compute, convert, raise};
 use crate::game::Game;
 use crate::objective;
-
-/// A bound as `posg-fsc certify` reports it (without its strategy).
-fn bound<'py>(py: Python<'py>, bound: &CertifiedBound) -> PyResult<Bound<'py, PyDict>> {
-    let dict = PyDict::new(py);
-    dict.set_item("value", bound.value)?;
-    dict.set_item("mdp_states", bound.mdp_states)?;
-    dict.set_item("seconds", bound.seconds)?;
-    dict.set_item("residual", bound.residual)?;
-    dict.set_item("error_bound", bound.error_bound)?;
-    Ok(dict)
-}
 
 /// The certified bounds of `posg-fsc certify` (docs/method.md section 6):
 /// `lower`, the defender's guaranteed probability of the formula against
@@ -58,34 +46,18 @@ pub fn certify<'py>(
         .not_phi
         .as_ref()
         .expect("the negation was asked for");
-    let (lower, upper, belief) = compute(py, || {
-        let lower = lower_bound(posg, not_phi, &defender)?;
-        let upper = match &adversary {
-            Some(adversary) => {
-                let upper = upper_bound(posg, &objective.phi, adversary)?;
-                check_consistent(&lower, &upper)?;
-                Some(upper)
-            }
-            None => None,
-        };
+    let certificate = compute(py, || {
+        let automata = (&objective.phi, not_phi);
         let settings = SolverSettings::default();
-        let belief = belief_bound_above(posg, &objective.phi, &lower, &settings)?;
-        Ok::<_, posg_fsc::certify::CertifyError>((lower, upper, belief))
+        certificate(posg, automata, &defender, adversary.as_ref(), &settings)
     })?;
     let report = PyDict::new(py);
     report.set_item("formula", ltl)?;
-    report.set_item("lower", bound(py, &lower)?)?;
-    report.set_item("upper", upper.map(|u| bound(py, &u)).transpose()?)?;
-    let belief = belief
-        .map(|b| {
-            let dict = PyDict::new(py);
-            dict.set_item("value", b.value)?;
-            dict.set_item("beliefs", b.beliefs)?;
-            dict.set_item("complete", b.complete)?;
-            Ok::<_, PyErr>(dict)
-        })
-        .transpose()?;
-    report.set_item("belief", belief)?;
+    report.update(
+        serialised(py, &certificate.report())?
+            .cast_into::<PyDict>()?
+            .as_mapping(),
+    )?;
     Ok(report)
 }
 

@@ -14,9 +14,8 @@ use std::path::{Path, PathBuf};
 
 use clap::Args;
 use posg_fsc::automaton::Dra;
-use posg_fsc::certify::belief::{BeliefBound, belief_bound_above};
 use posg_fsc::certify::strategy::StrategyFile;
-use posg_fsc::certify::{Bound, check_consistent, lower_bound_within, upper_bound_within};
+use posg_fsc::certify::{Bound, CertificateReport, certificate};
 use posg_fsc::controller::Role;
 use posg_fsc::controller::file::resolve;
 use posg_fsc::game::Posg;
@@ -59,34 +58,8 @@ struct Report {
     provenance: Provenance,
     game: String,
     formula: String,
-    lower: BoundSummary,
-    upper: Option<BoundSummary>,
-    /// A one-player game's belief bound (method.md section 6): no defender
-    /// of any memory does better.
-    belief: Option<BeliefBound>,
-}
-
-/// A bound without its strategy.
-#[derive(Serialize)]
-struct BoundSummary {
-    value: f64,
-    mdp_states: usize,
-    seconds: f64,
-    residual: f64,
-    /// A bound on the error of `value` (method.md section 8).
-    error_bound: f64,
-}
-
-impl From<&Bound> for BoundSummary {
-    fn from(bound: &Bound) -> Self {
-        Self {
-            value: bound.value,
-            mdp_states: bound.mdp_states,
-            seconds: bound.seconds,
-            residual: bound.residual,
-            error_bound: bound.error_bound,
-        }
-    }
+    #[serde(flatten)]
+    certificate: CertificateReport,
 }
 
 /// Computes and prints the bounds.
@@ -96,41 +69,40 @@ pub fn run(args: CertifyArgs) -> anyhow::Result<()> {
     let not_phi_dra =
         common::negated_objective(&args.objective, args.negated_automaton.as_deref(), &game)?;
     let defender = resolve(&args.defender, &game, Role::Defender)?;
+    let adversary = (args.adversary.as_ref())
+        .map(|spec| resolve(spec, &game, Role::Adversary))
+        .transpose()?;
     let settings = args.solver.settings();
-    let lower = lower_bound_within(&game, &not_phi_dra, &defender, &settings)?;
+    let certificate = certificate(
+        &game,
+        (&phi_dra, &not_phi_dra),
+        &defender,
+        adversary.as_ref(),
+        &settings,
+    )?;
     let strategy = |path: Option<&Path>, dra: &Dra, bound: &Bound, nodes: usize| {
         write_strategy(path, &game, dra, bound, nodes, &formula)
     };
+    let lower = &certificate.lower;
     strategy(
         args.attack.as_deref(),
         &not_phi_dra,
-        &lower,
+        lower,
         defender.num_nodes(),
     )?;
-    let upper = match &args.adversary {
-        Some(spec) => {
-            let adversary = resolve(spec, &game, Role::Adversary)?;
-            let upper = upper_bound_within(&game, &phi_dra, &adversary, &settings)?;
-            check_consistent(&lower, &upper)?;
-            strategy(
-                args.response.as_deref(),
-                &phi_dra,
-                &upper,
-                adversary.num_nodes(),
-            )?;
-            Some(upper)
-        }
-        None => None,
-    };
-    // The belief bound holds for every defender, this one included.
-    let belief = belief_bound_above(&game, &phi_dra, &lower, &settings)?;
+    if let (Some(upper), Some(adversary)) = (&certificate.upper, &adversary) {
+        strategy(
+            args.response.as_deref(),
+            &phi_dra,
+            upper,
+            adversary.num_nodes(),
+        )?;
+    }
     common::print_json(&Report {
         provenance: Provenance::current(),
         game: args.game.display().to_string(),
-        formula,
-        lower: (&lower).into(),
-        upper: upper.as_ref().map(BoundSummary::from),
-        belief,
+        formula: formula.clone(),
+        certificate: certificate.report(),
     })
 }
 
