@@ -90,12 +90,17 @@ fn an_unused_proposition_warns_and_refuses_an_objective_it_makes_unsatisfiable()
     assert!(warnings[0].contains("'gaol'") && warnings[0].contains("did you mean goal?"));
     // `F gaol` cannot: an error, unless allowed.
     match Automata::for_game(&game, "F gaol", &BUDGET, true, false) {
-        Err(PipelineError::Propositions(message)) => {
+        Err(error @ PipelineError::Propositions(_)) => {
+            let message = error.to_string();
             assert!(message.contains("can never hold"), "{message}");
             assert!(
                 message.contains("allow_unused_propositions=True"),
                 "{message}"
             );
+            let PipelineError::Propositions(check) = error else {
+                unreachable!()
+            };
+            assert_eq!(check.warnings.len(), 1, "the warning comes with the error");
         }
         other => panic!(
             "expected a proposition error, got {:?}",

@@ -132,10 +132,21 @@ where
     T: Send,
     E: Classify + std::error::Error + Send + Sync + 'static,
 {
-    match py.detach(|| std::panic::catch_unwind(std::panic::AssertUnwindSafe(work))) {
-        Ok(result) => result.map_err(convert),
-        Err(panic) => Err(panicked(panic.as_ref())),
-    }
+    compute_result(py, work)?.map_err(convert)
+}
+
+/// [`compute`] with `work`'s error returned as it is, for a caller that
+/// reports some errors its own way; only a panic is an exception here.
+pub fn compute_result<T, E>(
+    py: Python<'_>,
+    work: impl FnOnce() -> Result<T, E> + Send,
+) -> PyResult<Result<T, E>>
+where
+    T: Send,
+    E: Send,
+{
+    py.detach(|| std::panic::catch_unwind(std::panic::AssertUnwindSafe(work)))
+        .map_err(|panic| panicked(panic.as_ref()))
 }
 
 /// A panic's payload as `posg_fsc.Error`.

@@ -4,10 +4,10 @@
 
 use posg_fsc::game::Posg;
 use posg_fsc::ltl::{self, TranslationBudget};
-use posg_fsc::pipeline::Automata;
+use posg_fsc::pipeline::{Automata, PipelineError};
 use pyo3::prelude::*;
 
-use crate::errors::{Kind, compute, raise};
+use crate::errors::{Kind, compute_result, convert, raise};
 
 /// The automata of the formula `text` (and of its negation when
 /// `negation`), translated without the GIL within the command line's
@@ -27,10 +27,25 @@ pub fn automata(
     };
     ltl::parse(text)
         .map_err(|error| raise(Kind::Formula, format!("in the formula '{text}': {error}")))?;
-    let (automata, warnings) = compute(py, || {
+    let built = compute_result(py, || {
         Automata::for_game(game, text, &budget, negation, allow_unused)
     })?;
-    for warning in &warnings {
+    let (automata, warnings) = match built {
+        Ok(built) => built,
+        Err(PipelineError::Propositions(check)) => {
+            warn(py, &check.warnings)?;
+            let error = check.error.unwrap_or_default();
+            return Err(raise(Kind::Formula, error));
+        }
+        Err(error) => return Err(convert(error)),
+    };
+    warn(py, &warnings)?;
+    Ok(automata)
+}
+
+/// Each of `warnings` as a Python `UserWarning`.
+fn warn(py: Python<'_>, warnings: &[String]) -> PyResult<()> {
+    for warning in warnings {
         let warning = std::ffi::CString::new(warning.as_str())?;
         PyErr::warn(
             py,
@@ -39,5 +54,5 @@ pub fn automata(
             1,
         )?;
     }
-    Ok(automata)
+    Ok(())
 }

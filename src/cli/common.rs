@@ -245,6 +245,12 @@ pub fn formula_automata(
             }
             Ok(automata)
         }
+        Err(PipelineError::Propositions(check)) => {
+            for warning in &check.warnings {
+                eprintln!("warning: {warning}");
+            }
+            Err(anyhow::Error::msg(check.error.unwrap_or_default()))
+        }
         Err(error @ PipelineError::Parse(_)) => {
             Err(anyhow::Error::new(error).context(format!("in the formula '{text}'")))
         }

@@ -82,7 +82,7 @@ impl Automata {
     /// against `game`'s labels ([`check_propositions`], whose `allow` is
     /// `allow_unused`). Returns the automata and the check's warnings, for
     /// the face to show; a proposition check that fails is
-    /// [`PipelineError::Propositions`].
+    /// [`PipelineError::Propositions`], with its warnings too.
     pub fn for_game(
         game: &Posg,
         text: &str,
@@ -93,8 +93,8 @@ impl Automata {
         let formula = ltl::parse(text)?;
         let phi = ltl::translate_within(&formula, budget)?;
         let check = check_propositions(&phi, game, text, allow_unused);
-        if let Some(error) = check.error {
-            return Err(PipelineError::Propositions(error));
+        if check.error.is_some() {
+            return Err(PipelineError::Propositions(check));
         }
         let not_phi = match negation {
             true => Some(ltl::translate_within(&formula.negate(), budget)?),
@@ -334,9 +334,10 @@ pub enum PipelineError {
     #[error(transparent)]
     Json(#[from] serde_json::Error),
     /// The objective's propositions label no state of the game and make it
-    /// unsatisfiable ([`check_propositions`]).
-    #[error("{0}")]
-    Propositions(String),
+    /// unsatisfiable ([`check_propositions`]): the check, whose `error` is
+    /// the message and whose `warnings` name each such proposition.
+    #[error("{}", .0.error.as_deref().unwrap_or("the objective's propositions label no state"))]
+    Propositions(PropositionCheck),
 }
 
 /// The main job from the full support structure: optimise a defender of
