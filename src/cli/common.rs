@@ -240,21 +240,24 @@ pub fn formula_automata(
     let allow = args.allow_unused_propositions;
     match Automata::for_game(game, text, &budget, negation, allow) {
         Ok((automata, warnings)) => {
-            for warning in &warnings {
-                eprintln!("warning: {warning}");
-            }
+            print_warnings(&warnings);
             Ok(automata)
         }
         Err(PipelineError::Propositions(check)) => {
-            for warning in &check.warnings {
-                eprintln!("warning: {warning}");
-            }
+            print_warnings(&check.warnings);
             Err(anyhow::Error::msg(check.error.unwrap_or_default()))
         }
         Err(error @ PipelineError::Parse(_)) => {
             Err(anyhow::Error::new(error).context(format!("in the formula '{text}'")))
         }
         Err(error) => Err(error.into()),
+    }
+}
+
+/// Each warning on stderr, as `warning: ...`.
+fn print_warnings(warnings: &[String]) {
+    for warning in warnings {
+        eprintln!("warning: {warning}");
     }
 }
 
@@ -269,9 +272,7 @@ pub fn check_propositions(
     allow: bool,
 ) -> anyhow::Result<()> {
     let check = posg_fsc::pipeline::check_propositions(dra, game, objective, allow);
-    for warning in &check.warnings {
-        eprintln!("warning: {warning}");
-    }
+    print_warnings(&check.warnings);
     match check.error {
         Some(error) => Err(anyhow::Error::msg(error)),
         None => Ok(()),

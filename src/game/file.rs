@@ -13,8 +13,9 @@
 //! Every error is a [`ModelError`] whose path is `FILE: JSON.path`, e.g.
 //! `grid.posg.json: transitions[17].next.s9`.
 //!
-//! The helpers shared with the controller files (`parse`, `Located`,
-//! `distribution`) live here too. [`read`] also reads the optional binary
+//! The helpers shared with the other readers (`parse`, `Located`, the
+//! checks of names and probabilities) live in `super::reading`. [`read`]
+//! also reads the optional binary
 //! form of [`super::binary`] (formats.md section 11), told apart by its magic bytes.
 
 mod rewards;
@@ -100,7 +101,7 @@ pub fn write(path: &Path, game: &Posg) -> Result<(), ModelError> {
 /// `index` (`kind` names them in errors, e.g. "state"): checked, renormalised,
 /// zero entries dropped, sorted by outcome (so the order of keys in the file
 /// does not matter). Positions in `at` are built only for an error message.
-pub(crate) fn distribution<K: AsRef<str>>(
+fn distribution<K: AsRef<str>>(
     map: &UniqueMap<f64, K>,
     at: &Located,
     kind: &str,

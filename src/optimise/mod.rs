@@ -661,8 +661,10 @@ impl<'a> StructuresRun<'a> {
             start,
             shared: &shared,
         };
+        // A grown run's warm start (the last, `settings.starts`) takes the
+        // first start's steps whatever its index.
         let start = |start: usize| Start {
-            settings: settings.for_start(start),
+            settings: settings.for_start(if start < settings.starts { start } else { 0 }),
             stream: stream + ((start as u64) << 32),
         };
         // The single-player ascent is certified once, at the end (`finalise`):
@@ -875,8 +877,8 @@ fn settle(
 }
 
 /// The local search on the supports (`local_search.rs`) before the
-/// max-min race: from the argmax rounding of the structure's defender (its
-/// warm start, where it has one) and
+/// max-min race: from the argmax rounding of the structure's defender (and
+/// of its warm start, where it has one) and
 /// `local_search_restarts` seeded random memoryless ones, on the run's
 /// search stream ([`search_stream`]), sharing the run's memo, each climb
 /// bounded by `local_search_work` and, with a time budget, by

@@ -75,7 +75,8 @@ pub struct Settings {
     /// Independent starts of the optimiser per structure, run in parallel
     /// (rayon), each with its own seeded random stream; the best by
     /// certified lower bound (by worst-case estimate without an automaton
-    /// for !phi) is kept.
+    /// for !phi) is kept. A grown defender's sizes from 2 nodes up race
+    /// one more, from the size before.
     #[cfg_attr(feature = "cli", arg(long, default_value_t = Settings::default().starts))]
     pub starts: usize,
     /// Wall-clock budget in seconds for one structure (0: none).

@@ -58,6 +58,16 @@ impl SolveDirectory<'_> {
     where
         F: Fn(Slot) -> Box<dyn Observer + Send> + Sync,
     {
+        if let Some(format) = self.plot_format.filter(|_| !cfg!(feature = "plot")) {
+            // Refused before the run, not after it.
+            return Err(OutputError::Plot {
+                path: self.path.join(format!("curve.{format}")),
+                problem: "this build of posg-fsc draws no plots (cargo feature `plot`); ask \
+                          for none"
+                    .into(),
+            }
+            .into());
+        }
         create_dir(self.path)?;
         let (game, automata, settings) = (job.game, job.automata, job.settings);
         let outcome = run(job, observers)?;

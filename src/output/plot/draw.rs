@@ -1,5 +1,5 @@
-//! Plots with plotters, as SVG or PNG ([`PlotFormat`]): [`plot_curve`]
-//! (`curve.svg`) and [`plot_sweep`] (`sweep.svg`), sized and labelled for a
+//! Plots with plotters, as SVG or PNG ([`PlotFormat`]): [`super::plot_curve`]
+//! (`curve.svg`) and [`super::plot_sweep`] (`sweep.svg`), sized and labelled for a
 //! paper: a two-line title, integer ticks where the axis counts something,
 //! tick labels with as many decimals as make them distinct, the legend
 //! beside the data. Text in PNG is drawn with a font compiled into the
@@ -649,7 +649,7 @@ fn seconds_ticks(records: &[IterationRecord]) -> Vec<(f64, String)> {
     ticks
 }
 
-/// The sweep's heatmap ([`plot_sweep`]).
+/// The sweep's heatmap ([`super::plot_sweep`]).
 struct SweepPlot<'a> {
     title: &'a Title,
     points: &'a [SweepPoint],
