@@ -241,6 +241,7 @@ impl Classify for PipelineError {
         match self {
             PipelineError::Parse(_)
             | PipelineError::Translate(_)
+            | PipelineError::TranslateNegation(_)
             | PipelineError::Propositions(_) => Kind::Formula,
             PipelineError::Model(error) => error.kind(),
             PipelineError::Optimise(error) => error.kind(),

@@ -26,7 +26,8 @@ use super::common::{self, ObjectiveArgs, Provenance};
 /// Arguments of `certify`.
 #[derive(Debug, Args)]
 pub struct CertifyArgs {
-    /// The game (`*.posg.json`).
+    /// The game: a `*.posg.json` file (docs/formats.md section 1), its
+    /// binary form, or a model in Storm's DRN format (section 6).
     game: PathBuf,
     #[command(flatten)]
     objective: ObjectiveArgs,

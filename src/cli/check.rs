@@ -10,7 +10,8 @@ use super::common;
 /// Arguments of `check`.
 #[derive(Debug, Args)]
 pub struct CheckArgs {
-    /// The game (*.posg.json).
+    /// The game: a `*.posg.json` file (docs/formats.md section 1), its
+    /// binary form, or a model in Storm's DRN format (section 6).
     pub game: PathBuf,
 }
 

@@ -14,7 +14,8 @@ use super::common::{self, ControllerArgs, Provenance};
 /// Arguments of `export-gmc`.
 #[derive(Debug, Args)]
 pub struct ExportGmcArgs {
-    /// The game (*.posg.json).
+    /// The game: a `*.posg.json` file (docs/formats.md section 1), its
+    /// binary form, or a model in Storm's DRN format (section 6).
     pub game: PathBuf,
     #[command(flatten)]
     pub controllers: ControllerArgs,

@@ -14,7 +14,8 @@ use super::common::{self, ControllerArgs, ObjectiveArgs, Provenance};
 /// Arguments of `simulate`.
 #[derive(Debug, Args)]
 pub struct SimulateArgs {
-    /// The game (*.posg.json).
+    /// The game: a `*.posg.json` file (docs/formats.md section 1), its
+    /// binary form, or a model in Storm's DRN format (section 6).
     pub game: PathBuf,
     #[command(flatten)]
     pub objective: ObjectiveArgs,

@@ -20,7 +20,8 @@ use super::common::{self, ObjectiveArgs, Provenance};
 /// Arguments of `support`.
 #[derive(Debug, Args)]
 pub struct SupportArgs {
-    /// The game (`*.posg.json`).
+    /// The game: a `*.posg.json` file (docs/formats.md section 1), its
+    /// binary form, or a model in Storm's DRN format (section 6).
     game: PathBuf,
     #[command(flatten)]
     objective: ObjectiveArgs,

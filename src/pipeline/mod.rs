@@ -97,7 +97,10 @@ impl Automata {
             return Err(PipelineError::Propositions(check));
         }
         let not_phi = match negation {
-            true => Some(ltl::translate_within(&formula.negate(), budget)?),
+            true => Some(
+                ltl::translate_within(&formula.negate(), budget)
+                    .map_err(PipelineError::TranslateNegation)?,
+            ),
             false => None,
         };
         let automata = Self {
@@ -318,6 +321,10 @@ pub enum PipelineError {
     /// The formula could not be translated into an automaton.
     #[error(transparent)]
     Translate(#[from] TranslateError),
+    /// The formula's negation (for the certified bracket) could not be
+    /// translated into an automaton.
+    #[error("translating !phi: {0}")]
+    TranslateNegation(TranslateError),
     /// A size or a controller does not fit the game.
     #[error(transparent)]
     Model(#[from] ModelError),
