@@ -597,3 +597,37 @@ proptest! {
         }
     }
 }
+
+/// A PRISM or JANI model or a property file given where a game is expected
+/// is named for what it is, with how to export the model as DRN; other
+/// text keeps the JSON parser's error.
+#[test]
+fn models_and_queries_of_the_peer_tools_are_named_with_the_way_to_a_game() {
+    let error = |text: &str| from_json_str(text, "m.prism").unwrap_err().to_string();
+    let prism = error("// a POMDP\n\npomdp\n\nmodule m\n  x : [0..1];\nendmodule\n");
+    assert!(
+        prism.starts_with("m.prism: this is a PRISM model, not a game"),
+        "{prism}"
+    );
+    assert!(
+        prism.contains("--exportbuild") && prism.contains("export_to_drn"),
+        "{prism}"
+    );
+    let jani = error(r#"{"jani-version": 1, "type": "mdp"}"#);
+    assert!(jani.contains("this is a JANI model"), "{jani}");
+    for query in [
+        "Pmax=? [F \"goal\"]",
+        "<<0>> Pmin=? [F \"goal\"]",
+        "R{\"steps\"}min=? [F \"goal\"]",
+    ] {
+        let props = error(query);
+        assert!(
+            props.contains("this is a property file") && props.contains("--props"),
+            "{props}"
+        );
+    }
+    assert_eq!(
+        error("garbage"),
+        "m.prism: expected value at line 1 column 1"
+    );
+}

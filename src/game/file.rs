@@ -35,9 +35,9 @@ use serde::{Deserialize, Serialize};
 
 pub use super::reading::FORMAT_VERSION;
 use super::reading::{
-    Located, POMDP_SYMBOL, action_label_problem, bytes_without_bom, check_probability, index_names,
-    is_probability, is_valid_proposition, normalisation, parse_tracking_paths, pomdp_adversary,
-    triple_required, write_text,
+    Located, POMDP_SYMBOL, action_label_problem, bytes_without_bom, check_probability,
+    foreign_format, index_names, is_probability, is_valid_proposition, normalisation,
+    parse_tracking_paths, pomdp_adversary, triple_required, write_text,
 };
 use super::{AdversaryAction, DefenderAction, Distribution, ModelError, Player, Posg};
 use rewards::{RawRewardModel, raw_rewards};
@@ -76,6 +76,9 @@ pub fn from_json_slice(bytes: &[u8], file_name: &str) -> Result<Posg, ModelError
                 );
                 ModelError::new(file_name, format!("cannot read the file: {e}"))
             })?;
+            if let Some(error) = foreign_format(text, file_name) {
+                return Err(error);
+            }
             parse_tracking_paths(text, file_name)?
         }
     };

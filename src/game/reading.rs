@@ -268,3 +268,65 @@ pub(crate) fn pomdp_adversary(num_states: usize) -> Player {
         action_labels: Vec::new(),
     }
 }
+
+/// How to make a game of a model in a peer tool's format, for errors.
+const EXPORT_DRN: &str = "posg-fsc reads games as JSON (docs/formats.md section 1), \
+     their binary form (section 11) or Storm's DRN (section 6); export the model as DRN \
+     with `storm --prism MODEL --buildfull --exportbuild MODEL.drn` (JANI: `--jani`), or \
+     with stormpy's `stormpy.io.export_to_drn(model, PATH)`";
+
+/// The error for a file that is not a game but a PRISM or JANI model or a
+/// property file, recognised by how it begins; `None` for anything else.
+pub(super) fn foreign_format(text: &str, file_name: &str) -> Option<ModelError> {
+    let first_word = |text: &str| {
+        (text.lines())
+            .map(str::trim)
+            .find(|line| !line.is_empty() && !line.starts_with("//"))
+            .and_then(|line| line.split(|c: char| !c.is_ascii_alphanumeric()).next())
+            .map(str::to_string)
+    };
+    let text = without_bom(text);
+    let what = if text.trim_start().starts_with('{') {
+        text.contains("\"jani-version\"")
+            .then_some("a JANI model")?
+    } else {
+        let word = first_word(text)?;
+        let prism = [
+            "pomdp",
+            "mdp",
+            "dtmc",
+            "ctmc",
+            "smg",
+            "csg",
+            "pta",
+            "probabilistic",
+            "nondeterministic",
+            "stochastic",
+            "module",
+            "const",
+            "formula",
+            "observables",
+            "player",
+            "global",
+        ];
+        let query = [
+            "P", "Pmax", "Pmin", "R", "Rmax", "Rmin", "T", "Tmax", "Tmin", "filter",
+        ];
+        let property = text.trim_start().starts_with("<<") || query.contains(&word.as_str());
+        if prism.contains(&word.as_str()) {
+            "a PRISM model"
+        } else if property {
+            return Some(ModelError::new(
+                file_name,
+                "this is a property file, not a game: a query goes with `--props FILE` \
+                 beside the game",
+            ));
+        } else {
+            return None;
+        }
+    };
+    Some(ModelError::new(
+        file_name,
+        format!("this is {what}, not a game: {EXPORT_DRN}"),
+    ))
+}
