@@ -16,9 +16,9 @@ use super::common::{self, Provenance};
 pub struct StrategyArgs {
     /// The strategy file (`certify --attack FILE` or `--response FILE`).
     strategy: PathBuf,
-    /// The game the strategy was computed on: a `*.posg.json` file, its
-    /// binary form, or a model in Storm's DRN format (docs/formats.md
-    /// sections 1 and 6).
+    /// The game the strategy was computed on: a `*.posg.json` file
+    /// (docs/formats.md section 1), its binary form, or a model in Storm's
+    /// DRN format (section 6).
     #[arg(long)]
     game: PathBuf,
     /// Also write the strategy as a controller of the free player (one node
