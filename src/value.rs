@@ -32,7 +32,9 @@ use crate::solver::LinearSolver;
 pub use crate::analysis::{Bscc, Recurrence, StateClass};
 pub use crate::product::{Exploration, Gmc, GmcState, ProductError};
 pub use crate::sensitivity::{ForwardGradient, ForwardSensitivities};
-pub use crate::simulate::{Estimate, STEP_LIMIT, SimulationError, SimulationSettings, simulate};
+pub use crate::simulate::{
+    CONFIDENCE, Estimate, STEP_LIMIT, SimulationError, SimulationSettings, simulate,
+};
 pub use crate::solver::{
     DEFAULT_LU_LIMIT, DEFAULT_TOLERANCE, LuSolver, SolveReport, SolverError, SolverMethod,
     SolverSettings, SparsePattern, exact,

@@ -65,3 +65,46 @@ fn eval_with_gradient_reports_the_norms_of_the_adjoint_gradient() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// `simulate` says what its interval means: the JSON carries its
+/// confidence, and a run whose interval misses the exact value says on
+/// stderr that a 95% interval does so about once in twenty.
+#[test]
+fn simulate_explains_an_interval_that_misses_the_exact_value() {
+    let dir = std::env::temp_dir().join(format!("posg-fsc-simulate-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let game = dir.join("pass-or-trap.posg.json");
+    std::fs::write(&game, PASS_OR_TRAP).unwrap();
+    let (mut missed, mut met) = (0, 0);
+    for seed in 0..200 {
+        if missed > 0 && met > 0 {
+            break;
+        }
+        let output = Command::new(env!("CARGO_BIN_EXE_posg-fsc"))
+            .arg("simulate")
+            .arg(&game)
+            .args([
+                "--ltl",
+                "F goal",
+                "--runs",
+                "30",
+                "--seed",
+                &seed.to_string(),
+            ])
+            .output()
+            .unwrap();
+        assert!(output.status.success());
+        let report: Value = serde_json::from_slice(&output.stdout).unwrap();
+        assert_eq!(report["estimate"]["confidence"], 0.95);
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        let within = report["exact_within_interval"].as_bool().unwrap();
+        assert_eq!(
+            stderr.contains("lies outside the 95% interval") && stderr.contains("one seed of 20"),
+            !within,
+            "seed {seed}: {stderr}"
+        );
+        if within { met += 1 } else { missed += 1 }
+    }
+    assert!(missed > 0 && met > 0, "missed {missed}, met {met}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

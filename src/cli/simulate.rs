@@ -61,14 +61,26 @@ pub fn run(args: SimulateArgs) -> anyhow::Result<()> {
     };
     anyhow::ensure!(settings.runs > 0, "--runs must be at least 1");
     let estimate = simulate(&game, &dra, &defender, &adversary, &evaluator, settings)?;
+    let within =
+        estimate.lower - DEFAULT_TOLERANCE <= exact && exact <= estimate.upper + DEFAULT_TOLERANCE;
+    if !within {
+        eprintln!(
+            "note: the exact value {exact} lies outside the {}% interval [{}, {}]: such an \
+             interval misses the exact value in about one seed of {}; another --seed or more \
+             --runs tells chance from a fault",
+            estimate.confidence * 100.0,
+            estimate.lower,
+            estimate.upper,
+            (1.0 / (1.0 - estimate.confidence)).round()
+        );
+    }
     common::print_json(&Report {
         provenance: Provenance::current(),
         formula,
         settings,
         estimate,
         exact_value: exact,
-        exact_within_interval: estimate.lower - DEFAULT_TOLERANCE <= exact
-            && exact <= estimate.upper + DEFAULT_TOLERANCE,
+        exact_within_interval: within,
         seconds: common::seconds_since(start),
     })
 }
