@@ -25,13 +25,17 @@ pub fn automata(
     let budget = TranslationBudget {
         seconds: ltl::DEFAULT_TRANSLATION_SECONDS,
     };
-    ltl::parse(text)
-        .map_err(|error| raise(Kind::Formula, format!("in the formula '{text}': {error}")))?;
     let built = compute_result(py, || {
         Automata::for_game(game, text, &budget, negation, allow_unused)
     })?;
     let (automata, warnings) = match built {
         Ok(built) => built,
+        Err(PipelineError::Parse(error)) => {
+            return Err(raise(
+                Kind::Formula,
+                format!("in the formula '{text}': {error}"),
+            ));
+        }
         Err(PipelineError::Propositions(check)) => {
             warn(py, &check.warnings)?;
             let error = check.error.unwrap_or_default();

@@ -110,7 +110,10 @@ pub fn plot_curve(path: &Path, format: PlotFormat, curve: &CurvePlot) -> Result<
     #[cfg(feature = "plot")]
     return draw::curve(path, format, curve);
     #[cfg(not(feature = "plot"))]
-    return Err(not_built(path, &(format, curve)));
+    {
+        let _ = (format, curve);
+        Err(not_built(path))
+    }
 }
 
 /// Draws `sweep.svg` into `path` as `format`: a heatmap with one cell per
@@ -128,13 +131,15 @@ pub fn plot_sweep(
     #[cfg(feature = "plot")]
     return draw::sweep(path, format, title, points);
     #[cfg(not(feature = "plot"))]
-    return Err(not_built(path, &(format, title, points)));
+    {
+        let _ = (format, title, points);
+        Err(not_built(path))
+    }
 }
 
-/// The error of drawing `path` in a build without the feature `plot`
-/// (`_picture`: what would have been drawn).
+/// The error of drawing `path` in a build without the feature `plot`.
 #[cfg(not(feature = "plot"))]
-fn not_built<T>(path: &Path, _picture: &T) -> OutputError {
+fn not_built(path: &Path) -> OutputError {
     OutputError::Plot {
         path: path.to_path_buf(),
         problem: "this build of posg-fsc draws no plots (cargo feature `plot`)".into(),

@@ -24,15 +24,15 @@ use crate::output::{
 /// no plot), as `summary.json` lists them.
 pub fn files(format: Option<PlotFormat>) -> Vec<String> {
     let plot = format.map(|format| format!("curve.{format}"));
-    let files = [
-        Some("curve.csv".to_string()),
-        plot,
-        Some("defender.fsc.json".to_string()),
-        Some("defender.dot".to_string()),
-        Some("adversary.fsc.json".to_string()),
-        Some("summary.json".to_string()),
+    let others = [
+        "defender.fsc.json",
+        "defender.dot",
+        "adversary.fsc.json",
+        "summary.json",
     ];
-    files.into_iter().flatten().collect()
+    (std::iter::once("curve.csv".to_string()).chain(plot))
+        .chain(others.map(String::from))
+        .collect()
 }
 
 /// Where and how a solve directory is written.

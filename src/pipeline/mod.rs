@@ -180,13 +180,7 @@ impl<'a> Job<'a> {
         settings: &'a Settings,
     ) -> Result<Self, PipelineError> {
         settings.validate()?;
-        if sizes.defender == 0 || sizes.adversary == 0 {
-            return Err(ModelError::new(
-                "controller sizes",
-                "a controller needs at least one node",
-            )
-            .into());
-        }
+        sizes.check(game, ["the defender's size", "the adversary's size"])?;
         Ok(Self {
             game,
             automata,
