@@ -99,6 +99,36 @@ impl Recurrence {
             .iter()
             .map(|&c| flags[c as usize].class())
             .collect();
+        Self::with_classes(bsccs, classes)
+    }
+
+    /// The partition of the expected reward until a target (method.md
+    /// section 9) on a GMC built with the automaton `dra` of `F T`: the
+    /// states where `T` was reached (decided, or in a feasible BSCC) are
+    /// [`StateClass::Target`], with reward 0 from there; the states that
+    /// reach them with probability 1 without being there are the unknowns
+    /// ([`StateClass::Transient`]); every other state misses `T` with
+    /// positive probability, so its expected reward is infinite (Storm's
+    /// convention): [`StateClass::Zero`]. The classes come from
+    /// [`Recurrence::analyse`] for `F T`: its `Sure` states that have not
+    /// reached `T` are the unknowns, and its `Transient` and `Zero` states
+    /// the infinite ones.
+    pub fn until_target(gmc: &Gmc, dra: &Dra) -> Self {
+        let Self { bsccs, classes, .. } = Self::analyse(gmc, dra);
+        let classes: Vec<StateClass> = classes
+            .iter()
+            .enumerate()
+            .map(|(m, &class)| match (class, gmc.verdict(m)) {
+                (StateClass::Target, _) | (_, Some(true)) => StateClass::Target,
+                (StateClass::Sure, None) => StateClass::Transient,
+                _ => StateClass::Zero,
+            })
+            .collect();
+        Self::with_classes(bsccs, classes)
+    }
+
+    /// The recurrence with `classes`, its unknowns numbered in GMC order.
+    fn with_classes(bsccs: Vec<Bscc>, classes: Vec<StateClass>) -> Self {
         let transient: Vec<usize> = (0..classes.len())
             .filter(|&m| classes[m] == StateClass::Transient)
             .collect();

@@ -21,13 +21,15 @@
 //! and its buffers belong to the evaluator too.
 
 mod gradient;
+mod reward;
 
 use thiserror::Error;
 
 use crate::automaton::Dra;
 use crate::controller::{Fsc, Probabilities, Support};
-use crate::game::Posg;
+use crate::game::{Posg, RewardModel};
 use crate::solver::LinearSolver;
+use reward::RewardVector;
 
 pub use crate::analysis::{Bscc, Recurrence, StateClass};
 pub use crate::product::{Exploration, Gmc, GmcState, ProductError};
@@ -53,12 +55,20 @@ pub enum ValueError {
         "solving the linear system of the value, (I - Q) x = b on the transient states (or its adjoint for the gradient): {0}"
     )]
     Solver(#[from] SolverError),
+    /// The expected reward is infinite, so it has no gradient.
+    #[error(
+        "the expected reward is infinite: the target is missed with positive probability \
+         (method.md section 9), so the value has no gradient"
+    )]
+    InfiniteReward,
 }
 
 /// The value `V` of a controller pair and the accuracy of its linear solve.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Evaluation {
-    /// `V = P(trace |= phi)`.
+    /// `V = P(trace |= phi)`, or for an expected-reward objective the
+    /// expected total reward until the target (method.md section 9),
+    /// `f64::INFINITY` where the target is missed with positive probability.
     pub value: f64,
     /// `max_i |((I - Q) x - b)_i|` (0 when `T` is empty).
     pub residual: f64,
@@ -77,7 +87,9 @@ pub struct Evaluation {
 /// (method.md section 8). Made by [`Evaluator::report`].
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct EvaluationReport {
-    /// `V = P(trace |= phi)`.
+    /// `V = P(trace |= phi)`, or the expected reward (method.md section 9;
+    /// written `"inf"` in JSON where it is infinite).
+    #[serde(serialize_with = "number_or_inf")]
     pub value: f64,
     /// The GMC's explored states (by default the exploration stops at the
     /// decided states).
@@ -104,6 +116,59 @@ pub struct EvaluationReport {
     pub error_bound: f64,
     /// BiCGSTAB iterations (0 for LU).
     pub solver_iterations: usize,
+}
+
+/// A property file's query restated in its own terms (formats.md section
+/// 8): `Pmin=? [F goal]` is worth `1 - V` when `V` is the value of its
+/// complement `G !goal`, a reward query its expected reward.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct QueryValue {
+    /// The query as written (`Pmin=? [F "goal"]`).
+    pub text: String,
+    /// Its value (`"inf"` in JSON for an infinite expected reward).
+    #[serde(serialize_with = "number_or_inf")]
+    pub value: f64,
+    /// A bound on `|value - exact value|` (method.md section 8).
+    pub error_bound: f64,
+    /// For a reward query, the probability of reaching its target: below 1
+    /// exactly where the expected reward is infinite.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub target_probability: Option<f64>,
+}
+
+impl QueryValue {
+    /// The value of `property` given the evaluation of its objective
+    /// ([`crate::ltl::props::Property::probability_objective`], or the
+    /// expected reward) and, for a reward query, the probability of
+    /// reaching its target.
+    pub fn of(
+        property: &crate::ltl::props::Property,
+        evaluation: &Evaluation,
+        target_probability: Option<f64>,
+    ) -> Self {
+        use crate::ltl::props::Query;
+        let value = match (&property.query, property.maximise) {
+            (Query::Probability { .. }, false) => 1.0 - evaluation.value,
+            _ => evaluation.value,
+        };
+        Self {
+            text: property.text.clone(),
+            value,
+            error_bound: evaluation.error_bound,
+            target_probability,
+        }
+    }
+}
+
+/// A value as JSON: a number, or `"inf"`/`"-inf"` (as Storm prints them;
+/// Python's `float()` reads them) where it is infinite, which JSON numbers
+/// cannot say.
+fn number_or_inf<S: serde::Serializer>(value: &f64, serializer: S) -> Result<S::Ok, S::Error> {
+    match *value {
+        f64::INFINITY => serializer.serialize_str("inf"),
+        f64::NEG_INFINITY => serializer.serialize_str("-inf"),
+        finite => serializer.serialize_f64(finite),
+    }
 }
 
 /// Partial derivatives of `V` with respect to every controller probability,
@@ -136,6 +201,9 @@ struct TransientSystem {
     /// is the row's exit, `(I - Q) 1`.
     exit_offsets: Vec<usize>,
     exit_sources: Vec<u32>,
+    /// For an expected-reward objective, `b` is the one-step reward
+    /// (method.md section 9) instead of `P(B | m)`.
+    rewards: Option<RewardVector>,
     b: Vec<f64>,
     x: Vec<f64>,
     p0: Vec<f64>,
@@ -148,6 +216,7 @@ impl TransientSystem {
     fn build(
         gmc: &Gmc,
         recurrence: &Recurrence,
+        rewards: Option<RewardVector>,
         settings: &SolverSettings,
     ) -> Result<Self, SolverError> {
         let n = recurrence.transient.len();
@@ -206,6 +275,7 @@ impl TransientSystem {
             target_sources,
             exit_offsets,
             exit_sources,
+            rewards,
             b: vec![0.0; n],
             x: vec![0.0; n],
             p0: vec![0.0; n],
@@ -223,8 +293,13 @@ impl TransientSystem {
     /// when the chain leaves a block of states with probability `1e-13`,
     /// where any diagonal entry, `1 - P(m | m)` or a sum, keeps none of
     /// them (method.md section 8).
-    fn factorize(&mut self, gmc: &Gmc) -> Result<(), SolverError> {
-        self.write_b(gmc);
+    fn factorize(
+        &mut self,
+        gmc: &Gmc,
+        defender: &Probabilities,
+        adversary: &Probabilities,
+    ) -> Result<(), SolverError> {
+        self.write_b(gmc, defender, adversary);
         let matrix = MatrixSources {
             sources: &self.sources,
             exit_offsets: &self.exit_offsets,
@@ -238,12 +313,17 @@ impl TransientSystem {
     /// previous `x`) for a system solved once
     /// ([`LinearSolver::factorize_and_solve`]: with LU, `L` is applied
     /// during the factorisation, not stored).
-    fn factorize_and_solve_value(&mut self, gmc: &Gmc) -> Result<SolveReport, SolverError> {
+    fn factorize_and_solve_value(
+        &mut self,
+        gmc: &Gmc,
+        defender: &Probabilities,
+        adversary: &Probabilities,
+    ) -> Result<SolveReport, SolverError> {
         if self.len() == 0 {
-            self.factorize(gmc)?;
+            self.factorize(gmc, defender, adversary)?;
             return Ok(NO_SOLVE);
         }
-        self.write_b(gmc);
+        self.write_b(gmc, defender, adversary);
         let matrix = MatrixSources {
             sources: &self.sources,
             exit_offsets: &self.exit_offsets,
@@ -256,8 +336,14 @@ impl TransientSystem {
         )
     }
 
-    /// `b(m) = sum_{m' in B} P(m' | m)` from the GMC's numbers.
-    fn write_b(&mut self, gmc: &Gmc) {
+    /// `b(m) = sum_{m' in B} P(m' | m)` from the GMC's numbers, or for an
+    /// expected-reward objective the one-step reward `r(m)` of the
+    /// probabilities (method.md section 9).
+    fn write_b(&mut self, gmc: &Gmc, defender: &Probabilities, adversary: &Probabilities) {
+        if let Some(rewards) = &self.rewards {
+            rewards.write(defender, adversary, &mut self.b);
+            return;
+        }
         let p = gmc.values();
         for (b, w) in self.b.iter_mut().zip(self.target_offsets.windows(2)) {
             *b = self.target_sources[w[0]..w[1]]
@@ -348,6 +434,9 @@ pub fn evaluate_controllers(
 pub struct Evaluator {
     gmc: Gmc,
     recurrence: Recurrence,
+    /// For an expected-reward objective: whether some state misses the
+    /// target with positive probability, which makes the value infinite.
+    infinite: bool,
     system: TransientSystem,
     values: Vec<f64>,
     adjoint: Vec<f64>,
@@ -383,21 +472,77 @@ impl Evaluator {
     ) -> Result<Self, ValueError> {
         let gmc = Gmc::build_with(game, dra, defender, adversary, exploration)?;
         let recurrence = Recurrence::analyse(&gmc, dra);
-        let system = TransientSystem::build(&gmc, &recurrence, settings)?;
+        let system = TransientSystem::build(&gmc, &recurrence, None, settings)?;
         let values = recurrence
             .classes
             .iter()
             .map(|&c| f64::from(matches!(c, StateClass::Target | StateClass::Sure)))
             .collect();
+        Ok(Self::with_system(gmc, recurrence, false, system, values))
+    }
+
+    /// The evaluator of the expected total reward of `rewards` until the
+    /// target `T` (method.md section 9), on the GMC built with `target`,
+    /// the automaton of `F T` ([`crate::ltl::props::RewardQuery::reach_target`]),
+    /// explored up to its decided states: `(I - Q) x = r` on the states
+    /// that reach `T` with probability 1 ([`Recurrence::until_target`]),
+    /// with the one-step reward `r(m)` as right-hand side. Where some state
+    /// misses `T` with positive probability, the value is infinite.
+    pub fn for_expected_reward(
+        game: &Posg,
+        target: &Dra,
+        rewards: &RewardModel,
+        defender: &Support,
+        adversary: &Support,
+        settings: &SolverSettings,
+    ) -> Result<Self, ValueError> {
+        let gmc = Gmc::build_with(game, target, defender, adversary, Exploration::UntilDecided)?;
+        let recurrence = Recurrence::until_target(&gmc, target);
+        let reward = RewardVector::new(
+            game,
+            &gmc,
+            &recurrence.transient,
+            rewards,
+            defender,
+            adversary,
+        );
+        let system = TransientSystem::build(&gmc, &recurrence, Some(reward), settings)?;
+        let values = recurrence
+            .classes
+            .iter()
+            .map(|&c| match c {
+                StateClass::Zero => f64::INFINITY,
+                _ => 0.0,
+            })
+            .collect();
+        let infinite = recurrence.classes.contains(&StateClass::Zero);
+        Ok(Self::with_system(gmc, recurrence, infinite, system, values))
+    }
+
+    fn with_system(
+        gmc: Gmc,
+        recurrence: Recurrence,
+        infinite: bool,
+        system: TransientSystem,
+        values: Vec<f64>,
+    ) -> Self {
         let adjoint = vec![0.0; gmc.num_states()];
-        Ok(Self {
+        Self {
             gmc,
             recurrence,
+            infinite,
             system,
             values,
             adjoint,
             gradient_pass: GradientPass::new(),
-        })
+        }
+    }
+
+    /// For an expected-reward objective, whether the value is infinite
+    /// (the target is missed with positive probability: method.md section
+    /// 9); decided by the supports alone. `false` for a probability.
+    pub fn is_infinite(&self) -> bool {
+        self.infinite
     }
 
     /// The GMC (numbers as of the last evaluation).
@@ -475,7 +620,9 @@ impl Evaluator {
         adversary: &Probabilities,
     ) -> Result<Evaluation, ValueError> {
         self.gmc.refill(defender, adversary);
-        let report = self.system.factorize_and_solve_value(&self.gmc)?;
+        let report = self
+            .system
+            .factorize_and_solve_value(&self.gmc, defender, adversary)?;
         Ok(self.store_values(report))
     }
 
@@ -487,17 +634,26 @@ impl Evaluator {
         adversary: &Probabilities,
     ) -> Result<(), SolverError> {
         self.gmc.refill(defender, adversary);
-        self.system.factorize(&self.gmc)
+        self.system.factorize(&self.gmc, defender, adversary)
     }
 
     /// Copies `x` from `T` into the state values and computes `V`; its
     /// error bound adds the rounding of the sum `sum_m p0(m) x(m)` (at most
     /// `gamma_k sum_m p0(m) |x(m)|` for `k` initial states) to the solve's.
+    /// An infinite expected reward is exact (its error bound is 0).
     fn store_values(&mut self, report: SolveReport) -> Evaluation {
         for (&m, &xm) in self.recurrence.transient.iter().zip(&self.system.x) {
             self.values[m] = xm;
         }
-        let value = self.gmc.initial().map(|(m, p)| p * self.values[m]).sum();
+        let value: f64 = self.gmc.initial().map(|(m, p)| p * self.values[m]).sum();
+        if value.is_infinite() {
+            return Evaluation {
+                value,
+                residual: report.residual,
+                iterations: report.iterations,
+                error_bound: 0.0,
+            };
+        }
         let terms = self.gmc.initial().count() as f64;
         let magnitude: f64 = self
             .gmc
@@ -522,6 +678,9 @@ impl Evaluator {
         defender: &Probabilities,
         adversary: &Probabilities,
     ) -> Result<(Evaluation, Gradient), ValueError> {
+        if self.infinite {
+            return Err(ValueError::InfiniteReward);
+        }
         self.refill_and_factorize(defender, adversary)?;
         self.system.p0.fill(0.0);
         for (m, p) in self.gmc.initial() {
@@ -551,6 +710,15 @@ impl Evaluator {
             &mut gradient.defender,
             &mut gradient.adversary,
         );
+        if let Some(rewards) = &self.system.rewards {
+            rewards.add_gradient(
+                &self.system.y,
+                defender,
+                adversary,
+                &mut gradient.defender,
+                &mut gradient.adversary,
+            );
+        }
         gradient::add_initial_gradient(
             &self.gmc,
             &self.values,

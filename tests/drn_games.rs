@@ -202,7 +202,11 @@ fn paynts_controllers_keep_paynts_values() {
     let import = read(Path::new("tests/data/paynt/test-game.drn")).unwrap();
     let g = import.game;
     let props = std::fs::read_to_string("tests/data/paynt/test-game.props").unwrap();
-    let formula = parse_props(&props).unwrap().objective.to_string();
+    let formula = parse_props(&props)
+        .unwrap()
+        .probability_objective()
+        .unwrap()
+        .to_string();
     // A(P0,O1,M0)=dbl, A(P0,O2,M0)=add: PAYNT's optimum 0.375.
     let one = paynt_controller(1, &[(0, "o1", "dbl", 0), (0, "o2", "add", 0)]);
     let v = certified(&g, &formula, &one);
@@ -269,7 +273,11 @@ fn paynts_optimum_on_attacker_one_defender_is_certified_and_reached_by_solve() {
     let data = "tests/data/paynt/attacker-one-defender";
     let import = read(Path::new(&format!("{data}.drn"))).unwrap();
     let props = std::fs::read_to_string(format!("{data}.props")).unwrap();
-    let formula = parse_props(&props).unwrap().objective.to_string();
+    let formula = parse_props(&props)
+        .unwrap()
+        .probability_objective()
+        .unwrap()
+        .to_string();
     assert_eq!(formula, "G !goal");
     let rules: Vec<_> = ATTACKER_ONE_DEFENDER_PAYNT_1
         .iter()
@@ -630,20 +638,30 @@ fn property_files_become_the_defenders_objective() {
     let p = parse_props("// a comment\n\n<<0>> Pmax=? [F \"goal\"] // why\n").unwrap();
     assert_eq!((p.player, p.maximise, p.line), (Some(0), true, 3));
     assert_eq!(
-        p.objective,
-        Formula::Finally(Box::new(Formula::prop("goal")))
+        p.probability_objective(),
+        Some(&Formula::Finally(Box::new(Formula::prop("goal"))))
     );
+    assert_eq!(p.text, "<<0>> Pmax=? [F \"goal\"]");
     let p = parse_props("\"safe\": <<1>> Pmin=? [ F \"goal\" ]").unwrap();
     assert_eq!((p.player, p.maximise), (Some(1), false));
-    assert_eq!(p.objective.to_string(), "G !goal");
+    assert_eq!(p.probability_objective().unwrap().to_string(), "G !goal");
     let p = parse_props("Pmin=? [!\"crash\" U \"goal\"]").unwrap();
     assert_eq!(p.player, None);
-    assert_eq!(p.objective.to_string(), "!(!crash U goal)");
+    assert_eq!(
+        p.probability_objective().unwrap().to_string(),
+        "!(!crash U goal)"
+    );
     let p = parse_props("Pmin=? [G F \"a\" & F \"b\"]").unwrap();
-    assert_eq!(p.objective.to_string(), "!(G F a & F b)");
+    assert_eq!(
+        p.probability_objective().unwrap().to_string(),
+        "!(G F a & F b)"
+    );
     // Storm ends its queries with `;` (the SAYNT benchmarks' files do).
     let p = parse_props("Pmax=? [\"notbad\" U \"goal\"];\n").unwrap();
-    assert_eq!(p.objective.to_string(), "notbad U goal");
+    assert_eq!(
+        p.probability_objective().unwrap().to_string(),
+        "notbad U goal"
+    );
 }
 
 #[test]
@@ -651,8 +669,8 @@ fn property_files_posg_fsc_cannot_solve_are_errors_with_line_and_column() {
     let cases = [
         ("", "line 1, column 1: the file holds no property"),
         (
-            "<<0>> Rmax=? [F \"done\"]",
-            "line 1, column 7: `Rmax=?` is a reward or time query",
+            "<<0>> Rmax=? [C]",
+            "line 1, column 15: a cumulative reward `C` is not supported",
         ),
         (
             "<<0>> P>=0.5 [F \"goal\"]",

@@ -10,9 +10,9 @@ use posg_fsc::automaton::read_hoa_dra;
 use posg_fsc::controller::{Fsc, Role};
 use posg_fsc::game::Posg;
 use posg_fsc::game::drn::DrnOptions;
-use posg_fsc::ltl::props::Property;
+use posg_fsc::ltl::props::{Property, Query};
 use posg_fsc::output::PlotFormat;
-use posg_fsc::pipeline::{Automata, PipelineError};
+use posg_fsc::pipeline::{Automata, PipelineError, RewardObjective};
 use posg_fsc::value::{DEFAULT_LU_LIMIT, DEFAULT_TOLERANCE, SolverMethod, SolverSettings};
 use serde::Serialize;
 
@@ -55,12 +55,61 @@ impl ObjectiveArgs {
     }
 
     /// The text of phi: `--ltl`, or the objective of `--props`; `None` for
-    /// `--automaton`.
+    /// `--automaton`. An expected-reward query is an error: of the
+    /// commands, only `eval` takes one ([`Self::reward_objective`]).
     pub fn formula_text(&self) -> anyhow::Result<Option<String>> {
         if let Some(text) = &self.ltl {
             return Ok(Some(text.clone()));
         }
-        Ok(self.property()?.map(|p| p.objective.to_string()))
+        let Some(property) = self.property()? else {
+            return Ok(None);
+        };
+        match property.probability_objective() {
+            Some(objective) => Ok(Some(objective.to_string())),
+            None => anyhow::bail!(
+                "{}: `{}` is an expected-reward query: `posg-fsc eval` computes its value for \
+                 given controllers; this command takes probability queries (`Pmax=?`, `Pmin=?`) \
+                 so far (docs/method.md section 9)",
+                property.position(&self.props_name()),
+                property.text
+            ),
+        }
+    }
+
+    /// The expected-reward objective of `--props` on `game`, when its query
+    /// is one (its warnings on stderr); `None` for any other objective.
+    pub fn reward_objective(&self, game: &Posg) -> anyhow::Result<Option<RewardObjective>> {
+        let Some(property) = self.property()? else {
+            return Ok(None);
+        };
+        let Query::Reward(query) = &property.query else {
+            return Ok(None);
+        };
+        let budget = posg_fsc::ltl::TranslationBudget {
+            seconds: self.translate_seconds,
+        };
+        let minimise = !property.maximise;
+        let allow = self.allow_unused_propositions;
+        let at = property.position(&self.props_name());
+        match RewardObjective::for_game(game, query, minimise, &budget, allow) {
+            Ok((objective, warnings)) => {
+                print_warnings(&warnings);
+                Ok(Some(objective))
+            }
+            Err(PipelineError::Propositions(check)) => {
+                print_warnings(&check.warnings);
+                Err(anyhow::anyhow!("{at}: {}", check.error.unwrap_or_default()))
+            }
+            Err(error) => Err(anyhow::anyhow!("{at}: {error}")),
+        }
+    }
+
+    /// The property file's name as errors show it.
+    fn props_name(&self) -> String {
+        self.props
+            .as_deref()
+            .map(|p| p.display().to_string())
+            .unwrap_or_default()
     }
 
     /// The automaton of `formula` within the translation budget.

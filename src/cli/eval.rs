@@ -9,7 +9,7 @@ use posg_fsc::controller::Support;
 use posg_fsc::game::Posg;
 use posg_fsc::value::Gmc;
 use posg_fsc::value::Recurrence;
-use posg_fsc::value::{EvaluationReport, Evaluator, Exploration, Gradient};
+use posg_fsc::value::{EvaluationReport, Evaluator, Exploration, Gradient, QueryValue};
 use serde::Serialize;
 
 use super::common::{self, ControllerArgs, ObjectiveArgs, Provenance};
@@ -47,6 +47,9 @@ struct Report {
     #[serde(flatten)]
     provenance: Provenance,
     formula: String,
+    /// The query of `--props` restated in its own terms.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    query: Option<QueryValue>,
     /// With `--explain` the GMC is explored beyond the decided states.
     #[serde(flatten)]
     evaluation: EvaluationReport,
@@ -128,7 +131,17 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
     let mut lap = Lap(Instant::now());
     let game = common::read_game_for(&args.game, &args.objective)?;
     let read_game = lap.seconds();
-    let (dra, formula) = common::objective(&args.objective, &game)?;
+    let reward = args.objective.reward_objective(&game)?;
+    if reward.is_some() && args.explain {
+        anyhow::bail!(
+            "--explain lists the recurrence classes of a probability objective; drop it for an \
+             expected-reward query"
+        );
+    }
+    let (dra, formula) = match &reward {
+        Some(reward) => (reward.target.clone(), reward.description.clone()),
+        None => common::objective(&args.objective, &game)?,
+    };
     let automaton = lap.seconds();
     let (defender, adversary) = common::controllers(&args.controllers, &game)?;
     // The supports and probabilities are all that is needed of the
@@ -146,14 +159,39 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
     } else {
         Exploration::UntilDecided
     };
-    let mut evaluator = Evaluator::with_exploration(
-        &game,
-        &dra,
-        &def_support,
-        &adv_support,
-        &args.solver.settings(),
-        exploration,
-    )?;
+    let settings = args.solver.settings();
+    let mut evaluator = match &reward {
+        Some(reward) => Evaluator::for_expected_reward(
+            &game,
+            &dra,
+            &reward.rewards,
+            &def_support,
+            &adv_support,
+            &settings,
+        )?,
+        None => Evaluator::with_exploration(
+            &game,
+            &dra,
+            &def_support,
+            &adv_support,
+            &settings,
+            exploration,
+        )?,
+    };
+    // Where the expected reward is infinite, the probability of reaching
+    // the target says by how much it is missed.
+    let target_probability = match &reward {
+        Some(_) if evaluator.is_infinite() => {
+            let mut reach = Evaluator::new(&game, &dra, &def_support, &adv_support, &settings)?;
+            Some(
+                reach
+                    .evaluate(&def_probabilities, &adv_probabilities)?
+                    .value,
+            )
+        }
+        Some(_) => Some(1.0),
+        None => None,
+    };
     let build_and_analyse = lap.seconds();
     // The evaluator owns all it needs: free the game (tens of MB at 1e6 GMC
     // states) before the factorisation, the step of peak memory, unless
@@ -177,9 +215,14 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
         value_and_gradient: gradient.is_some().then_some(solve_seconds),
     };
     let recurrence = evaluator.recurrence();
+    let query = args
+        .objective
+        .property()?
+        .map(|property| QueryValue::of(&property, &evaluation, target_probability));
     let report = Report {
         provenance: Provenance::current(),
         formula,
+        query,
         evaluation: evaluator.report(&evaluation),
         seconds: common::seconds_since(start),
         phase_seconds,

@@ -1,8 +1,9 @@
 //! Property files of Storm, PRISM and PAYNT (`sketch.props`): the one
-//! probability query they hold, as the defender's LTL objective
-//! (formats.md section 6).
+//! query they hold, as the defender's objective (formats.md section 6).
 //!
 //! A file holds one query `<<P>> Pmax=? [ PATH ]` or `<<P>> Pmin=? [ PATH ]`,
+//! or an expected-reward query `<<P>> R{"r"}min=? [ F T ]` (also `Rmax`, and
+//! `Rmin`/`Rmax` without a name for a model's only reward model),
 //! optionally named (`"name": ...`) and ended by `;` as Storm writes it,
 //! with `//` comments and blank lines around it. `<<P>>` names the player
 //! who optimises (the defender of a turn-based game read from DRN);
@@ -11,11 +12,15 @@
 //! quotes, as Storm writes them: `F "goal"`, `G !"crash" & F "goal"`).
 //! `Pmax` makes `PATH` the defender's objective; `Pmin` makes its
 //! complement the objective (`F "goal"` becomes `G !goal`), since
-//! minimising the probability of `PATH` is maximising that of `!PATH`.
-//! Everything else (reward and time queries, bounds such as `P>=0.5`,
-//! several queries, constants, bounded operators such as `F<=10`) is an
-//! error naming the line and column ([`parse_props`]), and the file too
-//! ([`from_props_str`], as the command line reports it).
+//! minimising the probability of `PATH` is maximising that of `!PATH`. A
+//! reward query asks for the expected total reward of reward model `r`
+//! accumulated until the first state satisfying the state formula `T` (a
+//! Boolean combination of labels), minimised (`Rmin`, a cost) or maximised
+//! (`Rmax`) by the defender (method.md section 9).
+//! Everything else (time queries, bounds such as `P>=0.5`, reward paths
+//! other than `F T`, several queries, constants, bounded operators such as
+//! `F<=10`) is an error naming the line and column ([`parse_props`]), and
+//! the file too ([`from_props_str`], as the command line reports it).
 
 use thiserror::Error;
 
@@ -27,13 +32,13 @@ use crate::game::ModelError;
 pub struct Property {
     /// The optimising player `P` of `<<P>>`, if the query names one.
     pub player: Option<u64>,
-    /// `true` for `Pmax`, `false` for `Pmin`.
+    /// `true` for `Pmax` and `Rmax`, `false` for `Pmin` and `Rmin`.
     pub maximise: bool,
-    /// The path formula as written.
-    pub path: Formula,
-    /// The formula whose probability the defender maximises: `path` for
-    /// `Pmax`, its complement for `Pmin`.
-    pub objective: Formula,
+    /// What is asked: a probability or an expected reward.
+    pub query: Query,
+    /// The query as written, without its name and its `;` (`Pmax=? [F
+    /// "goal"]`), for reports that restate it.
+    pub text: String,
     /// The 1-based line of the query.
     pub line: usize,
     /// The 1-based column (in characters) where the query starts after its
@@ -41,7 +46,52 @@ pub struct Property {
     pub column: usize,
 }
 
+/// What a property file asks.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Query {
+    /// `Pmax=? [ PATH ]` or `Pmin=? [ PATH ]`.
+    Probability {
+        /// The path formula as written.
+        path: Formula,
+        /// The formula whose probability the defender maximises: `path`
+        /// for `Pmax`, its complement for `Pmin`.
+        objective: Formula,
+    },
+    /// `R{"r"}min=? [ F T ]` or `R{"r"}max=? [ F T ]`: the expected total
+    /// reward until `T` (method.md section 9).
+    Reward(RewardQuery),
+}
+
+/// An expected-reward query `R{"model"}min=? [ F target ]` (or `max`):
+/// the expected total reward of the reward model accumulated until the
+/// first state satisfying `target` (method.md section 9).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct RewardQuery {
+    /// The reward model's name; `None` for `Rmin`/`Rmax`, which need a
+    /// game with exactly one reward model.
+    pub model: Option<String>,
+    /// The state formula `T` (a Boolean combination of labels).
+    pub target: Formula,
+}
+
+impl RewardQuery {
+    /// The path formula `F T` whose automaton tracks whether `T` was
+    /// reached (its accepting states are the target of the reward).
+    pub fn reach_target(&self) -> Formula {
+        Formula::Finally(Box::new(self.target.clone()))
+    }
+}
+
 impl Property {
+    /// The formula whose probability the defender maximises, for a
+    /// probability query; `None` for a reward query.
+    pub fn probability_objective(&self) -> Option<&Formula> {
+        match &self.query {
+            Query::Probability { objective, .. } => Some(objective),
+            Query::Reward(_) => None,
+        }
+    }
+
     /// Where the query is in the property file `file`, as errors name it:
     /// `FILE: line L, column C`.
     pub fn position(&self, file: &str) -> String {
@@ -172,30 +222,137 @@ impl<'a> Cursor<'a> {
     }
 }
 
-/// `["name":] [<<P>>] P(max|min)=? [ PATH ] [;]` on one line.
+/// `["name":] [<<P>>] P(max|min)=? [ PATH ] [;]` or `["name":] [<<P>>]
+/// R[{"r"}](max|min)=? [ F T ] [;]` on one line.
 fn query(text: &str, line: usize) -> Result<Property, PropsError> {
     let mut cursor = Cursor { text, at: 0, line };
     skip_name(&mut cursor)?;
     cursor.skip_blanks();
     let column = cursor.column();
+    let query_start = cursor.at;
     let player = coalition(&mut cursor)?;
     cursor.skip_blanks();
-    let maximise = if cursor.eat("Pmax=?") {
+    let (operator, maximise) = operator(&mut cursor)?;
+    let (path, path_column) = bracketed_path(&mut cursor, &operator)?;
+    let query_end = cursor.at;
+    cursor.eat(";");
+    cursor.skip_blanks();
+    if !cursor.rest().is_empty() {
+        return Err(cursor.error(format!("unexpected {} after the query", cursor.found())));
+    }
+    let query = match operator {
+        Operator::Probability => {
+            let objective = if maximise {
+                path.clone()
+            } else {
+                complement(&path)
+            };
+            Query::Probability { path, objective }
+        }
+        Operator::Reward { model } => Query::Reward(RewardQuery {
+            model,
+            target: reward_target(path).map_err(|message| PropsError {
+                line,
+                column: path_column,
+                message,
+            })?,
+        }),
+    };
+    Ok(Property {
+        player,
+        maximise,
+        query,
+        text: text[query_start..query_end].trim().to_string(),
+        line,
+        column,
+    })
+}
+
+/// The operator of a query: `P` or `R` with its reward model.
+enum Operator {
+    Probability,
+    Reward { model: Option<String> },
+}
+
+impl std::fmt::Display for Operator {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Operator::Probability => write!(f, "P"),
+            Operator::Reward { model: None } => write!(f, "R"),
+            Operator::Reward { model: Some(name) } => write!(f, "R{{\"{name}\"}}"),
+        }
+    }
+}
+
+/// `Pmax=?`, `Pmin=?`, `R{"r"}max=?`, `R{"r"}min=?`, `Rmax=?` or `Rmin=?`,
+/// and whether it maximises.
+fn operator(cursor: &mut Cursor) -> Result<(Operator, bool), PropsError> {
+    let operator = if cursor.rest().starts_with('P') {
+        Operator::Probability
+    } else if cursor.rest().starts_with("R{") || cursor.rest().starts_with("Rm") {
+        let start = cursor.column();
+        cursor.at += 1;
+        let model = reward_model_name(cursor).map_err(|message| PropsError {
+            line: cursor.line,
+            column: start,
+            message,
+        })?;
+        Operator::Reward { model }
+    } else {
+        return Err(unsupported_query(cursor));
+    };
+    let after = match &operator {
+        Operator::Probability => 1,
+        Operator::Reward { .. } => 0,
+    };
+    let rest = &cursor.rest()[after..];
+    let maximise = if rest.starts_with("max=?") {
         true
-    } else if cursor.eat("Pmin=?") {
+    } else if rest.starts_with("min=?") {
         false
     } else {
-        return Err(unsupported_query(&cursor));
+        return Err(unsupported_query(cursor));
     };
+    cursor.at += after + "max=?".len();
+    Ok((operator, maximise))
+}
+
+/// After `R`: an optional `{"name"}`.
+fn reward_model_name(cursor: &mut Cursor) -> Result<Option<String>, String> {
+    if !cursor.rest().starts_with('{') {
+        return Ok(None);
+    }
+    let inside = &cursor.rest()[1..];
+    let close = inside
+        .find('}')
+        .ok_or("unterminated reward model name: expected `}`")?;
+    let name = inside[..close].trim();
+    let name = name
+        .strip_prefix('"')
+        .and_then(|n| n.strip_suffix('"'))
+        .filter(|n| !n.is_empty() && !n.contains('"'))
+        .ok_or_else(|| {
+            format!("the reward model in `R{{{name}}}` must be a name in double quotes, as `R{{\"steps\"}}`")
+        })?;
+    cursor.at += close + 2;
+    Ok(Some(name.to_string()))
+}
+
+/// `[ PATH ]` after the operator: the parsed path and the column where it
+/// starts.
+fn bracketed_path(
+    cursor: &mut Cursor,
+    operator: &Operator,
+) -> Result<(Formula, usize), PropsError> {
     cursor.skip_blanks();
     let open = cursor.column();
     if !cursor.eat("[") {
         return Err(cursor.error(format!(
-            "expected `[` and a path formula after P{}=?, found {}",
-            if maximise { "max" } else { "min" },
+            "expected `[` and a path formula after {operator}max=? or {operator}min=?, found {}",
             cursor.found()
         )));
     }
+    let (text, line) = (cursor.text, cursor.line);
     let inner_start = cursor.at;
     let close = text
         .rfind(']')
@@ -206,30 +363,91 @@ fn query(text: &str, line: usize) -> Result<Property, PropsError> {
             message: "this `[` has no closing `]`".into(),
         })?;
     let path_text = &text[inner_start..close];
-    let path = parse(path_text).map_err(|e| PropsError {
+    let path_column = text[..inner_start].chars().count() + 1 + indent(path_text);
+    if let Operator::Reward { .. } = operator {
+        if let Some(message) = unsupported_reward_path(path_text.trim()) {
+            return Err(PropsError {
+                line,
+                column: path_column,
+                message,
+            });
+        }
+    }
+    let (formula_text, reward_target) = match operator {
+        Operator::Reward { .. } => match reward_path(path_text) {
+            Some(target) => (target, true),
+            None => (path_text, false),
+        },
+        Operator::Probability => (path_text, false),
+    };
+    let formula_start = inner_start + (path_text.len() - formula_text.len());
+    let formula = parse(formula_text).map_err(|e| PropsError {
         line,
-        column: text[..inner_start].chars().count() + e.column,
+        column: text[..formula_start].chars().count() + e.column,
         message: format!("in the path formula: {}", e.message),
     })?;
-    cursor.at = close + 1;
-    cursor.eat(";");
-    cursor.skip_blanks();
-    if !cursor.rest().is_empty() {
-        return Err(cursor.error(format!("unexpected {} after the query", cursor.found())));
-    }
-    let objective = if maximise {
-        path.clone()
-    } else {
-        complement(&path)
+    let path = match reward_target {
+        true => Formula::Finally(Box::new(formula)),
+        false => formula,
     };
-    Ok(Property {
-        player,
-        maximise,
-        path,
-        objective,
-        line,
-        column,
-    })
+    cursor.at = close + 1;
+    Ok((path, path_column))
+}
+
+/// The message for a reward path of Storm's that is not a total reward
+/// until a target (`C`, `C<=k`, `I=k`, `LRA`, `F<=k`), or `None`.
+fn unsupported_reward_path(path: &str) -> Option<String> {
+    let word: String = path
+        .chars()
+        .take_while(|c| c.is_ascii_alphanumeric())
+        .collect();
+    let what = match word.as_str() {
+        "C" => "a cumulative reward `C`",
+        "I" => "an instantaneous reward `I=k`",
+        "LRA" | "S" => "a long-run average reward",
+        "F" if path[1..].trim_start().starts_with(['<', '>', '[']) => {
+            "a step-bounded reward `F<=k`"
+        }
+        _ => return None,
+    };
+    Some(format!(
+        "{what} is not supported: a reward query asks for the total reward until a target, `F T`"
+    ))
+}
+
+/// The target `T` of a reward path `F T`, which must be a state formula.
+fn reward_target(path: Formula) -> Result<Formula, String> {
+    match path {
+        Formula::Finally(target) if is_state_formula(&target) => Ok(*target),
+        other => Err(format!(
+            "a reward query asks for the total reward until a target, `F T` with `T` a Boolean \
+             combination of labels (as `F \"goal\"`); found `{other}`"
+        )),
+    }
+}
+
+/// A reward path `F T` read as PRISM and Storm read it: `F` applies to the
+/// whole state formula that follows (`F "goal" & !"crash"` is `F ("goal" &
+/// !"crash")`), where LTL's precedence would bind `F` to `"goal"` alone.
+/// `None` when the path does not start with `F`.
+fn reward_path(path_text: &str) -> Option<&str> {
+    let trimmed = path_text.trim_start();
+    let rest = trimmed.strip_prefix('F')?;
+    rest.starts_with(|c: char| c.is_whitespace() || matches!(c, '(' | '"' | '!'))
+        .then_some(rest)
+}
+
+/// Whether `f` has no temporal operator: its truth is decided by one state.
+fn is_state_formula(f: &Formula) -> bool {
+    match f {
+        Formula::True | Formula::False | Formula::Prop(_) => true,
+        Formula::Not(g) => is_state_formula(g),
+        Formula::And(gs) | Formula::Or(gs) => gs.iter().all(is_state_formula),
+        Formula::Implies(f, g) | Formula::Equiv(f, g) | Formula::Xor(f, g) => {
+            is_state_formula(f) && is_state_formula(g)
+        }
+        _ => false,
+    }
 }
 
 /// Skips an optional `"name":` prefix.
@@ -273,13 +491,21 @@ fn coalition(cursor: &mut Cursor) -> Result<Option<u64>, PropsError> {
     Ok(Some(player))
 }
 
-/// The error for a query other than `Pmax=?`/`Pmin=?`.
+/// The error for a query other than `Pmax=?`, `Pmin=?`, `R{"r"}max=?` and
+/// `R{"r"}min=?`.
 fn unsupported_query(cursor: &Cursor) -> PropsError {
     let rest = cursor.rest();
-    let message = if rest.starts_with('R') || rest.starts_with('T') {
+    let message = if rest.starts_with('T') {
         format!(
-            "{} is a reward or time query; posg-fsc solves probability queries `Pmax=? [ PATH ]` \
-             and `Pmin=? [ PATH ]`",
+            "{} is a time query; posg-fsc solves `Pmax=? [ PATH ]`, `Pmin=? [ PATH ]` and the \
+             expected-reward queries `R{{\"r\"}}min=? [ F T ]` and `R{{\"r\"}}max=? [ F T ]` \
+             (a time query is a reward query with reward 1 per step)",
+            cursor.found()
+        )
+    } else if rest.starts_with('R') {
+        format!(
+            "{}: only the reward queries `R{{\"r\"}}min=?` and `R{{\"r\"}}max=?` (or `Rmin=?` \
+             and `Rmax=?`) can be solved (not a bound or an unoptimised `R=?`)",
             cursor.found()
         )
     } else if rest.starts_with('P') {
@@ -290,7 +516,8 @@ fn unsupported_query(cursor: &Cursor) -> PropsError {
         )
     } else {
         format!(
-            "expected a query `Pmax=? [ PATH ]` or `Pmin=? [ PATH ]`, found {}",
+            "expected a query `Pmax=? [ PATH ]`, `Pmin=? [ PATH ]` or `R{{\"r\"}}min=? [ F T ]`, \
+             found {}",
             cursor.found()
         )
     };

@@ -26,9 +26,11 @@
 
 pub mod directory;
 mod propositions;
+mod reward;
 mod sweep;
 
 pub use propositions::{PropositionCheck, check_propositions};
+pub use reward::RewardObjective;
 pub use sweep::Chain;
 
 use std::sync::{Arc, Mutex, PoisonError};

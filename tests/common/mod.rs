@@ -247,3 +247,100 @@ pub fn solve_one_node(
     };
     posg_fsc::pipeline::solve(game, &automata, sizes, settings, |_| Box::new(()))
 }
+
+/// The expected total reward of `rewards` until the first state labelled
+/// `target` (method.md section 9), computed from the dense chain over
+/// `(s, g, h)` of formats.md section 3 with the target states made
+/// absorbing: infinite when a state that misses the target with positive
+/// probability (one that can reach a state from which no target state is
+/// reachable) has positive initial probability or is reachable from one;
+/// otherwise a dense solve of `(I - Q) x = r` on the non-target states.
+/// No automaton, no analysis of the crate.
+#[allow(clippy::needless_range_loop)]
+pub fn reference_expected_reward(
+    game: &Posg,
+    rewards: &posg_fsc::game::RewardModel,
+    target: &str,
+    def: &Fsc,
+    adv: &Fsc,
+) -> f64 {
+    let (ns, ng, nh) = (game.num_states(), def.num_nodes(), adv.num_nodes());
+    let n = ns * ng * nh;
+    let idx = |s: usize, g: usize, h: usize| (s * ng + g) * nh + h;
+    let is_target = |s: usize| game.label_names(s).any(|l| l == target);
+    let mut p = DMatrix::zeros(n);
+    let mut r = dense::zeros(n);
+    for s in (0..ns).filter(|&s| !is_target(s)) {
+        for g in 0..ng {
+            for h in 0..nh {
+                let from = idx(s, g, h);
+                r[from] = rewards.state_reward(s);
+                for &(o, po) in game.defender().observation_distribution(s) {
+                    for &(o2, po2) in game.adversary().observation_distribution(s) {
+                        for cd in def.choices(g, o) {
+                            for ca in adv.choices(h, o2) {
+                                let (u, v) =
+                                    (DefenderAction(cd.action), AdversaryAction(ca.action));
+                                let weight = po * po2 * cd.probability * ca.probability;
+                                r[from] += weight * rewards.action_reward(s, u, v).unwrap();
+                                for &(t, pt) in game.transition(s, u, v) {
+                                    p[(from, idx(t, cd.next, ca.next))] += weight * pt;
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+    let mut reach = vec![vec![false; n]; n];
+    for a in 0..n {
+        reach[a][a] = true;
+        for b in 0..n {
+            reach[a][b] |= p[(a, b)] > 0.0;
+        }
+    }
+    for k in 0..n {
+        for a in 0..n {
+            if reach[a][k] {
+                for b in 0..n {
+                    reach[a][b] |= reach[k][b];
+                }
+            }
+        }
+    }
+    let target_state = |m: usize| is_target(m / (ng * nh));
+    let hits_target: Vec<bool> = (0..n)
+        .map(|a| (0..n).any(|b| reach[a][b] && target_state(b)))
+        .collect();
+    let infinite: Vec<bool> = (0..n)
+        .map(|a| (0..n).any(|b| reach[a][b] && !hits_target[b]))
+        .collect();
+    let mut p0 = dense::zeros(n);
+    for &(s, ps) in game.initial() {
+        for g in 0..ng {
+            for h in 0..nh {
+                p0[idx(s, g, h)] += ps * def.initial()[g] * adv.initial()[h];
+            }
+        }
+    }
+    if (0..n).any(|m| p0[m] > 0.0 && infinite[m]) {
+        return f64::INFINITY;
+    }
+    let unknown: Vec<usize> = (0..n)
+        .filter(|&m| !target_state(m) && !infinite[m])
+        .collect();
+    let k = unknown.len();
+    let mut a = DMatrix::identity(k);
+    let mut rhs = dense::zeros(k);
+    for (i, &m) in unknown.iter().enumerate() {
+        for (j, &m2) in unknown.iter().enumerate() {
+            a[(i, j)] -= p[(m, m2)];
+        }
+        rhs[i] = r[m];
+    }
+    let solution = a
+        .solve(&rhs)
+        .expect("the finite states' system is nonsingular");
+    unknown.iter().zip(&solution).map(|(&m, x)| p0[m] * x).sum()
+}

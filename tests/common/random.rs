@@ -227,3 +227,48 @@ pub fn controller_with_nodes(seed: u64, game: &Posg, role: Role, nodes: usize) -
     }
     Fsc::new(role, nodes, no, na, initial, blocks).unwrap()
 }
+
+/// [`game_json`] with one reward model `r`: a random state reward on some
+/// states and a random action reward on some transition entries, of either
+/// sign (some exact zeros). In half of the games, one state not labelled
+/// `goal` is made a trap (every transition stays there), so that the goal
+/// is often missed with positive probability.
+pub fn game_json_with_rewards(seed: u64) -> String {
+    let mut game: Value = serde_json::from_str(&game_json(seed)).unwrap();
+    let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x4e3a4d);
+    let labels = game["labels"].clone();
+    let no_goal: Vec<String> = game["states"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s.as_str().unwrap().to_string())
+        .filter(|s| !labels[s].as_array().unwrap().contains(&json!("goal")))
+        .collect();
+    if rng.random_bool(0.5) {
+        if let Some(trap) = no_goal.choose(&mut rng) {
+            for entry in game["transitions"].as_array_mut().unwrap() {
+                if entry["state"] == json!(trap) {
+                    entry["next"] = json!({ trap.as_str(): 1.0 });
+                }
+            }
+        }
+    }
+    let reward = |rng: &mut ChaCha8Rng| (rng.random_range(-20..=40) as f64) / 8.0;
+    let mut states = Map::new();
+    for s in game["states"].as_array().unwrap() {
+        if rng.random_bool(0.6) {
+            states.insert(s.as_str().unwrap().to_string(), json!(reward(&mut rng)));
+        }
+    }
+    let mut actions = Vec::new();
+    for entry in game["transitions"].as_array().unwrap() {
+        if rng.random_bool(0.5) {
+            actions.push(json!({
+                "state": entry["state"], "defender": entry["defender"],
+                "adversary": entry["adversary"], "reward": reward(&mut rng),
+            }));
+        }
+    }
+    game["rewards"] = json!({"r": {"states": states, "actions": actions}});
+    game.to_string()
+}

@@ -1,0 +1,432 @@
+//! Expected total rewards until a target (method.md section 9): values on
+//! paper (a POMDP where probing pays, a game whose adversary can make the
+//! target unreachable, a discount sink against its closed form), random
+//! games against an independent dense computation, the gradient against
+//! finite differences, and `eval` on a property file.
+
+mod common;
+
+use std::process::Command;
+
+use posg_fsc::controller::{Choice, Fsc, Probabilities, Role, Support};
+use posg_fsc::game::Posg;
+use posg_fsc::game::file::from_json_str;
+use posg_fsc::ltl::TranslationBudget;
+use posg_fsc::ltl::props::{Query, RewardQuery, parse_props};
+use posg_fsc::pipeline::{PipelineError, RewardObjective};
+use posg_fsc::value::{Evaluator, SolverSettings, ValueError};
+use proptest::prelude::*;
+use serde_json::Value;
+
+/// The objective of the property `props` on `game`.
+fn objective(game: &Posg, props: &str) -> RewardObjective {
+    let property = parse_props(props).unwrap();
+    let Query::Reward(query) = &property.query else {
+        panic!("{props} is not a reward query");
+    };
+    let budget = TranslationBudget::default();
+    RewardObjective::for_game(game, query, !property.maximise, &budget, false)
+        .unwrap()
+        .0
+}
+
+fn evaluator(game: &Posg, objective: &RewardObjective, def: &Fsc, adv: &Fsc) -> Evaluator {
+    Evaluator::for_expected_reward(
+        game,
+        &objective.target,
+        &objective.rewards,
+        &Support::of(def),
+        &Support::of(adv),
+        &SolverSettings::default(),
+    )
+    .unwrap()
+}
+
+fn expected_reward(game: &Posg, objective: &RewardObjective, def: &Fsc, adv: &Fsc) -> f64 {
+    let mut evaluator = evaluator(game, objective, def, adv);
+    let (pd, pa) = (
+        Support::probabilities_of(def),
+        Support::probabilities_of(adv),
+    );
+    evaluator.evaluate(&pd, &pa).unwrap().value
+}
+
+fn uniform(game: &Posg, role: Role) -> Fsc {
+    let player = match role {
+        Role::Defender => game.defender(),
+        Role::Adversary => game.adversary(),
+    };
+    Fsc::uniform_enabled(role, 1, player)
+}
+
+/// The one-node controller playing `actions[o]` (by name) after observation `o`.
+fn memoryless(game: &Posg, role: Role, actions: &[&str]) -> Fsc {
+    let player = match role {
+        Role::Defender => game.defender(),
+        Role::Adversary => game.adversary(),
+    };
+    let blocks = actions
+        .iter()
+        .map(|name| {
+            let action = player.actions().iter().position(|a| a == name).unwrap();
+            vec![Choice {
+                next: 0,
+                action,
+                probability: 1.0,
+                logit: None,
+            }]
+        })
+        .collect();
+    Fsc::new(
+        role,
+        1,
+        player.num_observations(),
+        player.num_actions(),
+        vec![1.0],
+        blocks,
+    )
+    .unwrap()
+}
+
+fn probe() -> Posg {
+    posg_fsc::game::drn::read(std::path::Path::new("tests/data/rewards/probe.drn"))
+        .unwrap()
+        .game
+}
+
+#[test]
+fn probing_costs_one_guessing_five_and_the_uniform_controller_sixteen_thirds() {
+    let game = probe();
+    let cost = objective(&game, "Rmin=? [F \"goal\"]");
+    let adversary = uniform(&game, Role::Adversary);
+    let at = |defender: &Fsc| expected_reward(&game, &cost, defender, &adversary);
+    let uniform = at(&uniform(&game, Role::Defender));
+    assert!((uniform - 16.0 / 3.0).abs() < 1e-12, "{uniform}");
+    // Observations o0..o5: start, hidden side, left seen, right seen, goal, trap.
+    let probing = ["go", "probe", "left", "right", "stay", "pay"];
+    let value = at(&memoryless(&game, Role::Defender, &probing));
+    assert!((value - 1.0).abs() < 1e-12, "{value}");
+    let guessing = ["go", "left", "left", "right", "stay", "pay"];
+    let value = at(&memoryless(&game, Role::Defender, &guessing));
+    assert!((value - 5.0).abs() < 1e-12, "{value}");
+}
+
+/// From `start` the adversary can `block` the way to the goal for good;
+/// each step before the goal costs 1.
+const BLOCKING: &str = r#"{
+  "posg": 1, "states": ["start", "mid", "goal", "stuck"], "initial": {"start": 1.0},
+  "labels": {"goal": ["goal"]},
+  "defender": {"actions": ["go"], "observe": "full"},
+  "adversary": {"actions": ["let", "block"], "observe": "full"},
+  "transitions": [
+    {"state": "start", "defender": "go", "adversary": "let", "next": {"mid": 1.0}},
+    {"state": "start", "defender": "go", "adversary": "block", "next": {"stuck": 1.0}},
+    {"state": "mid", "defender": "go", "adversary": "*", "next": {"goal": 1.0}},
+    {"state": "goal", "defender": "go", "adversary": "*", "next": {"goal": 1.0}},
+    {"state": "stuck", "defender": "go", "adversary": "*", "next": {"stuck": 1.0}}
+  ],
+  "rewards": {"steps": {"states": {"start": 1.0, "mid": 1.0, "stuck": 1.0}}}
+}"#;
+
+#[test]
+fn an_adversary_that_can_block_the_target_makes_the_cost_infinite() {
+    let game = from_json_str(BLOCKING, "blocking.posg.json").unwrap();
+    let steps = objective(&game, "R{\"steps\"}min=? [F \"goal\"]");
+    let defender = uniform(&game, Role::Defender);
+    let letting = memoryless(&game, Role::Adversary, &["let", "let", "let", "let"]);
+    assert_eq!(expected_reward(&game, &steps, &defender, &letting), 2.0);
+    let mixing = uniform(&game, Role::Adversary);
+    let mut evaluator = evaluator(&game, &steps, &defender, &mixing);
+    assert!(evaluator.is_infinite());
+    let (pd, pa) = (
+        Support::probabilities_of(&defender),
+        Support::probabilities_of(&mixing),
+    );
+    let evaluation = evaluator.evaluate(&pd, &pa).unwrap();
+    assert_eq!(evaluation.value, f64::INFINITY);
+    assert_eq!(evaluation.error_bound, 0.0);
+    assert_eq!(
+        evaluator.evaluate_with_gradient(&pd, &pa).unwrap_err(),
+        ValueError::InfiniteReward
+    );
+}
+
+/// `s0` earns 1 and `s1` earns -0.5 per step; each step continues to the
+/// other with probability 0.9 and otherwise falls into the discount sink:
+/// `x0 = 1 + 0.9 x1`, `x1 = -0.5 + 0.9 x0`, so `x0 = (1 - 0.45) / (1 - 0.81)`.
+const DISCOUNT_SINK: &str = r#"{
+  "posg": 1, "states": ["s0", "s1", "sink"], "initial": {"s0": 1.0},
+  "labels": {"sink": ["discount_sink"]},
+  "defender": {"actions": ["a"], "observe": "full"},
+  "transitions": [
+    {"state": "s0", "defender": "a", "next": {"s1": 0.9, "sink": 0.1}},
+    {"state": "s1", "defender": "a", "next": {"s0": 0.9, "sink": 0.1}},
+    {"state": "sink", "defender": "a", "next": {"sink": 1.0}}
+  ],
+  "rewards": {"reward": {"states": {"s0": 1.0}, "actions": [
+    {"state": "s1", "defender": "a", "reward": -0.5}]}}
+}"#;
+
+#[test]
+fn a_discount_sink_gives_the_discounted_sum_in_closed_form() {
+    let game = from_json_str(DISCOUNT_SINK, "sink.posg.json").unwrap();
+    let reward = objective(&game, "Rmax=? [F \"discount_sink\"]");
+    let value = expected_reward(
+        &game,
+        &reward,
+        &uniform(&game, Role::Defender),
+        &uniform(&game, Role::Adversary),
+    );
+    let closed_form = (1.0 - 0.45) / (1.0 - 0.81);
+    assert!(
+        (value - closed_form).abs() < 1e-13,
+        "{value} vs {closed_form}"
+    );
+}
+
+#[test]
+fn reward_models_are_looked_up_by_name_or_as_the_only_one() {
+    let game = probe();
+    let query = |model: Option<&str>| RewardQuery {
+        model: model.map(str::to_string),
+        target: posg_fsc::ltl::parse("goal").unwrap(),
+    };
+    let budget = TranslationBudget::default();
+    let error = |model| {
+        RewardObjective::for_game(&game, &query(model), true, &budget, false)
+            .unwrap_err()
+            .to_string()
+    };
+    assert_eq!(
+        error(Some("time")),
+        "R{\"time\"}: the game has no reward model \"time\"; its reward models: \"cost\""
+    );
+    let found = RewardObjective::for_game(&game, &query(None), true, &budget, false).unwrap();
+    assert_eq!(found.0.rewards.name(), "cost");
+    assert_eq!(found.0.description, "R{\"cost\"}min=? [F goal]");
+    let sink = from_json_str(DISCOUNT_SINK, "sink.posg.json").unwrap();
+    let misspelt = RewardQuery {
+        model: None,
+        target: posg_fsc::ltl::parse("discount_snk").unwrap(),
+    };
+    let result = RewardObjective::for_game(&sink, &misspelt, false, &budget, false);
+    let Err(PipelineError::Propositions(check)) = result else {
+        panic!("a target labelling no state is refused");
+    };
+    assert!(
+        check.warnings[0].contains("did you mean discount_sink?"),
+        "{check:?}"
+    );
+}
+
+#[test]
+fn reward_queries_are_read_from_property_files() {
+    let p = parse_props("<<0>> R{\"steps\"}min=? [F \"goal\" & !\"crash\"];").unwrap();
+    assert_eq!((p.player, p.maximise), (Some(0), false));
+    assert_eq!(p.text, "<<0>> R{\"steps\"}min=? [F \"goal\" & !\"crash\"]");
+    let Query::Reward(query) = &p.query else {
+        panic!("{p:?}")
+    };
+    assert_eq!(query.model.as_deref(), Some("steps"));
+    assert_eq!(query.target.to_string(), "goal & !crash");
+    assert!(p.probability_objective().is_none());
+    let p = parse_props("Rmax=? [F \"done\"]").unwrap();
+    assert!(p.maximise);
+    assert!(matches!(
+        &p.query,
+        Query::Reward(RewardQuery { model: None, .. })
+    ));
+    for (text, message) in [
+        (
+            "Rmin=? [C]",
+            "column 9: a cumulative reward `C` is not supported",
+        ),
+        (
+            "Rmin=? [ LRA ]",
+            "column 10: a long-run average reward is not supported",
+        ),
+        (
+            "Rmin=? [F<=10 \"goal\"]",
+            "column 9: a step-bounded reward `F<=k` is not supported",
+        ),
+        (
+            "Rmin=? [F G \"goal\"]",
+            "column 9: a reward query asks for the total reward until a target, `F T` with `T` a Boolean combination of labels (as `F \"goal\"`); found `F G goal`",
+        ),
+        (
+            "Rmin=? [\"goal\" U \"done\"]",
+            "column 9: a reward query asks for the total reward until a target",
+        ),
+        (
+            "R{steps}min=? [F \"goal\"]",
+            "column 1: the reward model in `R{steps}` must be a name in double quotes",
+        ),
+        (
+            "R{\"steps\"=? [F \"goal\"]",
+            "column 1: unterminated reward model name",
+        ),
+        (
+            "R=? [F \"goal\"]",
+            "column 1: `R=?`: only the reward queries",
+        ),
+        ("Tmin=? [F \"goal\"]", "column 1: `Tmin=?` is a time query"),
+    ] {
+        let error = parse_props(text).unwrap_err().to_string();
+        assert!(error.contains(message), "{text}: {error}");
+    }
+}
+
+fn posg_fsc(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_posg-fsc"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+#[test]
+fn eval_restates_a_reward_query_and_says_inf_where_the_target_can_be_missed() {
+    let output = posg_fsc(&[
+        "eval",
+        "tests/data/rewards/probe.drn",
+        "--props",
+        "tests/data/rewards/probe.props",
+        "--gradient",
+    ]);
+    assert!(output.status.success(), "{output:?}");
+    let report: Value = serde_json::from_slice(&output.stdout).unwrap();
+    assert_eq!(report["query"]["text"], "Rmin=? [F \"goal\"]");
+    assert!((report["query"]["value"].as_f64().unwrap() - 16.0 / 3.0).abs() < 1e-12);
+    assert_eq!(report["query"]["target_probability"], 1.0);
+    assert_eq!(report["formula"], "R{\"cost\"}min=? [F goal]");
+
+    let dir = std::env::temp_dir().join(format!("posg-fsc-rewards-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let game = dir.join("blocking.posg.json");
+    std::fs::write(&game, BLOCKING).unwrap();
+    let props = dir.join("steps.props");
+    std::fs::write(&props, "R{\"steps\"}min=? [F \"goal\"]\n").unwrap();
+    let args = [
+        "eval",
+        game.to_str().unwrap(),
+        "--props",
+        props.to_str().unwrap(),
+    ];
+    let output = posg_fsc(&args);
+    assert!(output.status.success(), "{output:?}");
+    let report: Value = serde_json::from_slice(&output.stdout).unwrap();
+    assert_eq!(report["value"], "inf");
+    assert_eq!(report["query"]["value"], "inf");
+    assert_eq!(report["query"]["target_probability"], 0.5);
+    let output = posg_fsc(&[&args[..], &["--gradient"]].concat());
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(!output.status.success());
+    assert!(
+        stderr.contains("the expected reward is infinite"),
+        "{stderr}"
+    );
+
+    let output = posg_fsc(&[
+        "solve",
+        game.to_str().unwrap(),
+        "--out",
+        dir.join("out").to_str().unwrap(),
+        "--props",
+        props.to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(!output.status.success());
+    assert!(
+        stderr.contains(
+            "line 1, column 1: `R{\"steps\"}min=? [F \"goal\"]` is an expected-reward query"
+        ),
+        "{stderr}"
+    );
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig {
+        rng_seed: proptest::test_runner::RngSeed::Fixed(1),
+        cases: 60,
+        ..ProptestConfig::default()
+    })]
+
+    /// 60 random games with rewards of both signs (54 with a goal: 35
+    /// finite values, 19 infinite ones): the same value as the dense
+    /// reference, infinite exactly where it is.
+    #[test]
+    fn random_games_agree_with_the_dense_reference(seed in any::<u64>()) {
+        let game = from_json_str(&common::random::game_json_with_rewards(seed), "r.posg.json").unwrap();
+        let Some(objective) = reachable_goal(&game) else { return Ok(()) };
+        let def = common::random::controller(seed, &game, Role::Defender);
+        let adv = common::random::controller(seed, &game, Role::Adversary);
+        let value = expected_reward(&game, &objective, &def, &adv);
+        let reference = common::reference_expected_reward(&game, &objective.rewards, "goal", &def, &adv);
+        if reference.is_infinite() {
+            prop_assert_eq!(value, f64::INFINITY);
+        } else {
+            prop_assert!((value - reference).abs() <= 1e-8 * (1.0 + reference.abs()), "{} vs {}", value, reference);
+        }
+    }
+
+    /// The adjoint gradient with the reward term (method.md section 9)
+    /// against central differences, in the directions a controller can
+    /// move in (`e_k - e_first` inside each block), where the value is
+    /// finite.
+    #[test]
+    fn the_gradient_matches_central_differences(seed in any::<u64>()) {
+        let game = from_json_str(&common::random::game_json_with_rewards(seed), "r.posg.json").unwrap();
+        let Some(objective) = reachable_goal(&game) else { return Ok(()) };
+        let def = common::random::controller(seed, &game, Role::Defender);
+        let adv = common::random::controller(seed, &game, Role::Adversary);
+        let mut ev = evaluator(&game, &objective, &def, &adv);
+        if ev.is_infinite() {
+            return Ok(());
+        }
+        let (pd, pa) = (Support::probabilities_of(&def), Support::probabilities_of(&adv));
+        let (evaluation, gradient) = ev.evaluate_with_gradient(&pd, &pa).unwrap();
+        let mut at = |pd: &Probabilities, pa: &Probabilities| ev.evaluate(pd, pa).unwrap().value;
+        let h = 1e-6;
+        let scale = 1.0 + evaluation.value.abs()
+            + gradient.defender.iter().chain(&gradient.adversary).fold(0.0f64, |m, g| m.max(g.abs()));
+        for (first, k) in directions(&Support::of(&def)) {
+            let (mut plus, mut minus) = (pd.clone(), pd.clone());
+            plus.entries[k] += h;
+            plus.entries[first] -= h;
+            minus.entries[k] -= h;
+            minus.entries[first] += h;
+            let fd = (at(&plus, &pa) - at(&minus, &pa)) / (2.0 * h);
+            let adjoint = gradient.defender[k] - gradient.defender[first];
+            prop_assert!((fd - adjoint).abs() < 1e-5 * scale, "defender {} - {}: fd {} adjoint {}", k, first, fd, adjoint);
+        }
+        for (first, k) in directions(&Support::of(&adv)) {
+            let (mut plus, mut minus) = (pa.clone(), pa.clone());
+            plus.entries[k] += h;
+            plus.entries[first] -= h;
+            minus.entries[k] -= h;
+            minus.entries[first] += h;
+            let fd = (at(&pd, &plus) - at(&pd, &minus)) / (2.0 * h);
+            let adjoint = gradient.adversary[k] - gradient.adversary[first];
+            prop_assert!((fd - adjoint).abs() < 1e-5 * scale, "adversary {} - {}: fd {} adjoint {}", k, first, fd, adjoint);
+        }
+    }
+}
+
+/// The objective `R{"r"}min=? [F "goal"]` when some state is labelled
+/// `goal` (random games may have none).
+fn reachable_goal(game: &Posg) -> Option<RewardObjective> {
+    game.propositions()
+        .iter()
+        .any(|p| p == "goal")
+        .then(|| objective(game, "R{\"r\"}min=? [F \"goal\"]"))
+}
+
+/// The directions `e_k - e_first` inside each block of `support`.
+fn directions(support: &Support) -> Vec<(usize, usize)> {
+    (0..support.num_blocks())
+        .flat_map(|b| {
+            let block = support.block_by_index(b);
+            let first = block.start;
+            block.skip(1).map(move |k| (first, k))
+        })
+        .collect()
+}
