@@ -29,7 +29,7 @@ use crate::automaton::Dra;
 use crate::controller::{Fsc, Probabilities, Support};
 use crate::game::{Posg, RewardModel};
 use crate::solver::LinearSolver;
-use reward::RewardVector;
+pub(crate) use reward::RewardVector;
 
 pub use crate::analysis::{Bscc, Recurrence, StateClass};
 pub use crate::product::{Exploration, Gmc, GmcState, ProductError};

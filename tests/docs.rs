@@ -79,7 +79,7 @@ fn the_documents_have_their_numbered_sections() {
     );
     assert_eq!(
         sections("method.md"),
-        (1..=8).map(|n| n.to_string()).collect::<Vec<_>>()
+        (1..=9).map(|n| n.to_string()).collect::<Vec<_>>()
     );
 }
 

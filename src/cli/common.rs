@@ -30,7 +30,9 @@ pub struct ObjectiveArgs {
     /// A Storm/PRISM property file with one query `<<P>> Pmax=? [ PATH ]`
     /// (phi = PATH) or `<<P>> Pmin=? [ PATH ]` (phi = !PATH, e.g. `G !goal`),
     /// instead of --ltl; for a turn-based DRN game, player P is the defender
-    /// (docs/formats.md section 6).
+    /// (docs/formats.md section 6). `eval` also takes an expected-reward
+    /// query `R{"r"}min=? [ F T ]` or `R{"r"}max=? [ F T ]` (docs/method.md
+    /// section 9).
     #[arg(long, value_name = "FILE.props", conflicts_with = "automaton")]
     pub props: Option<PathBuf>,
     /// A deterministic automaton for phi in HOA v1 or v1.1 (instead of

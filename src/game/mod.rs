@@ -7,7 +7,8 @@
 //! models (formats.md section 6) and [`grid`] builds the seed paper's grid
 //! family. Every distribution held here has positive entries only (a zero
 //! is "no edge") that sum to one exactly up to rounding. A game may carry
-//! named [`rewards`] models, which LTL objectives do not use.
+//! named [`rewards`] models, which expected-reward objectives use (method.md
+//! section 9) and LTL objectives do not.
 
 pub mod binary;
 pub mod drn;

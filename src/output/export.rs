@@ -22,7 +22,11 @@
 //! lines), `chain.lab` (label declarations, then `state: labels` lines) and
 //! `chain.sta` (each state's `(s,g,h)`: the game state's index in the game
 //! file's `states` list and the two controller nodes; `-1` for the fresh
-//! initial state). All four describe the same chain.
+//! initial state). All four describe the same chain. `chain.drn` also
+//! carries the game's reward models as state rewards: state `(s, g, h)`
+//! earns the one-step reward `r(s) + sum_{u,v} a_def(u | s,g) a_adv(v | s,h)
+//! r(s, u, v)` of method.md section 9, state 0 earns 0, so that Storm's
+//! `R{"r"}=? [F T]` in state 0 is the expected reward posg-fsc computes.
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -32,6 +36,7 @@ use crate::controller::{Fsc, Support};
 use crate::game::Posg;
 use crate::output::{OutputError, create_dir, write_file};
 use crate::product::{Gmc, ProductError};
+use crate::value::RewardVector;
 
 /// Sizes of an exported chain.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
@@ -112,8 +117,9 @@ pub fn explicit_chain(
         writeln!(sta, "{}:({},{},{})", m + 1, state.s, state.g, state.h)
             .expect("writing to a String");
     }
+    let rewards = state_rewards(game, &gmc, defender, adversary);
     Ok(ExplicitChain {
-        drn: drn(game, &gmc, &initial, states),
+        drn: drn(game, &gmc, &initial, &rewards, states),
         tra,
         lab,
         sta,
@@ -124,11 +130,52 @@ pub fn explicit_chain(
     })
 }
 
+/// Per reward model of the game, the one-step reward of every GMC state
+/// under the controllers (method.md section 9).
+fn state_rewards(game: &Posg, gmc: &Gmc, defender: &Fsc, adversary: &Fsc) -> Vec<Vec<f64>> {
+    let all: Vec<usize> = (0..gmc.num_states()).collect();
+    let (def_support, adv_support) = (Support::of(defender), Support::of(adversary));
+    let (def_mu, adv_mu) = (
+        Support::probabilities_of(defender),
+        Support::probabilities_of(adversary),
+    );
+    game.reward_models()
+        .iter()
+        .map(|model| {
+            let vector = RewardVector::new(game, gmc, &all, model, &def_support, &adv_support);
+            let mut rewards = vec![0.0; all.len()];
+            vector.write(&def_mu, &adv_mu, &mut rewards);
+            rewards
+        })
+        .collect()
+}
+
+/// ` [r1, r2]`: the DRN annotation of state `m`'s rewards (state 0's, the
+/// fresh initial state's, for `None`), empty without reward models.
+fn reward_annotation(rewards: &[Vec<f64>], m: Option<usize>) -> String {
+    if rewards.is_empty() {
+        return String::new();
+    }
+    let values: Vec<String> = rewards
+        .iter()
+        .map(|model| m.map_or(0.0, |m| model[m]))
+        .map(|r| format!("{r:e}"))
+        .collect();
+    format!(" [{}]", values.join(", "))
+}
+
 /// Storm's DRN text of the chain: state 0 is the fresh initial state,
-/// state `m + 1` the GMC state `m`, each labelled by `L(s)`, and, if some
-/// proposition labels no reachable state, an unreachable last state that
-/// carries those propositions (module documentation).
-fn drn(game: &Posg, gmc: &Gmc, initial: &[(usize, f64)], states: usize) -> String {
+/// state `m + 1` the GMC state `m`, each labelled by `L(s)`, with its
+/// rewards, and, if some proposition labels no reachable state, an
+/// unreachable last state that carries those propositions (module
+/// documentation).
+fn drn(
+    game: &Posg,
+    gmc: &Gmc,
+    initial: &[(usize, f64)],
+    rewards: &[Vec<f64>],
+    states: usize,
+) -> String {
     let mut reached = vec![false; game.propositions().len()];
     for m in 0..gmc.num_states() {
         for &p in game.label(gmc.state(m).s as usize) {
@@ -143,12 +190,15 @@ fn drn(game: &Posg, gmc: &Gmc, initial: &[(usize, f64)], states: usize) -> Strin
         .map(|(name, _)| name.as_str())
         .collect();
     let states = states + usize::from(!unreached.is_empty());
+    let names: Vec<&str> = game.reward_model_names().collect();
     let mut text = format!(
         "// Exported by posg-fsc {}: the Markov chain on (s, g, h) under two controllers.\n\
          // State 0 is a fresh initial state: the value of phi is P=? [ X phi ] there.\n\
-         @type: DTMC\n@value_type: double\n@parameters\n\n@reward_models\n\n\
-         @nr_states\n{states}\n@nr_choices\n{states}\n@model\nstate 0 init\n\taction 0\n",
-        env!("CARGO_PKG_VERSION")
+         @type: DTMC\n@value_type: double\n@parameters\n\n@reward_models\n{}\n\
+         @nr_states\n{states}\n@nr_choices\n{states}\n@model\nstate 0{} init\n\taction 0\n",
+        env!("CARGO_PKG_VERSION"),
+        names.join(" "),
+        reward_annotation(rewards, None),
     );
     for &(m, p) in initial {
         writeln!(text, "\t\t{} : {p:e}", m + 1).expect("writing to a String");
@@ -156,7 +206,13 @@ fn drn(game: &Posg, gmc: &Gmc, initial: &[(usize, f64)], states: usize) -> Strin
     for m in 0..gmc.num_states() {
         let state = gmc.state(m);
         let s = state.s as usize;
-        write!(text, "state {}", m + 1).expect("writing to a String");
+        write!(
+            text,
+            "state {}{}",
+            m + 1,
+            reward_annotation(rewards, Some(m))
+        )
+        .expect("writing to a String");
         for name in game.label_names(s) {
             write!(text, " {name}").expect("writing to a String");
         }
@@ -177,8 +233,9 @@ fn drn(game: &Posg, gmc: &Gmc, initial: &[(usize, f64)], states: usize) -> Strin
         let last = states - 1;
         writeln!(
             text,
-            "state {last} {}\n// unreachable: declares the propositions no reachable state carries\n\
+            "state {last}{} {}\n// unreachable: declares the propositions no reachable state carries\n\
              \taction 0\n\t\t{last} : 1e0",
+            reward_annotation(rewards, None),
             unreached.join(" ")
         )
         .expect("writing to a String");
