@@ -19,6 +19,13 @@ Role = Literal["defender", "adversary"]
 Path = Union[str, "PathLike[str]"]
 ControllerLike = Union["Controller", str, "PathLike[str]"]
 """A Controller of the game, a controller file's path, or "uniform:K"."""
+Props = Union[str, "PathLike[str]"]
+"""A query of a Storm/PRISM property file ('Pmax=? [F "goal"]', recognised by
+its "=?"), or the path of such a file (docs/formats.md section 6). Every
+function takes `props=` instead of `ltl=`; `Pmin=? [PATH]` makes the
+complement of PATH the objective. An expected-reward query
+('R{"steps"}min=? [F "goal"]', docs/method.md section 9) is taken by
+Game.evaluate only, so far."""
 
 class Error(Exception):
     """Base class of every error posg_fsc raises; the message is the one the
@@ -98,7 +105,7 @@ class Game:
         """The adversary's observations."""
     def evaluate(
         self,
-        ltl: str,
+        ltl: Optional[str] = None,
         defender: Optional[ControllerLike] = None,
         adversary: Optional[ControllerLike] = None,
         gradient: bool = False,
@@ -106,12 +113,17 @@ class Game:
         tolerance: Optional[float] = None,
         lu_limit: Optional[int] = None,
         allow_unused_propositions: bool = False,
+        props: Optional[Props] = None,
     ) -> Evaluation:
         """The exact value P(trace |= ltl) of a controller pair (default
         "uniform:1" for both), as `posg-fsc eval`; with gradient=True also
         dV/d mu of both players (docs/method.md sections 1-2). `solver`,
         `tolerance` and `lu_limit` are the command line's --solver,
-        --tolerance and --lu-limit."""
+        --tolerance and --lu-limit. With `props=` instead of `ltl=`, the
+        query is restated in its own terms in `query`; an expected-reward
+        query gives the expected total reward until its target (inf where
+        the target is missed with positive probability; docs/method.md
+        section 9)."""
 
 class Controller:
     """A finite-state controller of one player: in node g, on observation o,
@@ -173,12 +185,29 @@ class Controller:
     def support_size(self) -> int:
         """The number of supported entries (g, o, g', u)."""
 
+class Query:
+    """A property file's query restated in its own terms (eval's `query`)."""
+
+    text: str
+    """The query as written."""
+    value: float
+    """Its value: for Pmin=? [PATH], 1 - the value of the complement of
+    PATH; for a reward query the expected reward (inf where the target is
+    missed with positive probability)."""
+    error_bound: float
+    """A bound on |value - exact value| (docs/method.md section 8)."""
+    target_probability: Optional[float]
+    """For a reward query, the probability of reaching its target."""
+
 class Evaluation:
     """The value of a controller pair, with the names of `posg-fsc eval`'s
     report."""
 
     value: float
-    """V = P(trace |= phi)."""
+    """V = P(trace |= phi), or an expected reward (inf where the target is
+    missed with positive probability)."""
+    query: Optional[Query]
+    """With props=, the query restated in its own terms."""
     error_bound: float
     """A bound on |value - exact value| (docs/method.md section 8)."""
     residual: float
@@ -273,10 +302,11 @@ def example_grid(
 
 def solve(
     game: Game,
-    ltl: str,
+    ltl: Optional[str] = None,
     def_nodes: Optional[int] = None,
     adv_nodes: Optional[int] = None,
     *,
+    props: Optional[Props] = None,
     defender: Optional[ControllerLike] = None,
     adversary: Optional[ControllerLike] = None,
     on_iteration: Optional[Callable[[dict[str, Any]], Optional[bool]]] = None,
@@ -297,10 +327,11 @@ def solve(
 
 def sweep(
     game: Game,
-    ltl: str,
+    ltl: Optional[str] = None,
     def_nodes: Union[int, Sequence[int], range, None] = None,
     adv_nodes: Union[int, Sequence[int], range, None] = None,
     *,
+    props: Optional[Props] = None,
     on_iteration: Optional[Callable[[dict[str, Any]], Optional[bool]]] = None,
     **settings: Any,
 ) -> list[dict[str, Any]]:
@@ -311,9 +342,11 @@ def sweep(
 
 def certify(
     game: Game,
-    ltl: str,
-    defender: ControllerLike,
+    ltl: Optional[str] = None,
+    defender: Optional[ControllerLike] = None,
     adversary: Optional[ControllerLike] = None,
+    *,
+    props: Optional[Props] = None,
 ) -> dict[str, Any]:
     """The certified bounds of `posg-fsc certify`: "lower" (the defender's
     guaranteed value against every adversary) and "upper" (the best any
@@ -324,9 +357,11 @@ def certify(
 
 def support(
     game: Game,
-    ltl: str,
+    ltl: Optional[str] = None,
     def_nodes: Optional[int] = None,
     almost_sure: bool = False,
+    *,
+    props: Optional[Props] = None,
     **settings: Any,
 ) -> dict[str, Any]:
     """A defender support that wins positively (or almost surely) against

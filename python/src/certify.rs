@@ -14,7 +14,7 @@ use crate::controller::Controller;
 use crate::convert::{serialised, settings_from_json, size, to_json};
 use crate::errors::{Kind, compute, convert, raise};
 use crate::game::Game;
-use crate::objective;
+use crate::objective::{self, Asked};
 
 /// The certified bounds of `posg-fsc certify` (docs/method.md section 6):
 /// `lower`, the defender's guaranteed probability of the formula against
@@ -28,14 +28,22 @@ use crate::objective;
 /// the bound cannot be had (docs/method.md section 6).
 /// Controllers are `Controller`s, paths or `"uniform:K"`.
 #[pyfunction]
-#[pyo3(signature = (game, ltl, defender, adversary = None))]
+#[pyo3(signature = (game, ltl = None, defender = None, adversary = None, *, props = None))]
 pub fn certify<'py>(
     py: Python<'py>,
     game: &Bound<'py, Game>,
-    ltl: &str,
-    defender: &Bound<'py, PyAny>,
+    ltl: Option<&str>,
+    defender: Option<&Bound<'py, PyAny>>,
     adversary: Option<&Bound<'py, PyAny>>,
+    props: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
+    let ltl = &Asked::from_keywords(ltl, props)?.formula("certify")?;
+    let defender = defender.ok_or_else(|| {
+        raise(
+            Kind::Settings,
+            "certify needs the defender's controller: defender= (a Controller, a path or \"uniform:K\")",
+        )
+    })?;
     let posg = &game.get().inner;
     let defender = Controller::resolve("defender", Some(defender), posg, Role::Defender)?;
     let adversary = adversary
@@ -70,15 +78,17 @@ pub fn certify<'py>(
 /// on the support found (or `None`). `settings` are the synthesis options
 /// (`engine`, `rank_bound`, `clause_budget`, `synthesis_time_budget`, ...).
 #[pyfunction]
-#[pyo3(signature = (game, ltl, def_nodes = None, almost_sure = false, **settings))]
+#[pyo3(signature = (game, ltl = None, def_nodes = None, almost_sure = false, *, props = None, **settings))]
 pub fn support<'py>(
     py: Python<'py>,
     game: &Bound<'py, Game>,
-    ltl: &str,
+    ltl: Option<&str>,
     def_nodes: Option<&Bound<'py, PyAny>>,
     almost_sure: bool,
+    props: Option<&Bound<'py, PyAny>>,
     settings: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyDict>> {
+    let ltl = &Asked::from_keywords(ltl, props)?.formula("support")?;
     let mut json = serde_json::Map::new();
     if let Some(settings) = settings {
         for (key, value) in settings.iter() {

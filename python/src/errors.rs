@@ -197,7 +197,7 @@ impl Classify for ValueError {
         match self {
             ValueError::Solver(_) => Kind::Numerical,
             ValueError::Product(ProductError::Mismatch { .. }) => Kind::Game,
-            ValueError::Product(_) => Kind::Other,
+            ValueError::Product(_) | ValueError::InfiniteReward => Kind::Other,
         }
     }
 }

@@ -6,15 +6,20 @@ use std::time::Instant;
 
 use numpy::ndarray::{Array1, Array4};
 use numpy::{IntoPyArray, PyArray1, PyArray4};
-use posg_fsc::controller::{Role, Support};
-use posg_fsc::value::{Evaluator, SolverMethod, SolverSettings};
+use posg_fsc::controller::{Fsc, Role, Support};
+use posg_fsc::game::Posg;
+use posg_fsc::ltl::props::Query as PropsQuery;
+use posg_fsc::pipeline::RewardObjective;
+use posg_fsc::value::{
+    EvaluationReport, Evaluator, Gradient, QueryValue, SolverMethod, SolverSettings, ValueError,
+};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
 use crate::controller::Controller;
 use crate::errors::compute;
 use crate::game::Game;
-use crate::objective;
+use crate::objective::{self, Asked};
 
 /// The keyword options of `Game.evaluate`.
 pub struct Options<'a> {
@@ -30,8 +35,11 @@ pub struct Options<'a> {
 /// both players as arrays shaped like the controllers' `probabilities`.
 #[pyclass(module = "posg_fsc", name = "Evaluation", frozen, get_all)]
 pub struct Evaluation {
-    /// `V = P(trace |= phi)`.
+    /// `V = P(trace |= phi)`, or the expected reward of a reward query
+    /// (`inf` where the target is missed with positive probability).
     pub value: f64,
+    /// With `props=`, the query restated in its own terms.
+    pub query: Option<Query>,
     /// A bound on `|value - exact value|` (docs/method.md section 8).
     pub error_bound: f64,
     /// `max |(I - Q) x - b|` of the linear solve.
@@ -65,6 +73,45 @@ pub struct Evaluation {
     pub defender_initial_gradient: Option<Py<PyArray1<f64>>>,
     /// `dV/d init_adv(h)`, shape `(nodes,)`, with `gradient=True`.
     pub adversary_initial_gradient: Option<Py<PyArray1<f64>>>,
+}
+
+/// A property file's query restated in its own terms (`eval`'s `query`):
+/// for `Pmin=? [F "goal"]`, 1 - the value of its complement `G !goal`.
+#[pyclass(module = "posg_fsc", name = "Query", frozen, get_all)]
+#[derive(Clone)]
+pub struct Query {
+    /// The query as written.
+    pub text: String,
+    /// Its value (`inf` for an infinite expected reward).
+    pub value: f64,
+    /// A bound on `|value - exact value|` (docs/method.md section 8).
+    pub error_bound: f64,
+    /// For a reward query, the probability of reaching its target.
+    pub target_probability: Option<f64>,
+}
+
+impl From<QueryValue> for Query {
+    fn from(query: QueryValue) -> Self {
+        let QueryValue {
+            text,
+            value,
+            error_bound,
+            target_probability,
+        } = query;
+        Self {
+            text,
+            value,
+            error_bound,
+            target_probability,
+        }
+    }
+}
+
+#[pymethods]
+impl Query {
+    fn __repr__(&self) -> String {
+        format!("Query(text={:?}, value={})", self.text, self.value)
+    }
 }
 
 #[pymethods]
@@ -106,7 +153,7 @@ pub fn solver_settings(
 /// `Game.evaluate`.
 pub fn evaluate(
     game: &Bound<'_, Game>,
-    ltl: &str,
+    asked: Asked,
     defender: Option<&Bound<'_, PyAny>>,
     adversary: Option<&Bound<'_, PyAny>>,
     options: Options,
@@ -117,29 +164,35 @@ pub fn evaluate(
     let settings = solver_settings(options.solver, options.tolerance, options.lu_limit)?;
     let defender = Controller::resolve("defender", defender, posg, Role::Defender)?;
     let adversary = Controller::resolve("adversary", adversary, posg, Role::Adversary)?;
-    let objective = objective::automata(py, posg, ltl, options.allow_unused_propositions, false)?;
+    let allow = options.allow_unused_propositions;
+    let pair = (&defender, &adversary);
     let gradient = options.gradient;
-    let computed = compute(py, || {
-        let mut evaluator = Evaluator::new(
-            posg,
-            &objective.phi,
-            &Support::of(&defender),
-            &Support::of(&adversary),
-            &settings,
-        )?;
-        let (def, adv) = (
-            Support::probabilities_of(&defender),
-            Support::probabilities_of(&adversary),
-        );
-        let (evaluation, gradient) = if gradient {
-            let (evaluation, gradient) = evaluator.evaluate_with_gradient(&def, &adv)?;
-            (evaluation, Some(gradient))
-        } else {
-            (evaluator.evaluate(&def, &adv)?, None)
-        };
-        Ok::<_, posg_fsc::value::ValueError>((evaluator.report(&evaluation), gradient))
-    })?;
-    let (report, gradient) = computed;
+    let (report, gradient, query) = match &asked {
+        Asked::Props(property) => match &property.query {
+            PropsQuery::Reward(query) => {
+                let objective = objective::reward(py, posg, query, property.maximise, allow)?;
+                let (report, gradient, target_probability) = compute(py, || {
+                    expected_reward(posg, &objective, pair, &settings, gradient)
+                })?;
+                let query = QueryValue::of(property, &report.0, Some(target_probability));
+                (report.1, gradient, Some(query))
+            }
+            PropsQuery::Probability { .. } => {
+                let (evaluation, report, gradient) =
+                    probability(py, posg, &asked, allow, pair, &settings, gradient)?;
+                (
+                    report,
+                    gradient,
+                    Some(QueryValue::of(property, &evaluation, None)),
+                )
+            }
+        },
+        Asked::Ltl(_) => {
+            let (_, report, gradient) =
+                probability(py, posg, &asked, allow, pair, &settings, gradient)?;
+            (report, gradient, None)
+        }
+    };
     let dense = |fsc, values: &[f64]| -> Py<PyArray4<f64>> {
         let array: Array4<f64> = Controller::dense(fsc, values);
         array.into_pyarray(py).unbind()
@@ -148,6 +201,7 @@ pub fn evaluate(
     let g = gradient.as_ref();
     Ok(Evaluation {
         value: report.value,
+        query: query.map(Query::from),
         error_bound: report.error_bound,
         residual: report.residual,
         gmc_states: report.gmc_states,
@@ -165,4 +219,96 @@ pub fn evaluate(
         defender_initial_gradient: g.map(|g| vector(&g.defender_initial)),
         adversary_initial_gradient: g.map(|g| vector(&g.adversary_initial)),
     })
+}
+
+/// The value (and gradient) of the probability of the formula `asked`
+/// names, as `eval` computes it.
+fn probability(
+    py: Python<'_>,
+    posg: &Posg,
+    asked: &Asked,
+    allow_unused: bool,
+    (defender, adversary): (&Fsc, &Fsc),
+    settings: &SolverSettings,
+    gradient: bool,
+) -> PyResult<(
+    posg_fsc::value::Evaluation,
+    EvaluationReport,
+    Option<Gradient>,
+)> {
+    let formula = asked.formula("Game.evaluate")?;
+    let objective = objective::automata(py, posg, &formula, allow_unused, false)?;
+    compute(py, || {
+        let mut evaluator = Evaluator::new(
+            posg,
+            &objective.phi,
+            &Support::of(defender),
+            &Support::of(adversary),
+            settings,
+        )?;
+        let (def, adv) = (
+            Support::probabilities_of(defender),
+            Support::probabilities_of(adversary),
+        );
+        let (evaluation, gradient) = if gradient {
+            let (evaluation, gradient) = evaluator.evaluate_with_gradient(&def, &adv)?;
+            (evaluation, Some(gradient))
+        } else {
+            (evaluator.evaluate(&def, &adv)?, None)
+        };
+        Ok::<_, ValueError>((evaluation, evaluator.report(&evaluation), gradient))
+    })
+}
+
+/// The expected reward of `objective` (method.md section 9), its report,
+/// the gradient when asked, and the probability of reaching the target
+/// (computed where the reward is infinite, 1 otherwise).
+#[allow(clippy::type_complexity)]
+fn expected_reward(
+    posg: &Posg,
+    objective: &RewardObjective,
+    (defender, adversary): (&Fsc, &Fsc),
+    settings: &SolverSettings,
+    gradient: bool,
+) -> Result<
+    (
+        (posg_fsc::value::Evaluation, EvaluationReport),
+        Option<Gradient>,
+        f64,
+    ),
+    ValueError,
+> {
+    let (def_support, adv_support) = (Support::of(defender), Support::of(adversary));
+    let (def, adv) = (
+        Support::probabilities_of(defender),
+        Support::probabilities_of(adversary),
+    );
+    let mut evaluator = Evaluator::for_expected_reward(
+        posg,
+        &objective.target,
+        &objective.rewards,
+        &def_support,
+        &adv_support,
+        settings,
+    )?;
+    let (evaluation, gradient) = if gradient {
+        let (evaluation, gradient) = evaluator.evaluate_with_gradient(&def, &adv)?;
+        (evaluation, Some(gradient))
+    } else {
+        (evaluator.evaluate(&def, &adv)?, None)
+    };
+    let target_probability = if evaluator.is_infinite() {
+        let mut reach = Evaluator::new(
+            posg,
+            &objective.target,
+            &def_support,
+            &adv_support,
+            settings,
+        )?;
+        reach.evaluate(&def, &adv)?.value
+    } else {
+        1.0
+    };
+    let report = evaluator.report(&evaluation);
+    Ok(((evaluation, report), gradient, target_probability))
 }

@@ -167,11 +167,11 @@ impl Game {
     }
 
     /// The exact value of a controller pair (see `posg_fsc.evaluate`).
-    #[pyo3(signature = (ltl, defender = None, adversary = None, gradient = false, solver = "auto", tolerance = None, lu_limit = None, allow_unused_propositions = false))]
+    #[pyo3(signature = (ltl = None, defender = None, adversary = None, gradient = false, solver = "auto", tolerance = None, lu_limit = None, allow_unused_propositions = false, props = None))]
     #[allow(clippy::too_many_arguments)]
     fn evaluate(
         slf: &Bound<'_, Self>,
-        ltl: &str,
+        ltl: Option<&str>,
         defender: Option<&Bound<'_, PyAny>>,
         adversary: Option<&Bound<'_, PyAny>>,
         gradient: bool,
@@ -179,10 +179,11 @@ impl Game {
         tolerance: Option<f64>,
         lu_limit: Option<usize>,
         allow_unused_propositions: bool,
+        props: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<crate::evaluate::Evaluation> {
         crate::evaluate::evaluate(
             slf,
-            ltl,
+            crate::objective::Asked::from_keywords(ltl, props)?,
             defender,
             adversary,
             crate::evaluate::Options {

@@ -37,6 +37,7 @@ fn posg_fsc_python(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add_class::<game::Game>()?;
     module.add_class::<controller::Controller>()?;
     module.add_class::<evaluate::Evaluation>()?;
+    module.add_class::<evaluate::Query>()?;
     module.add_class::<solve::SolveResult>()?;
     module.add_function(wrap_pyfunction!(game::example_grid, module)?)?;
     module.add_function(wrap_pyfunction!(solve::solve, module)?)?;

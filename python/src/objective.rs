@@ -1,10 +1,12 @@
-//! The objective of every function: an LTL formula (Spot's syntax) and its
-//! automata, built by the library as the command line builds them
-//! ([`Automata::for_game`]).
+//! The objective of every function: an LTL formula (Spot's syntax) or a
+//! property file's query, and its automata, built by the library as the
+//! command line builds them ([`Automata::for_game`],
+//! [`RewardObjective::for_game`]).
 
 use posg_fsc::game::Posg;
+use posg_fsc::ltl::props::{self, Property, RewardQuery};
 use posg_fsc::ltl::{self, TranslationBudget};
-use posg_fsc::pipeline::{Automata, PipelineError};
+use posg_fsc::pipeline::{Automata, PipelineError, RewardObjective};
 use pyo3::prelude::*;
 
 use crate::errors::{Kind, compute_result, convert, raise};
@@ -59,4 +61,110 @@ fn warn(py: Python<'_>, warnings: &[String]) -> PyResult<()> {
         )?;
     }
     Ok(())
+}
+
+/// What a function was asked: an LTL formula (`ltl=`) or the query of a
+/// property file (`props=`).
+pub enum Asked {
+    /// `ltl=`: the formula's text.
+    Ltl(String),
+    /// `props=`: the property file's query.
+    Props(Property),
+}
+
+impl Asked {
+    /// Exactly one of `ltl` and `props`. `props` is a query (`'Pmax=? [F
+    /// "goal"]'`, recognised by its `=?`) or the path of a property file
+    /// (a `str` or an `os.PathLike`); a query that cannot be read is a
+    /// `FormulaError` naming the line and column (and the file).
+    pub fn from_keywords(ltl: Option<&str>, props: Option<&Bound<'_, PyAny>>) -> PyResult<Self> {
+        match (ltl, props) {
+            (Some(text), None) => Ok(Self::Ltl(text.to_string())),
+            (None, Some(props)) => Ok(Self::Props(property(props)?)),
+            (Some(_), Some(_)) => Err(raise(
+                Kind::Settings,
+                "give the objective once: ltl= or props=, not both",
+            )),
+            (None, None) => Err(raise(
+                Kind::Settings,
+                "give the objective: ltl='F goal' (an LTL formula) or props='Pmax=? [F \"goal\"]' \
+                 (a query or a property file)",
+            )),
+        }
+    }
+
+    /// The LTL formula whose probability the defender maximises: `ltl=`,
+    /// or the objective of a `Pmax`/`Pmin` query. `function` takes no
+    /// expected-reward query (so far only `evaluate` does): an error says so.
+    pub fn formula(&self, function: &str) -> PyResult<String> {
+        match self {
+            Self::Ltl(text) => Ok(text.clone()),
+            Self::Props(property) => match property.probability_objective() {
+                Some(objective) => Ok(objective.to_string()),
+                None => Err(raise(
+                    Kind::Settings,
+                    format!(
+                        "`{}` is an expected-reward query: Game.evaluate computes its value for \
+                         given controllers; {function} takes probability queries (Pmax=?, Pmin=?) \
+                         so far (docs/method.md section 9)",
+                        property.text
+                    ),
+                )),
+            },
+        }
+    }
+}
+
+/// The query of `props`: a query's text, or a property file's path.
+fn property(props: &Bound<'_, PyAny>) -> PyResult<Property> {
+    let (text, name) = match props.extract::<String>() {
+        Ok(text) if text.contains("=?") => (text, "props".to_string()),
+        _ => {
+            let path: std::path::PathBuf = props.extract().map_err(|_| {
+                raise(
+                    Kind::Settings,
+                    "props must be a query (a str with `=?`, as 'Pmax=? [F \"goal\"]') or the \
+                     path of a property file",
+                )
+            })?;
+            let text = std::fs::read_to_string(&path).map_err(|error| {
+                raise(
+                    Kind::Settings,
+                    format!("props: cannot read {}: {error}", path.display()),
+                )
+            })?;
+            (text, path.display().to_string())
+        }
+    };
+    props::from_props_str(&text, &name).map_err(|error| raise(Kind::Formula, error.to_string()))
+}
+
+/// The expected-reward objective of `query` on `game` (method.md section
+/// 9), minimised unless `maximise`, with the formula's checks of
+/// [`automata`]: warnings as Python warnings, errors as `FormulaError`s.
+pub fn reward(
+    py: Python<'_>,
+    game: &Posg,
+    query: &RewardQuery,
+    maximise: bool,
+    allow_unused: bool,
+) -> PyResult<RewardObjective> {
+    let budget = TranslationBudget {
+        seconds: ltl::DEFAULT_TRANSLATION_SECONDS,
+    };
+    let built = compute_result(py, || {
+        RewardObjective::for_game(game, query, !maximise, &budget, allow_unused)
+    })?;
+    match built {
+        Ok((objective, warnings)) => {
+            warn(py, &warnings)?;
+            Ok(objective)
+        }
+        Err(PipelineError::Propositions(check)) => {
+            warn(py, &check.warnings)?;
+            Err(raise(Kind::Formula, check.error.unwrap_or_default()))
+        }
+        Err(PipelineError::Model(error)) => Err(raise(Kind::Formula, error.to_string())),
+        Err(error) => Err(convert(error)),
+    }
 }

@@ -20,7 +20,7 @@ use crate::controller::Controller;
 use crate::convert::{serialised, settings_from_json, size, sizes, to_json};
 use crate::errors::{Kind, convert, panicked, raise};
 use crate::game::Game;
-use crate::objective;
+use crate::objective::{self, Asked};
 
 /// Keyword arguments with the command line's names that live elsewhere in
 /// [`Settings`]: `tolerance` is `solver_tolerance`, and the synthesis
@@ -354,14 +354,15 @@ fn check_sizes(game: &Posg, sizes: Sizes) -> PyResult<()> {
 /// warning, and an error when it makes the formula unsatisfiable, unless
 /// `allow_unused_propositions=True`.
 #[pyfunction]
-#[pyo3(signature = (game, ltl, def_nodes = None, adv_nodes = None, *, defender = None, adversary = None, on_iteration = None, out = None, force = false, allow_unused_propositions = false, **settings))]
+#[pyo3(signature = (game, ltl = None, def_nodes = None, adv_nodes = None, *, props = None, defender = None, adversary = None, on_iteration = None, out = None, force = false, allow_unused_propositions = false, **settings))]
 #[allow(clippy::too_many_arguments)]
 pub fn solve(
     py: Python<'_>,
     game: &Bound<'_, Game>,
-    ltl: &str,
+    ltl: Option<&str>,
     def_nodes: Option<&Bound<'_, PyAny>>,
     adv_nodes: Option<&Bound<'_, PyAny>>,
+    props: Option<&Bound<'_, PyAny>>,
     defender: Option<&Bound<'_, PyAny>>,
     adversary: Option<&Bound<'_, PyAny>>,
     on_iteration: Option<Py<PyAny>>,
@@ -370,6 +371,7 @@ pub fn solve(
     allow_unused_propositions: bool,
     settings: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<SolveResult> {
+    let ltl = &Asked::from_keywords(ltl, props)?.formula("solve")?;
     let settings = self::settings("solve", settings)?;
     let posg = &game.get().inner;
     let start_defender = defender
@@ -428,18 +430,20 @@ pub fn solve(
 /// columns of `sweep.csv` (`result` is the row in words) and the pair's `SolveResult` under `solved`.
 /// The chains of the adversary sizes run one after the other here.
 #[pyfunction]
-#[pyo3(signature = (game, ltl, def_nodes = None, adv_nodes = None, *, on_iteration = None, allow_unused_propositions = false, **settings))]
+#[pyo3(signature = (game, ltl = None, def_nodes = None, adv_nodes = None, *, props = None, on_iteration = None, allow_unused_propositions = false, **settings))]
 #[allow(clippy::too_many_arguments)]
 pub fn sweep(
     py: Python<'_>,
     game: &Bound<'_, Game>,
-    ltl: &str,
+    ltl: Option<&str>,
     def_nodes: Option<&Bound<'_, PyAny>>,
     adv_nodes: Option<&Bound<'_, PyAny>>,
+    props: Option<&Bound<'_, PyAny>>,
     on_iteration: Option<Py<PyAny>>,
     allow_unused_propositions: bool,
     settings: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<Py<PyList>> {
+    let ltl = &Asked::from_keywords(ltl, props)?.formula("sweep")?;
     let settings = self::settings("sweep", settings)?;
     let posg = &game.get().inner;
     let mut defender_sizes = match def_nodes {

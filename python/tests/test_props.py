@@ -1,0 +1,92 @@
+"""props=: a property file's query (a string or a file) in every function,
+restated in its own terms; expected-reward queries in Game.evaluate, with
+the values of `posg-fsc eval`."""
+
+import math
+
+import numpy as np
+import pytest
+
+import posg_fsc
+from conftest import REPOSITORY, cli_json
+
+PROBE = REPOSITORY / "tests" / "data" / "rewards" / "probe.drn"
+PROBE_PROPS = REPOSITORY / "tests" / "data" / "rewards" / "probe.props"
+
+
+def test_a_reward_query_from_a_file_or_a_string_gives_eval_s_value(cli):
+    game = posg_fsc.Game.from_drn(PROBE)
+    report = cli_json(cli, "eval", PROBE, "--props", PROBE_PROPS)
+    for props in [PROBE_PROPS, str(PROBE_PROPS), 'Rmin=? [F "goal"]']:
+        ours = game.evaluate(props=props)
+        assert ours.value == report["value"]
+        assert ours.query.value == report["query"]["value"]
+        assert ours.query.target_probability == 1.0
+    assert abs(ours.value - 16 / 3) < 1e-12
+    assert ours.query.text == 'Rmin=? [F "goal"]'
+    gradient = game.evaluate(props='R{"cost"}min=? [F "goal"]', gradient=True)
+    report = cli_json(cli, "eval", PROBE, "--props", PROBE_PROPS, "--gradient")
+    norm = np.linalg.norm(gradient.defender_gradient)
+    assert abs(norm - report["gradient"]["defender_norm"]) < 1e-12 * norm
+
+
+def test_an_infinite_expected_reward_is_inf_with_the_probability_of_the_target(tmp_path):
+    game = posg_fsc.Game.from_json(
+        """{"posg": 1, "states": ["s", "goal", "pit"], "initial": {"s": 1.0},
+        "labels": {"goal": ["goal"]},
+        "defender": {"actions": ["a"], "observe": "full"},
+        "transitions": [
+          {"state": "s", "defender": "a", "next": {"goal": 0.75, "pit": 0.25}},
+          {"state": "goal", "defender": "a", "next": {"goal": 1.0}},
+          {"state": "pit", "defender": "a", "next": {"pit": 1.0}}],
+        "rewards": {"steps": {"states": {"s": 1.0, "pit": 1.0}}}}"""
+    )
+    evaluation = game.evaluate(props='Rmin=? [F "goal"]')
+    assert evaluation.value == math.inf
+    assert evaluation.query.target_probability == 0.75
+    with pytest.raises(posg_fsc.Error, match="the expected reward is infinite"):
+        game.evaluate(props='Rmin=? [F "goal"]', gradient=True)
+
+
+def test_a_probability_query_is_restated_and_pmin_is_one_minus_its_complement(grid_file):
+    game = posg_fsc.Game.load(grid_file)
+    pmax = game.evaluate(props='Pmax=? [F "goal"]')
+    assert pmax.query.value == pmax.value == game.evaluate("F goal").value
+    pmin = game.evaluate(props='Pmin=? [F "goal"]')
+    assert pmin.value == game.evaluate("G !goal").value
+    assert pmin.query.value == 1 - pmin.value
+    assert pmin.query.target_probability is None
+
+
+def test_props_go_everywhere_ltl_goes_and_reward_queries_are_refused_where_not_taken(grid_file):
+    game = posg_fsc.Game.load(grid_file)
+    by_props = posg_fsc.certify(game, props='Pmax=? [!"unsafe" U "goal"]', defender="uniform:1")
+    by_ltl = posg_fsc.certify(game, "!unsafe U goal", defender="uniform:1")
+    assert by_props["lower"]["value"] == by_ltl["lower"]["value"]
+    assert by_props["upper"] == by_ltl["upper"]
+    settings = {"max_iterations": 5, "starts": 1, "structures": ["full"]}
+    by_props = posg_fsc.solve(game, props='Pmax=? [F "goal"]', **settings)
+    by_ltl = posg_fsc.solve(game, "F goal", **settings)
+    assert by_props.worst_case == by_ltl.worst_case
+    for function in [
+        lambda: posg_fsc.solve(game, props='R{"r"}min=? [F "goal"]'),
+        lambda: posg_fsc.support(game, props='Rmax=? [F "goal"]'),
+    ]:
+        with pytest.raises(posg_fsc.SettingsError, match="is an expected-reward query"):
+            function()
+
+
+def test_bad_props_are_errors_that_say_what_to_give(grid_file, tmp_path):
+    game = posg_fsc.Game.load(grid_file)
+    with pytest.raises(posg_fsc.SettingsError, match="not both"):
+        game.evaluate("F goal", props='Pmax=? [F "goal"]')
+    with pytest.raises(posg_fsc.SettingsError, match="give the objective"):
+        game.evaluate()
+    with pytest.raises(posg_fsc.FormulaError, match="props: line 1, column 9: a cumulative reward"):
+        game.evaluate(props="Rmin=? [C]")
+    with pytest.raises(posg_fsc.FormulaError, match='no reward model "steps"'):
+        game.evaluate(props='R{"steps"}min=? [F "goal"]')
+    with pytest.raises(posg_fsc.SettingsError, match="cannot read"):
+        game.evaluate(props=tmp_path / "missing.props")
+    with pytest.raises(posg_fsc.SettingsError, match="certify needs the defender"):
+        posg_fsc.certify(game, "F goal")
