@@ -118,52 +118,13 @@ pub struct EvaluationReport {
     pub solver_iterations: usize,
 }
 
-/// A property file's query restated in its own terms (formats.md section
-/// 8): `Pmin=? [F goal]` is worth `1 - V` when `V` is the value of its
-/// complement `G !goal`, a reward query its expected reward.
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
-pub struct QueryValue {
-    /// The query as written (`Pmin=? [F "goal"]`).
-    pub text: String,
-    /// Its value (`"inf"` in JSON for an infinite expected reward).
-    #[serde(serialize_with = "number_or_inf")]
-    pub value: f64,
-    /// A bound on `|value - exact value|` (method.md section 8).
-    pub error_bound: f64,
-    /// For a reward query, the probability of reaching its target: below 1
-    /// exactly where the expected reward is infinite.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub target_probability: Option<f64>,
-}
-
-impl QueryValue {
-    /// The value of `property` given the evaluation of its objective
-    /// ([`crate::ltl::props::Property::probability_objective`], or the
-    /// expected reward) and, for a reward query, the probability of
-    /// reaching its target.
-    pub fn of(
-        property: &crate::ltl::props::Property,
-        evaluation: &Evaluation,
-        target_probability: Option<f64>,
-    ) -> Self {
-        use crate::ltl::props::Query;
-        let value = match (&property.query, property.maximise) {
-            (Query::Probability { .. }, false) => 1.0 - evaluation.value,
-            _ => evaluation.value,
-        };
-        Self {
-            text: property.text.clone(),
-            value,
-            error_bound: evaluation.error_bound,
-            target_probability,
-        }
-    }
-}
-
 /// A value as JSON: a number, or `"inf"`/`"-inf"` (as Storm prints them;
 /// Python's `float()` reads them) where it is infinite, which JSON numbers
 /// cannot say.
-fn number_or_inf<S: serde::Serializer>(value: &f64, serializer: S) -> Result<S::Ok, S::Error> {
+pub(crate) fn number_or_inf<S: serde::Serializer>(
+    value: &f64,
+    serializer: S,
+) -> Result<S::Ok, S::Error> {
     match *value {
         f64::INFINITY => serializer.serialize_str("inf"),
         f64::NEG_INFINITY => serializer.serialize_str("-inf"),

@@ -393,6 +393,15 @@ fn solve_reads_the_drn_and_the_property_file_and_certifies_the_paper_values() {
     assert_eq!(summary["objective"], "G !goal");
     let lower = summary["certified"]["certified_lower"].as_f64().unwrap();
     assert!((lower - 0.5).abs() < 1e-3 && lower <= 0.5 + 1e-6, "{lower}");
+    // Restated as the query asks: P(F goal) is 1 - P(G !goal), and the
+    // defender's guarantee is the bracket's upper end.
+    let query = &summary["query"];
+    assert_eq!(query["text"], "<<1>> Pmin=? [ F \"goal\" ]");
+    let worst_case = summary["worst_case"].as_f64().unwrap();
+    assert_eq!(query["value"].as_f64().unwrap(), 1.0 - worst_case);
+    let upper = summary["certified"]["upper_bound"].as_f64().unwrap();
+    assert_eq!(query["certified"][0].as_f64().unwrap(), 1.0 - upper);
+    assert_eq!(query["certified"][1].as_f64().unwrap(), 1.0 - lower);
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

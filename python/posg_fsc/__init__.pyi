@@ -196,6 +196,10 @@ class Query:
     missed with positive probability)."""
     error_bound: float
     """A bound on |value - exact value| (docs/method.md section 8)."""
+    certified: Optional[list[float]]
+    """For a solved query, [lo, hi] in its own terms: for Pmax, lo is what
+    the returned defender guarantees and hi bounds every defender; for Pmin
+    (the probability kept low), hi is the guarantee and lo the bound."""
     target_probability: Optional[float]
     """For a reward query, the probability of reaching its target."""
 
@@ -256,6 +260,8 @@ class SolveResult:
     any size does better than upper_bound; None when not certified."""
     certification_error: Optional[str]
     """Why `certified` is None."""
+    query: Optional[Query]
+    """With props=, the query restated in its own terms."""
     structure_used: str
     """The structure whose defender was kept."""
     worst_case: float

@@ -9,9 +9,9 @@ use numpy::{IntoPyArray, PyArray1, PyArray4};
 use posg_fsc::controller::{Fsc, Role, Support};
 use posg_fsc::game::Posg;
 use posg_fsc::ltl::props::Query as PropsQuery;
-use posg_fsc::pipeline::RewardObjective;
+use posg_fsc::pipeline::{QueryValue, RewardObjective};
 use posg_fsc::value::{
-    EvaluationReport, Evaluator, Gradient, QueryValue, SolverMethod, SolverSettings, ValueError,
+    EvaluationReport, Evaluator, Gradient, SolverMethod, SolverSettings, ValueError,
 };
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -86,6 +86,9 @@ pub struct Query {
     pub value: f64,
     /// A bound on `|value - exact value|` (docs/method.md section 8).
     pub error_bound: f64,
+    /// For a solved query, `[lo, hi]` in the query's terms (for `Pmin`,
+    /// `hi` is what the returned defender guarantees).
+    pub certified: Option<[f64; 2]>,
     /// For a reward query, the probability of reaching its target.
     pub target_probability: Option<f64>,
 }
@@ -96,12 +99,14 @@ impl From<QueryValue> for Query {
             text,
             value,
             error_bound,
+            certified,
             target_probability,
         } = query;
         Self {
             text,
             value,
             error_bound,
+            certified,
             target_probability,
         }
     }
@@ -174,7 +179,7 @@ pub fn evaluate(
                 let (report, gradient, target_probability) = compute(py, || {
                     expected_reward(posg, &objective, pair, &settings, gradient)
                 })?;
-                let query = QueryValue::of(property, &report.0, Some(target_probability));
+                let query = QueryValue::evaluated(property, &report.0, Some(target_probability));
                 (report.1, gradient, Some(query))
             }
             PropsQuery::Probability { .. } => {
@@ -183,7 +188,7 @@ pub fn evaluate(
                 (
                     report,
                     gradient,
-                    Some(QueryValue::of(property, &evaluation, None)),
+                    Some(QueryValue::evaluated(property, &evaluation, None)),
                 )
             }
         },

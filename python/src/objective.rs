@@ -93,6 +93,14 @@ impl Asked {
         }
     }
 
+    /// The property file's query, for `props=`.
+    pub fn property(&self) -> Option<&Property> {
+        match self {
+            Self::Props(property) => Some(property),
+            Self::Ltl(_) => None,
+        }
+    }
+
     /// The LTL formula whose probability the defender maximises: `ltl=`,
     /// or the objective of a `Pmax`/`Pmin` query. `function` takes no
     /// expected-reward query (so far only `evaluate` does): an error says so.

@@ -8,8 +8,10 @@ use std::time::Duration;
 
 use posg_fsc::controller::Role;
 use posg_fsc::game::Posg;
+use posg_fsc::ltl::props::Property;
 use posg_fsc::optimise::{Cancel, IterationRecord, Observer, Settings};
 use posg_fsc::output::OutputDirectory;
+use posg_fsc::pipeline::QueryValue;
 use posg_fsc::pipeline::directory::SolveDirectory;
 use posg_fsc::pipeline::{self, Automata, Chain, Job, Outcome, Sizes};
 use pyo3::prelude::*;
@@ -19,6 +21,7 @@ use serde_json::{Map, Value};
 use crate::controller::Controller;
 use crate::convert::{serialised, settings_from_json, size, sizes, to_json};
 use crate::errors::{Kind, convert, panicked, raise};
+use crate::evaluate::Query;
 use crate::game::Game;
 use crate::objective::{self, Asked};
 
@@ -164,6 +167,7 @@ fn run_job(
     mut job: Job,
     callback: Option<Py<PyAny>>,
     out: Option<(&PathBuf, bool)>,
+    query: Option<&Property>,
 ) -> PyResult<Outcome> {
     let run = Arc::new(Run {
         callback,
@@ -178,7 +182,7 @@ fn run_job(
         }) as Box<dyn Observer + Send>
     };
     let outcome = std::thread::scope(|scope| {
-        let worker = scope.spawn(|| work(job, observers, out));
+        let worker = scope.spawn(|| work(job, observers, out, query));
         while !worker.is_finished() {
             py.detach(|| std::thread::sleep(SIGNAL_POLL));
             if let Err(interrupt) = py.check_signals() {
@@ -194,7 +198,12 @@ fn run_job(
 }
 
 /// The pipeline, into the solve directory `out` when given.
-fn work<F>(job: Job, observers: F, out: Option<(&PathBuf, bool)>) -> PyResult<Outcome>
+fn work<F>(
+    job: Job,
+    observers: F,
+    out: Option<(&PathBuf, bool)>,
+    query: Option<&Property>,
+) -> PyResult<Outcome>
 where
     F: Fn(pipeline::Slot) -> Box<dyn Observer + Send> + Sync,
 {
@@ -208,6 +217,7 @@ where
         seconds_axis: false,
         command_line: &command_line,
         plot_format: None,
+        query,
     };
     let outcome = solve.solve(job, observers).map_err(convert)?;
     directory.commit().map_err(convert)?;
@@ -240,6 +250,9 @@ pub struct SolveResult {
     pub last_value: f64,
     /// Why the best structure won, then why each other one lost.
     pub structure_choice: Vec<String>,
+    /// With `props=`, the query restated in its own terms (for `Pmin`,
+    /// the certified bracket's upper end is the defender's guarantee).
+    pub query: Option<Query>,
     /// The best structure's convergence curve: one dict per iteration
     /// (`pandas.DataFrame(result.curve)` makes a table).
     pub curve: Py<PyList>,
@@ -272,8 +285,18 @@ fn result(
     game: &Arc<Posg>,
     settings: &Settings,
     outcome: &Outcome,
+    query: Option<&Property>,
 ) -> PyResult<SolveResult> {
     let best = outcome.best();
+    let query = query.map(|property| {
+        let report = &best.report;
+        QueryValue::solved(
+            property,
+            report.worst_case,
+            report.error_bound,
+            outcome.certified,
+        )
+    });
     let records = |records: &[IterationRecord]| -> PyResult<Bound<'_, PyList>> {
         let list = PyList::empty(py);
         for record in records {
@@ -297,6 +320,7 @@ fn result(
         .map(|s| &s.report)
         .collect();
     Ok(SolveResult {
+        query: query.map(Query::from),
         defender: Py::new(py, Controller::new(best.defender.clone(), game))?,
         adversary: Py::new(py, Controller::new(best.adversary.clone(), game))?,
         certified: outcome
@@ -371,7 +395,8 @@ pub fn solve(
     allow_unused_propositions: bool,
     settings: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<SolveResult> {
-    let ltl = &Asked::from_keywords(ltl, props)?.formula("solve")?;
+    let asked = Asked::from_keywords(ltl, props)?;
+    let ltl = &asked.formula("solve")?;
     let settings = self::settings("solve", settings)?;
     let posg = &game.get().inner;
     let start_defender = defender
@@ -418,8 +443,9 @@ pub fn solve(
     if defender.is_some() || adversary.is_some() {
         job.start.name = "from-files".into();
     }
-    let outcome = run_job(py, job, on_iteration, out.as_ref().map(|p| (p, force)))?;
-    result(py, posg, &settings, &outcome)
+    let out = out.as_ref().map(|p| (p, force));
+    let outcome = run_job(py, job, on_iteration, out, asked.property())?;
+    result(py, posg, &settings, &outcome, asked.property())
 }
 
 /// `posg-fsc sweep`: [`solve`] for every pair of sizes, the defender sizes
@@ -443,7 +469,8 @@ pub fn sweep(
     allow_unused_propositions: bool,
     settings: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<Py<PyList>> {
-    let ltl = &Asked::from_keywords(ltl, props)?.formula("sweep")?;
+    let asked = Asked::from_keywords(ltl, props)?;
+    let ltl = &asked.formula("sweep")?;
     let settings = self::settings("sweep", settings)?;
     let posg = &game.get().inner;
     let mut defender_sizes = match def_nodes {
@@ -474,9 +501,12 @@ pub fn sweep(
         for &n in &defender_sizes {
             let job = chain.job(n).map_err(convert)?;
             let callback = callback.as_ref().map(|c| c.clone_ref(py));
-            let outcome = run_job(py, job, callback, None)?;
+            let outcome = run_job(py, job, callback, None, asked.property())?;
             let row = serialised(py, &chain.row(n, &outcome))?.cast_into::<PyDict>()?;
-            row.set_item("solved", result(py, posg, &settings, &outcome)?)?;
+            row.set_item(
+                "solved",
+                result(py, posg, &settings, &outcome, asked.property())?,
+            )?;
             rows.append(row)?;
         }
     }

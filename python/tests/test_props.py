@@ -68,6 +68,13 @@ def test_props_go_everywhere_ltl_goes_and_reward_queries_are_refused_where_not_t
     by_props = posg_fsc.solve(game, props='Pmax=? [F "goal"]', **settings)
     by_ltl = posg_fsc.solve(game, "F goal", **settings)
     assert by_props.worst_case == by_ltl.worst_case
+    assert by_ltl.query is None
+    assert by_props.query.value == by_props.worst_case
+    # Pmin: the objective is G !goal; restated, the bracket turns over.
+    pmin = posg_fsc.solve(game, props='Pmin=? [F "goal"]', **settings)
+    assert pmin.query.value == 1 - pmin.worst_case
+    bracket = pmin.certified
+    assert pmin.query.certified == [1 - bracket["upper_bound"], 1 - bracket["certified_lower"]]
     for function in [
         lambda: posg_fsc.solve(game, props='R{"r"}min=? [F "goal"]'),
         lambda: posg_fsc.support(game, props='Rmax=? [F "goal"]'),

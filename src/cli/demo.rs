@@ -89,6 +89,7 @@ fn solve_with_defaults(game: &Posg, automata: &Automata, place: &Place) -> anyho
         ProgressMode::Quiet,
         false,
         posg_fsc::output::PlotFormat::Svg,
+        None,
     )
 }
 

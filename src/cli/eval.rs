@@ -7,9 +7,10 @@ use std::time::Instant;
 use clap::Args;
 use posg_fsc::controller::Support;
 use posg_fsc::game::Posg;
+use posg_fsc::pipeline::QueryValue;
 use posg_fsc::value::Gmc;
 use posg_fsc::value::Recurrence;
-use posg_fsc::value::{EvaluationReport, Evaluator, Exploration, Gradient, QueryValue};
+use posg_fsc::value::{EvaluationReport, Evaluator, Exploration, Gradient};
 use serde::Serialize;
 
 use super::common::{self, ControllerArgs, ObjectiveArgs, Provenance};
@@ -218,7 +219,7 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
     let query = args
         .objective
         .property()?
-        .map(|property| QueryValue::of(&property, &evaluation, target_probability));
+        .map(|property| QueryValue::evaluated(&property, &evaluation, target_probability));
     let report = Report {
         provenance: Provenance::current(),
         formula,

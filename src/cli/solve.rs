@@ -14,10 +14,11 @@ use indicatif::MultiProgress;
 
 use posg_fsc::controller::{self, Role};
 use posg_fsc::game::Posg;
+use posg_fsc::ltl::props::Property;
 use posg_fsc::optimise::Settings;
 use posg_fsc::output::{OutputDirectory, PlotFormat};
 use posg_fsc::pipeline::directory::SolveDirectory;
-use posg_fsc::pipeline::{Automata, Job, Outcome, Sizes};
+use posg_fsc::pipeline::{Automata, Job, Outcome, QueryValue, Sizes};
 
 use super::common::{
     ObjectiveArgs, PlotArgs, SolverArgs, formula_automata, objective, print_text, read_game_for,
@@ -103,6 +104,7 @@ pub fn solve_into(
     progress: ProgressMode,
     seconds_axis: bool,
     plot_format: PlotFormat,
+    query: Option<&Property>,
 ) -> anyhow::Result<Outcome> {
     let command_line = super::common::command_line();
     let directory = SolveDirectory {
@@ -110,6 +112,7 @@ pub fn solve_into(
         seconds_axis,
         plot_format: Some(plot_format),
         command_line: &command_line,
+        query,
     };
     let iterations = job.settings.max_iterations;
     let bars = (progress == ProgressMode::Bars).then(MultiProgress::new);
@@ -173,7 +176,16 @@ pub fn run(args: SolveArgs) -> anyhow::Result<()> {
     super::interrupt::stop_gracefully(&job.cancel);
     let progress = ProgressMode::detect(&args.output);
     let format = args.plot.format;
-    let outcome = solve_into(job, out.path(), progress, args.output.seconds_axis, format)?;
+    let property = args.objective.property()?;
+    let seconds_axis = args.output.seconds_axis;
+    let outcome = solve_into(
+        job,
+        out.path(),
+        progress,
+        seconds_axis,
+        format,
+        property.as_ref(),
+    )?;
     out.commit()?;
     if super::interrupt::received() {
         eprintln!("interrupted: the results below are those of the defender found before it");
@@ -214,6 +226,16 @@ pub fn run(args: SolveArgs) -> anyhow::Result<()> {
             )
         },
     );
+    if let Some(property) = &property {
+        let report = &outcome.best().report;
+        let query = QueryValue::solved(
+            property,
+            report.worst_case,
+            report.error_bound,
+            outcome.certified,
+        );
+        print_text(&restated_query(property, &query))?;
+    }
     print_text(&format!(
         "structure {}: worst-case estimate {:.6} (last iterate value {:.6}) after {} \
          ({}, {}; best of {}; {} defender), {:.1} s; \
@@ -231,4 +253,27 @@ pub fn run(args: SolveArgs) -> anyhow::Result<()> {
         report.gmc.states,
         args.out.display()
     ))
+}
+
+/// The text line of a property file's query solved: its value, and its
+/// certified bracket in its own terms (for `Pmin`, the returned defender's
+/// guarantee is the bracket's upper end).
+fn restated_query(property: &Property, query: &QueryValue) -> String {
+    let certified = query.certified.map_or(String::new(), |[lo, hi]| {
+        if property.maximise {
+            format!(
+                "; certified: at least {lo:.6} against every adversary, and no defender \
+                 guarantees more than {hi:.6}"
+            )
+        } else {
+            format!(
+                "; certified: at most {hi:.6} against every adversary, and no defender \
+                 guarantees less than {lo:.6}"
+            )
+        }
+    });
+    format!(
+        "query {}: {:.6} (worst-case estimate of the returned defender){certified}\n",
+        query.text, query.value
+    )
 }

@@ -15,6 +15,7 @@ use super::shard::{self, Shard, ShardRecord, SweepPlan};
 use super::slurm::{self, SlurmSweep};
 use posg_fsc::game::Posg;
 use posg_fsc::limits;
+use posg_fsc::ltl::props::Property;
 use posg_fsc::optimise::Settings;
 use posg_fsc::output::sweep::{SweepRow, sweep_table};
 use posg_fsc::output::{OutputDirectory, PlotFormat, Title, create_dir, write_file};
@@ -128,6 +129,8 @@ struct Inputs<'a> {
     defender_sizes: &'a [usize],
     seconds_axis: bool,
     plot_format: PlotFormat,
+    /// The query of `--props`, restated in each pair's `summary.json`.
+    query: Option<&'a Property>,
 }
 
 /// Where a chain writes its pairs.
@@ -150,6 +153,7 @@ enum PairPlace<'a> {
 pub fn run(args: SweepArgs) -> anyhow::Result<()> {
     let settings = settings(&args.settings, &args.solver)?;
     let (game, automata) = load(&args.game, &args.objective)?;
+    let property = args.objective.property()?;
     let description = &automata.description;
     let count = args.def_nodes.0.len() as u128 * args.adv_nodes.0.len() as u128;
     if let Some(message) = limits::exceeded(
@@ -180,6 +184,7 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
         defender_sizes: &defender_sizes,
         seconds_axis: args.output.seconds_axis,
         plot_format: args.plot.format,
+        query: property.as_ref(),
     };
     let adversary_sizes = distinct_in_order(&args.adv_nodes.0);
     let title = Title {
@@ -315,6 +320,7 @@ fn run_chain(
             ProgressMode::Quiet,
             inputs.seconds_axis,
             inputs.plot_format,
+            inputs.query,
         )
         .with_context(|| format!("defender {n} nodes, adversary {m} nodes"))?;
         let row = chain.row(n, &outcome);

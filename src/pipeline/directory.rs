@@ -9,10 +9,11 @@ use std::path::Path;
 
 use serde::Serialize;
 
-use super::{Automata, Job, Outcome, PipelineError, SizeResult, Slot, run};
+use super::{Automata, Job, Outcome, PipelineError, QueryValue, SizeResult, Slot, run};
 use crate::certify::Bracket;
 use crate::controller::{self, Fsc};
 use crate::game::Posg;
+use crate::ltl::props::Property;
 use crate::optimise::StructureOutcome;
 use crate::optimise::{IterationRecord, Observer, Settings, SourceNote, StructureReport};
 use crate::output::{
@@ -48,6 +49,9 @@ pub struct SolveDirectory<'a> {
     pub plot_format: Option<PlotFormat>,
     /// The command line recorded in `summary.json`.
     pub command_line: &'a [String],
+    /// The property file's query the objective came from, if any:
+    /// `summary.json` restates it ([`QueryValue::solved`]).
+    pub query: Option<&'a Property>,
 }
 
 impl SolveDirectory<'_> {
@@ -185,6 +189,15 @@ impl SolveDirectory<'_> {
             crate_version: env!("CARGO_PKG_VERSION"),
             game: game.name(),
             objective: &automata.description,
+            query: self.query.map(|property| {
+                let report = &best.report;
+                QueryValue::solved(
+                    property,
+                    report.worst_case,
+                    report.error_bound,
+                    outcome.certified,
+                )
+            }),
             defender_nodes: best.defender.num_nodes(),
             adversary_nodes: best.adversary.num_nodes(),
             settings,
@@ -222,6 +235,10 @@ struct Summary<'a> {
     crate_version: &'static str,
     game: Option<&'a str>,
     objective: &'a str,
+    /// The property file's query in its own terms (for `Pmin`, 1 - the
+    /// objective's numbers).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    query: Option<QueryValue>,
     defender_nodes: usize,
     adversary_nodes: usize,
     settings: &'a Settings,

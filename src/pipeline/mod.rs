@@ -26,10 +26,12 @@
 
 pub mod directory;
 mod propositions;
+mod query;
 mod reward;
 mod sweep;
 
 pub use propositions::{PropositionCheck, check_propositions};
+pub use query::QueryValue;
 pub use reward::RewardObjective;
 pub use sweep::Chain;
 
