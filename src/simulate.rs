@@ -8,7 +8,9 @@
 //! trace satisfies phi iff the run's BSCC is feasible). A run also ends at a
 //! decided state, whose automaton state decides phi whatever follows
 //! ([`crate::product::Gmc::verdict`]). The estimate carries a 95% Wilson
-//! score interval.
+//! score interval. [`simulate_reward`] samples the total reward of each run
+//! until its target instead (method.md section 9), with a normal
+//! approximation interval.
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -17,7 +19,7 @@ use thiserror::Error;
 
 use crate::automaton::Dra;
 use crate::controller::{Choice, Fsc};
-use crate::game::{AdversaryAction, DefenderAction, Posg};
+use crate::game::{AdversaryAction, DefenderAction, Posg, RewardModel};
 use crate::product::GmcState;
 use crate::value::Evaluator;
 
@@ -31,8 +33,14 @@ pub enum SimulationError {
         /// The run's number.
         run: u64,
     },
+    /// The expected reward is infinite: some runs never reach the target.
+    #[error(
+        "the expected reward is infinite (the target is missed with positive probability, \
+         method.md section 9): there is no mean to estimate"
+    )]
+    InfiniteReward,
     /// A run did not reach a BSCC or a decided state within the step limit.
-    #[error("run {run} did not reach a recurrence class within {limit} steps")]
+    #[error("run {run} did not reach a recurrence class (or the target) within {limit} steps")]
     StepLimit {
         /// The run's number.
         run: u64,
@@ -66,7 +74,7 @@ impl Estimate {
     fn wilson(runs: u64, successes: u64) -> Self {
         let n = runs as f64;
         let p = successes as f64 / n;
-        let z = 1.959_963_984_540_054_f64;
+        let z = Z_95;
         let centre = (p + z * z / (2.0 * n)) / (1.0 + z * z / n);
         let half = z * (p * (1.0 - p) / n + z * z / (4.0 * n * n)).sqrt() / (1.0 + z * z / n);
         Self {
@@ -110,27 +118,146 @@ pub fn simulate(
             bscc_of[m] = Some(bscc.is_feasible());
         }
     }
-    let letters = dra.state_letters(game);
-    let mut rng = ChaCha8Rng::seed_from_u64(settings.seed);
+    let mut sampler = Sampler::new(game, dra, defender, adversary, evaluator, settings.seed);
     let mut successes = 0;
     for run in 0..settings.runs {
-        let s = sample(&mut rng, game.initial().iter().map(|&(s, p)| (s, p)));
-        let g = sample(&mut rng, defender.initial().iter().copied().enumerate());
-        let h = sample(&mut rng, adversary.initial().iter().copied().enumerate());
-        let q = dra.successor(dra.initial(), letters[s]);
+        let feasible = sampler.run(run, |m| bscc_of[m].or(gmc.verdict(m)), |_, _, _| {})?;
+        successes += u64::from(feasible);
+    }
+    Ok(Estimate::wilson(settings.runs, successes))
+}
+
+/// A Monte Carlo estimate of an expected reward (method.md section 9) with
+/// a 95% normal-approximation interval, `mean +- 1.96 s / sqrt(runs)`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct RewardEstimate {
+    /// Number of runs.
+    pub runs: u64,
+    /// The mean total reward of the runs until the target.
+    pub mean: f64,
+    /// The runs' sample standard deviation `s`.
+    pub standard_deviation: f64,
+    /// Lower end of the interval.
+    pub lower: f64,
+    /// Upper end of the interval.
+    pub upper: f64,
+    /// The interval's confidence, [`CONFIDENCE`] (asymptotically: rewards
+    /// with heavy tails make it optimistic for few runs).
+    pub confidence: f64,
+}
+
+/// Estimates the expected total reward of `rewards` until the target of
+/// `target` (the automaton of `F T`) by sampled runs, each ending at its
+/// first state where `T` has held. `evaluator` must have been built by
+/// [`Evaluator::for_expected_reward`] for these controllers' supports, and
+/// the value must be finite ([`SimulationError::InfiniteReward`] otherwise:
+/// some runs would never end).
+pub fn simulate_reward(
+    game: &Posg,
+    target: &Dra,
+    rewards: &RewardModel,
+    defender: &Fsc,
+    adversary: &Fsc,
+    evaluator: &Evaluator,
+    settings: SimulationSettings,
+) -> Result<RewardEstimate, SimulationError> {
+    if evaluator.is_infinite() {
+        return Err(SimulationError::InfiniteReward);
+    }
+    let gmc = evaluator.gmc();
+    let mut sampler = Sampler::new(game, target, defender, adversary, evaluator, settings.seed);
+    let (mut sum, mut sum_of_squares) = (0.0, 0.0);
+    for run in 0..settings.runs {
+        let mut total = 0.0;
+        let reached = |m| (gmc.verdict(m) == Some(true)).then_some(());
+        sampler.run(run, reached, |s, u, v| {
+            let action = rewards.action_reward(s, DefenderAction(u), AdversaryAction(v));
+            total += rewards.state_reward(s) + action.unwrap_or(0.0);
+        })?;
+        sum += total;
+        sum_of_squares += total * total;
+    }
+    let n = settings.runs as f64;
+    let mean = sum / n;
+    let variance = if settings.runs > 1 {
+        ((sum_of_squares - n * mean * mean) / (n - 1.0)).max(0.0)
+    } else {
+        0.0
+    };
+    let standard_deviation = variance.sqrt();
+    let half = Z_95 * standard_deviation / n.sqrt();
+    Ok(RewardEstimate {
+        runs: settings.runs,
+        mean,
+        standard_deviation,
+        lower: mean - half,
+        upper: mean + half,
+        confidence: CONFIDENCE,
+    })
+}
+
+/// The 97.5% quantile of the standard normal distribution.
+const Z_95: f64 = 1.959_963_984_540_054;
+
+/// Samples runs of the GMC from the game and the controllers themselves.
+struct Sampler<'a> {
+    game: &'a Posg,
+    dra: &'a Dra,
+    defender: &'a Fsc,
+    adversary: &'a Fsc,
+    evaluator: &'a Evaluator,
+    letters: Vec<u32>,
+    rng: ChaCha8Rng,
+}
+
+impl<'a> Sampler<'a> {
+    fn new(
+        game: &'a Posg,
+        dra: &'a Dra,
+        defender: &'a Fsc,
+        adversary: &'a Fsc,
+        evaluator: &'a Evaluator,
+        seed: u64,
+    ) -> Self {
+        Self {
+            game,
+            dra,
+            defender,
+            adversary,
+            evaluator,
+            letters: dra.state_letters(game),
+            rng: ChaCha8Rng::seed_from_u64(seed),
+        }
+    }
+
+    /// One run from the initial distribution until `ended(m)` gives its
+    /// outcome at the GMC state `m`; `stepped(s, u, v)` sees each step's
+    /// game state and actions.
+    fn run<T>(
+        &mut self,
+        run: u64,
+        ended: impl Fn(usize) -> Option<T>,
+        mut stepped: impl FnMut(usize, usize, usize),
+    ) -> Result<T, SimulationError> {
+        let (game, dra, rng) = (self.game, self.dra, &mut self.rng);
+        let s = sample(rng, game.initial().iter().map(|&(s, p)| (s, p)));
+        let g = sample(rng, self.defender.initial().iter().copied().enumerate());
+        let h = sample(rng, self.adversary.initial().iter().copied().enumerate());
+        let q = dra.successor(dra.initial(), self.letters[s]);
         let mut state = GmcState {
             s: s as u32,
             q: q as u32,
             g: g as u32,
             h: h as u32,
         };
+        let gmc = self.evaluator.gmc();
         let mut steps = 0;
-        let feasible = loop {
+        loop {
             let m = gmc
                 .index_of(state)
                 .ok_or(SimulationError::OutsideChain { run })?;
-            if let Some(feasible) = bscc_of[m].or(gmc.verdict(m)) {
-                break feasible;
+            if let Some(outcome) = ended(m) {
+                return Ok(outcome);
             }
             steps += 1;
             if steps > STEP_LIMIT {
@@ -139,45 +266,41 @@ pub fn simulate(
                     limit: STEP_LIMIT,
                 });
             }
-            state = step(&mut rng, game, dra, defender, adversary, &letters, state);
-        };
-        successes += u64::from(feasible);
+            let (next, u, v) = self.step(state);
+            stepped(state.s as usize, u, v);
+            state = next;
+        }
     }
-    Ok(Estimate::wilson(settings.runs, successes))
-}
 
-fn step(
-    rng: &mut ChaCha8Rng,
-    game: &Posg,
-    dra: &Dra,
-    defender: &Fsc,
-    adversary: &Fsc,
-    letters: &[u32],
-    state: GmcState,
-) -> GmcState {
-    let s = state.s as usize;
-    let o = sample(
-        rng,
-        game.defender().observation_distribution(s).iter().copied(),
-    );
-    let o_adv = sample(
-        rng,
-        game.adversary().observation_distribution(s).iter().copied(),
-    );
-    let def = choose(rng, defender.choices(state.g as usize, o));
-    let adv = choose(rng, adversary.choices(state.h as usize, o_adv));
-    let next = sample(
-        rng,
-        game.transition(s, DefenderAction(def.action), AdversaryAction(adv.action))
-            .iter()
-            .copied(),
-    );
-    let q = dra.successor(state.q as usize, letters[next]);
-    GmcState {
-        s: next as u32,
-        q: q as u32,
-        g: def.next as u32,
-        h: adv.next as u32,
+    /// One step of formats.md section 3 from `state`: the next state and
+    /// the actions played.
+    fn step(&mut self, state: GmcState) -> (GmcState, usize, usize) {
+        let (game, rng) = (self.game, &mut self.rng);
+        let s = state.s as usize;
+        let o = sample(
+            rng,
+            game.defender().observation_distribution(s).iter().copied(),
+        );
+        let o_adv = sample(
+            rng,
+            game.adversary().observation_distribution(s).iter().copied(),
+        );
+        let def = choose(rng, self.defender.choices(state.g as usize, o));
+        let adv = choose(rng, self.adversary.choices(state.h as usize, o_adv));
+        let next = sample(
+            rng,
+            game.transition(s, DefenderAction(def.action), AdversaryAction(adv.action))
+                .iter()
+                .copied(),
+        );
+        let q = self.dra.successor(state.q as usize, self.letters[next]);
+        let next = GmcState {
+            s: next as u32,
+            q: q as u32,
+            g: def.next as u32,
+            h: adv.next as u32,
+        };
+        (next, def.action, adv.action)
     }
 }
 

@@ -325,6 +325,17 @@ fn eval_restates_a_reward_query_and_says_inf_where_the_target_can_be_missed() {
         "{stderr}"
     );
 
+    let simulate = [
+        "simulate",
+        game.to_str().unwrap(),
+        "--props",
+        props.to_str().unwrap(),
+    ];
+    let output = posg_fsc(&simulate);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(!output.status.success());
+    assert!(stderr.contains("there is no mean to estimate"), "{stderr}");
+
     let output = posg_fsc(&[
         "solve",
         game.to_str().unwrap(),
@@ -429,4 +440,31 @@ fn directions(support: &Support) -> Vec<(usize, usize)> {
             block.skip(1).map(move |k| (first, k))
         })
         .collect()
+}
+
+#[test]
+fn simulate_estimates_the_expected_cost_within_its_interval() {
+    let output = posg_fsc(&[
+        "simulate",
+        "tests/data/rewards/probe.drn",
+        "--props",
+        "tests/data/rewards/probe.props",
+        "--runs",
+        "20000",
+        "--seed",
+        "1",
+    ]);
+    assert!(output.status.success(), "{output:?}");
+    let report: Value = serde_json::from_slice(&output.stdout).unwrap();
+    let estimate = &report["estimate"];
+    let (lower, upper) = (
+        estimate["lower"].as_f64().unwrap(),
+        estimate["upper"].as_f64().unwrap(),
+    );
+    assert!(lower < 16.0 / 3.0 && 16.0 / 3.0 < upper, "{estimate}");
+    // Each run costs 0, 1, 10 or 11: the spread is that of those outcomes.
+    let deviation = estimate["standard_deviation"].as_f64().unwrap();
+    assert!((4.0..6.0).contains(&deviation), "{deviation}");
+    assert!(upper - lower < 0.2, "{estimate}");
+    assert_eq!(report["exact_within_interval"], true);
 }
