@@ -347,9 +347,7 @@ fn eval_restates_a_reward_query_and_says_inf_where_the_target_can_be_missed() {
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert!(!output.status.success());
     assert!(
-        stderr.contains(
-            "line 1, column 1: `R{\"steps\"}min=? [F \"goal\"]` is an expected-reward query"
-        ),
+        stderr.contains("optimised on games without an adversary"),
         "{stderr}"
     );
 }
@@ -467,4 +465,94 @@ fn simulate_estimates_the_expected_cost_within_its_interval() {
     assert!((4.0..6.0).contains(&deviation), "{deviation}");
     assert!(upper - lower < 0.2, "{estimate}");
     assert_eq!(report["exact_within_interval"], true);
+}
+
+/// `solve` of `props` on `game` into a fresh directory; the summary, or
+/// the error's text.
+fn solve_reward(game: &str, props: &str, extra: &[&str]) -> Result<Value, String> {
+    let dir = std::env::temp_dir().join(format!(
+        "posg-fsc-reward-solve-{}-{}",
+        std::process::id(),
+        props.len() + extra.len() + game.len()
+    ));
+    std::fs::create_dir_all(&dir).unwrap();
+    let props_file = dir.join("q.props");
+    std::fs::write(&props_file, props).unwrap();
+    let out = dir.join("out");
+    let args = [
+        "solve",
+        game,
+        "--props",
+        props_file.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--force",
+        "--quiet",
+    ];
+    let output = posg_fsc(&[&args[..], extra].concat());
+    if !output.status.success() {
+        return Err(String::from_utf8_lossy(&output.stderr).into_owned());
+    }
+    let summary = std::fs::read_to_string(out.join("summary.json")).unwrap();
+    let curve = std::fs::read_to_string(out.join("curve.csv")).unwrap();
+    let last = curve.lines().last().unwrap().to_string();
+    std::fs::remove_dir_all(&dir).unwrap();
+    let mut summary: Value = serde_json::from_str(&summary).unwrap();
+    summary["last_curve_row"] = Value::String(last);
+    Ok(summary)
+}
+
+#[test]
+fn solve_finds_the_probing_controller_whose_cost_is_one() {
+    let summary = solve_reward(
+        "tests/data/rewards/probe.drn",
+        "Rmin=? [F \"goal\"]",
+        &["--seed", "1"],
+    )
+    .unwrap();
+    // The ascent ends next to the deterministic optimum; its rounding is it.
+    assert_eq!(summary["value"], 1.0);
+    assert_eq!(summary["query"]["value"], 1.0);
+    assert_eq!(summary["query"]["text"], "Rmin=? [F \"goal\"]");
+    let last = summary["last_curve_row"].as_str().unwrap();
+    assert!(last.ends_with(",1.0,,,10.0,rounding,true"), "{last}");
+    assert_eq!(summary["starts"].as_array().unwrap().len(), 4);
+}
+
+#[test]
+fn solve_maximises_a_discounted_reward_and_refuses_what_it_cannot_optimise() {
+    let dir = std::env::temp_dir().join(format!("posg-fsc-reward-games-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let write = |name: &str, text: &str| {
+        let path = dir.join(name);
+        std::fs::write(&path, text).unwrap();
+        path.to_str().unwrap().to_string()
+    };
+    let sink = write("sink.posg.json", DISCOUNT_SINK);
+    let summary = solve_reward(&sink, "Rmax=? [F \"discount_sink\"]", &[]).unwrap();
+    let value = summary["value"].as_f64().unwrap();
+    assert!((value - 0.55 / 0.19).abs() < 1e-12, "{value}");
+
+    let blocking = write("blocking.posg.json", BLOCKING);
+    let error = solve_reward(&blocking, "R{\"steps\"}min=? [F \"goal\"]", &[]).unwrap_err();
+    assert!(error.contains("on games without an adversary"), "{error}");
+
+    // `jump` falls into a pit the goal cannot be reached from.
+    let pit = write(
+        "pit.posg.json",
+        r#"{"posg": 1, "states": ["s", "goal", "pit"], "initial": {"s": 1.0},
+        "labels": {"goal": ["goal"]},
+        "defender": {"actions": ["go", "jump"], "observe": "full"},
+        "transitions": [
+          {"state": "s", "defender": "go", "next": {"goal": 1.0}},
+          {"state": "s", "defender": "jump", "next": {"pit": 1.0}},
+          {"state": "goal", "defender": "*", "next": {"goal": 1.0}},
+          {"state": "pit", "defender": "*", "next": {"pit": 1.0}}],
+        "rewards": {"steps": {"states": {"s": 1.0, "pit": 1.0}}}}"#,
+    );
+    let error = solve_reward(&pit, "Rmin=? [F \"goal\"]", &[]).unwrap_err();
+    assert!(error.contains("infinite expected cost"), "{error}");
+    let summary = solve_reward(&pit, "Rmax=? [F \"goal\"]", &[]).unwrap();
+    assert_eq!(summary["value"], "inf");
+    std::fs::remove_dir_all(&dir).unwrap();
 }

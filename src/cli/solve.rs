@@ -15,10 +15,10 @@ use indicatif::MultiProgress;
 use posg_fsc::controller::{self, Role};
 use posg_fsc::game::Posg;
 use posg_fsc::ltl::props::Property;
-use posg_fsc::optimise::Settings;
+use posg_fsc::optimise::{Cancel, Settings};
 use posg_fsc::output::{OutputDirectory, PlotFormat};
 use posg_fsc::pipeline::directory::SolveDirectory;
-use posg_fsc::pipeline::{Automata, Job, Outcome, QueryValue, Sizes};
+use posg_fsc::pipeline::{Automata, Job, Outcome, QueryValue, RewardObjective, Sizes};
 
 use super::common::{
     ObjectiveArgs, PlotArgs, SolverArgs, formula_automata, objective, print_text, read_game_for,
@@ -81,18 +81,23 @@ pub fn settings(settings: &Settings, solver: &SolverArgs) -> anyhow::Result<Sett
 /// its negation's too, for the certified bracket).
 pub fn load(game: &Path, args: &ObjectiveArgs) -> anyhow::Result<(Posg, Automata)> {
     let game = read_game_for(game, args)?;
-    let automata = match &args.formula_text()? {
-        Some(text) => formula_automata(args, &game, text, true)?,
+    let automata = automata(args, &game)?;
+    Ok((game, automata))
+}
+
+/// The objective's automata on `game` ([`load`]).
+fn automata(args: &ObjectiveArgs, game: &Posg) -> anyhow::Result<Automata> {
+    Ok(match &args.formula_text()? {
+        Some(text) => formula_automata(args, game, text, true)?,
         None => {
-            let (phi, description) = objective(args, &game)?;
+            let (phi, description) = objective(args, game)?;
             Automata {
                 phi,
                 not_phi: None,
                 description,
             }
         }
-    };
-    Ok((game, automata))
+    })
 }
 
 /// Runs `job` into the solve directory `path` (the pipeline with its curve
@@ -155,7 +160,11 @@ fn agree(
 /// Runs `solve`.
 pub fn run(args: SolveArgs) -> anyhow::Result<()> {
     let settings = settings(&args.settings, &args.solver)?;
-    let (game, automata) = load(&args.game, &args.objective)?;
+    let game = read_game_for(&args.game, &args.objective)?;
+    if let Some(reward) = args.objective.reward_objective(&game)? {
+        return solve_expected_reward(&args, &game, &reward, &settings);
+    }
+    let automata = automata(&args.objective, &game)?;
     let sizes = Sizes {
         defender: args.def_nodes.unwrap_or(1),
         adversary: args.adv_nodes.unwrap_or(1),
@@ -276,4 +285,76 @@ fn restated_query(property: &Property, query: &QueryValue) -> String {
         "query {}: {:.6} (worst-case estimate of the returned defender){certified}\n",
         query.text, query.value
     )
+}
+
+/// `solve` of an expected-reward query (docs/method.md section 9): the
+/// defender of `--def-nodes` nodes optimised on a game without adversary,
+/// into the solve directory.
+fn solve_expected_reward(
+    args: &SolveArgs,
+    game: &Posg,
+    reward: &RewardObjective,
+    settings: &Settings,
+) -> anyhow::Result<()> {
+    if let Some(option) = [
+        ("--defender", &args.defender),
+        ("--adversary", &args.adversary),
+    ]
+    .iter()
+    .find_map(|(option, given)| given.as_ref().map(|_| option))
+    {
+        anyhow::bail!(
+            "{option}: starting controllers are not taken for an expected-reward query yet; \
+             drop it (docs/method.md section 9)"
+        );
+    }
+    let nodes = args.def_nodes.unwrap_or(1);
+    let sizes = Sizes {
+        defender: nodes,
+        adversary: args.adv_nodes.unwrap_or(1),
+    };
+    sizes.check(game, SIZE_OPTIONS)?;
+    let out = OutputDirectory::create(&args.out, args.force)?;
+    let cancel = Cancel::new();
+    super::interrupt::stop_gracefully(&cancel);
+    let progress = ProgressMode::detect(&args.output);
+    let bars = (progress == ProgressMode::Bars).then(MultiProgress::new);
+    let observer = structure_progress(progress, bars.as_ref(), "full", settings.max_iterations)
+        .unwrap_or_else(|| Box::new(()));
+    let command_line = super::common::command_line();
+    let property = args.objective.property()?;
+    let directory = SolveDirectory {
+        path: out.path(),
+        seconds_axis: false,
+        plot_format: None,
+        command_line: &command_line,
+        query: property.as_ref(),
+    };
+    let solution =
+        directory.solve_expected_reward(game, reward, nodes, settings, &cancel, observer)?;
+    out.commit()?;
+    if super::interrupt::received() {
+        eprintln!("interrupted: the results below are those of the defender found before it");
+    }
+    let query = property.as_ref().map_or(&reward.description, |p| &p.text);
+    let how = match solution.starts.get(solution.best_start) {
+        Some(best) => format!(
+            "{:.6} (the returned defender's expected reward, exact within {:.1e}; {nodes} nodes, \
+             best of {}, {} of start {})",
+            solution.value,
+            solution.error_bound,
+            posg_fsc::output::counted(solution.starts.len(), "start"),
+            posg_fsc::output::counted(best.iterations, "iteration"),
+            solution.best_start,
+        ),
+        None => "inf (the uniform defender misses the target with positive probability, and \
+                 an infinite reward is the most there is)"
+            .to_string(),
+    };
+    print_text(&format!(
+        "{query}: {how}, {:.1} s\nwrote curve.csv, defender.fsc.json, defender.dot, summary.json \
+         to {}\n",
+        solution.seconds,
+        args.out.display()
+    ))
 }

@@ -60,6 +60,13 @@ pub(super) trait DefenderObjective {
     /// The value at `defender`, its logit gradient and the larger residual
     /// of the linear solves behind them.
     fn point(&mut self, defender: &[f64]) -> Result<DefenderPoint, OptimiseError>;
+
+    /// Whether the ascent climbs `ln V` (a positive value such as a
+    /// probability, far better scaled in its logarithm) rather than `V`
+    /// itself (an expected reward, of either sign).
+    fn logarithmic(&self) -> bool {
+        true
+    }
 }
 
 /// A value of the defender's logits with its gradient.
@@ -87,6 +94,10 @@ impl DefenderObjective for AgainstFixed<'_> {
             gradient: point.defender,
             residual: point.residual,
         })
+    }
+
+    fn logarithmic(&self) -> bool {
+        self.objective.is_probability()
     }
 }
 
@@ -286,13 +297,15 @@ impl Solver for Ascent {
     }
 }
 
-/// The value, the ascent objective `ln V` and its `z`-gradient at one point.
+/// The value, the ascent objective (`ln V`, or `V` where the objective is
+/// not [`DefenderObjective::logarithmic`]) and its `z`-gradient at one point.
 struct Evaluated {
     value: f64,
     /// `ln V` (maximising `ln V` maximises `V`; on long horizons, where `V`
-    /// is a product of many probabilities, `ln V` is far better scaled).
-    log_value: f64,
-    /// `d ln V / dz = (dV/dz) / V`.
+    /// is a product of many probabilities, `ln V` is far better scaled), or
+    /// `V`.
+    ascended: f64,
+    /// `d ln V / dz = (dV/dz) / V`, or `dV/dz`.
     ascent: Vec<f64>,
     /// `dV/dphi`.
     phi_gradient: Vec<f64>,
@@ -306,15 +319,20 @@ impl Evaluated {
         c: Reparametrisation,
     ) -> Result<Self, OptimiseError> {
         let point = objective.point(&c.to_phi(z))?;
-        let value = point.value.max(f64::MIN_POSITIVE);
+        let (scale, ascended) = if objective.logarithmic() {
+            let value = point.value.max(f64::MIN_POSITIVE);
+            (value, value.ln())
+        } else {
+            (1.0, point.value)
+        };
         let ascent = c
             .chain_rule(z, &point.gradient)
             .into_iter()
-            .map(|d| d / value)
+            .map(|d| d / scale)
             .collect();
         Ok(Self {
             value: point.value,
-            log_value: value.ln(),
+            ascended,
             ascent,
             phi_gradient: point.gradient,
             residual: point.residual,
@@ -354,7 +372,7 @@ fn line_search(
             .map(|(zi, d)| zi + step * d)
             .collect();
         match Evaluated::at(objective, &trial, c) {
-            Ok(next) if next.log_value >= here.log_value + ARMIJO * step * slope => {
+            Ok(next) if next.ascended >= here.ascended + ARMIJO * step * slope => {
                 return Ok(Some((trial, next, step)));
             }
             Ok(_) => {}

@@ -54,6 +54,7 @@ mod optimiser;
 mod play;
 mod race;
 mod reparam;
+mod reward;
 mod rounding;
 mod settings;
 mod softmax;
@@ -67,6 +68,7 @@ pub use cancel::Cancel;
 pub use objective::{GmcSize, Objective, Point};
 pub use observer::{IterationRecord, Observer, ObserverError, RecordSource, SearchRecord};
 pub(crate) use optimiser::{Certifier, Optimiser, PhaseSeconds, RunOutcome};
+pub use reward::{ExpectedReward, RewardSolution, RewardStart, optimise_expected_reward};
 pub use rounding::{TRUNCATION_THRESHOLDS, rounded_candidates, truncated};
 pub use settings::{MAX_LOGIT_BOUND, Settings, UpdateRule};
 pub use softmax::{Softmax, clip};
@@ -131,6 +133,9 @@ pub enum OptimiseError {
     /// The best-response minimisation failed for another reason.
     #[error("best response: {0}")]
     BestResponse(String),
+    /// The objective cannot be optimised on this game yet.
+    #[error("{0}")]
+    Unsupported(String),
 }
 
 impl OptimiseError {

@@ -5,12 +5,15 @@
 //! symbolic LU) and reused for every evaluation; each evaluation is the
 //! adjoint computation of method.md section 2 followed by the softmax chain
 //! rule of section 3. argmin asks for the cost and the gradient of the same
-//! point in separate calls: the cache answers the second.
+//! point in separate calls: the cache answers the second. For an
+//! expected-reward objective (section 9) the value is the expected reward,
+//! negated where the defender minimises it, so that the defender always
+//! maximises.
 
 use crate::analysis::StateClass;
 use crate::automaton::Dra;
 use crate::controller::Support;
-use crate::game::Posg;
+use crate::game::{Posg, RewardModel};
 use crate::solver::SolverSettings;
 use crate::value::{Evaluator, ValueError};
 
@@ -33,6 +36,12 @@ pub struct Point {
 /// The value as a function of both players' logits on one structure.
 pub struct Objective {
     evaluator: Evaluator,
+    /// What the defender maximises: `V` itself (`1`), or `-V` for an
+    /// expected reward the defender minimises (`-1`).
+    sense: f64,
+    /// Whether `V` is a probability (else an expected reward, method.md
+    /// section 9).
+    probability: bool,
     defender: Softmax,
     adversary: Softmax,
     cache: Option<(Vec<f64>, Vec<f64>, Point)>,
@@ -84,12 +93,65 @@ impl Objective {
         Ok(Self {
             identically_zero,
             evaluator,
+            sense: 1.0,
+            probability: true,
             defender,
             adversary,
             cache: None,
             largest_error_bound: 0.0,
             work: 0.0,
         })
+    }
+
+    /// The expected reward of `rewards` until the target of `target` (the
+    /// automaton of `F T`; method.md section 9) on the supports of the two
+    /// softmax maps, as the value the defender maximises: `V`, or `-V`
+    /// where it `minimises` (a cost). An infinite expected reward on these
+    /// supports is [`ValueError::InfiniteReward`]: no point of them has a
+    /// finite value to climb.
+    pub fn for_expected_reward(
+        game: &Posg,
+        (target, rewards, minimise): (&Dra, &RewardModel, bool),
+        defender: Softmax,
+        adversary: Softmax,
+        solver: &SolverSettings,
+    ) -> Result<Self, ValueError> {
+        let evaluator = Evaluator::for_expected_reward(
+            game,
+            target,
+            rewards,
+            &Support::of(defender.template()),
+            &Support::of(adversary.template()),
+            solver,
+        )?;
+        if evaluator.is_infinite() {
+            return Err(ValueError::InfiniteReward);
+        }
+        Ok(Self {
+            identically_zero: false,
+            evaluator,
+            sense: if minimise { -1.0 } else { 1.0 },
+            probability: false,
+            defender,
+            adversary,
+            cache: None,
+            largest_error_bound: 0.0,
+            work: 0.0,
+        })
+    }
+
+    /// Whether the value is a probability (else an expected reward,
+    /// method.md section 9, which the single-player ascent climbs as it is
+    /// rather than in its logarithm).
+    pub fn is_probability(&self) -> bool {
+        self.probability
+    }
+
+    /// `1`, or `-1` where the value is the negated expected reward of a
+    /// minimised cost: the factor from the value to the quantity the
+    /// objective's value means.
+    pub fn sense(&self) -> f64 {
+        self.sense
     }
 
     /// The largest error bound of any value computed so far (method.md
@@ -155,7 +217,7 @@ impl Objective {
         self.work += self.evaluator.gmc().num_states() as f64;
         let evaluation = self.evaluator.evaluate(&mu_def, &mu_adv)?;
         self.largest_error_bound = self.largest_error_bound.max(evaluation.error_bound);
-        Ok(evaluation.value)
+        Ok(self.sense * evaluation.value)
     }
 
     /// `V` and both logit gradients (one factorisation, two solves, one pass
@@ -171,18 +233,20 @@ impl Objective {
         self.work += self.evaluator.gmc().num_states() as f64;
         let (evaluation, gradient) = self.evaluator.evaluate_with_gradient(&mu_def, &mu_adv)?;
         self.largest_error_bound = self.largest_error_bound.max(evaluation.error_bound);
+        let sense = self.sense;
+        let signed = |g: Vec<f64>| g.into_iter().map(|d| sense * d).collect();
         let point = Point {
-            value: evaluation.value,
-            defender: self.defender.chain_rule(
+            value: sense * evaluation.value,
+            defender: signed(self.defender.chain_rule(
                 &mu_def,
                 &gradient.defender,
                 &gradient.defender_initial,
-            ),
-            adversary: self.adversary.chain_rule(
+            )),
+            adversary: signed(self.adversary.chain_rule(
                 &mu_adv,
                 &gradient.adversary,
                 &gradient.adversary_initial,
-            ),
+            )),
             residual: evaluation.residual.max(gradient.adjoint_residual),
         };
         self.cache = Some((defender.to_vec(), adversary.to_vec(), point.clone()));

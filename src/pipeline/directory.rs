@@ -9,13 +9,17 @@ use std::path::Path;
 
 use serde::Serialize;
 
-use super::{Automata, Job, Outcome, PipelineError, QueryValue, SizeResult, Slot, run};
+use super::{
+    Automata, Job, Outcome, PipelineError, QueryValue, RewardObjective, SizeResult, Slot, run,
+};
 use crate::certify::Bracket;
 use crate::controller::{self, Fsc};
 use crate::game::Posg;
 use crate::ltl::props::Property;
-use crate::optimise::StructureOutcome;
-use crate::optimise::{IterationRecord, Observer, Settings, SourceNote, StructureReport};
+use crate::optimise::{
+    Cancel, ExpectedReward, IterationRecord, Observer, RewardSolution, RewardStart, Settings,
+    SourceNote, StructureOutcome, StructureReport, optimise_expected_reward,
+};
 use crate::output::{
     CurveCsv, CurvePlot, OutputError, PlotFormat, Returned, Title, create_dir, plot_curve,
     write_file,
@@ -226,6 +230,101 @@ impl SolveDirectory<'_> {
         )?;
         Ok(())
     }
+}
+
+impl SolveDirectory<'_> {
+    /// Runs the expected-reward optimiser ([`optimise_expected_reward`],
+    /// method.md section 9) for a defender of `nodes` nodes with `observer`
+    /// beside `curve.csv`, then writes `defender.fsc.json`, `defender.dot`
+    /// and `summary.json` (no picture yet: `curve.csv` holds the curve).
+    pub fn solve_expected_reward(
+        &self,
+        game: &Posg,
+        objective: &RewardObjective,
+        nodes: usize,
+        settings: &Settings,
+        cancel: &Cancel,
+        observer: Box<dyn Observer + Send>,
+    ) -> Result<RewardSolution, PipelineError> {
+        create_dir(self.path)?;
+        let curve = CurveCsv::create(&self.path.join("curve.csv"))?;
+        let mut observers: Vec<Box<dyn Observer + Send>> = vec![Box::new(curve), observer];
+        let expected = ExpectedReward {
+            target: &objective.target,
+            rewards: &objective.rewards,
+            minimise: objective.minimise,
+        };
+        let solution =
+            optimise_expected_reward(game, expected, nodes, settings, cancel, &mut observers)?;
+        let description = &objective.description;
+        let title = format!(
+            "defender for {}: {description} ({nodes} nodes)",
+            game.name().unwrap_or("game"),
+        );
+        controller::file::write(
+            &self.path.join("defender.fsc.json"),
+            &solution.defender,
+            game,
+        )?;
+        let player = game.defender();
+        let dot = crate::output::dot::controller_dot(
+            &solution.defender,
+            player.observations(),
+            player.actions(),
+            &title,
+            crate::output::dot::DEFAULT_THRESHOLD,
+        );
+        write_file(&self.path.join("defender.dot"), &dot)?;
+        let summary = RewardSummary {
+            command_line: self.command_line,
+            crate_version: env!("CARGO_PKG_VERSION"),
+            game: game.name(),
+            objective: description,
+            query: self.query.map(|property| {
+                QueryValue::rewarded(property, solution.value, solution.error_bound)
+            }),
+            defender_nodes: nodes,
+            settings,
+            value: solution.value,
+            error_bound: solution.error_bound,
+            best_start: solution.best_start,
+            starts: &solution.starts,
+            seconds: solution.seconds,
+            files: [
+                "curve.csv",
+                "defender.fsc.json",
+                "defender.dot",
+                "summary.json",
+            ],
+        };
+        write_file(
+            &self.path.join("summary.json"),
+            serde_json::to_string_pretty(&summary)? + "\n",
+        )?;
+        Ok(solution)
+    }
+}
+
+/// `summary.json` of an expected-reward objective (docs/formats.md section 9).
+#[derive(Debug, Serialize)]
+struct RewardSummary<'a> {
+    command_line: &'a [String],
+    crate_version: &'static str,
+    game: Option<&'a str>,
+    objective: &'a str,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    query: Option<QueryValue>,
+    defender_nodes: usize,
+    settings: &'a Settings,
+    /// The returned defender's expected reward, evaluated exactly.
+    #[serde(serialize_with = "crate::value::number_or_inf")]
+    value: f64,
+    /// A bound on `|value - exact value|` (method.md section 8).
+    error_bound: f64,
+    best_start: usize,
+    starts: &'a [RewardStart],
+    seconds: f64,
+    files: [&'static str; 4],
 }
 
 /// `summary.json` (docs/formats.md section 9).

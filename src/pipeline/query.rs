@@ -78,6 +78,21 @@ impl QueryValue {
     }
 }
 
+impl QueryValue {
+    /// The expected-reward query of `property` solved: the returned
+    /// defender's expected reward `value`, exact within `error_bound`, and
+    /// finite (its target is reached with probability 1).
+    pub fn rewarded(property: &Property, value: f64, error_bound: f64) -> Self {
+        Self {
+            text: property.text.clone(),
+            value,
+            error_bound,
+            certified: None,
+            target_probability: Some(1.0),
+        }
+    }
+}
+
 /// `value` of the objective as a value of the query: `1 - value` for
 /// `Pmin`, whose objective is the complement of its path.
 fn restated(property: &Property, value: f64) -> f64 {

@@ -1,0 +1,319 @@
+//! The expected-reward optimiser (method.md section 9) for a game without
+//! adversary (a POMDP or an MDP): the single-player ascent under the one
+//! driver ([`Optimiser`] with [`Method::Ascent`]: L-BFGS on the defender's
+//! logits, the same stopping rules and observers as a probability
+//! objective), climbing the expected reward itself (negated for a cost,
+//! so that the defender always maximises), from `settings.starts` seeded
+//! starts in parallel on the full support of the given size. The returned
+//! defender is the best start's incumbent or one of its roundings (the
+//! softmax keeps every supported choice above `exp(-2c)`; a rounding
+//! removes that residue), its expected reward evaluated again exactly
+//! (within its error bound, method.md section 8): with no adversary, that
+//! number is the defender's guarantee.
+
+use std::sync::{Mutex, PoisonError};
+use std::time::Instant;
+
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
+use serde::Serialize;
+
+use super::objective::Objective;
+use super::observer::{IterationRecord, Observer, RecordSource};
+use super::optimiser::Optimiser;
+use super::rounding::rounded_candidates;
+use super::softmax::Softmax;
+use super::{Cancel, Method, OptimiseError, Settings, Status, Structure};
+use crate::automaton::Dra;
+use crate::controller::{Fsc, Support};
+use crate::game::{Posg, RewardModel};
+use crate::value::{Evaluation, Evaluator};
+
+/// An expected-reward objective as the optimiser takes it: the automaton
+/// of `F T`, the reward model and whether the defender minimises.
+#[derive(Debug, Clone, Copy)]
+pub struct ExpectedReward<'a> {
+    /// The automaton of `F T`.
+    pub target: &'a Dra,
+    /// The reward model.
+    pub rewards: &'a RewardModel,
+    /// Whether the defender minimises the expected reward (a cost).
+    pub minimise: bool,
+}
+
+/// What one start of the expected-reward optimiser ended with.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct RewardStart {
+    /// The expected reward of the start's best defender.
+    pub value: f64,
+    /// Its iterations.
+    pub iterations: usize,
+    /// Why it stopped.
+    pub status: Status,
+    /// Its wall-clock seconds.
+    pub seconds: f64,
+}
+
+/// The expected-reward optimiser's result.
+#[derive(Debug, Clone)]
+pub struct RewardSolution {
+    /// The best defender found.
+    pub defender: Fsc,
+    /// Its expected reward, evaluated exactly (method.md section 9).
+    pub value: f64,
+    /// A bound on `|value - exact value|` (method.md section 8).
+    pub error_bound: f64,
+    /// Each start's result, in start order.
+    pub starts: Vec<RewardStart>,
+    /// The start whose defender was returned.
+    pub best_start: usize,
+    /// Wall-clock seconds of the whole run.
+    pub seconds: f64,
+}
+
+/// Optimises a defender of `nodes` nodes for `objective` on `game`, which
+/// has no adversary; every iteration's record goes to `observer` (the
+/// expected reward in `value` and `worst_case`, with its sign), then one
+/// `returned` record for the defender returned. Stops early when `cancel`
+/// is set.
+pub fn optimise_expected_reward(
+    game: &Posg,
+    objective: ExpectedReward<'_>,
+    nodes: usize,
+    settings: &Settings,
+    cancel: &Cancel,
+    observer: &mut (dyn Observer + Send),
+) -> Result<RewardSolution, OptimiseError> {
+    if game.has_adversary() {
+        return Err(OptimiseError::Unsupported(
+            "expected-reward objectives are optimised on games without an adversary (POMDPs, \
+             MDPs) so far; `eval` evaluates them on every game (docs/method.md section 9)"
+                .into(),
+        ));
+    }
+    let started = Instant::now();
+    let structure = Structure::full(game, nodes, 1, settings.optimise_initial);
+    let full = exact_value(game, objective, &structure.defender, settings)?;
+    let (solution, iterations, logit_bound, source) = if full.value.is_infinite() {
+        let solution = infinite_on_full_support(objective, structure.defender, started)?;
+        (solution, 0, settings.logit_bound, RecordSource::Gradient)
+    } else {
+        let (solution, iterations, logit_bound, source) = race(
+            game, objective, &structure, settings, cancel, observer, started,
+        )?;
+        (solution, iterations, logit_bound, source)
+    };
+    observer.observe(&IterationRecord {
+        start: solution.best_start,
+        iteration: iterations,
+        seconds: started.elapsed().as_secs_f64(),
+        value: solution.value,
+        defender_gradient_norm: 0.0,
+        adversary_gradient_norm: 0.0,
+        defender_step: 0.0,
+        adversary_step: 0.0,
+        worst_case: Some(solution.value),
+        certified_lower: None,
+        upper_bound: None,
+        logit_bound,
+        source,
+        returned: true,
+    });
+    observer.finish().map_err(OptimiseError::Observer)?;
+    Ok(solution)
+}
+
+/// The seeded starts in parallel on `structure`, each reporting to
+/// `observer` as it goes; the best start's defender or its best rounding,
+/// with the iterations of that start, its logit bound and the source of
+/// the defender returned.
+fn race(
+    game: &Posg,
+    objective: ExpectedReward<'_>,
+    structure: &Structure,
+    settings: &Settings,
+    cancel: &Cancel,
+    observer: &mut (dyn Observer + Send),
+    started: Instant,
+) -> Result<(RewardSolution, usize, f64, RecordSource), OptimiseError> {
+    let shared = Mutex::new(observer);
+    let sense = if objective.minimise { -1.0 } else { 1.0 };
+    let runs: Vec<(Fsc, RewardStart, f64)> = (0..settings.starts)
+        .into_par_iter()
+        .map(|start| {
+            let mut signed = Signed {
+                start,
+                sense,
+                shared: &shared,
+            };
+            run_start(
+                game,
+                objective,
+                structure,
+                settings,
+                start,
+                cancel,
+                &mut signed,
+            )
+        })
+        .collect::<Result<_, _>>()?;
+    let best_start = (0..runs.len())
+        .max_by(|&a, &b| (sense * runs[a].1.value).total_cmp(&(sense * runs[b].1.value)))
+        .ok_or(OptimiseError::NoStructure)?;
+    let (looped, best, logit_bound) = runs[best_start].clone();
+    let (defender, evaluation, source) = rounded(game, objective, looped, settings)?;
+    let solution = RewardSolution {
+        defender,
+        value: evaluation.value,
+        error_bound: evaluation.error_bound,
+        starts: runs.iter().map(|(_, start, _)| *start).collect(),
+        best_start,
+        seconds: started.elapsed().as_secs_f64(),
+    };
+    Ok((solution, best.iterations, logit_bound, source))
+}
+
+/// The result where the full support's expected reward is infinite (the
+/// target is missed with positive probability): for `Rmax` that is the
+/// optimum, which the uniform defender attains; for a cost it is an error,
+/// since only supports that avoid the target's misses have a finite cost
+/// and they are not searched yet.
+fn infinite_on_full_support(
+    objective: ExpectedReward<'_>,
+    defender: Fsc,
+    started: Instant,
+) -> Result<RewardSolution, OptimiseError> {
+    if objective.minimise {
+        return Err(OptimiseError::Unsupported(
+            "on the full support of the defender's controller the target is missed with \
+             positive probability (some enabled action leads where the target cannot be \
+             reached), so every controller of that support has an infinite expected cost; \
+             supports that avoid those actions are not searched for expected rewards yet \
+             (docs/method.md section 9)"
+                .into(),
+        ));
+    }
+    Ok(RewardSolution {
+        defender,
+        value: f64::INFINITY,
+        error_bound: 0.0,
+        starts: Vec::new(),
+        best_start: 0,
+        seconds: started.elapsed().as_secs_f64(),
+    })
+}
+
+/// One seeded start: the driver running the single-player ascent on the
+/// structure's objective. Returns its best defender, its result and the
+/// logit bound it ended with.
+fn run_start(
+    game: &Posg,
+    objective: ExpectedReward<'_>,
+    structure: &Structure,
+    settings: &Settings,
+    start: usize,
+    cancel: &Cancel,
+    observer: &mut dyn Observer,
+) -> Result<(Fsc, RewardStart, f64), OptimiseError> {
+    let clock = Instant::now();
+    let settings = settings.for_start(start);
+    let objective = Objective::for_expected_reward(
+        game,
+        (objective.target, objective.rewards, objective.minimise),
+        Softmax::new(&structure.defender, settings.optimise_initial),
+        Softmax::new(&structure.adversary, settings.optimise_initial),
+        &settings.solver_settings(),
+    )?;
+    let sense = objective.sense();
+    let mut rng = ChaCha8Rng::seed_from_u64(settings.seed);
+    rng.set_stream(start as u64);
+    let mut optimiser =
+        Optimiser::new(Method::Ascent, objective, &settings, rng).with_cancel(cancel);
+    let mut run = optimiser.begin(clock)?;
+    let stopped = optimiser.advance(&mut run, settings.max_iterations, observer)?;
+    let outcome = optimiser.finish(run, stopped.unwrap_or(Status::MaxIterations))?;
+    let (objective, _) = optimiser.into_parts();
+    let defender = objective.defender().controller(&outcome.best.defender)?;
+    let result = RewardStart {
+        value: sense * outcome.best.worst_case,
+        iterations: outcome.iterations,
+        status: outcome.status,
+        seconds: clock.elapsed().as_secs_f64(),
+    };
+    Ok((defender, result, outcome.logit_bound))
+}
+
+/// The best of `defender` and its roundings ([`rounded_candidates`]: the
+/// partial and the argmax roundings, each on its own support) by expected
+/// reward, evaluated exactly; a rounding whose expected reward is infinite
+/// (it dropped every way to the target somewhere) is left out. Returns the
+/// defender, its evaluation and where it came from.
+fn rounded(
+    game: &Posg,
+    objective: ExpectedReward<'_>,
+    defender: Fsc,
+    settings: &Settings,
+) -> Result<(Fsc, Evaluation, RecordSource), OptimiseError> {
+    let sense = if objective.minimise { -1.0 } else { 1.0 };
+    let evaluation = exact_value(game, objective, &defender, settings)?;
+    let mut best = (defender, evaluation, RecordSource::Gradient);
+    for (_, candidate) in rounded_candidates(&best.0)? {
+        let evaluation = match exact_value(game, objective, &candidate, settings) {
+            Ok(evaluation) if evaluation.value.is_finite() => evaluation,
+            Ok(_) => continue,
+            Err(error) if error.is_numerical() => continue,
+            Err(error) => return Err(error),
+        };
+        if sense * evaluation.value > sense * best.1.value {
+            best = (candidate, evaluation, RecordSource::Rounding);
+        }
+    }
+    Ok(best)
+}
+
+/// The expected reward of `defender`, evaluated afresh on its own support.
+fn exact_value(
+    game: &Posg,
+    objective: ExpectedReward<'_>,
+    defender: &Fsc,
+    settings: &Settings,
+) -> Result<Evaluation, OptimiseError> {
+    let adversary = Fsc::uniform_enabled(crate::controller::Role::Adversary, 1, game.adversary());
+    let mut evaluator = Evaluator::for_expected_reward(
+        game,
+        objective.target,
+        objective.rewards,
+        &Support::of(defender),
+        &Support::of(&adversary),
+        &settings.solver_settings(),
+    )?;
+    Ok(evaluator.evaluate(
+        &Support::probabilities_of(defender),
+        &Support::probabilities_of(&adversary),
+    )?)
+}
+
+/// One start's view of the shared observer: each record, marked with the
+/// start's index and with the expected reward's sign restored (the driver
+/// maximises `-V` for a cost), goes to the observer as it happens.
+struct Signed<'a, 'o> {
+    start: usize,
+    sense: f64,
+    shared: &'a Mutex<&'o mut (dyn Observer + Send)>,
+}
+
+impl Observer for Signed<'_, '_> {
+    fn observe(&mut self, record: &IterationRecord) {
+        let record = IterationRecord {
+            start: self.start,
+            value: self.sense * record.value,
+            worst_case: record.worst_case.map(|w| self.sense * w),
+            ..*record
+        };
+        self.shared
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner)
+            .observe(&record);
+    }
+}
