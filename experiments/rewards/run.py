@@ -72,6 +72,11 @@ MODELS = {
 }
 
 
+def set_binary(path):
+    global BINARY
+    BINARY = os.path.abspath(path)
+
+
 def git_show(repo, path):
     return subprocess.run(["git", "--git-dir", repo, "show", f"HEAD:{path}"], check=True,
                           capture_output=True, text=True).stdout
@@ -194,7 +199,9 @@ def main():
     parser.add_argument("--posg-limit", type=int, default=300, help="posg-fsc's limit, seconds")
     parser.add_argument("--nodes", type=int, nargs="+", default=[1, 2, 3])
     parser.add_argument("--out", default=os.path.join(ROOT, "results", "rewards.csv"))
+    parser.add_argument("--binary", default=BINARY, help="the posg-fsc binary (default: the build's)")
     args = parser.parse_args()
+    set_binary(args.binary)
     if not os.path.exists(BINARY):
         subprocess.run(["cargo", "build", "--release", "--quiet"], cwd=ROOT, check=True)
     rows = []

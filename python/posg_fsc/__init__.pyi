@@ -25,7 +25,7 @@ its "=?"), or the path of such a file (docs/formats.md section 6). Every
 function takes `props=` instead of `ltl=`; `Pmin=? [PATH]` makes the
 complement of PATH the objective. An expected-reward query
 ('R{"steps"}min=? [F "goal"]', docs/method.md section 9) is taken by
-Game.evaluate only, so far."""
+Game.evaluate and, on a game without adversary, by solve, so far."""
 
 class Error(Exception):
     """Base class of every error posg_fsc raises; the message is the one the
@@ -246,6 +246,28 @@ class Evaluation:
     adversary_initial_gradient: Optional[npt.NDArray[np.float64]]
     """dV/d init_adv, shape (nodes,)."""
 
+class RewardSolveResult:
+    """The result of solve() for an expected-reward query (props=, on a game
+    without adversary; docs/method.md section 9), with the names of its
+    summary.json (docs/formats.md section 9)."""
+
+    defender: Controller
+    """The best defender found."""
+    value: float
+    """Its expected reward, evaluated exactly (inf where it is infinite)."""
+    error_bound: float
+    """A bound on |value - exact value| (docs/method.md section 8)."""
+    query: Optional[Query]
+    """The query restated in its own terms."""
+    best_start: int
+    """The start whose defender was returned."""
+    starts: list[dict[str, Any]]
+    """Each start's value, iterations, status and seconds."""
+    curve: list[dict[str, Any]]
+    """Every iteration's record of every start, then the returned one."""
+    seconds: float
+    """Wall-clock seconds."""
+
 class SolveResult:
     """The result of solve(), with the names of summary.json
     (docs/formats.md section 9)."""
@@ -319,8 +341,10 @@ def solve(
     out: Optional[Path] = None,
     force: bool = False,
     **settings: Any,
-) -> SolveResult:
-    """Tunes a defender against a worst-case adversary, as `posg-fsc solve`.
+) -> Union[SolveResult, RewardSolveResult]:
+    """Tunes a defender against a worst-case adversary, as `posg-fsc solve`;
+    for an expected-reward query (props=, on a game without adversary) the
+    defender of def_nodes nodes that optimises it (a RewardSolveResult).
 
     `settings` are the command line's options with _ for - and the same
     defaults (seed=0, max_iterations=3000, starts=4, structures=["full",

@@ -18,6 +18,7 @@ mod errors;
 mod evaluate;
 mod game;
 mod objective;
+mod reward;
 mod solve;
 
 use pyo3::prelude::*;
@@ -39,6 +40,7 @@ fn posg_fsc_python(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add_class::<evaluate::Evaluation>()?;
     module.add_class::<evaluate::Query>()?;
     module.add_class::<solve::SolveResult>()?;
+    module.add_class::<reward::RewardSolveResult>()?;
     module.add_function(wrap_pyfunction!(game::example_grid, module)?)?;
     module.add_function(wrap_pyfunction!(solve::solve, module)?)?;
     module.add_function(wrap_pyfunction!(solve::sweep, module)?)?;

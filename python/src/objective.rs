@@ -93,6 +93,14 @@ impl Asked {
         }
     }
 
+    /// The expected-reward query of `props=`, if it is one.
+    pub fn reward(&self) -> Option<&RewardQuery> {
+        match self.property().map(|p| &p.query) {
+            Some(posg_fsc::ltl::props::Query::Reward(query)) => Some(query),
+            _ => None,
+        }
+    }
+
     /// The property file's query, for `props=`.
     pub fn property(&self) -> Option<&Property> {
         match self {
@@ -113,8 +121,9 @@ impl Asked {
                     Kind::Settings,
                     format!(
                         "`{}` is an expected-reward query: Game.evaluate computes its value for \
-                         given controllers; {function} takes probability queries (Pmax=?, Pmin=?) \
-                         so far (docs/method.md section 9)",
+                         given controllers and solve optimises it on a game without adversary; \
+                         {function} takes probability queries (Pmax=?, Pmin=?) so far \
+                         (docs/method.md section 9)",
                         property.text
                     ),
                 )),

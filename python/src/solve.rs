@@ -89,10 +89,10 @@ pub fn settings(function: &str, kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<
 /// What the observers of one run share: the Python callback, and the first
 /// exception (the callback's own, or KeyboardInterrupt) to raise after the
 /// run stopped.
-struct Run {
-    callback: Option<Py<PyAny>>,
-    error: Mutex<Option<PyErr>>,
-    stop: Cancel,
+pub(crate) struct Run {
+    pub(crate) callback: Option<Py<PyAny>>,
+    pub(crate) error: Mutex<Option<PyErr>>,
+    pub(crate) stop: Cancel,
 }
 
 impl Run {
@@ -141,9 +141,9 @@ impl Run {
 }
 
 /// One structure's observer.
-struct PythonObserver {
-    run: Arc<Run>,
-    structure: String,
+pub(crate) struct PythonObserver {
+    pub(crate) run: Arc<Run>,
+    pub(crate) structure: String,
 }
 
 impl Observer for PythonObserver {
@@ -153,7 +153,7 @@ impl Observer for PythonObserver {
 }
 
 /// How often the waiting thread looks for Ctrl-C while a job runs.
-const SIGNAL_POLL: Duration = Duration::from_millis(10);
+pub(crate) const SIGNAL_POLL: Duration = Duration::from_millis(10);
 
 /// Runs `job` on a thread of its own while this (Python's) thread waits
 /// without the GIL, checking for Ctrl-C every [`SIGNAL_POLL`] (signals are
@@ -181,8 +181,19 @@ fn run_job(
             structure: slot.structure.name.clone(),
         }) as Box<dyn Observer + Send>
     };
+    with_signals(py, &run, || work(job, observers, out, query))
+}
+
+/// Runs `work` on a thread of its own while this (Python's) thread waits
+/// without the GIL, checking for Ctrl-C every [`SIGNAL_POLL`] (which
+/// stops `run`); the error that stopped `run`, if any, is raised after it.
+pub(crate) fn with_signals<T: Send>(
+    py: Python<'_>,
+    run: &Run,
+    work: impl FnOnce() -> PyResult<T> + Send,
+) -> PyResult<T> {
     let outcome = std::thread::scope(|scope| {
-        let worker = scope.spawn(|| work(job, observers, out, query));
+        let worker = scope.spawn(work);
         while !worker.is_finished() {
             py.detach(|| std::thread::sleep(SIGNAL_POLL));
             if let Err(interrupt) = py.check_signals() {
@@ -394,10 +405,29 @@ pub fn solve(
     force: bool,
     allow_unused_propositions: bool,
     settings: Option<&Bound<'_, PyDict>>,
-) -> PyResult<SolveResult> {
+) -> PyResult<Py<PyAny>> {
     let asked = Asked::from_keywords(ltl, props)?;
-    let ltl = &asked.formula("solve")?;
     let settings = self::settings("solve", settings)?;
+    if let Some(reward) = asked.reward() {
+        if defender.is_some() || adversary.is_some() || adv_nodes.is_some() {
+            return Err(raise(
+                Kind::Settings,
+                "an expected-reward query is optimised from the full support of def_nodes nodes \
+                 on a game without adversary: drop defender=, adversary= and adv_nodes=",
+            ));
+        }
+        let nodes = def_nodes.map_or(Ok(1), |n| size("def_nodes", n))?;
+        let request = crate::reward::Request {
+            asked: &asked,
+            reward,
+            nodes,
+            settings: &settings,
+            allow_unused: allow_unused_propositions,
+        };
+        let output = out.as_ref().map(|p| (p, force));
+        return crate::reward::solve(py, game, request, on_iteration, output);
+    }
+    let ltl = &asked.formula("solve")?;
     let posg = &game.get().inner;
     let start_defender = defender
         .map(|d| Controller::resolve("defender", Some(d), posg, Role::Defender))
@@ -445,7 +475,8 @@ pub fn solve(
     }
     let out = out.as_ref().map(|p| (p, force));
     let outcome = run_job(py, job, on_iteration, out, asked.property())?;
-    result(py, posg, &settings, &outcome, asked.property())
+    let result = result(py, posg, &settings, &outcome, asked.property())?;
+    Ok(Py::new(py, result)?.into_any())
 }
 
 /// `posg-fsc sweep`: [`solve`] for every pair of sizes, the defender sizes

@@ -2,13 +2,14 @@
 restated in its own terms; expected-reward queries in Game.evaluate, with
 the values of `posg-fsc eval`."""
 
+import json
 import math
 
 import numpy as np
 import pytest
 
 import posg_fsc
-from conftest import REPOSITORY, cli_json
+from conftest import REPOSITORY, cli_json, run_cli
 
 PROBE = REPOSITORY / "tests" / "data" / "rewards" / "probe.drn"
 PROBE_PROPS = REPOSITORY / "tests" / "data" / "rewards" / "probe.props"
@@ -76,7 +77,7 @@ def test_props_go_everywhere_ltl_goes_and_reward_queries_are_refused_where_not_t
     bracket = pmin.certified
     assert pmin.query.certified == [1 - bracket["upper_bound"], 1 - bracket["certified_lower"]]
     for function in [
-        lambda: posg_fsc.solve(game, props='R{"r"}min=? [F "goal"]'),
+        lambda: posg_fsc.sweep(game, props='R{"r"}min=? [F "goal"]'),
         lambda: posg_fsc.support(game, props='Rmax=? [F "goal"]'),
     ]:
         with pytest.raises(posg_fsc.SettingsError, match="is an expected-reward query"):
@@ -97,3 +98,22 @@ def test_bad_props_are_errors_that_say_what_to_give(grid_file, tmp_path):
         game.evaluate(props=tmp_path / "missing.props")
     with pytest.raises(posg_fsc.SettingsError, match="certify needs the defender"):
         posg_fsc.certify(game, "F goal")
+
+
+def test_solve_optimises_an_expected_cost_on_a_pomdp_as_the_cli_does(cli, tmp_path):
+    game = posg_fsc.Game.from_drn(PROBE)
+    seen = []
+    result = posg_fsc.solve(game, props=PROBE_PROPS, def_nodes=1, seed=1, on_iteration=seen.append,
+                            out=tmp_path / "out")
+    assert result.value == 1.0 and result.query.value == 1.0
+    assert result.curve[-1]["returned"] and result.curve[-1]["value"] == 1.0
+    assert len(result.starts) == 4 and seen
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert summary["value"] == 1.0 and summary["query"]["text"] == 'Rmin=? [F "goal"]'
+    run_cli(cli, "solve", PROBE, "--props", PROBE_PROPS, "--seed", "1", "--out", tmp_path / "cli",
+            "--quiet")
+    by_cli = json.loads((tmp_path / "cli" / "summary.json").read_text())
+    assert by_cli["value"] == summary["value"]
+    assert [s["value"] for s in by_cli["starts"]] == [s["value"] for s in result.starts]
+    with pytest.raises(posg_fsc.SettingsError, match="drop defender="):
+        posg_fsc.solve(game, props=PROBE_PROPS, defender="uniform:1")

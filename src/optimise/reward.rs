@@ -22,11 +22,11 @@ use serde::Serialize;
 use super::objective::Objective;
 use super::observer::{IterationRecord, Observer, RecordSource};
 use super::optimiser::Optimiser;
-use super::rounding::rounded_candidates;
+use super::rounding::{rounded_candidates, truncated};
 use super::softmax::Softmax;
 use super::{Cancel, Method, OptimiseError, Settings, Status, Structure};
 use crate::automaton::Dra;
-use crate::controller::{Fsc, Support};
+use crate::controller::{Choice, Fsc, Support};
 use crate::game::{Posg, RewardModel};
 use crate::value::{Evaluation, Evaluator};
 
@@ -163,6 +163,8 @@ fn race(
         .ok_or(OptimiseError::NoStructure)?;
     let (looped, best, logit_bound) = runs[best_start].clone();
     let (defender, evaluation, source) = rounded(game, objective, looped, settings)?;
+    let (defender, evaluation, source) =
+        climb(game, objective, (defender, evaluation, source), settings)?;
     let solution = RewardSolution {
         defender,
         value: evaluation.value,
@@ -272,13 +274,86 @@ fn rounded(
     Ok(best)
 }
 
-/// The expected reward of `defender`, evaluated afresh on its own support.
-fn exact_value(
+/// Hill-climbing over deterministic controllers from the argmax rounding
+/// of `from`'s defender: each pass visits the blocks `(g, o)` in order and,
+/// in each, every other `(next node, enabled action)` choice, moving to the
+/// first that improves the expected reward in the query's direction by
+/// more than both values' error bounds; passes repeat until one improves
+/// nothing or the evaluations have explored `settings.max_work` GMC
+/// states. The gradient's optima are often randomised; where a
+/// deterministic controller beats them in a basin the ascent did not find,
+/// this finds it. Returns the better of `from` and the climb's end.
+fn climb(
+    game: &Posg,
+    objective: ExpectedReward<'_>,
+    from: (Fsc, Evaluation, RecordSource),
+    settings: &Settings,
+) -> Result<(Fsc, Evaluation, RecordSource), OptimiseError> {
+    let sense = if objective.minimise { -1.0 } else { 1.0 };
+    let mut here = truncated(&from.0, f64::INFINITY)?;
+    let (mut value, mut work) = match exact_value_and_work(game, objective, &here, settings) {
+        Ok((evaluation, work)) if evaluation.value.is_finite() => (evaluation, work),
+        Ok(_) => return Ok(from),
+        Err(error) if error.is_numerical() => return Ok(from),
+        Err(error) => return Err(error),
+    };
+    let player = game.defender();
+    let nodes = here.num_nodes();
+    let mut improved = true;
+    while improved && work < settings.max_work {
+        improved = false;
+        for b in 0..here.blocks.len() {
+            let o = b % here.num_observations();
+            let choices: Vec<(usize, usize)> = (0..nodes)
+                .flat_map(|next| player.enabled_actions(o).map(move |u| (next, u)))
+                .collect();
+            for (next, action) in choices {
+                if work >= settings.max_work {
+                    break;
+                }
+                let current = &here.blocks[b][0];
+                if (current.next, current.action) == (next, action) {
+                    continue;
+                }
+                let mut candidate = here.clone();
+                candidate.blocks[b] = vec![Choice {
+                    next,
+                    action,
+                    probability: 1.0,
+                    logit: None,
+                }];
+                let (evaluation, spent) =
+                    match exact_value_and_work(game, objective, &candidate, settings) {
+                        Ok(found) => found,
+                        Err(error) if error.is_numerical() => continue,
+                        Err(error) => return Err(error),
+                    };
+                work += spent;
+                let margin = evaluation.error_bound + value.error_bound;
+                if evaluation.value.is_finite() && sense * (evaluation.value - value.value) > margin
+                {
+                    here = candidate;
+                    value = evaluation;
+                    improved = true;
+                }
+            }
+        }
+    }
+    if sense * (value.value - from.1.value) > value.error_bound + from.1.error_bound {
+        Ok((here, value, RecordSource::LocalSearch))
+    } else {
+        Ok(from)
+    }
+}
+
+/// [`exact_value`] and the GMC states its evaluation explored (the unit of
+/// `settings.max_work`).
+fn exact_value_and_work(
     game: &Posg,
     objective: ExpectedReward<'_>,
     defender: &Fsc,
     settings: &Settings,
-) -> Result<Evaluation, OptimiseError> {
+) -> Result<(Evaluation, f64), OptimiseError> {
     let adversary = Fsc::uniform_enabled(crate::controller::Role::Adversary, 1, game.adversary());
     let mut evaluator = Evaluator::for_expected_reward(
         game,
@@ -288,10 +363,21 @@ fn exact_value(
         &Support::of(&adversary),
         &settings.solver_settings(),
     )?;
-    Ok(evaluator.evaluate(
+    let evaluation = evaluator.evaluate(
         &Support::probabilities_of(defender),
         &Support::probabilities_of(&adversary),
-    )?)
+    )?;
+    Ok((evaluation, evaluator.gmc().num_states() as f64))
+}
+
+/// The expected reward of `defender`, evaluated afresh on its own support.
+fn exact_value(
+    game: &Posg,
+    objective: ExpectedReward<'_>,
+    defender: &Fsc,
+    settings: &Settings,
+) -> Result<Evaluation, OptimiseError> {
+    Ok(exact_value_and_work(game, objective, defender, settings)?.0)
 }
 
 /// One start's view of the shared observer: each record, marked with the

@@ -1,0 +1,195 @@
+//! `posg_fsc.solve` of an expected-reward query (docs/method.md section 9):
+//! the library's expected-reward optimiser on a game without adversary
+//! ([`posg_fsc::optimise::optimise_expected_reward`]), into a solve
+//! directory when `out=` is given, with the same callback, Ctrl-C and
+//! thread handling as a probability objective.
+
+use std::path::PathBuf;
+use std::sync::{Arc, Mutex, PoisonError};
+
+use posg_fsc::ltl::props::RewardQuery;
+use posg_fsc::optimise::{
+    Cancel, ExpectedReward, IterationRecord, Observer, RewardSolution, Settings,
+    optimise_expected_reward,
+};
+use posg_fsc::output::OutputDirectory;
+use posg_fsc::pipeline::QueryValue;
+use posg_fsc::pipeline::RewardObjective;
+use posg_fsc::pipeline::directory::SolveDirectory;
+use pyo3::prelude::*;
+use pyo3::types::PyList;
+
+use crate::controller::Controller;
+use crate::convert::serialised;
+use crate::errors::convert;
+use crate::evaluate::Query;
+use crate::game::Game;
+use crate::objective::{self, Asked};
+use crate::solve::{PythonObserver, Run, with_signals};
+
+/// What `solve` was asked for an expected-reward query.
+pub struct Request<'a> {
+    /// The objective as given (`props=`).
+    pub asked: &'a Asked,
+    /// Its reward query.
+    pub reward: &'a RewardQuery,
+    /// The defender's nodes.
+    pub nodes: usize,
+    /// The optimiser's settings.
+    pub settings: &'a Settings,
+    /// `allow_unused_propositions=`.
+    pub allow_unused: bool,
+}
+
+/// The result of `posg_fsc.solve` for an expected-reward query, with the
+/// names of its `summary.json` (docs/formats.md section 9).
+#[pyclass(module = "posg_fsc", name = "RewardSolveResult", frozen, get_all)]
+pub struct RewardSolveResult {
+    /// The best defender found.
+    pub defender: Py<Controller>,
+    /// Its expected reward, evaluated exactly (`inf` where it is infinite).
+    pub value: f64,
+    /// A bound on `|value - exact value|` (docs/method.md section 8).
+    pub error_bound: f64,
+    /// The query restated in its own terms.
+    pub query: Option<Query>,
+    /// The start whose defender was returned.
+    pub best_start: usize,
+    /// Each start's `value`, `iterations`, `status` and `seconds`.
+    pub starts: Py<PyList>,
+    /// Every iteration's record of every start, then the returned one (a
+    /// dict each, as the rows of `curve.csv`).
+    pub curve: Py<PyList>,
+    /// Wall-clock seconds.
+    pub seconds: f64,
+}
+
+#[pymethods]
+impl RewardSolveResult {
+    fn __repr__(&self) -> String {
+        format!(
+            "RewardSolveResult(value={}, error_bound={:e}, seconds={:.2})",
+            self.value, self.error_bound, self.seconds
+        )
+    }
+}
+
+/// Every record, kept for the result's `curve`.
+#[derive(Clone, Default)]
+struct Recorded(Arc<Mutex<Vec<IterationRecord>>>);
+
+impl Observer for Recorded {
+    fn observe(&mut self, record: &IterationRecord) {
+        self.0
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner)
+            .push(*record);
+    }
+}
+
+/// `solve` of `request` on `game`: `on_iteration` sees each record, `out`
+/// (with `force`) receives the solve directory.
+pub fn solve(
+    py: Python<'_>,
+    game: &Bound<'_, Game>,
+    request: Request<'_>,
+    on_iteration: Option<Py<PyAny>>,
+    out: Option<(&PathBuf, bool)>,
+) -> PyResult<Py<PyAny>> {
+    let posg = &game.get().inner;
+    let property = request
+        .asked
+        .property()
+        .expect("a reward query came from props=");
+    let objective = objective::reward(
+        py,
+        posg,
+        request.reward,
+        property.maximise,
+        request.allow_unused,
+    )?;
+    let run = Arc::new(Run {
+        callback: on_iteration,
+        error: Mutex::new(None),
+        stop: Cancel::new(),
+    });
+    let recorded = Recorded::default();
+    let observers: Vec<Box<dyn Observer + Send>> = vec![
+        Box::new(recorded.clone()),
+        Box::new(PythonObserver {
+            run: Arc::clone(&run),
+            structure: "full".into(),
+        }),
+    ];
+    let (nodes, settings) = (request.nodes, request.settings);
+    let solution = with_signals(py, &run, || {
+        optimise(
+            posg, &objective, nodes, settings, &run.stop, observers, out, property,
+        )
+    })?;
+    let records = recorded.0.lock().unwrap_or_else(PoisonError::into_inner);
+    let curve = PyList::empty(py);
+    for record in records.iter() {
+        curve.append(serialised(py, record)?)?;
+    }
+    let starts = PyList::empty(py);
+    for start in &solution.starts {
+        starts.append(serialised(py, start)?)?;
+    }
+    let query = QueryValue::rewarded(property, solution.value, solution.error_bound);
+    let result = RewardSolveResult {
+        defender: Py::new(py, Controller::new(solution.defender, &game.get().inner))?,
+        value: solution.value,
+        error_bound: solution.error_bound,
+        query: Some(query.into()),
+        best_start: solution.best_start,
+        starts: starts.unbind(),
+        curve: curve.unbind(),
+        seconds: solution.seconds,
+    };
+    Ok(Py::new(py, result)?.into_any())
+}
+
+/// The optimiser, into the solve directory `out` when given.
+#[allow(clippy::too_many_arguments)]
+fn optimise(
+    game: &posg_fsc::game::Posg,
+    objective: &RewardObjective,
+    nodes: usize,
+    settings: &Settings,
+    cancel: &Cancel,
+    mut observers: Vec<Box<dyn Observer + Send>>,
+    out: Option<(&PathBuf, bool)>,
+    property: &posg_fsc::ltl::props::Property,
+) -> PyResult<RewardSolution> {
+    let Some((path, force)) = out else {
+        let expected = ExpectedReward {
+            target: &objective.target,
+            rewards: &objective.rewards,
+            minimise: objective.minimise,
+        };
+        return optimise_expected_reward(game, expected, nodes, settings, cancel, &mut observers)
+            .map_err(convert);
+    };
+    let directory = OutputDirectory::create(path, force).map_err(convert)?;
+    let command_line = vec!["python".to_string(), "posg_fsc.solve".to_string()];
+    let solve = SolveDirectory {
+        path: directory.path(),
+        seconds_axis: false,
+        command_line: &command_line,
+        plot_format: None,
+        query: Some(property),
+    };
+    let solution = solve
+        .solve_expected_reward(
+            game,
+            objective,
+            nodes,
+            settings,
+            cancel,
+            Box::new(observers),
+        )
+        .map_err(convert)?;
+    directory.commit().map_err(convert)?;
+    Ok(solution)
+}
