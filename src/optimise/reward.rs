@@ -25,6 +25,7 @@ use super::optimiser::Optimiser;
 use super::rounding::{rounded_candidates, truncated};
 use super::softmax::Softmax;
 use super::{Cancel, Method, OptimiseError, Settings, Status, Structure};
+use super::{WARM_START_MIX, embed, pad};
 use crate::automaton::Dra;
 use crate::controller::{Choice, Fsc, Support};
 use crate::game::{Posg, RewardModel};
@@ -99,10 +100,7 @@ pub fn optimise_expected_reward(
         let solution = infinite_on_full_support(objective, structure.defender, started)?;
         (solution, 0, settings.logit_bound, RecordSource::Gradient)
     } else {
-        let (solution, iterations, logit_bound, source) = race(
-            game, objective, &structure, settings, cancel, observer, started,
-        )?;
-        (solution, iterations, logit_bound, source)
+        grown(game, objective, nodes, settings, cancel, observer, started)?
     };
     observer.observe(&IterationRecord {
         start: solution.best_start,
@@ -124,14 +122,70 @@ pub fn optimise_expected_reward(
     Ok(solution)
 }
 
-/// The seeded starts in parallel on `structure`, each reporting to
-/// `observer` as it goes; the best start's defender or its best rounding,
-/// with the iterations of that start, its logit bound and the source of
-/// the defender returned.
+/// The race of each defender size from 1 node up to `nodes` (only `nodes`
+/// with `settings.grow_defender` off), as the probability objectives grow
+/// (method.md section 4, "growth of memory"): each size races its fresh
+/// starts and one more, the best smaller defender embedded ([`embed`]),
+/// and returns the better of its own result and that smaller defender
+/// padded to its size ([`pad`]: the same behaviour, so the same value).
+/// A larger defender can play every smaller one, so the value never gets
+/// worse with memory. Only the last size's records go to `observer`.
+fn grown(
+    game: &Posg,
+    objective: ExpectedReward<'_>,
+    nodes: usize,
+    settings: &Settings,
+    cancel: &Cancel,
+    observer: &mut (dyn Observer + Send),
+    started: Instant,
+) -> Result<(RewardSolution, usize, f64, RecordSource), OptimiseError> {
+    let sense = if objective.minimise { -1.0 } else { 1.0 };
+    let first = if settings.grow_defender { 1 } else { nodes };
+    let mut previous: Option<(RewardSolution, usize, f64, RecordSource)> = None;
+    for size in first..=nodes {
+        let mut quiet = ();
+        let sink: &mut (dyn Observer + Send) = if size == nodes {
+            &mut *observer
+        } else {
+            &mut quiet
+        };
+        let structure = Structure::full(game, size, 1, settings.optimise_initial);
+        let warm = match &previous {
+            Some((smaller, ..)) => Some(embed(
+                &smaller.defender,
+                &structure.defender,
+                WARM_START_MIX,
+                settings.optimise_initial,
+            )?),
+            None => None,
+        };
+        let mut result = race(
+            game, objective, &structure, warm, settings, cancel, sink, started,
+        )?;
+        if let Some((smaller, ..)) = previous {
+            if sense * smaller.value > sense * result.0.value {
+                result.0.defender = pad(&smaller.defender, size)?;
+                result.0.value = smaller.value;
+                result.0.error_bound = smaller.error_bound;
+                result.3 = RecordSource::Gradient;
+            }
+        }
+        previous = Some(result);
+    }
+    previous.ok_or(OptimiseError::NoStructure)
+}
+
+/// The seeded starts in parallel on `structure` (and one more from `warm`,
+/// a defender on its support, when given), each reporting to `observer` as
+/// it goes; the best start's defender or its best rounding or climb, with
+/// the iterations of that start, its logit bound and the source of the
+/// defender returned.
+#[allow(clippy::too_many_arguments)]
 fn race(
     game: &Posg,
     objective: ExpectedReward<'_>,
     structure: &Structure,
+    warm: Option<Fsc>,
     settings: &Settings,
     cancel: &Cancel,
     observer: &mut (dyn Observer + Send),
@@ -139,7 +193,13 @@ fn race(
 ) -> Result<(RewardSolution, usize, f64, RecordSource), OptimiseError> {
     let shared = Mutex::new(observer);
     let sense = if objective.minimise { -1.0 } else { 1.0 };
-    let runs: Vec<(Fsc, RewardStart, f64)> = (0..settings.starts)
+    let warm = warm.map(|defender| Structure {
+        defender,
+        warm: None,
+        ..structure.clone()
+    });
+    let starts = settings.starts + usize::from(warm.is_some());
+    let runs: Vec<(Fsc, RewardStart, f64)> = (0..starts)
         .into_par_iter()
         .map(|start| {
             let mut signed = Signed {
@@ -147,10 +207,11 @@ fn race(
                 sense,
                 shared: &shared,
             };
+            let begins = warm.as_ref().filter(|_| start == settings.starts);
             run_start(
                 game,
                 objective,
-                structure,
+                begins.unwrap_or(structure),
                 settings,
                 start,
                 cancel,
