@@ -177,6 +177,15 @@ def run_paynt(directory, k, timeout):
             "wall_seconds": wall, "cpu_seconds": cpu}
 
 
+def paynt_rows(path):
+    """PAYNT's results of an earlier run of this script, by (model, k)."""
+    with open(path) as handle:
+        rows = csv.DictReader(line for line in handle if not line.startswith("#"))
+        return {(r["model"], int(r["nodes"])): {
+            "status": r["paynt_status"], "value": float(r["paynt"]) if r["paynt"] else None,
+            "wall_seconds": None, "cpu_seconds": float(r["paynt_cpu"])} for r in rows}
+
+
 def better(posg, paynt, maximise):
     """How much posg-fsc's value beats PAYNT's, in the query's direction,
     relative to PAYNT's magnitude (negative: PAYNT is better)."""
@@ -200,10 +209,18 @@ def main():
     parser.add_argument("--nodes", type=int, nargs="+", default=[1, 2, 3])
     parser.add_argument("--out", default=os.path.join(ROOT, "results", "rewards.csv"))
     parser.add_argument("--binary", default=BINARY, help="the posg-fsc binary (default: the build's)")
+    parser.add_argument("--paynt-from", help="reuse PAYNT's rows (value, status, CPU) of an earlier CSV")
+    parser.add_argument("--plot-from", help="only draw the plot of this CSV (next to it, as .png)")
     args = parser.parse_args()
+    if args.plot_from:
+        with open(args.plot_from) as handle:
+            rows = list(csv.DictReader(line for line in handle if not line.startswith("#")))
+        plot(rows, args.plot_from.replace(".csv", ".png"))
+        return
     set_binary(args.binary)
     if not os.path.exists(BINARY):
         subprocess.run(["cargo", "build", "--release", "--quiet"], cwd=ROOT, check=True)
+    earlier = paynt_rows(args.paynt_from) if args.paynt_from else {}
     rows = []
     for name, (half, label) in MODELS.items():
         directory, props = prepare(args.repo, args.work, name, label)
@@ -211,7 +228,7 @@ def main():
         for k in args.nodes:
             posg = run_posg(directory, k, args.posg_limit)
             storm = storm_value(directory, posg["out"], props) if posg["status"] == "ok" else None
-            paynt = run_paynt(directory, k, args.timeout)
+            paynt = earlier.get((name, k)) or run_paynt(directory, k, args.timeout)
             row = {
                 "model": name, "half": half, "query": props, "nodes": k,
                 "posg_fsc": posg.get("value"), "posg_fsc_error_bound": posg.get("error_bound"),
@@ -232,6 +249,11 @@ def main():
     plot(rows, args.out.replace(".csv", ".png"))
 
 
+def number(text):
+    """A CSV cell (or a row's value) as a float; None where it is empty."""
+    return None if text in (None, "") else float(text)
+
+
 def plot(rows, path):
     """posg-fsc's gain over PAYNT (relative, in the query's direction) and
     the CPU ratio, per model and k, tune and check halves side by side."""
@@ -242,14 +264,16 @@ def plot(rows, path):
     labels = [f"{r['model']} k={r['nodes']}" for r in rows]
     colours = ["tab:blue" if r["half"] == "tune" else "tab:orange" for r in rows]
     figure, (gain, cpu) = plt.subplots(2, 1, figsize=(12, 7), sharex=True)
-    values = [r["posg_fsc_better_relative"] if r["posg_fsc_better_relative"] is not None else 0
-              for r in rows]
-    gain.bar(range(len(rows)), values, color=colours)
+    gains = [number(r["posg_fsc_better_relative"]) for r in rows]
+    gain.bar(range(len(rows)), [0 if g is None else g for g in gains], color=colours)
+    for i, g in enumerate(gains):
+        if g is None:
+            gain.text(i, 0.05, "no PAYNT value", rotation=90, ha="center", va="bottom", fontsize=7)
     gain.axhline(0, color="black", linewidth=0.8)
     gain.axhline(-1e-3, color="grey", linewidth=0.8, linestyle="--")
     gain.set_ylabel("posg-fsc better than PAYNT\n(relative, query's direction)")
     gain.set_title("Expected-reward POMDPs of PAYNT's repository: blue = tune half, orange = check half")
-    ratios = [r["posg_fsc_cpu"] / max(r["paynt_cpu"], 1e-3) for r in rows]
+    ratios = [number(r["posg_fsc_cpu"]) / max(number(r["paynt_cpu"]), 1e-3) for r in rows]
     cpu.bar(range(len(rows)), ratios, color=colours)
     cpu.set_yscale("log")
     cpu.axhline(1, color="black", linewidth=0.8)
