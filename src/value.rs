@@ -449,7 +449,10 @@ impl Evaluator {
     /// explored up to its decided states: `(I - Q) x = r` on the states
     /// that reach `T` with probability 1 ([`Recurrence::until_target`]),
     /// with the one-step reward `r(m)` as right-hand side. Where some state
-    /// misses `T` with positive probability, the value is infinite.
+    /// misses `T` with positive probability, the value is infinite. The
+    /// solver's tolerance, made for values in [0, 1], is scaled by the
+    /// largest step reward ([`RewardModel::largest_step_reward`], at least
+    /// 1): the residual of a reward's solve grows with its right-hand side.
     pub fn for_expected_reward(
         game: &Posg,
         target: &Dra,
@@ -468,7 +471,11 @@ impl Evaluator {
             defender,
             adversary,
         );
-        let system = TransientSystem::build(&gmc, &recurrence, Some(reward), settings)?;
+        let scaled = SolverSettings {
+            tolerance: settings.tolerance * rewards.largest_step_reward().max(1.0),
+            ..*settings
+        };
+        let system = TransientSystem::build(&gmc, &recurrence, Some(reward), &scaled)?;
         let values = recurrence
             .classes
             .iter()

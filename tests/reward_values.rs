@@ -554,6 +554,24 @@ fn solve_maximises_a_discounted_reward_and_refuses_what_it_cannot_optimise() {
     assert!(error.contains("infinite expected cost"), "{error}");
     let summary = solve_reward(&pit, "Rmax=? [F \"goal\"]", &[]).unwrap();
     assert_eq!(summary["value"], "inf");
+    // Finite on the full support, but `stay` alone never reaches the goal:
+    // for Rmax that infinite reward is the optimum, found by the rounding.
+    let loop_game = write(
+        "loop.posg.json",
+        r#"{"posg": 1, "states": ["s", "goal"], "initial": {"s": 1.0},
+        "labels": {"goal": ["goal"]},
+        "defender": {"actions": ["go", "stay"], "observe": "full"},
+        "transitions": [
+          {"state": "s", "defender": "go", "next": {"goal": 1.0}},
+          {"state": "s", "defender": "stay", "next": {"s": 1.0}},
+          {"state": "goal", "defender": "*", "next": {"goal": 1.0}}],
+        "rewards": {"steps": {"states": {"s": 1.0}}}}"#,
+    );
+    let summary = solve_reward(&loop_game, "Rmax=? [F \"goal\"]", &[]).unwrap();
+    assert_eq!(summary["value"], "inf");
+    assert!(summary["query"].get("target_probability").is_none(), "{summary}");
+    let summary = solve_reward(&loop_game, "Rmin=? [F \"goal\"]", &[]).unwrap();
+    assert_eq!(summary["value"], 1.0);
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

@@ -153,7 +153,19 @@ fn property(props: &Bound<'_, PyAny>) -> PyResult<Property> {
             (text, path.display().to_string())
         }
     };
-    props::from_props_str(&text, &name).map_err(|error| raise(Kind::Formula, error.to_string()))
+    let property = props::from_props_str(&text, &name)
+        .map_err(|error| raise(Kind::Formula, error.to_string()))?;
+    if let Some(player) = property.player.filter(|&p| p != 0) {
+        let warning = format!(
+            "{}: `<<{player}>>` is not applied: a Game fixes its defender when it is loaded \
+             (Game.from_drn makes player 0 of a turn-based game the defender); for player \
+             {player}, write the game with `posg-fsc import-drn --defender-player {player}` and \
+             load that file",
+            property.position(&name)
+        );
+        Python::attach(|py| warn(py, &[warning]))?;
+    }
+    Ok(property)
 }
 
 /// The expected-reward objective of `query` on `game` (method.md section

@@ -409,14 +409,19 @@ pub fn solve(
     let asked = Asked::from_keywords(ltl, props)?;
     let settings = self::settings("solve", settings)?;
     if let Some(reward) = asked.reward() {
-        if defender.is_some() || adversary.is_some() || adv_nodes.is_some() {
+        if defender.is_some() || adversary.is_some() {
             return Err(raise(
                 Kind::Settings,
                 "an expected-reward query is optimised from the full support of def_nodes nodes \
-                 on a game without adversary: drop defender=, adversary= and adv_nodes=",
+                 on a game without adversary: drop defender= and adversary=",
             ));
         }
-        let nodes = def_nodes.map_or(Ok(1), |n| size("def_nodes", n))?;
+        let sizes = Sizes {
+            defender: def_nodes.map_or(Ok(1), |n| size("def_nodes", n))?,
+            adversary: adv_nodes.map_or(Ok(1), |n| size("adv_nodes", n))?,
+        };
+        check_sizes(&game.get().inner, sizes)?;
+        let nodes = sizes.defender;
         let request = crate::reward::Request {
             asked: &asked,
             reward,

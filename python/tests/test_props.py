@@ -117,3 +117,7 @@ def test_solve_optimises_an_expected_cost_on_a_pomdp_as_the_cli_does(cli, tmp_pa
     assert [s["value"] for s in by_cli["starts"]] == [s["value"] for s in result.starts]
     with pytest.raises(posg_fsc.SettingsError, match="drop defender="):
         posg_fsc.solve(game, props=PROBE_PROPS, defender="uniform:1")
+    with pytest.raises(posg_fsc.SettingsError, match="def_nodes"):
+        posg_fsc.solve(game, props=PROBE_PROPS, def_nodes=10**9)
+    with pytest.warns(UserWarning, match="import-drn --defender-player 1"):
+        game.evaluate(props='<<1>> Rmin=? [F "goal"]')

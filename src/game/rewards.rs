@@ -114,6 +114,14 @@ impl RewardModel {
         })
     }
 
+    /// `max_s |r(s)| + max |r(s, u, v)|`: a bound on the magnitude of
+    /// the reward of any step, whatever the controllers play.
+    pub fn largest_step_reward(&self) -> f64 {
+        let largest =
+            |rewards: &[(usize, f64)]| rewards.iter().fold(0.0f64, |m, r| m.max(r.1.abs()));
+        largest(&self.state_rewards) + largest(&self.action_rewards)
+    }
+
     /// Whether some state reward is not 0.
     pub(crate) fn has_state_rewards(&self) -> bool {
         !self.state_rewards.is_empty()

@@ -142,6 +142,8 @@ fn grown(
     let sense = if objective.minimise { -1.0 } else { 1.0 };
     let first = if settings.grow_defender { 1 } else { nodes };
     let mut previous: Option<(RewardSolution, usize, f64, RecordSource)> = None;
+    // A cancelled run still passes through every size (each start stops
+    // at its first iteration), so the defender returned has `nodes` nodes.
     for size in first..=nodes {
         let mut quiet = ();
         let sink: &mut (dyn Observer + Send) = if size == nodes {
@@ -224,8 +226,13 @@ fn race(
         .ok_or(OptimiseError::NoStructure)?;
     let (looped, best, logit_bound) = runs[best_start].clone();
     let (defender, evaluation, source) = rounded(game, objective, looped, settings)?;
-    let (defender, evaluation, source) =
-        climb(game, objective, (defender, evaluation, source), settings)?;
+    let (defender, evaluation, source) = climb(
+        game,
+        objective,
+        (defender, evaluation, source),
+        settings,
+        cancel,
+    )?;
     let solution = RewardSolution {
         defender,
         value: evaluation.value,
@@ -322,9 +329,10 @@ fn rounded(
     let evaluation = exact_value(game, objective, &defender, settings)?;
     let mut best = (defender, evaluation, RecordSource::Gradient);
     for (_, candidate) in rounded_candidates(&best.0)? {
+        // An infinite value is the worst cost and the best reward (Storm's
+        // convention, method.md section 9): the comparison sees both.
         let evaluation = match exact_value(game, objective, &candidate, settings) {
-            Ok(evaluation) if evaluation.value.is_finite() => evaluation,
-            Ok(_) => continue,
+            Ok(evaluation) => evaluation,
             Err(error) if error.is_numerical() => continue,
             Err(error) => return Err(error),
         };
@@ -340,8 +348,8 @@ fn rounded(
 /// in each, every other `(next node, enabled action)` choice, moving to the
 /// first that improves the expected reward in the query's direction by
 /// more than both values' error bounds; passes repeat until one improves
-/// nothing or the evaluations have explored `settings.max_work` GMC
-/// states. The gradient's optima are often randomised; where a
+/// nothing, the evaluations have explored `settings.max_work` GMC states
+/// (0: no limit) or the run is cancelled. The gradient's optima are often randomised; where a
 /// deterministic controller beats them in a basin the ascent did not find,
 /// this finds it. Returns the better of `from` and the climb's end.
 fn climb(
@@ -349,19 +357,20 @@ fn climb(
     objective: ExpectedReward<'_>,
     from: (Fsc, Evaluation, RecordSource),
     settings: &Settings,
+    cancel: &Cancel,
 ) -> Result<(Fsc, Evaluation, RecordSource), OptimiseError> {
     let sense = if objective.minimise { -1.0 } else { 1.0 };
     let mut here = truncated(&from.0, f64::INFINITY)?;
     let (mut value, mut work) = match exact_value_and_work(game, objective, &here, settings) {
-        Ok((evaluation, work)) if evaluation.value.is_finite() => (evaluation, work),
-        Ok(_) => return Ok(from),
+        Ok(found) => found,
         Err(error) if error.is_numerical() => return Ok(from),
         Err(error) => return Err(error),
     };
+    let budget_left = |work: f64| settings.max_work <= 0.0 || work < settings.max_work;
     let player = game.defender();
     let nodes = here.num_nodes();
     let mut improved = true;
-    while improved && work < settings.max_work {
+    while improved && budget_left(work) && !cancel.is_cancelled() {
         improved = false;
         for b in 0..here.blocks.len() {
             let o = b % here.num_observations();
@@ -369,7 +378,7 @@ fn climb(
                 .flat_map(|next| player.enabled_actions(o).map(move |u| (next, u)))
                 .collect();
             for (next, action) in choices {
-                if work >= settings.max_work {
+                if !budget_left(work) || cancel.is_cancelled() {
                     break;
                 }
                 let current = &here.blocks[b][0];
@@ -391,8 +400,7 @@ fn climb(
                     };
                 work += spent;
                 let margin = evaluation.error_bound + value.error_bound;
-                if evaluation.value.is_finite() && sense * (evaluation.value - value.value) > margin
-                {
+                if sense * (evaluation.value - value.value) > margin {
                     here = candidate;
                     value = evaluation;
                     improved = true;

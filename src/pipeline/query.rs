@@ -80,15 +80,15 @@ impl QueryValue {
 
 impl QueryValue {
     /// The expected-reward query of `property` solved: the returned
-    /// defender's expected reward `value`, exact within `error_bound`, and
-    /// finite (its target is reached with probability 1).
+    /// defender's expected reward `value`, exact within `error_bound`;
+    /// where it is finite, its target is reached with probability 1.
     pub fn rewarded(property: &Property, value: f64, error_bound: f64) -> Self {
         Self {
             text: property.text.clone(),
             value,
             error_bound,
             certified: None,
-            target_probability: Some(1.0),
+            target_probability: value.is_finite().then_some(1.0),
         }
     }
 }
