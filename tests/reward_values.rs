@@ -569,7 +569,10 @@ fn solve_maximises_a_discounted_reward_and_refuses_what_it_cannot_optimise() {
     );
     let summary = solve_reward(&loop_game, "Rmax=? [F \"goal\"]", &[]).unwrap();
     assert_eq!(summary["value"], "inf");
-    assert!(summary["query"].get("target_probability").is_none(), "{summary}");
+    assert!(
+        summary["query"].get("target_probability").is_none(),
+        "{summary}"
+    );
     let summary = solve_reward(&loop_game, "Rmin=? [F \"goal\"]", &[]).unwrap();
     assert_eq!(summary["value"], 1.0);
     std::fs::remove_dir_all(&dir).unwrap();
