@@ -262,7 +262,9 @@ class RewardSolveResult:
     best_start: int
     """The start whose defender was returned."""
     starts: list[dict[str, Any]]
-    """Each start's value, iterations, status and seconds."""
+    """Each start's start (index), value, iterations, status and seconds."""
+    dropped_starts: list[str]
+    """The starts dropped for numerical trouble, with why."""
     curve: list[dict[str, Any]]
     """Every iteration's record of every start, then the returned one."""
     seconds: float

@@ -25,7 +25,7 @@ use crate::errors::convert;
 use crate::evaluate::Query;
 use crate::game::Game;
 use crate::objective::{self, Asked};
-use crate::solve::{PythonObserver, Run, with_signals};
+use crate::solve::{PythonObserver, Run, record_dict, with_signals};
 
 /// What `solve` was asked for an expected-reward query.
 pub struct Request<'a> {
@@ -55,8 +55,10 @@ pub struct RewardSolveResult {
     pub query: Option<Query>,
     /// The start whose defender was returned.
     pub best_start: usize,
-    /// Each start's `value`, `iterations`, `status` and `seconds`.
+    /// Each start's `start`, `value`, `iterations`, `status` and `seconds`.
     pub starts: Py<PyList>,
+    /// The starts dropped for numerical trouble, with why.
+    pub dropped_starts: Vec<String>,
     /// Every iteration's record of every start, then the returned one (a
     /// dict each, as the rows of `curve.csv`).
     pub curve: Py<PyList>,
@@ -130,7 +132,7 @@ pub fn solve(
     let records = recorded.0.lock().unwrap_or_else(PoisonError::into_inner);
     let curve = PyList::empty(py);
     for record in records.iter() {
-        curve.append(serialised(py, record)?)?;
+        curve.append(record_dict(py, record)?)?;
     }
     let starts = PyList::empty(py);
     for start in &solution.starts {
@@ -144,6 +146,7 @@ pub fn solve(
         query: Some(query.into()),
         best_start: solution.best_start,
         starts: starts.unbind(),
+        dropped_starts: solution.dropped_starts,
         curve: curve.unbind(),
         seconds: solution.seconds,
     };

@@ -123,7 +123,7 @@ impl Run {
             return;
         }
         Python::attach(|py| {
-            let answer = serialised(py, record).and_then(|dict| {
+            let answer = record_dict(py, record).and_then(|dict| {
                 dict.set_item("structure", structure)?;
                 let answer = callback.call1(py, (dict,))?;
                 let answer = answer.bind(py);
@@ -138,6 +138,25 @@ impl Run {
             }
         });
     }
+}
+
+/// An iteration's record as a dict, with the names of `curve.csv`; an
+/// infinite expected reward (method.md section 9) is Python's `inf` there,
+/// where JSON would have nothing to say it.
+pub(crate) fn record_dict<'py>(
+    py: Python<'py>,
+    record: &IterationRecord,
+) -> PyResult<Bound<'py, PyAny>> {
+    let dict = serialised(py, record)?;
+    for (key, value) in [
+        ("value", Some(record.value)),
+        ("worst_case", record.worst_case),
+    ] {
+        if let Some(value) = value.filter(|v| v.is_infinite()) {
+            dict.set_item(key, value)?;
+        }
+    }
+    Ok(dict)
 }
 
 /// One structure's observer.
@@ -311,7 +330,7 @@ fn result(
     let records = |records: &[IterationRecord]| -> PyResult<Bound<'_, PyList>> {
         let list = PyList::empty(py);
         for record in records {
-            list.append(serialised(py, record)?)?;
+            list.append(record_dict(py, record)?)?;
         }
         Ok(list)
     };

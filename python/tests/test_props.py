@@ -121,3 +121,22 @@ def test_solve_optimises_an_expected_cost_on_a_pomdp_as_the_cli_does(cli, tmp_pa
         posg_fsc.solve(game, props=PROBE_PROPS, def_nodes=10**9)
     with pytest.warns(UserWarning, match="import-drn --defender-player 1"):
         game.evaluate(props='<<1>> Rmin=? [F "goal"]')
+
+
+def test_an_infinite_reward_is_inf_in_the_result_and_its_records():
+    # `stay` alone never reaches the goal: for Rmax the infinite reward is the optimum.
+    game = posg_fsc.Game.from_json(
+        """{"posg": 1, "states": ["s", "goal"], "initial": {"s": 1.0},
+        "labels": {"goal": ["goal"]},
+        "defender": {"actions": ["go", "stay"], "observe": "full"},
+        "transitions": [
+          {"state": "s", "defender": "go", "next": {"goal": 1.0}},
+          {"state": "s", "defender": "stay", "next": {"s": 1.0}},
+          {"state": "goal", "defender": "*", "next": {"goal": 1.0}}],
+        "rewards": {"steps": {"states": {"s": 1.0}}}}"""
+    )
+    result = posg_fsc.solve(game, props='Rmax=? [F "goal"]')
+    assert result.value == math.inf
+    assert result.curve[-1]["returned"] and result.curve[-1]["value"] == math.inf
+    assert result.query.target_probability is None
+    assert result.dropped_starts == []

@@ -337,7 +337,11 @@ fn solve_expected_reward(
         eprintln!("interrupted: the results below are those of the defender found before it");
     }
     let query = property.as_ref().map_or(&reward.description, |p| &p.text);
-    let how = match solution.starts.get(solution.best_start) {
+    for dropped in &solution.dropped_starts {
+        eprintln!("warning: dropped for numerical trouble: {dropped}");
+    }
+    let best = (solution.starts.iter()).find(|start| start.start == solution.best_start);
+    let how = match best {
         Some(best) => format!(
             "{:.6} (the returned defender's expected reward, exact within {:.1e}; {nodes} nodes, \
              best of {}, {} of start {})",

@@ -24,7 +24,7 @@ use super::observer::{IterationRecord, Observer, RecordSource};
 use super::optimiser::Optimiser;
 use super::rounding::{rounded_candidates, truncated};
 use super::softmax::Softmax;
-use super::{Cancel, Method, OptimiseError, Settings, Status, Structure};
+use super::{Cancel, Method, OptimiseError, Settings, Status, Structure, keep_solved};
 use super::{WARM_START_MIX, embed, pad};
 use crate::automaton::Dra;
 use crate::controller::{Choice, Fsc, Support};
@@ -46,6 +46,9 @@ pub struct ExpectedReward<'a> {
 /// What one start of the expected-reward optimiser ended with.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct RewardStart {
+    /// The start's index (its random stream; `settings.starts` is the warm
+    /// start of a grown run).
+    pub start: usize,
     /// The expected reward of the start's best defender.
     pub value: f64,
     /// Its iterations.
@@ -67,8 +70,10 @@ pub struct RewardSolution {
     pub error_bound: f64,
     /// Each start's result, in start order.
     pub starts: Vec<RewardStart>,
-    /// The start whose defender was returned.
+    /// The start whose defender was returned ([`RewardStart::start`]).
     pub best_start: usize,
+    /// The starts dropped for numerical trouble, with why.
+    pub dropped_starts: Vec<String>,
     /// Wall-clock seconds of the whole run.
     pub seconds: f64,
 }
@@ -201,7 +206,7 @@ fn race(
         ..structure.clone()
     });
     let starts = settings.starts + usize::from(warm.is_some());
-    let runs: Vec<(Fsc, RewardStart, f64)> = (0..starts)
+    let results: Vec<Result<(Fsc, RewardStart, f64), OptimiseError>> = (0..starts)
         .into_par_iter()
         .map(|start| {
             let mut signed = Signed {
@@ -220,11 +225,15 @@ fn race(
                 &mut signed,
             )
         })
-        .collect::<Result<_, _>>()?;
-    let best_start = (0..runs.len())
+        .collect();
+    // A start whose system cannot be solved to the tolerance is dropped, as
+    // in the probability race; all of them failing is the error.
+    let (kept, dropped) = keep_solved(results)?;
+    let runs: Vec<(Fsc, RewardStart, f64)> = kept.into_iter().map(|(_, run)| run).collect();
+    let best = (0..runs.len())
         .max_by(|&a, &b| (sense * runs[a].1.value).total_cmp(&(sense * runs[b].1.value)))
         .ok_or(OptimiseError::NoStructure)?;
-    let (looped, best, logit_bound) = runs[best_start].clone();
+    let (looped, best, logit_bound) = runs[best].clone();
     let (defender, evaluation, source) = rounded(game, objective, looped, settings)?;
     let (defender, evaluation, source) = climb(
         game,
@@ -238,7 +247,11 @@ fn race(
         value: evaluation.value,
         error_bound: evaluation.error_bound,
         starts: runs.iter().map(|(_, start, _)| *start).collect(),
-        best_start,
+        best_start: best.start,
+        dropped_starts: dropped
+            .into_iter()
+            .map(|(start, error)| format!("start {start}: {error}"))
+            .collect(),
         seconds: started.elapsed().as_secs_f64(),
     };
     Ok((solution, best.iterations, logit_bound, source))
@@ -270,6 +283,7 @@ fn infinite_on_full_support(
         error_bound: 0.0,
         starts: Vec::new(),
         best_start: 0,
+        dropped_starts: Vec::new(),
         seconds: started.elapsed().as_secs_f64(),
     })
 }
@@ -306,6 +320,7 @@ fn run_start(
     let (objective, _) = optimiser.into_parts();
     let defender = objective.defender().controller(&outcome.best.defender)?;
     let result = RewardStart {
+        start,
         value: sense * outcome.best.worst_case,
         iterations: outcome.iterations,
         status: outcome.status,

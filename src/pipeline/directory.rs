@@ -289,6 +289,7 @@ impl SolveDirectory<'_> {
             error_bound: solution.error_bound,
             best_start: solution.best_start,
             starts: &solution.starts,
+            dropped_starts: &solution.dropped_starts,
             seconds: solution.seconds,
             files: [
                 "curve.csv",
@@ -323,6 +324,9 @@ struct RewardSummary<'a> {
     error_bound: f64,
     best_start: usize,
     starts: &'a [RewardStart],
+    /// The starts dropped for numerical trouble, with why.
+    #[serde(skip_serializing_if = "<[String]>::is_empty")]
+    dropped_starts: &'a [String],
     seconds: f64,
     files: [&'static str; 4],
 }
