@@ -397,7 +397,7 @@ proptest! {
         let h = 1e-6;
         let scale = 1.0 + evaluation.value.abs()
             + gradient.defender.iter().chain(&gradient.adversary).fold(0.0f64, |m, g| m.max(g.abs()));
-        for (first, k) in directions(&Support::of(&def)) {
+        for (first, k) in common::block_directions(&Support::of(&def)) {
             let (mut plus, mut minus) = (pd.clone(), pd.clone());
             plus.entries[k] += h;
             plus.entries[first] -= h;
@@ -407,7 +407,7 @@ proptest! {
             let adjoint = gradient.defender[k] - gradient.defender[first];
             prop_assert!((fd - adjoint).abs() < 1e-5 * scale, "defender {} - {}: fd {} adjoint {}", k, first, fd, adjoint);
         }
-        for (first, k) in directions(&Support::of(&adv)) {
+        for (first, k) in common::block_directions(&Support::of(&adv)) {
             let (mut plus, mut minus) = (pa.clone(), pa.clone());
             plus.entries[k] += h;
             plus.entries[first] -= h;
@@ -427,17 +427,6 @@ fn reachable_goal(game: &Posg) -> Option<RewardObjective> {
         .iter()
         .any(|p| p == "goal")
         .then(|| objective(game, "R{\"r\"}min=? [F \"goal\"]"))
-}
-
-/// The directions `e_k - e_first` inside each block of `support`.
-fn directions(support: &Support) -> Vec<(usize, usize)> {
-    (0..support.num_blocks())
-        .flat_map(|b| {
-            let block = support.block_by_index(b);
-            let first = block.start;
-            block.skip(1).map(move |k| (first, k))
-        })
-        .collect()
 }
 
 #[test]

@@ -249,16 +249,7 @@ proptest! {
         let mut at = |pd: &Probabilities, pa: &Probabilities| ev.evaluate(pd, pa).unwrap().value;
         let h = 1e-6;
         let scale = 1.0 + gradient.defender.iter().chain(&gradient.adversary).fold(0.0f64, |m, g| m.max(g.abs()));
-        let directions = |support: &Support| -> Vec<(usize, usize)> {
-            (0..support.num_blocks())
-                .flat_map(|b| {
-                    let block = support.block_by_index(b);
-                    let first = block.start;
-                    block.skip(1).map(move |k| (first, k))
-                })
-                .collect()
-        };
-        for (first, k) in directions(&Support::of(&def)) {
+        for (first, k) in common::block_directions(&Support::of(&def)) {
             let (mut plus, mut minus) = (pd.clone(), pd.clone());
             plus.entries[k] += h;
             plus.entries[first] -= h;
@@ -268,7 +259,7 @@ proptest! {
             let adjoint = gradient.defender[k] - gradient.defender[first];
             prop_assert!((fd - adjoint).abs() < 1e-6 * scale, "defender {} - {}: fd {} adjoint {}", k, first, fd, adjoint);
         }
-        for (first, k) in directions(&Support::of(&adv)) {
+        for (first, k) in common::block_directions(&Support::of(&adv)) {
             let (mut plus, mut minus) = (pa.clone(), pa.clone());
             plus.entries[k] += h;
             plus.entries[first] -= h;

@@ -302,18 +302,13 @@ fn expected_reward(
     } else {
         (evaluator.evaluate(&def, &adv)?, None)
     };
-    let target_probability = if evaluator.is_infinite() {
-        let mut reach = Evaluator::new(
-            posg,
-            &objective.target,
-            &def_support,
-            &adv_support,
-            settings,
-        )?;
-        reach.evaluate(&def, &adv)?.value
-    } else {
-        1.0
-    };
+    let target_probability = objective.target_probability(
+        posg,
+        &evaluator,
+        (&def_support, &adv_support),
+        (&def, &adv),
+        settings,
+    )?;
     let report = evaluator.report(&evaluation);
     Ok(((evaluation, report), gradient, target_probability))
 }

@@ -9,13 +9,10 @@ use std::sync::{Arc, Mutex, PoisonError};
 
 use posg_fsc::ltl::props::RewardQuery;
 use posg_fsc::optimise::{
-    Cancel, ExpectedReward, IterationRecord, Observer, RewardSolution, Settings,
-    optimise_expected_reward,
+    Cancel, IterationRecord, Observer, RewardSolution, Settings, optimise_expected_reward,
 };
-use posg_fsc::output::OutputDirectory;
 use posg_fsc::pipeline::QueryValue;
 use posg_fsc::pipeline::RewardObjective;
-use posg_fsc::pipeline::directory::SolveDirectory;
 use pyo3::prelude::*;
 use pyo3::types::PyList;
 
@@ -25,7 +22,7 @@ use crate::errors::convert;
 use crate::evaluate::Query;
 use crate::game::Game;
 use crate::objective::{self, Asked};
-use crate::solve::{PythonObserver, Run, record_dict, with_signals};
+use crate::solve::{PythonObserver, Run, into_directory, record_dict, with_signals};
 
 /// What `solve` was asked for an expected-reward query.
 pub struct Request<'a> {
@@ -165,26 +162,13 @@ fn optimise(
     out: Option<(&PathBuf, bool)>,
     property: &posg_fsc::ltl::props::Property,
 ) -> PyResult<RewardSolution> {
-    let Some((path, force)) = out else {
-        let expected = ExpectedReward {
-            target: &objective.target,
-            rewards: &objective.rewards,
-            minimise: objective.minimise,
-        };
+    let Some(out) = out else {
+        let expected = objective.optimised();
         return optimise_expected_reward(game, expected, nodes, settings, cancel, &mut observers)
             .map_err(convert);
     };
-    let directory = OutputDirectory::create(path, force).map_err(convert)?;
-    let command_line = vec!["python".to_string(), "posg_fsc.solve".to_string()];
-    let solve = SolveDirectory {
-        path: directory.path(),
-        seconds_axis: false,
-        command_line: &command_line,
-        plot_format: None,
-        query: Some(property),
-    };
-    let solution = solve
-        .solve_expected_reward(
+    into_directory(out, Some(property), |directory| {
+        directory.solve_expected_reward(
             game,
             objective,
             nodes,
@@ -192,7 +176,5 @@ fn optimise(
             cancel,
             Box::new(observers),
         )
-        .map_err(convert)?;
-    directory.commit().map_err(convert)?;
-    Ok(solution)
+    })
 }

@@ -11,7 +11,6 @@ use posg_fsc::game::Posg;
 use posg_fsc::ltl::props::Property;
 use posg_fsc::optimise::{Cancel, IterationRecord, Observer, Settings};
 use posg_fsc::output::OutputDirectory;
-use posg_fsc::pipeline::QueryValue;
 use posg_fsc::pipeline::directory::SolveDirectory;
 use posg_fsc::pipeline::{self, Automata, Chain, Job, Outcome, Sizes};
 use pyo3::prelude::*;
@@ -237,9 +236,20 @@ fn work<F>(
 where
     F: Fn(pipeline::Slot) -> Box<dyn Observer + Send> + Sync,
 {
-    let Some((path, force)) = out else {
+    let Some(out) = out else {
         return pipeline::run(job, observers).map_err(convert);
     };
+    into_directory(out, query, |directory| directory.solve(job, observers))
+}
+
+/// Runs `write` into the solve directory at `path` (a non-empty one
+/// replaced with `force`), as `posg_fsc.solve` writes it: no picture, the
+/// query of `query` restated; the directory appears once `write` is done.
+pub(crate) fn into_directory<T>(
+    (path, force): (&PathBuf, bool),
+    query: Option<&Property>,
+    write: impl FnOnce(&SolveDirectory) -> Result<T, pipeline::PipelineError>,
+) -> PyResult<T> {
     let directory = OutputDirectory::create(path, force).map_err(convert)?;
     let command_line = vec!["python".to_string(), "posg_fsc.solve".to_string()];
     let solve = SolveDirectory {
@@ -249,9 +259,9 @@ where
         plot_format: None,
         query,
     };
-    let outcome = solve.solve(job, observers).map_err(convert)?;
+    let result = write(&solve).map_err(convert)?;
     directory.commit().map_err(convert)?;
-    Ok(outcome)
+    Ok(result)
 }
 
 /// The result of `posg_fsc.solve`, with the names of `summary.json`
@@ -318,15 +328,7 @@ fn result(
     query: Option<&Property>,
 ) -> PyResult<SolveResult> {
     let best = outcome.best();
-    let query = query.map(|property| {
-        let report = &best.report;
-        QueryValue::solved(
-            property,
-            report.worst_case,
-            report.error_bound,
-            outcome.certified,
-        )
-    });
+    let query = query.map(|property| outcome.query(property));
     let records = |records: &[IterationRecord]| -> PyResult<Bound<'_, PyList>> {
         let list = PyList::empty(py);
         for record in records {

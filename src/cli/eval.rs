@@ -182,15 +182,13 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
     // Where the expected reward is infinite, the probability of reaching
     // the target says by how much it is missed.
     let target_probability = match &reward {
-        Some(_) if evaluator.is_infinite() => {
-            let mut reach = Evaluator::new(&game, &dra, &def_support, &adv_support, &settings)?;
-            Some(
-                reach
-                    .evaluate(&def_probabilities, &adv_probabilities)?
-                    .value,
-            )
-        }
-        Some(_) => Some(1.0),
+        Some(reward) => Some(reward.target_probability(
+            &game,
+            &evaluator,
+            (&def_support, &adv_support),
+            (&def_probabilities, &adv_probabilities),
+            &settings,
+        )?),
         None => None,
     };
     let build_and_analyse = lap.seconds();

@@ -236,14 +236,7 @@ pub fn run(args: SolveArgs) -> anyhow::Result<()> {
         },
     );
     if let Some(property) = &property {
-        let report = &outcome.best().report;
-        let query = QueryValue::solved(
-            property,
-            report.worst_case,
-            report.error_bound,
-            outcome.certified,
-        );
-        print_text(&restated_query(property, &query))?;
+        print_text(&restated_query(property, &outcome.query(property)))?;
     }
     print_text(&format!(
         "structure {}: worst-case estimate {:.6} (last iterate value {:.6}) after {} \

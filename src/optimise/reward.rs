@@ -43,6 +43,15 @@ pub struct ExpectedReward<'a> {
     pub minimise: bool,
 }
 
+impl ExpectedReward<'_> {
+    /// `1` where the defender maximises the expected reward, `-1` where it
+    /// minimises it: comparing `sense * value` ranks in the query's
+    /// direction.
+    pub fn sense(&self) -> f64 {
+        if self.minimise { -1.0 } else { 1.0 }
+    }
+}
+
 /// What one start of the expected-reward optimiser ended with.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct RewardStart {
@@ -100,8 +109,10 @@ pub fn optimise_expected_reward(
     }
     let started = Instant::now();
     let structure = Structure::full(game, nodes, 1, settings.optimise_initial);
-    let full = exact_value(game, objective, &structure.defender, settings)?;
-    let (solution, iterations, logit_bound, source) = if full.value.is_infinite() {
+    // Whether the target can be missed is a fact of the support's graph:
+    // the evaluator's analysis says it without a solve.
+    let infinite = evaluator(game, objective, &structure.defender, settings)?.is_infinite();
+    let (solution, iterations, logit_bound, source) = if infinite {
         let solution = infinite_on_full_support(objective, structure.defender, started)?;
         (solution, 0, settings.logit_bound, RecordSource::Gradient)
     } else {
@@ -144,7 +155,7 @@ fn grown(
     observer: &mut (dyn Observer + Send),
     started: Instant,
 ) -> Result<(RewardSolution, usize, f64, RecordSource), OptimiseError> {
-    let sense = if objective.minimise { -1.0 } else { 1.0 };
+    let sense = objective.sense();
     let first = if settings.grow_defender { 1 } else { nodes };
     let mut previous: Option<(RewardSolution, usize, f64, RecordSource)> = None;
     // A cancelled run still passes through every size (each start stops
@@ -199,7 +210,7 @@ fn race(
     started: Instant,
 ) -> Result<(RewardSolution, usize, f64, RecordSource), OptimiseError> {
     let shared = Mutex::new(observer);
-    let sense = if objective.minimise { -1.0 } else { 1.0 };
+    let sense = objective.sense();
     let warm = warm.map(|defender| Structure {
         defender,
         warm: None,
@@ -340,7 +351,7 @@ fn rounded(
     defender: Fsc,
     settings: &Settings,
 ) -> Result<(Fsc, Evaluation, RecordSource), OptimiseError> {
-    let sense = if objective.minimise { -1.0 } else { 1.0 };
+    let sense = objective.sense();
     let evaluation = exact_value(game, objective, &defender, settings)?;
     let mut best = (defender, evaluation, RecordSource::Gradient);
     for (_, candidate) in rounded_candidates(&best.0)? {
@@ -374,7 +385,7 @@ fn climb(
     settings: &Settings,
     cancel: &Cancel,
 ) -> Result<(Fsc, Evaluation, RecordSource), OptimiseError> {
-    let sense = if objective.minimise { -1.0 } else { 1.0 };
+    let sense = objective.sense();
     let mut here = truncated(&from.0, f64::INFINITY)?;
     let (mut value, mut work) = match exact_value_and_work(game, objective, &here, settings) {
         Ok(found) => found,
@@ -438,20 +449,33 @@ fn exact_value_and_work(
     defender: &Fsc,
     settings: &Settings,
 ) -> Result<(Evaluation, f64), OptimiseError> {
-    let adversary = Fsc::uniform_enabled(crate::controller::Role::Adversary, 1, game.adversary());
-    let mut evaluator = Evaluator::for_expected_reward(
+    let mut evaluator = evaluator(game, objective, defender, settings)?;
+    let adversary = Support::probabilities_of(&only_adversary(game));
+    let evaluation = evaluator.evaluate(&Support::probabilities_of(defender), &adversary)?;
+    Ok((evaluation, evaluator.gmc().num_states() as f64))
+}
+
+/// The evaluator of `objective` on `defender`'s support (against the
+/// adversary's only controller: the game has no adversary).
+fn evaluator(
+    game: &Posg,
+    objective: ExpectedReward<'_>,
+    defender: &Fsc,
+    settings: &Settings,
+) -> Result<Evaluator, OptimiseError> {
+    Ok(Evaluator::for_expected_reward(
         game,
         objective.target,
         objective.rewards,
         &Support::of(defender),
-        &Support::of(&adversary),
+        &Support::of(&only_adversary(game)),
         &settings.solver_settings(),
-    )?;
-    let evaluation = evaluator.evaluate(
-        &Support::probabilities_of(defender),
-        &Support::probabilities_of(&adversary),
-    )?;
-    Ok((evaluation, evaluator.gmc().num_states() as f64))
+    )?)
+}
+
+/// The one-node controller of a game without adversary's adversary.
+fn only_adversary(game: &Posg) -> Fsc {
+    Fsc::uniform_enabled(crate::controller::Role::Adversary, 1, game.adversary())
 }
 
 /// The expected reward of `defender`, evaluated afresh on its own support.

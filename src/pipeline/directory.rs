@@ -17,8 +17,8 @@ use crate::controller::{self, Fsc};
 use crate::game::Posg;
 use crate::ltl::props::Property;
 use crate::optimise::{
-    Cancel, ExpectedReward, IterationRecord, Observer, RewardSolution, RewardStart, Settings,
-    SourceNote, StructureOutcome, StructureReport, optimise_expected_reward,
+    Cancel, IterationRecord, Observer, RewardSolution, RewardStart, Settings, SourceNote,
+    StructureOutcome, StructureReport, optimise_expected_reward,
 };
 use crate::output::{
     CurveCsv, CurvePlot, OutputError, PlotFormat, Returned, Title, create_dir, plot_curve,
@@ -193,15 +193,7 @@ impl SolveDirectory<'_> {
             crate_version: env!("CARGO_PKG_VERSION"),
             game: game.name(),
             objective: &automata.description,
-            query: self.query.map(|property| {
-                let report = &best.report;
-                QueryValue::solved(
-                    property,
-                    report.worst_case,
-                    report.error_bound,
-                    outcome.certified,
-                )
-            }),
+            query: self.query.map(|property| outcome.query(property)),
             defender_nodes: best.defender.num_nodes(),
             adversary_nodes: best.adversary.num_nodes(),
             settings,
@@ -249,13 +241,14 @@ impl SolveDirectory<'_> {
         create_dir(self.path)?;
         let curve = CurveCsv::create(&self.path.join("curve.csv"))?;
         let mut observers: Vec<Box<dyn Observer + Send>> = vec![Box::new(curve), observer];
-        let expected = ExpectedReward {
-            target: &objective.target,
-            rewards: &objective.rewards,
-            minimise: objective.minimise,
-        };
-        let solution =
-            optimise_expected_reward(game, expected, nodes, settings, cancel, &mut observers)?;
+        let solution = optimise_expected_reward(
+            game,
+            objective.optimised(),
+            nodes,
+            settings,
+            cancel,
+            &mut observers,
+        )?;
         let description = &objective.description;
         let title = format!(
             "defender for {}: {description} ({nodes} nodes)",

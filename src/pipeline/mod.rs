@@ -308,6 +308,19 @@ impl Outcome {
     pub fn best(&self) -> &StructureOutcome {
         self.solution.best()
     }
+
+    /// The query of `property` restated for the returned defender: its
+    /// worst-case estimate, error bound and certified bracket in the
+    /// query's terms ([`QueryValue::solved`]).
+    pub fn query(&self, property: &crate::ltl::props::Property) -> QueryValue {
+        let report = &self.best().report;
+        QueryValue::solved(
+            property,
+            report.worst_case,
+            report.error_bound,
+            self.certified,
+        )
+    }
 }
 
 /// Why the pipeline could not finish.

@@ -5,8 +5,11 @@
 
 use super::{PipelineError, check_propositions};
 use crate::automaton::Dra;
+use crate::controller::{Probabilities, Support};
 use crate::game::{ModelError, Posg, RewardModel};
 use crate::ltl::{self, props::RewardQuery};
+use crate::optimise::ExpectedReward;
+use crate::value::{Evaluator, SolverSettings, ValueError};
 
 /// An expected-reward objective for one game: the expected total reward of
 /// `rewards` until the first state satisfying the target `T`, which the
@@ -57,6 +60,37 @@ impl RewardObjective {
             description,
         };
         Ok((objective, check.warnings))
+    }
+}
+
+impl RewardObjective {
+    /// The objective as the optimiser takes it
+    /// ([`crate::optimise::optimise_expected_reward`]).
+    pub fn optimised(&self) -> ExpectedReward<'_> {
+        ExpectedReward {
+            target: &self.target,
+            rewards: &self.rewards,
+            minimise: self.minimise,
+        }
+    }
+
+    /// The probability of reaching the target under the controllers of
+    /// `supports` with `probabilities`, which `evaluator` (built for this
+    /// objective on those supports) evaluates: 1 where it finds the reward
+    /// finite, else computed (it says by how much the target is missed).
+    pub fn target_probability(
+        &self,
+        game: &Posg,
+        evaluator: &Evaluator,
+        supports: (&Support, &Support),
+        probabilities: (&Probabilities, &Probabilities),
+        settings: &SolverSettings,
+    ) -> Result<f64, ValueError> {
+        if !evaluator.is_infinite() {
+            return Ok(1.0);
+        }
+        let mut reach = Evaluator::new(game, &self.target, supports.0, supports.1, settings)?;
+        Ok(reach.evaluate(probabilities.0, probabilities.1)?.value)
     }
 }
 

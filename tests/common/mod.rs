@@ -344,3 +344,16 @@ pub fn reference_expected_reward(
         .expect("the finite states' system is nonsingular");
     unknown.iter().zip(&solution).map(|(&m, x)| p0[m] * x).sum()
 }
+
+/// The directions `e_k - e_first` inside each block of `support`, along
+/// which a controller's probabilities stay a distribution: those a finite
+/// difference of the value may move in.
+pub fn block_directions(support: &posg_fsc::controller::Support) -> Vec<(usize, usize)> {
+    (0..support.num_blocks())
+        .flat_map(|b| {
+            let block = support.block_by_index(b);
+            let first = block.start;
+            block.skip(1).map(move |k| (first, k))
+        })
+        .collect()
+}
