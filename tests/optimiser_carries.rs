@@ -32,7 +32,7 @@ fn certified(
         defender: nodes,
         adversary: 1,
     };
-    let outcome = pipeline::solve(game, automata, sizes, settings, |_| Box::new(())).unwrap();
+    let outcome = pipeline::solve(game, automata, sizes, settings, pipeline::Unwatched).unwrap();
     assert_eq!(outcome.best().defender.num_nodes(), nodes);
     outcome.certified.map(|b| b.certified_lower)
 }
@@ -93,7 +93,7 @@ fn a_grown_run_reports_every_size_and_returns_the_size_asked() {
         defender: 3,
         adversary: 1,
     };
-    let outcome = pipeline::solve(&game, &automata, sizes, &settings, |_| Box::new(())).unwrap();
+    let outcome = pipeline::solve(&game, &automata, sizes, &settings, pipeline::Unwatched).unwrap();
     let nodes: Vec<usize> = outcome.sizes.iter().map(|s| s.defender_nodes).collect();
     assert_eq!(nodes, [1, 2, 3]);
     assert_eq!(outcome.best().defender.num_nodes(), 3);
@@ -135,7 +135,7 @@ fn the_informed_start_sees_the_goal_on_a_48_by_48_grid() {
         defender: 2,
         adversary: 1,
     };
-    let outcome = pipeline::solve(&game, &automata, sizes, &settings, |_| Box::new(())).unwrap();
+    let outcome = pipeline::solve(&game, &automata, sizes, &settings, pipeline::Unwatched).unwrap();
     let curve = (outcome.curves.iter())
         .find(|c| c.structure == "informed")
         .expect("an informed structure");
@@ -156,7 +156,7 @@ fn returned_curve(game: &posg_fsc::game::Posg, formula: &str, settings: &Setting
         defender: 1,
         adversary: 1,
     };
-    let outcome = pipeline::solve(game, &automata, sizes, settings, |_| Box::new(())).unwrap();
+    let outcome = pipeline::solve(game, &automata, sizes, settings, pipeline::Unwatched).unwrap();
     let best = outcome.best();
     let curve = (outcome.curves.iter())
         .find(|c| c.structure == best.report.name)
@@ -190,7 +190,7 @@ fn the_curve_ends_at_the_returned_certified_value_on_the_papers_grid() {
         defender: 1,
         adversary: 1,
     };
-    let outcome = pipeline::solve(&game, &automata, sizes, &settings, |_| Box::new(())).unwrap();
+    let outcome = pipeline::solve(&game, &automata, sizes, &settings, pipeline::Unwatched).unwrap();
     let last = outcome.curves[0].records.last().unwrap();
     assert_eq!(last.source, RecordSource::LocalSearch);
     returned_curve(&game, "!unsafe U goal", &settings);
@@ -220,7 +220,7 @@ fn a_support_on_which_the_value_is_identically_zero_stops_the_loop_at_once() {
     let status_and_iterations = |formula: &str| -> Vec<(String, Status, usize)> {
         let automata = Automata::from_ltl(formula).unwrap();
         let outcome =
-            pipeline::solve(&game, &automata, sizes, &settings, |_| Box::new(())).unwrap();
+            pipeline::solve(&game, &automata, sizes, &settings, pipeline::Unwatched).unwrap();
         (outcome.solution.structures.iter())
             .map(|s| (s.report.name.clone(), s.report.status, s.report.iterations))
             .collect()

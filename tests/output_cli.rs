@@ -107,37 +107,91 @@ fn solve_writes_a_titled_curve_with_the_certified_band_and_a_controller_picture(
     assert!(summary.contains("\"defender.dot\""));
     let stderr = String::from_utf8(output.stderr).unwrap();
     assert!(
-        stderr.contains("[full] start ") && stderr.contains(" at iteration 30: value "),
+        stderr.contains("2 nodes, full: returns its defender from ")
+            && stderr.contains(
+                " after 30 iterations (its race: iteration limit reached: 30 iterations)"
+            )
+            && stderr.contains("; best certified ["),
         "{stderr}"
     );
 }
 
+/// Issue 59: a line at once for each event, and the status (what each
+/// structure does, the best certified bracket) whenever nothing else was
+/// said for `--progress-every` seconds; every line stamped with the run's
+/// clock, which never runs backwards.
 #[test]
-fn the_last_progress_line_is_not_repeated_at_the_end() {
+fn progress_lines_say_what_runs_and_the_best_bracket_on_one_clock() {
     let dir = scratch("lines");
-    let game = grid(&dir);
+    let example = posg_fsc(&[
+        "example",
+        "grid",
+        "--width",
+        "6",
+        "--height",
+        "6",
+        "--unsafe",
+        "none",
+        "--goal",
+        "s35",
+        "--random-unsafe",
+        "4",
+        "--seed",
+        "1",
+    ]);
+    let game = dir.join("grid6.json");
+    std::fs::write(&game, example.stdout).unwrap();
     let out = dir.join("out").display().to_string();
     let output = posg_fsc(&[
         "solve",
-        &game,
+        &game.display().to_string(),
         "--ltl",
         "F goal & G !unsafe",
         "--out",
         &out,
         "--max-iterations",
-        "12",
+        "300",
+        "--stall-checks",
+        "0",
+        "--gap-tolerance",
+        "0",
+        "--no-local-search",
         "--structures",
-        "full",
+        "full,sat",
+        "--def-nodes",
+        "2",
         "--progress-every",
         "1e-9",
     ]);
+    assert!(output.status.success());
     let stderr = String::from_utf8(output.stderr).unwrap();
-    let lines: Vec<&str> = stderr
-        .lines()
-        .filter(|line| line.contains(" at iteration "))
+    let stamped: Vec<(f64, &str)> = (stderr.lines())
+        .filter_map(|line| {
+            let (stamp, text) = line.strip_prefix('[')?.split_once(" s] ")?;
+            Some((stamp.parse().ok()?, text))
+        })
         .collect();
-    assert!(lines.len() >= 2, "a line per record: {stderr}");
-    assert!(lines.windows(2).all(|pair| pair[0] != pair[1]), "{stderr}");
+    assert!(stamped.len() >= 4, "{stderr}");
+    assert!(
+        stamped.windows(2).all(|pair| pair[0].0 <= pair[1].0),
+        "one clock: {stderr}"
+    );
+    let status = |text: &str| text.starts_with("1 of 2 nodes: ") || text.starts_with("2 nodes: ");
+    assert!(
+        stamped
+            .iter()
+            .any(|(_, text)| status(text) && text.contains(" racing (iteration ")),
+        "a status line during the race: {stderr}"
+    );
+    assert!(
+        (stamped.iter())
+            .any(|(_, text)| text.starts_with("2 nodes: done in ") && text.contains("certified [")),
+        "the size's result: {stderr}"
+    );
+    assert!(
+        !stderr.contains("(at most "),
+        "no cap the run may not reach: {stderr}"
+    );
 }
 
 #[test]

@@ -33,7 +33,7 @@ fn solve_with(
         defender,
         adversary: 1,
     };
-    pipeline::solve(game, &automata, sizes, settings, |_| Box::new(())).unwrap()
+    pipeline::solve(game, &automata, sizes, settings, pipeline::Unwatched).unwrap()
 }
 
 #[test]
@@ -284,10 +284,8 @@ fn solve_logging_search(
         seed,
         ..Settings::default()
     };
-    let outcome = pipeline::solve(game, &automata, sizes, &settings, |_| {
-        Box::new(SearchLog(log.clone(), 0))
-    })
-    .unwrap();
+    let observer = pipeline::observing(|_| Box::new(SearchLog(log.clone(), 0)));
+    let outcome = pipeline::solve(game, &automata, sizes, &settings, observer).unwrap();
     let log = log.lock().unwrap().clone();
     (log, outcome)
 }

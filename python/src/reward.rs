@@ -6,6 +6,7 @@
 
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex, PoisonError};
+use std::time::Duration;
 
 use posg_fsc::ltl::props::RewardQuery;
 use posg_fsc::optimise::{
@@ -92,7 +93,7 @@ pub fn solve(
     py: Python<'_>,
     game: &Bound<'_, Game>,
     request: Request<'_>,
-    on_iteration: Option<Py<PyAny>>,
+    (on_iteration, progress): (Option<Py<PyAny>>, Option<Duration>),
     out: Option<(&PathBuf, bool)>,
 ) -> PyResult<Py<PyAny>> {
     let posg = &game.get().inner;
@@ -107,19 +108,18 @@ pub fn solve(
         property.maximise,
         request.allow_unused,
     )?;
-    let run = Arc::new(Run {
-        callback: on_iteration,
-        error: Mutex::new(None),
-        stop: Cancel::new(),
-    });
+    let run = Run::new(on_iteration, progress);
     let recorded = Recorded::default();
-    let observers: Vec<Box<dyn Observer + Send>> = vec![
+    let mut observers: Vec<Box<dyn Observer + Send>> = vec![
         Box::new(recorded.clone()),
         Box::new(PythonObserver {
             run: Arc::clone(&run),
             structure: "full".into(),
         }),
     ];
+    if let Some(progress) = &run.progress {
+        observers.push(Box::new(progress.observer("full", request.nodes)));
+    }
     let (nodes, settings) = (request.nodes, request.settings);
     let solution = with_signals(py, &run, || {
         optimise(

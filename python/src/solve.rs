@@ -12,7 +12,8 @@ use posg_fsc::ltl::props::Property;
 use posg_fsc::optimise::{Cancel, IterationRecord, Observer, Settings};
 use posg_fsc::output::OutputDirectory;
 use posg_fsc::pipeline::directory::SolveDirectory;
-use posg_fsc::pipeline::{self, Automata, Chain, Job, Outcome, Sizes};
+use posg_fsc::pipeline::progress::Progress;
+use posg_fsc::pipeline::{self, Automata, Chain, Job, Outcome, Sizes, Watch};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 use serde_json::{Map, Value};
@@ -92,9 +93,45 @@ pub(crate) struct Run {
     pub(crate) callback: Option<Py<PyAny>>,
     pub(crate) error: Mutex<Option<PyErr>>,
     pub(crate) stop: Cancel,
+    /// The board whose lines go to `sys.stderr` while the run runs
+    /// (`progress=`).
+    pub(crate) progress: Option<Arc<Progress>>,
 }
 
 impl Run {
+    /// A run calling `callback` with each record, its progress on a board
+    /// with a status line every `progress` when given.
+    pub(crate) fn new(callback: Option<Py<PyAny>>, progress: Option<Duration>) -> Arc<Self> {
+        Arc::new(Run {
+            callback,
+            error: Mutex::new(None),
+            stop: Cancel::new(),
+            progress: progress.map(Progress::new),
+        })
+    }
+
+    /// Writes the board's due lines (or, `last`, its last events) to
+    /// `sys.stderr`.
+    fn report(&self, py: Python<'_>, last: bool) -> PyResult<()> {
+        let Some(progress) = &self.progress else {
+            return Ok(());
+        };
+        let lines = if last {
+            progress.events()
+        } else {
+            progress.due_lines()
+        };
+        if lines.is_empty() {
+            return Ok(());
+        }
+        let stderr = py.import("sys")?.getattr("stderr")?;
+        for line in lines {
+            stderr.call_method1("write", (format!("{line}\n"),))?;
+        }
+        stderr.call_method0("flush")?;
+        Ok(())
+    }
+
     fn stopped_by(&self) -> Option<PyErr> {
         self.error
             .lock()
@@ -183,23 +220,22 @@ pub(crate) const SIGNAL_POLL: Duration = Duration::from_millis(10);
 fn run_job(
     py: Python<'_>,
     mut job: Job,
-    callback: Option<Py<PyAny>>,
+    (callback, progress): (Option<Py<PyAny>>, Option<Duration>),
     out: Option<(&PathBuf, bool)>,
     query: Option<&Property>,
 ) -> PyResult<Outcome> {
-    let run = Arc::new(Run {
-        callback,
-        error: Mutex::new(None),
-        stop: Cancel::new(),
-    });
+    let run = Run::new(callback, progress);
     job.cancel = run.stop.clone();
-    let observers = |slot: pipeline::Slot| {
+    let observers = pipeline::observing(|slot| {
         Box::new(PythonObserver {
             run: Arc::clone(&run),
             structure: slot.structure.name.clone(),
-        }) as Box<dyn Observer + Send>
-    };
-    with_signals(py, &run, || work(job, observers, out, query))
+        })
+    });
+    with_signals(py, &run, || match &run.progress {
+        Some(progress) => work(job, progress.watching(observers), out, query),
+        None => work(job, observers, out, query),
+    })
 }
 
 /// Runs `work` on a thread of its own while this (Python's) thread waits
@@ -217,9 +253,13 @@ pub(crate) fn with_signals<T: Send>(
             if let Err(interrupt) = py.check_signals() {
                 run.fail(interrupt);
             }
+            if let Err(error) = run.report(py, false) {
+                run.fail(error);
+            }
         }
         worker.join()
     });
+    run.report(py, true)?;
     if let Some(error) = run.stopped_by() {
         return Err(error);
     }
@@ -227,19 +267,16 @@ pub(crate) fn with_signals<T: Send>(
 }
 
 /// The pipeline, into the solve directory `out` when given.
-fn work<F>(
+fn work(
     job: Job,
-    observers: F,
+    watch: impl Watch,
     out: Option<(&PathBuf, bool)>,
     query: Option<&Property>,
-) -> PyResult<Outcome>
-where
-    F: Fn(pipeline::Slot) -> Box<dyn Observer + Send> + Sync,
-{
+) -> PyResult<Outcome> {
     let Some(out) = out else {
-        return pipeline::run(job, observers).map_err(convert);
+        return pipeline::run(job, watch).map_err(convert);
     };
-    into_directory(out, query, |directory| directory.solve(job, observers))
+    into_directory(out, query, |directory| directory.solve(job, watch))
 }
 
 /// Runs `write` into the solve directory at `path` (a non-empty one
@@ -403,14 +440,20 @@ fn check_sizes(game: &Posg, sizes: Sizes) -> PyResult<()> {
 /// controllers instead of the full uniform structure. `on_iteration(record)`
 /// is called with each iteration's record (a dict, with `structure`) from
 /// the optimiser's threads; returning `False` stops the run, which returns
-/// what it has. Ctrl-C stops it too (then KeyboardInterrupt is raised).
+/// what it has. `progress=True` writes the command line's progress lines to
+/// `sys.stderr` while the run runs: one for each event (a local search
+/// ended, a structure returned its defender, a size was certified) and,
+/// when nothing happened for 5 seconds (or the seconds given instead of
+/// `True`), what each part of the run is doing with the best certified
+/// bracket so far. Ctrl-C stops the run too (then KeyboardInterrupt is
+/// raised).
 /// With `out`, the solve directory (`curve.csv`, `summary.json`, ...) is
 /// written there too, without its picture (`force=True` replaces a
 /// non-empty one). A proposition that labels no state of the game is a
 /// warning, and an error when it makes the formula unsatisfiable, unless
 /// `allow_unused_propositions=True`.
 #[pyfunction]
-#[pyo3(signature = (game, ltl = None, def_nodes = None, adv_nodes = None, *, props = None, defender = None, adversary = None, on_iteration = None, out = None, force = false, allow_unused_propositions = false, **settings))]
+#[pyo3(signature = (game, ltl = None, def_nodes = None, adv_nodes = None, *, props = None, defender = None, adversary = None, on_iteration = None, progress = None, out = None, force = false, allow_unused_propositions = false, **settings))]
 #[allow(clippy::too_many_arguments)]
 pub fn solve(
     py: Python<'_>,
@@ -422,6 +465,7 @@ pub fn solve(
     defender: Option<&Bound<'_, PyAny>>,
     adversary: Option<&Bound<'_, PyAny>>,
     on_iteration: Option<Py<PyAny>>,
+    progress: Option<&Bound<'_, PyAny>>,
     out: Option<PathBuf>,
     force: bool,
     allow_unused_propositions: bool,
@@ -429,6 +473,7 @@ pub fn solve(
 ) -> PyResult<Py<PyAny>> {
     let asked = Asked::from_keywords(ltl, props)?;
     let settings = self::settings("solve", settings)?;
+    let watching = (on_iteration, progress_interval(progress)?);
     if let Some(reward) = asked.reward() {
         if defender.is_some() || adversary.is_some() {
             return Err(raise(
@@ -451,7 +496,7 @@ pub fn solve(
             allow_unused: allow_unused_propositions,
         };
         let output = out.as_ref().map(|p| (p, force));
-        return crate::reward::solve(py, game, request, on_iteration, output);
+        return crate::reward::solve(py, game, request, watching, output);
     }
     let ltl = &asked.formula("solve")?;
     let posg = &game.get().inner;
@@ -500,7 +545,7 @@ pub fn solve(
         job.start.name = "from-files".into();
     }
     let out = out.as_ref().map(|p| (p, force));
-    let outcome = run_job(py, job, on_iteration, out, asked.property())?;
+    let outcome = run_job(py, job, watching, out, asked.property())?;
     let result = result(py, posg, &settings, &outcome, asked.property())?;
     Ok(Py::new(py, result)?.into_any())
 }
@@ -512,8 +557,9 @@ pub fn solve(
 /// (or range) of sizes. Returns one row per size pair: a dict with the
 /// columns of `sweep.csv` (`result` is the row in words) and the pair's `SolveResult` under `solved`.
 /// The chains of the adversary sizes run one after the other here.
+/// `on_iteration` and `progress` are [`solve`]'s, for each pair.
 #[pyfunction]
-#[pyo3(signature = (game, ltl = None, def_nodes = None, adv_nodes = None, *, props = None, on_iteration = None, allow_unused_propositions = false, **settings))]
+#[pyo3(signature = (game, ltl = None, def_nodes = None, adv_nodes = None, *, props = None, on_iteration = None, progress = None, allow_unused_propositions = false, **settings))]
 #[allow(clippy::too_many_arguments)]
 pub fn sweep(
     py: Python<'_>,
@@ -523,9 +569,11 @@ pub fn sweep(
     adv_nodes: Option<&Bound<'_, PyAny>>,
     props: Option<&Bound<'_, PyAny>>,
     on_iteration: Option<Py<PyAny>>,
+    progress: Option<&Bound<'_, PyAny>>,
     allow_unused_propositions: bool,
     settings: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<Py<PyList>> {
+    let progress = progress_interval(progress)?;
     let asked = Asked::from_keywords(ltl, props)?;
     let ltl = &asked.formula("sweep")?;
     let settings = self::settings("sweep", settings)?;
@@ -558,7 +606,7 @@ pub fn sweep(
         for &n in &defender_sizes {
             let job = chain.job(n).map_err(convert)?;
             let callback = callback.as_ref().map(|c| c.clone_ref(py));
-            let outcome = run_job(py, job, callback, None, asked.property())?;
+            let outcome = run_job(py, job, (callback, progress), None, asked.property())?;
             let row = serialised(py, &chain.row(n, &outcome))?.cast_into::<PyDict>()?;
             row.set_item(
                 "solved",
@@ -569,3 +617,35 @@ pub fn sweep(
     }
     Ok(rows.unbind())
 }
+
+/// The status-line interval `progress=` asks for: none for `None` or
+/// `False`, [`DEFAULT_PROGRESS_EVERY`] for `True`, else the seconds given.
+fn progress_interval(progress: Option<&Bound<'_, PyAny>>) -> PyResult<Option<Duration>> {
+    let Some(progress) = progress else {
+        return Ok(None);
+    };
+    if let Ok(flag) = progress.cast::<pyo3::types::PyBool>() {
+        return Ok(flag.is_true().then_some(DEFAULT_PROGRESS_EVERY));
+    }
+    let seconds: f64 = progress.extract().map_err(|_| {
+        raise(
+            Kind::Settings,
+            "progress must be True, False or the seconds between two status lines",
+        )
+    })?;
+    posg_fsc::seconds::duration(seconds)
+        .filter(|d| !d.is_zero())
+        .map(Some)
+        .ok_or_else(|| {
+            raise(
+                Kind::Settings,
+                format!(
+                    "progress={seconds}: the seconds between two status lines must be positive"
+                ),
+            )
+        })
+}
+
+/// The seconds between two status lines with `progress=True`, as the
+/// command line's `--progress-every`.
+const DEFAULT_PROGRESS_EVERY: Duration = Duration::from_secs(5);

@@ -217,3 +217,20 @@ def test_ctrl_c_leaves_out_complete_or_untouched(tmp_path):
         assert summary["certified"]["certified_lower"] <= summary["certified"]["upper_bound"]
         for name in ("defender.fsc.json", "adversary.fsc.json", "curve.csv", "defender.dot"):
             assert (out / name).is_file(), name
+
+
+def test_progress_prints_the_command_line_s_lines_on_stderr(capsys):
+    game = posg_fsc.example_grid(width=6, height=6, unsafe=[5], goal=[35])
+    result = posg_fsc.solve(
+        game, FORMULA, 2, 1, progress=0.01, **dict(LONG, max_iterations=200)
+    )
+    lines = capsys.readouterr().err.splitlines()
+    stamps = [float(line[1:].split(" s] ")[0]) for line in lines]
+    assert stamps == sorted(stamps), lines
+    assert any(" racing (iteration " in line for line in lines), lines
+    done = [line for line in lines if line.split("] ")[1].startswith("2 nodes: done in ")]
+    assert done and f"certified [{result.certified['certified_lower']:.6f}, " in done[-1], lines
+    posg_fsc.solve(game, FORMULA, 1, 1, **QUICK)
+    assert capsys.readouterr().err == ""
+    with pytest.raises(posg_fsc.SettingsError, match="progress"):
+        posg_fsc.solve(game, FORMULA, 1, 1, progress=-1.0, **QUICK)

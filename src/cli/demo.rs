@@ -25,7 +25,6 @@ use posg_fsc::synthesis::{self, Mode, synthesise};
 use posg_fsc::value::SolverSettings;
 use posg_fsc::value::evaluate_controllers;
 
-use super::progress::ProgressMode;
 use super::solve::solve_into;
 
 /// Arguments of `demo`.
@@ -86,7 +85,7 @@ fn solve_with_defaults(game: &Posg, automata: &Automata, place: &Place) -> anyho
     solve_into(
         job,
         &place.staging,
-        ProgressMode::Quiet,
+        None,
         false,
         posg_fsc::output::PlotFormat::Svg,
         None,

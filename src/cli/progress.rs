@@ -1,22 +1,25 @@
 //! Progress reports on stderr for `solve` and `sweep`, kept out of the
-//! library: optimiser [`Observer`]s and a sweep tracker that draw indicatif
-//! bars on a terminal, print a line every few seconds otherwise (logs, CI,
-//! cluster jobs), and stay silent with `--quiet`.
+//! library: a [`Reporter`] that shows the library's [`Progress`] board (a
+//! spinner on a terminal, a line every few seconds otherwise: logs, CI,
+//! cluster jobs) and a sweep tracker; silent with `--quiet`.
 
 use std::io::IsTerminal;
-use std::sync::Mutex;
+use std::sync::mpsc;
+use std::sync::{Arc, Mutex};
+use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
 use clap::Args;
-use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
-use posg_fsc::optimise::{IterationRecord, Observer, ObserverError, RecordSource, SearchRecord};
+use indicatif::{ProgressBar, ProgressStyle};
+use posg_fsc::pipeline::progress::Progress;
 
 /// Output options shared by `solve` and `sweep`.
 #[derive(Debug, Clone, Args)]
 pub struct OutputArgs {
-    /// No progress on stderr (by default: bars on a terminal, otherwise a
-    /// line every `--progress-every` seconds with the start, iteration,
-    /// estimate, best certified bracket and elapsed time).
+    /// No progress on stderr (by default: a spinner on a terminal,
+    /// otherwise a line at once for each event and, when nothing happened
+    /// for `--progress-every` seconds, one with what each part of the run
+    /// is doing and the best certified bracket so far).
     #[arg(long)]
     pub quiet: bool,
     /// Seconds between two progress lines when stderr is not a terminal
@@ -54,224 +57,89 @@ impl ProgressMode {
     }
 }
 
-/// The numbers a progress report shows, updated from the records of every
-/// start as they arrive: the latest record's start, iteration, value and
-/// worst case, the furthest iteration of any start, and the best bracket
-/// certified so far (the highest lower bound and lowest upper bound of any
-/// start).
-#[derive(Debug, Clone, Copy, Default)]
-struct Latest {
-    start: usize,
-    iteration: usize,
-    furthest: usize,
-    value: f64,
-    worst_case: Option<f64>,
-    lower: Option<f64>,
-    upper: Option<f64>,
-    seconds: f64,
-    /// The part that made the returned defender, once it is known.
-    returned: Option<RecordSource>,
+/// How often the reporter looks at the board: events appear within this.
+const POLL: Duration = Duration::from_millis(100);
+
+/// Prints a run's [`Progress`] on stderr while it runs, from a thread of
+/// its own: the board's lines as they are due ([`ProgressMode::Lines`]),
+/// or a spinner with the status and the events above it
+/// ([`ProgressMode::Bars`]). Dropping it prints what is left and stops.
+pub struct Reporter {
+    progress: Arc<Progress>,
+    stop: Option<mpsc::Sender<()>>,
+    thread: Option<JoinHandle<()>>,
 }
 
-impl Latest {
-    fn update(&mut self, record: &IterationRecord) {
-        self.seconds = self.seconds.max(record.seconds);
-        self.lower = max_of(self.lower, record.certified_lower);
-        self.upper = min_of(self.upper, record.upper_bound);
-        if record.returned {
-            self.returned = Some(record.source);
-            self.worst_case = record.worst_case;
-            return;
-        }
-        self.start = record.start;
-        self.iteration = record.iteration;
-        self.furthest = self.furthest.max(record.iteration + 1);
-        self.value = record.value;
-        self.worst_case = record.worst_case.or(self.worst_case);
-    }
-
-    /// Counts the bound of the local search before the race as certified.
-    fn searched(&mut self, record: &SearchRecord) {
-        self.seconds = self.seconds.max(record.seconds);
-        self.lower = max_of(self.lower, Some(record.certified_lower));
-    }
-
-    /// `start 2 at iteration 140: value 0.61, worst case 0.58; best certified [0.57, 0.70]`.
-    fn describe(&self) -> String {
-        let worst = self.worst_case.map_or("-".into(), |w| format!("{w:.6}"));
-        let bracket = match (self.lower, self.upper) {
-            (Some(l), Some(u)) => format!("; best certified [{l:.6}, {u:.6}]"),
-            _ => String::new(),
+impl Reporter {
+    /// A reporter of a new board (whose lines begin with `label`, if
+    /// given), or `None` in [`ProgressMode::Quiet`].
+    pub fn start(mode: ProgressMode, label: Option<String>) -> Option<Self> {
+        let interval = match mode {
+            ProgressMode::Quiet => return None,
+            ProgressMode::Lines(interval) => interval,
+            ProgressMode::Bars => Duration::MAX,
         };
-        if let Some(source) = self.returned {
-            let source = serde_json::to_value(source).ok();
-            let source = source.as_ref().and_then(|s| s.as_str()).unwrap_or("?");
-            return format!(
-                "returned the {source} defender after {}: worst case {worst}{bracket}",
-                posg_fsc::output::counted(self.furthest, "iteration")
-            );
-        }
-        format!(
-            "start {} at iteration {}: value {:.6}, worst case {worst}{bracket}",
-            self.start,
-            self.iteration + 1,
-            self.value
-        )
+        let progress = Progress::labelled(interval, label);
+        let (stop, stopped) = mpsc::channel();
+        let board = Arc::clone(&progress);
+        let thread = std::thread::spawn(move || match mode {
+            ProgressMode::Bars => spin(&board, &stopped),
+            _ => print_lines(&board, &stopped),
+        });
+        Some(Self {
+            progress,
+            stop: Some(stop),
+            thread: Some(thread),
+        })
+    }
+
+    /// The board the run's observers update.
+    pub fn progress(&self) -> &Arc<Progress> {
+        &self.progress
     }
 }
 
-/// `local search before the race: certified 0.81, done at 0.4 s` (since
-/// the run began: the structures search one after another).
-fn searched_line(record: &SearchRecord) -> String {
-    format!(
-        "local search before the race: certified {:.6}, done at {:.1} s",
-        record.certified_lower, record.seconds
-    )
-}
-
-/// The larger of two optional numbers (either when the other is `None`).
-fn max_of(a: Option<f64>, b: Option<f64>) -> Option<f64> {
-    match (a, b) {
-        (Some(a), Some(b)) => Some(a.max(b)),
-        (a, b) => a.or(b),
-    }
-}
-
-/// The smaller of two optional numbers (either when the other is `None`).
-fn min_of(a: Option<f64>, b: Option<f64>) -> Option<f64> {
-    match (a, b) {
-        (Some(a), Some(b)) => Some(a.min(b)),
-        (a, b) => a.or(b),
-    }
-}
-
-/// The progress observer of one structure's optimisation, or `None`.
-pub fn structure_progress(
-    mode: ProgressMode,
-    bars: Option<&MultiProgress>,
-    label: &str,
-    iterations: usize,
-) -> Option<Box<dyn Observer + Send>> {
-    match (mode, bars) {
-        (ProgressMode::Bars, Some(bars)) => {
-            Some(Box::new(BarProgress::new(bars, label, iterations)))
-        }
-        (ProgressMode::Lines(interval), _) => {
-            Some(Box::new(LineProgress::new(label, iterations, interval)))
-        }
-        _ => None,
-    }
-}
-
-/// A progress bar over the outer iterations.
-struct BarProgress {
-    bar: ProgressBar,
-    latest: Latest,
-}
-
-impl BarProgress {
-    fn new(bars: &MultiProgress, label: &str, iterations: usize) -> Self {
-        let bar = bars.add(ProgressBar::new(iterations as u64));
-        let style =
-            ProgressStyle::with_template("{prefix} [{bar:30}] {pos}/{len} {msg} ({elapsed})")
-                .unwrap_or_else(|_| ProgressStyle::default_bar())
-                .progress_chars("=> ");
-        bar.set_style(style);
-        bar.set_prefix(label.to_string());
-        Self {
-            bar,
-            latest: Latest::default(),
+impl Drop for Reporter {
+    fn drop(&mut self) {
+        drop(self.stop.take());
+        if let Some(thread) = self.thread.take() {
+            let _ = thread.join();
         }
     }
 }
 
-impl Observer for BarProgress {
-    fn observe(&mut self, record: &IterationRecord) {
-        self.latest.update(record);
-        self.bar.set_position(self.latest.furthest as u64);
-        self.bar.set_message(self.latest.describe());
+/// Prints the board's due lines until `stopped` says stop (or its sender
+/// is gone), then its last events.
+fn print_lines(board: &Progress, stopped: &mpsc::Receiver<()>) {
+    while let Err(mpsc::RecvTimeoutError::Timeout) = stopped.recv_timeout(POLL) {
+        for line in board.due_lines() {
+            eprintln!("{line}");
+        }
     }
-
-    fn searched(&mut self, record: &SearchRecord) {
-        self.latest.searched(record);
-        self.bar.set_message(searched_line(record));
-    }
-
-    fn finish(&mut self) -> Result<(), ObserverError> {
-        self.bar.finish();
-        Ok(())
+    for line in board.events() {
+        eprintln!("{line}");
     }
 }
 
-/// A line on stderr every `interval` and at the end (unless the last
-/// line already showed every record).
-struct LineProgress {
-    label: String,
-    iterations: usize,
-    interval: Duration,
-    last_line: Instant,
-    latest: Latest,
-    /// Whether a record arrived since the last line.
-    unprinted: bool,
-}
-
-impl LineProgress {
-    fn new(label: &str, iterations: usize, interval: Duration) -> Self {
-        Self {
-            label: label.to_string(),
-            iterations,
-            interval,
-            last_line: Instant::now(),
-            latest: Latest::default(),
-            unprinted: false,
+/// A spinner with the board's status, its events printed above it.
+fn spin(board: &Progress, stopped: &mpsc::Receiver<()>) {
+    let spinner = ProgressBar::new_spinner();
+    spinner.set_style(
+        ProgressStyle::with_template("{spinner} [{elapsed}] {wide_msg}")
+            .unwrap_or_else(|_| ProgressStyle::default_spinner()),
+    );
+    let show = |spinner: &ProgressBar| {
+        for line in board.events() {
+            spinner.println(line);
         }
+        spinner.set_message(board.status());
+    };
+    while let Err(mpsc::RecvTimeoutError::Timeout) = stopped.recv_timeout(POLL) {
+        show(&spinner);
+        spinner.tick();
     }
-
-    fn print(&mut self) {
-        self.unprinted = false;
-        self.last_line = Instant::now();
-        let cap = match self.latest.returned {
-            None => format!(" (at most {} iterations)", self.iterations),
-            Some(_) => String::new(),
-        };
-        eprintln!(
-            "[{}] {}{cap}; {:.1} s",
-            self.label,
-            self.latest.describe(),
-            self.latest.seconds
-        );
-    }
-}
-
-impl Observer for LineProgress {
-    fn observe(&mut self, record: &IterationRecord) {
-        if record.returned {
-            // The last iterations' line, then the returned defender's, at once.
-            if self.unprinted {
-                self.print();
-            }
-            self.latest.update(record);
-            self.print();
-            return;
-        }
-        self.latest.update(record);
-        self.unprinted = true;
-        if self.last_line.elapsed() >= self.interval {
-            self.print();
-        }
-    }
-
-    fn searched(&mut self, record: &SearchRecord) {
-        self.latest.searched(record);
-        eprintln!("[{}] {}", self.label, searched_line(record));
-    }
-
-    fn finish(&mut self) -> Result<(), ObserverError> {
-        if self.unprinted {
-            self.print();
-        }
-        Ok(())
-    }
+    show(&spinner);
+    spinner.finish_and_clear();
 }
 
 /// The size pairs of a sweep done so far: a bar with done / total and an
@@ -330,6 +198,18 @@ impl SweepProgress {
                 );
             }
             _ => {}
+        }
+    }
+
+    /// The reporter of the pair (`defender`, `adversary`) while it runs:
+    /// its own lines in a log (a terminal shows the sweep's bar alone).
+    pub fn pair_reporter(&self, defender: usize, adversary: usize) -> Option<Reporter> {
+        match self.mode {
+            ProgressMode::Lines(_) => Reporter::start(
+                self.mode,
+                Some(format!("defender {defender}, adversary {adversary}")),
+            ),
+            _ => None,
         }
     }
 

@@ -9,21 +9,23 @@
 
 use std::path::{Path, PathBuf};
 
+use std::sync::Arc;
+
 use clap::Args;
-use indicatif::MultiProgress;
 
 use posg_fsc::controller::{self, Role};
 use posg_fsc::game::Posg;
 use posg_fsc::ltl::props::Property;
-use posg_fsc::optimise::{Cancel, Settings};
+use posg_fsc::optimise::{Cancel, Observer, Settings};
 use posg_fsc::output::{OutputDirectory, PlotFormat};
 use posg_fsc::pipeline::directory::SolveDirectory;
-use posg_fsc::pipeline::{Automata, Job, Outcome, QueryValue, RewardObjective, Sizes};
+use posg_fsc::pipeline::progress::Progress;
+use posg_fsc::pipeline::{Automata, Job, Outcome, QueryValue, RewardObjective, Sizes, Unwatched};
 
 use super::common::{
     ObjectiveArgs, PlotArgs, SolverArgs, formula_automata, objective, print_text, read_game_for,
 };
-use super::progress::{OutputArgs, ProgressMode, structure_progress};
+use super::progress::{OutputArgs, ProgressMode, Reporter};
 
 /// Arguments of `solve`.
 #[derive(Debug, Args)]
@@ -101,12 +103,12 @@ fn automata(args: &ObjectiveArgs, game: &Posg) -> anyhow::Result<Automata> {
 }
 
 /// Runs `job` into the solve directory `path` (the pipeline with its curve
-/// writers, [`SolveDirectory`]), with progress on stderr as `progress`
-/// says; warns when the best defender has no certificate.
+/// writers, [`SolveDirectory`]), its progress on the board `progress` if
+/// given; warns when the best defender has no certificate.
 pub fn solve_into(
     job: Job,
     path: &Path,
-    progress: ProgressMode,
+    progress: Option<&Arc<Progress>>,
     seconds_axis: bool,
     plot_format: PlotFormat,
     query: Option<&Property>,
@@ -119,17 +121,10 @@ pub fn solve_into(
         command_line: &command_line,
         query,
     };
-    let iterations = job.settings.max_iterations;
-    let bars = (progress == ProgressMode::Bars).then(MultiProgress::new);
-    let outcome = directory.solve(job, |slot| {
-        let name = if slot.final_size {
-            slot.structure.name.clone()
-        } else {
-            format!("{} nodes: {}", slot.defender_nodes, slot.structure.name)
-        };
-        structure_progress(progress, bars.as_ref(), &name, iterations)
-            .unwrap_or_else(|| Box::new(()))
-    })?;
+    let outcome = match progress {
+        Some(progress) => directory.solve(job, progress.watching(Unwatched)),
+        None => directory.solve(job, Unwatched),
+    }?;
     if let Some(error) = &outcome.certification_error {
         eprintln!("warning: the best defender has no certificate: {error}");
     }
@@ -160,9 +155,17 @@ fn agree(
 /// Runs `solve`.
 pub fn run(args: SolveArgs) -> anyhow::Result<()> {
     let settings = settings(&args.settings, &args.solver)?;
+    let reporter = Reporter::start(ProgressMode::detect(&args.output), None);
+    let progress = reporter.as_ref().map(Reporter::progress);
+    if let Some(progress) = progress {
+        progress.begin(format!("reading {}", args.game.display()));
+    }
     let game = read_game_for(&args.game, &args.objective)?;
     if let Some(reward) = args.objective.reward_objective(&game)? {
-        return solve_expected_reward(&args, &game, &reward, &settings);
+        return solve_expected_reward(&args, &game, &reward, &settings, progress);
+    }
+    if let Some(progress) = progress {
+        progress.begin("translating the formula");
     }
     let automata = automata(&args.objective, &game)?;
     let sizes = Sizes {
@@ -183,7 +186,6 @@ pub fn run(args: SolveArgs) -> anyhow::Result<()> {
     }
     let out = OutputDirectory::create(&args.out, args.force)?;
     super::interrupt::stop_gracefully(&job.cancel);
-    let progress = ProgressMode::detect(&args.output);
     let format = args.plot.format;
     let property = args.objective.property()?;
     let seconds_axis = args.output.seconds_axis;
@@ -195,6 +197,7 @@ pub fn run(args: SolveArgs) -> anyhow::Result<()> {
         format,
         property.as_ref(),
     )?;
+    drop(reporter);
     out.commit()?;
     if super::interrupt::received() {
         eprintln!("interrupted: the results below are those of the defender found before it");
@@ -288,6 +291,7 @@ fn solve_expected_reward(
     game: &Posg,
     reward: &RewardObjective,
     settings: &Settings,
+    progress: Option<&Arc<Progress>>,
 ) -> anyhow::Result<()> {
     if let Some(option) = [
         ("--defender", &args.defender),
@@ -310,10 +314,10 @@ fn solve_expected_reward(
     let out = OutputDirectory::create(&args.out, args.force)?;
     let cancel = Cancel::new();
     super::interrupt::stop_gracefully(&cancel);
-    let progress = ProgressMode::detect(&args.output);
-    let bars = (progress == ProgressMode::Bars).then(MultiProgress::new);
-    let observer = structure_progress(progress, bars.as_ref(), "full", settings.max_iterations)
-        .unwrap_or_else(|| Box::new(()));
+    let observer: Box<dyn Observer + Send> = match progress {
+        Some(progress) => Box::new(progress.observer("full", nodes)),
+        None => Box::new(()),
+    };
     let command_line = super::common::command_line();
     let property = args.objective.property()?;
     let directory = SolveDirectory {

@@ -22,7 +22,7 @@ use posg_fsc::output::{OutputDirectory, PlotFormat, Title, create_dir, write_fil
 use posg_fsc::pipeline::{self, Automata, Chain};
 
 use super::common::{self, ObjectiveArgs, PlotArgs, SolverArgs, print_text};
-use super::progress::{OutputArgs, ProgressMode, SweepProgress};
+use super::progress::{OutputArgs, ProgressMode, Reporter, SweepProgress};
 use super::solve::{SIZE_OPTIONS, load, settings, solve_into};
 
 /// Arguments of `sweep`.
@@ -314,15 +314,17 @@ fn run_chain(
                 (Some(own), path)
             }
         };
+        let reporter = progress.pair_reporter(n, m);
         let outcome = solve_into(
             chain.job(n)?,
             &out,
-            ProgressMode::Quiet,
+            reporter.as_ref().map(Reporter::progress),
             inputs.seconds_axis,
             inputs.plot_format,
             inputs.query,
         )
         .with_context(|| format!("defender {n} nodes, adversary {m} nodes"))?;
+        drop(reporter);
         let row = chain.row(n, &outcome);
         progress.finished(n, m, row.worst_case);
         if let Some(own) = own {

@@ -66,7 +66,7 @@ mod warm_start;
 pub(crate) use best_response::{Starts, final_best_response};
 pub use cancel::Cancel;
 pub use objective::{GmcSize, Objective, Point};
-pub use observer::{IterationRecord, Observer, ObserverError, RecordSource, SearchRecord};
+pub use observer::{IterationRecord, Observer, ObserverError, Phase, RecordSource, SearchRecord};
 pub(crate) use optimiser::{Certifier, Optimiser, PhaseSeconds, RunOutcome};
 pub use reward::{ExpectedReward, RewardSolution, RewardStart, optimise_expected_reward};
 pub use rounding::{TRUNCATION_THRESHOLDS, rounded_candidates, truncated};
@@ -212,6 +212,35 @@ pub enum Status {
     /// early probe against the local search's bound found it out of reach
     /// (`optimiser.rs`, `FLOOR_PROBE_CHECKS`).
     Outpaced,
+}
+
+impl Status {
+    /// Why a run stopped, in words, with the budget of `settings` that
+    /// ended it where one did (`work budget spent: 3.5e6 GMC states solved
+    /// per start`).
+    pub fn explained(self, settings: &Settings) -> String {
+        match self {
+            Status::MaxIterations => format!(
+                "iteration limit reached: {} iterations",
+                settings.max_iterations
+            ),
+            Status::WorkBudget => format!(
+                "work budget spent: {:.1e} GMC states solved per start",
+                settings.max_work
+            ),
+            Status::TimeBudget => {
+                format!("time budget spent: {} s", settings.time_budget)
+            }
+            Status::Stalled => "stalled: the best score stopped improving".into(),
+            Status::GapClosed => format!("certified gap closed to {:.0e}", settings.gap_tolerance),
+            Status::Converged => "converged: no ascent step left".into(),
+            Status::Cancelled => "cancelled".into(),
+            Status::ZeroOnSupport => {
+                "value 0 on the whole support: no phi-feasible recurrent set reachable".into()
+            }
+            Status::Outpaced => "outpaced by another start or the local search".into(),
+        }
+    }
 }
 
 /// How a structure was optimised.
@@ -611,7 +640,10 @@ impl<'a> StructuresRun<'a> {
             .filter(|_| self.method() == Method::MaxMin && settings.round && settings.local_search)
             .filter(|_| !self.cancel.is_cancelled());
         let climbed = match search {
-            Some(c) => search_supports(c, structure, self)?,
+            Some(c) => {
+                observer.phase(&Phase::LocalSearch);
+                search_supports(c, structure, self)?
+            }
             None => None,
         };
         // The search's seconds; where it was asked but not run, those of
@@ -661,6 +693,7 @@ impl<'a> StructuresRun<'a> {
             climbed: presolved,
             phases: presolve,
         } = presolved;
+        observer.phase(&Phase::Race);
         let shared = Mutex::new(observer);
         let live = |start| Live {
             start,
@@ -769,6 +802,9 @@ impl<'a> StructuresRun<'a> {
             .filter_map(|r| r.outcome.upper_bound)
             .reduce(f64::min);
         let mut run = runs.swap_remove(best_start);
+        observer.phase(&Phase::Finishing {
+            race: run.outcome.status.explained(settings),
+        });
         let chosen = finalise(
             game,
             dra,

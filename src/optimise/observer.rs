@@ -80,6 +80,26 @@ pub struct SearchRecord {
     pub certified_lower: f64,
 }
 
+/// A step of a structure's optimisation (method.md section 4), announced
+/// to its observer as it begins, so that a progress report can say what a
+/// long stretch without records is spent on.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Phase {
+    /// The local search on the supports before the race (method.md
+    /// section 6).
+    LocalSearch,
+    /// The starts' race of gradient play (or of the single-player ascent).
+    Race,
+    /// The race ended: the rounding, the local search from the rounded
+    /// candidates and the returned defender's final best responses and
+    /// certificate follow.
+    Finishing {
+        /// Why the kept start's race ended, in words with the budget that
+        /// ended it ([`super::Status::explained`]).
+        race: String,
+    },
+}
+
 /// An observer's failure (an output file could not be written, say).
 pub type ObserverError = Box<dyn std::error::Error + Send + Sync>;
 
@@ -92,6 +112,9 @@ pub trait Observer {
     /// Called once when the local search before a max-min race has ended,
     /// before the race's first record.
     fn searched(&mut self, _record: &SearchRecord) {}
+
+    /// Called as each phase of the structure's optimisation begins.
+    fn phase(&mut self, _phase: &Phase) {}
 
     /// Called once after the last record: flushes output and reports the
     /// first failure, which fails the run.
@@ -116,6 +139,12 @@ impl Observer for Vec<Box<dyn Observer + Send>> {
     fn searched(&mut self, record: &SearchRecord) {
         for observer in self {
             observer.searched(record);
+        }
+    }
+
+    fn phase(&mut self, phase: &Phase) {
+        for observer in self {
+            observer.phase(phase);
         }
     }
 

@@ -10,7 +10,7 @@ use std::path::Path;
 use serde::Serialize;
 
 use super::{
-    Automata, Job, Outcome, PipelineError, QueryValue, RewardObjective, SizeResult, Slot, run,
+    Automata, Job, Outcome, PipelineError, QueryValue, RewardObjective, SizeResult, Watch, run,
 };
 use crate::certify::Bracket;
 use crate::controller::{self, Fsc};
@@ -59,13 +59,10 @@ pub struct SolveDirectory<'a> {
 }
 
 impl SolveDirectory<'_> {
-    /// Runs `job` ([`run`]) with `observers(slot)` as each structure's
-    /// observers, then writes the curve tables, draws the curves and writes
-    /// the other files.
-    pub fn solve<F>(&self, job: Job, observers: F) -> Result<Outcome, PipelineError>
-    where
-        F: Fn(Slot) -> Box<dyn Observer + Send> + Sync,
-    {
+    /// Runs `job` ([`run`]) under `watch` (each structure's observer and
+    /// the run's steps), then writes the curve tables, draws the curves and
+    /// writes the other files.
+    pub fn solve(&self, job: Job, watch: impl Watch) -> Result<Outcome, PipelineError> {
         if let Some(format) = self.plot_format.filter(|_| !cfg!(feature = "plot")) {
             // Refused before the run, not after it.
             return Err(OutputError::Plot {
@@ -78,7 +75,7 @@ impl SolveDirectory<'_> {
         }
         create_dir(self.path)?;
         let (game, automata, settings) = (job.game, job.automata, job.settings);
-        let outcome = run(job, observers)?;
+        let outcome = run(job, watch)?;
         self.write(game, automata, settings, &outcome)?;
         Ok(outcome)
     }

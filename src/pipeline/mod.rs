@@ -25,6 +25,7 @@
 //! to the observers, warnings into the outcome.
 
 pub mod directory;
+pub mod progress;
 mod propositions;
 mod query;
 mod reward;
@@ -244,6 +245,72 @@ pub struct Slot<'a> {
     pub final_size: bool,
 }
 
+/// A step of a run that concerns no one structure, announced to
+/// [`Watch::step`] as it begins (or, for [`Step::SizeDone`], as it ends).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Step {
+    /// Gathering the candidate structures of a defender size (the informed
+    /// projection, support synthesis by SAT, the paper's Algorithm 1;
+    /// method.md sections 5 and 7): `defender_nodes` of `final_nodes`.
+    Supports {
+        /// The size whose structures are gathered.
+        defender_nodes: usize,
+        /// The job's own size (a grown run optimises every size up to it).
+        final_nodes: usize,
+    },
+    /// Certifying the best defender of a size (method.md section 6).
+    Certifying {
+        /// The size whose best defender is certified.
+        defender_nodes: usize,
+    },
+    /// A size's result is known.
+    SizeDone(SizeResult),
+}
+
+/// What watches a run ([`run`]): an observer for each structure's
+/// optimisation, and the steps between them ([`observing`] makes one of
+/// an observer factory, [`Unwatched`] watches nothing,
+/// [`progress::Progress::watching`] adds a progress board).
+pub trait Watch: Sync {
+    /// The observer of the structure in `slot`.
+    fn structure(&self, slot: Slot) -> Box<dyn Observer + Send>;
+
+    /// Called as each [`Step`] begins.
+    fn step(&self, _step: &Step) {}
+}
+
+/// The watch that observes nothing.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Unwatched;
+
+impl Watch for Unwatched {
+    fn structure(&self, _slot: Slot) -> Box<dyn Observer + Send> {
+        Box::new(())
+    }
+}
+
+/// The watch that gives each structure the observer `observer(slot)`
+/// makes and ignores the steps.
+pub fn observing<F>(observer: F) -> Observing<F>
+where
+    F: Fn(Slot) -> Box<dyn Observer + Send> + Sync,
+{
+    Observing(observer)
+}
+
+/// The watch [`observing`] makes.
+#[derive(Debug, Clone, Copy)]
+pub struct Observing<F>(F);
+
+impl<F> Watch for Observing<F>
+where
+    F: Fn(Slot) -> Box<dyn Observer + Send> + Sync,
+{
+    fn structure(&self, slot: Slot) -> Box<dyn Observer + Send> {
+        (self.0)(slot)
+    }
+}
+
 /// One defender size of a run ([`Outcome::sizes`]): a grown run
 /// ([`Settings::grow_defender`]) has one per size from 1 node up, each
 /// warm-started from and at least as good as the one before.
@@ -372,38 +439,34 @@ pub enum PipelineError {
 /// let automata = Automata::from_ltl("!unsafe U goal").unwrap();
 /// let settings = Settings { max_iterations: 20, starts: 1, ..Settings::default() };
 /// let sizes = Sizes { defender: 1, adversary: 1 };
-/// let outcome = pipeline::solve(&game, &automata, sizes, &settings, |_| Box::new(())).unwrap();
+/// let outcome = pipeline::solve(&game, &automata, sizes, &settings, pipeline::Unwatched).unwrap();
 /// let bracket = outcome.certified.expect("a formula gives a certified bracket");
 /// assert!(bracket.certified_lower <= bracket.upper_bound);
 /// assert!(bracket.certified_lower <= outcome.best().report.worst_case + 1e-9);
 /// assert_eq!(outcome.curves.len(), outcome.solution.structures.len());
 /// ```
-pub fn solve<F>(
+pub fn solve(
     game: &Posg,
     automata: &Automata,
     sizes: Sizes,
     settings: &Settings,
-    observers: F,
-) -> Result<Outcome, PipelineError>
-where
-    F: Fn(Slot) -> Box<dyn Observer + Send> + Sync,
-{
-    run(Job::full(game, automata, sizes, settings)?, observers)
+    watch: impl Watch,
+) -> Result<Outcome, PipelineError> {
+    run(Job::full(game, automata, sizes, settings)?, watch)
 }
 
 /// Runs `job`: gathers the structures, optimises on each (each reporting to
-/// `observers(slot)`), keeps the best (at least as good as `job.floor`),
+/// the observer `watch` makes for its slot, every step announced to
+/// `watch`), keeps the best (at least as good as `job.floor`),
 /// certifies its bracket. Where the job grows ([`Job::grows`]), every
 /// smaller defender size runs first, from 1 node up, each warm-started from
 /// and floored by the one before ([`Job::warm_started`]): the result then
 /// certifies at least what any smaller size would under the same settings
 /// (method.md section 4, "Memory that never hurts").
-pub fn run<F>(job: Job, observers: F) -> Result<Outcome, PipelineError>
-where
-    F: Fn(Slot) -> Box<dyn Observer + Send> + Sync,
-{
+pub fn run(job: Job, watch: impl Watch) -> Result<Outcome, PipelineError> {
     if !job.grows() {
-        return run_size(job, &observers, true);
+        let nodes = job.start.defender.num_nodes();
+        return run_size(job, &watch, nodes);
     }
     let clock = Instant::now();
     let nodes = job.start.defender.num_nodes();
@@ -434,7 +497,7 @@ where
             Some(previous) => sized.warm_started(previous.best())?,
             None => sized,
         };
-        let mut outcome = run_size(sized, &observers, k == nodes)?;
+        let mut outcome = run_size(sized, &watch, nodes)?;
         if let Some(previous) = &smaller {
             keep_kept_curve(&mut outcome, previous);
         }
@@ -498,12 +561,10 @@ fn pad_defenders(outcome: &mut Outcome, nodes: usize, reason: &str) -> Result<()
     Ok(())
 }
 
-/// [`run`] at the job's size alone; `final_size` tells the observers
+/// [`run`] at the job's size alone; `final_nodes` is the size a grown run
+/// ends at (the job's own when it does not grow), which tells the observers
 /// whether it is the job's own size or a smaller one of a grown run.
-fn run_size<F>(job: Job, observers: &F, final_size: bool) -> Result<Outcome, PipelineError>
-where
-    F: Fn(Slot) -> Box<dyn Observer + Send> + Sync,
-{
+fn run_size(job: Job, watch: &impl Watch, final_nodes: usize) -> Result<Outcome, PipelineError> {
     let clock = Instant::now();
     let Job {
         game,
@@ -515,6 +576,12 @@ where
     } = job;
     let (phi, not_phi) = (&automata.phi, automata.not_phi.as_ref());
     let belief = BeliefBoundOnce::new(game, phi, settings.solver_settings());
+    let defender_nodes = start.defender.num_nodes();
+    let final_size = defender_nodes == final_nodes;
+    watch.step(&Step::Supports {
+        defender_nodes,
+        final_nodes,
+    });
     let candidates =
         optimise::candidate_structures(game, (phi, not_phi), start, settings, &belief)?;
     let count = candidates.structures.len();
@@ -526,7 +593,7 @@ where
         &candidates.structures,
         settings,
         |index, structure| {
-            let given = observers(Slot {
+            let given = watch.structure(Slot {
                 index,
                 count,
                 structure,
@@ -543,6 +610,7 @@ where
         let nodes = solution.best().defender.num_nodes();
         optimise::keep_better(&mut solution, floor, nodes)?;
     }
+    watch.step(&Step::Certifying { defender_nodes });
     let (certified, certification_error) = certify_best(game, automata, &solution)?;
     let curves: Vec<Curve> = candidates
         .structures
@@ -554,13 +622,15 @@ where
         })
         .collect();
     let best = solution.best();
-    let sizes = vec![SizeResult {
+    let size = SizeResult {
         defender_nodes: best.defender.num_nodes(),
         certified,
         worst_case: best.report.worst_case,
         seconds: clock.elapsed().as_secs_f64(),
         first_positive_seconds: first_positive_seconds(&curves),
-    }];
+    };
+    watch.step(&Step::SizeDone(size));
+    let sizes = vec![size];
     Ok(Outcome {
         sizes,
         structure_choice: structure_choice(&solution, &candidates.notes),

@@ -245,7 +245,13 @@ pub fn solve_one_node(
         defender: 1,
         adversary: 1,
     };
-    posg_fsc::pipeline::solve(game, &automata, sizes, settings, |_| Box::new(()))
+    posg_fsc::pipeline::solve(
+        game,
+        &automata,
+        sizes,
+        settings,
+        posg_fsc::pipeline::Unwatched,
+    )
 }
 
 /// The expected total reward of `rewards` until the first state labelled
