@@ -11,7 +11,7 @@ use posg_fsc::controller::{Fsc, Role};
 use posg_fsc::game::Posg;
 use posg_fsc::game::drn::DrnOptions;
 use posg_fsc::ltl::props::{Property, Query};
-use posg_fsc::output::PlotFormat;
+use posg_fsc::output::{PlotFormat, PlotSize};
 use posg_fsc::pipeline::{Automata, PipelineError, RewardObjective};
 use posg_fsc::value::{DEFAULT_LU_LIMIT, DEFAULT_TOLERANCE, SolverMethod, SolverSettings};
 use serde::Serialize;
@@ -149,16 +149,24 @@ pub struct ControllerArgs {
     pub adversary: String,
 }
 
-/// The plots' file format (`solve`, `sweep`, `sweep-merge`).
-#[derive(Debug, Clone, Args)]
+/// The plots' file format and size (`solve`, `sweep`, `sweep-merge`).
+#[derive(Debug, Clone, Copy, Args)]
 pub struct PlotArgs {
     /// The plots' file format: `svg` (curve.svg, sweep.svg) or `png`
-    /// (curve.png, sweep.png: 900 x 520 pixels, for slides).
+    /// (curve.png, sweep.png, for slides).
     #[arg(long, default_value = "svg", value_parser = plot_format)]
     pub format: PlotFormat,
+    /// The plots' size, WIDTHxHEIGHT: pixels of a PNG image, or the SVG
+    /// canvas in the same units.
+    #[arg(long, default_value_t = PlotSize::default(), value_parser = plot_size)]
+    pub size: PlotSize,
 }
 
 fn plot_format(text: &str) -> Result<PlotFormat, String> {
+    text.parse()
+}
+
+fn plot_size(text: &str) -> Result<PlotSize, String> {
     text.parse()
 }
 

@@ -18,13 +18,14 @@ use posg_fsc::controller::{Choice, Fsc, Role};
 use posg_fsc::game::Posg;
 use posg_fsc::game::grid::GridSpec;
 use posg_fsc::optimise::Settings;
-use posg_fsc::output::OutputDirectory;
+use posg_fsc::output::{OutputDirectory, PlotFormat, PlotSize};
 use posg_fsc::pipeline::{Automata, Job, Outcome, Sizes};
 use posg_fsc::prune::{PruneSettings, prune};
 use posg_fsc::synthesis::{self, Mode, synthesise};
 use posg_fsc::value::SolverSettings;
 use posg_fsc::value::evaluate_controllers;
 
+use super::common::PlotArgs;
 use super::solve::solve_into;
 
 /// Arguments of `demo`.
@@ -87,7 +88,10 @@ fn solve_with_defaults(game: &Posg, automata: &Automata, place: &Place) -> anyho
         &place.staging,
         None,
         false,
-        posg_fsc::output::PlotFormat::Svg,
+        PlotArgs {
+            format: PlotFormat::Svg,
+            size: PlotSize::default(),
+        },
         None,
     )
 }

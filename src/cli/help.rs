@@ -108,7 +108,7 @@ const HEADINGS: &[(&str, &[&str])] = &[
         ],
     ),
     ("Linear solver", &["solver", "lu_limit", "tolerance"]),
-    ("Output", &["progress_every", "seconds_axis"]),
+    ("Output", &["progress_every", "seconds_axis", "size"]),
 ];
 
 /// The heading of an option in no list (one added later).

@@ -28,9 +28,9 @@ use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use posg_fsc::output::sweep::{SWEEP_COLUMNS, SweepRow, sweep_table};
-use posg_fsc::output::{
-    OutputError, PlotFormat, SweepPoint, Title, create_dir, plot_sweep, write_file,
-};
+
+use super::common::PlotArgs;
+use posg_fsc::output::{OutputError, SweepPoint, Title, create_dir, plot_sweep, write_file};
 
 /// The file in each pair directory holding its row of `sweep.csv`.
 pub const ROW_FILE: &str = "row.csv";
@@ -398,8 +398,9 @@ pub fn write_sweep(
     dir: &Path,
     rows: &[SweepRow],
     title: &Title,
-    format: PlotFormat,
+    style: PlotArgs,
 ) -> Result<(), ShardError> {
+    let format = style.format;
     let table = dir.join("sweep.csv");
     let text = sweep_table(rows).map_err(|e| ShardError::Malformed {
         path: table.clone(),
@@ -418,9 +419,11 @@ pub fn write_sweep(
     let name = format!("sweep.{format}");
     let plot = dir.join(&name);
     let temporary = dir.join(format!(".{name}.partial-{}", std::process::id()));
-    plot_sweep(&temporary, format, title, &points).map_err(|e| ShardError::Malformed {
-        path: plot.clone(),
-        problem: e.to_string(),
+    plot_sweep(&temporary, (format, style.size), title, &points).map_err(|e| {
+        ShardError::Malformed {
+            path: plot.clone(),
+            problem: e.to_string(),
+        }
     })?;
     fs::rename(&temporary, &plot).map_err(|e| OutputError::io("renaming into", &plot, e))?;
     Ok(())
@@ -594,9 +597,9 @@ fn checked_row(pair: &Path, n: usize, m: usize, plan: &SweepPlan) -> Result<Swee
 
 /// `sweep-merge`: [`collect`], then writes `sweep.csv` and `sweep.svg` (or
 /// `sweep.png`) into `dir`, the same as the unsharded sweep's.
-pub fn merge(dir: &Path, format: PlotFormat) -> Result<Merged, ShardError> {
+pub fn merge(dir: &Path, plot: PlotArgs) -> Result<Merged, ShardError> {
     let merged = collect(dir)?;
-    write_sweep(dir, &merged.rows, &merged.plan.title(), format)?;
+    write_sweep(dir, &merged.rows, &merged.plan.title(), plot)?;
     Ok(merged)
 }
 

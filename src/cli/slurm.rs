@@ -4,7 +4,9 @@
 
 use std::path::Path;
 
-use posg_fsc::output::PlotFormat;
+use posg_fsc::output::{PlotFormat, PlotSize};
+
+use super::common::PlotArgs;
 
 /// What the scripts run and where.
 #[derive(Debug, Clone)]
@@ -21,8 +23,9 @@ pub struct SlurmSweep<'a> {
     pub out: &'a Path,
     /// N, the number of shards (array tasks).
     pub shards: usize,
-    /// The plots' format, passed on to `sweep-merge` (`--format png`).
-    pub plot_format: PlotFormat,
+    /// The plots' format and size, passed on to `sweep-merge` (`--format
+    /// png --size 1200x700`).
+    pub plot: PlotArgs,
     /// Extra `#SBATCH` options, each as given (`--partition=short`).
     pub options: &'a [String],
     /// The command line that wrote the scripts, recorded in them.
@@ -112,10 +115,13 @@ pub fn array_script(sweep: &SlurmSweep) -> String {
 pub fn merge_script(sweep: &SlurmSweep) -> String {
     let mut text = header(sweep, "posg-fsc-sweep-merge", "merge-%j.out");
     text += &footer(sweep, "the merge of a sharded posg-fsc sweep");
-    let format = match sweep.plot_format {
+    let mut format = match sweep.plot.format {
         PlotFormat::Svg => String::new(),
         format => format!(" --format {format}"),
     };
+    if sweep.plot.size != PlotSize::default() {
+        format += &format!(" --size {}", sweep.plot.size);
+    }
     text += &format!(
         "exec {} sweep-merge {}{format}\n",
         shell_quote(&sweep.program.display().to_string()),

@@ -17,7 +17,7 @@ use posg_fsc::controller::{self, Role};
 use posg_fsc::game::Posg;
 use posg_fsc::ltl::props::Property;
 use posg_fsc::optimise::{Cancel, Observer, Settings};
-use posg_fsc::output::{OutputDirectory, PlotFormat};
+use posg_fsc::output::{OutputDirectory, PlotSize};
 use posg_fsc::pipeline::directory::SolveDirectory;
 use posg_fsc::pipeline::progress::Progress;
 use posg_fsc::pipeline::{Automata, Job, Outcome, QueryValue, RewardObjective, Sizes, Unwatched};
@@ -110,14 +110,15 @@ pub fn solve_into(
     path: &Path,
     progress: Option<&Arc<Progress>>,
     seconds_axis: bool,
-    plot_format: PlotFormat,
+    plot: PlotArgs,
     query: Option<&Property>,
 ) -> anyhow::Result<Outcome> {
     let command_line = super::common::command_line();
     let directory = SolveDirectory {
         path,
         seconds_axis,
-        plot_format: Some(plot_format),
+        plot_format: Some(plot.format),
+        plot_size: plot.size,
         command_line: &command_line,
         query,
     };
@@ -194,7 +195,7 @@ pub fn run(args: SolveArgs) -> anyhow::Result<()> {
         out.path(),
         progress,
         seconds_axis,
-        format,
+        args.plot,
         property.as_ref(),
     )?;
     drop(reporter);
@@ -324,6 +325,7 @@ fn solve_expected_reward(
         path: out.path(),
         seconds_axis: false,
         plot_format: None,
+        plot_size: PlotSize::default(),
         command_line: &command_line,
         query: property.as_ref(),
     };

@@ -18,7 +18,7 @@ use posg_fsc::limits;
 use posg_fsc::ltl::props::Property;
 use posg_fsc::optimise::Settings;
 use posg_fsc::output::sweep::{SweepRow, sweep_table};
-use posg_fsc::output::{OutputDirectory, PlotFormat, Title, create_dir, write_file};
+use posg_fsc::output::{OutputDirectory, Title, create_dir, write_file};
 use posg_fsc::pipeline::{self, Automata, Chain};
 
 use super::common::{self, ObjectiveArgs, PlotArgs, SolverArgs, print_text};
@@ -128,7 +128,7 @@ struct Inputs<'a> {
     settings: &'a Settings,
     defender_sizes: &'a [usize],
     seconds_axis: bool,
-    plot_format: PlotFormat,
+    plot: PlotArgs,
     /// The query of `--props`, restated in each pair's `summary.json`.
     query: Option<&'a Property>,
 }
@@ -183,7 +183,7 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
         settings: &settings,
         defender_sizes: &defender_sizes,
         seconds_axis: args.output.seconds_axis,
-        plot_format: args.plot.format,
+        plot: args.plot,
         query: property.as_ref(),
     };
     let adversary_sizes = distinct_in_order(&args.adv_nodes.0);
@@ -263,7 +263,7 @@ fn run_whole(
     )?;
     progress.finish();
     let format = args.plot.format;
-    shard::write_sweep(out.path(), &rows, title, format)?;
+    shard::write_sweep(out.path(), &rows, title, args.plot)?;
     out.commit()?;
     print_text(&format!(
         "wrote sweep.csv and sweep.{format} ({} size pairs) to {}\n{MONOTONE}\n",
@@ -320,7 +320,7 @@ fn run_chain(
             &out,
             reporter.as_ref().map(Reporter::progress),
             inputs.seconds_axis,
-            inputs.plot_format,
+            inputs.plot,
             inputs.query,
         )
         .with_context(|| format!("defender {n} nodes, adversary {m} nodes"))?;
@@ -447,7 +447,7 @@ fn write_slurm(args: &SweepArgs, plan: &SweepPlan) -> anyhow::Result<()> {
         sweep_arguments: &sweep_arguments,
         out: &out,
         shards: plan.shards,
-        plot_format: args.plot.format,
+        plot: args.plot,
         options: &args.slurm_option,
         command_line: &command_line,
     };
@@ -466,7 +466,7 @@ fn write_slurm(args: &SweepArgs, plan: &SweepPlan) -> anyhow::Result<()> {
 /// Runs `sweep-merge`.
 pub fn run_merge(args: SweepMergeArgs) -> anyhow::Result<()> {
     let format = args.plot.format;
-    let merged = shard::merge(&args.dir, format)?;
+    let merged = shard::merge(&args.dir, args.plot)?;
     print_text(&format!(
         "wrote sweep.csv and sweep.{format} ({} size pairs from {} shards) to {}\n",
         merged.rows.len(),

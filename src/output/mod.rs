@@ -23,7 +23,9 @@ pub mod sweep;
 pub use directory::{
     Abandoned, OutputDirectory, OutputError, abandon_uncommitted, create_dir, write_file,
 };
-pub use plot::{CurvePlot, PlotFormat, Returned, SweepPoint, Title, plot_curve, plot_sweep};
+pub use plot::{
+    CurvePlot, PlotFormat, PlotSize, Returned, SweepPoint, Title, plot_curve, plot_sweep,
+};
 
 use std::fs::File;
 use std::path::Path;

@@ -20,7 +20,8 @@ pub enum PlotFormat {
     /// Scalable vector graphics, text kept as text (the default).
     #[default]
     Svg,
-    /// A 900 x 520 pixel PNG image (for slides).
+    /// A PNG image (for slides; 900 x 520 pixels unless a [`PlotSize`]
+    /// says otherwise).
     Png,
 }
 
@@ -48,6 +49,69 @@ impl FromStr for PlotFormat {
             "svg" => Ok(Self::Svg),
             "png" => Ok(Self::Png),
             _ => Err(format!("'{text}' is not a plot format: svg or png")),
+        }
+    }
+}
+
+/// The size of a plot (`--size WIDTHxHEIGHT`): pixels of a PNG image, or
+/// the SVG canvas in the same units; 900 x 520 by default.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct PlotSize {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+}
+
+impl PlotSize {
+    /// The smallest size the legend, title and axes fit in.
+    pub const MIN: PlotSize = PlotSize {
+        width: 640,
+        height: 400,
+    };
+    /// The largest size (a PNG of it is drawn in about 100 MB of memory).
+    pub const MAX: PlotSize = PlotSize {
+        width: 6000,
+        height: 6000,
+    };
+}
+
+impl Default for PlotSize {
+    fn default() -> Self {
+        Self {
+            width: 900,
+            height: 520,
+        }
+    }
+}
+
+impl fmt::Display for PlotSize {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}x{}", self.width, self.height)
+    }
+}
+
+impl FromStr for PlotSize {
+    type Err = String;
+
+    fn from_str(text: &str) -> Result<Self, String> {
+        let (min, max) = (Self::MIN, Self::MAX);
+        let bad = || {
+            format!(
+                "'{text}' is not a plot size: WIDTHxHEIGHT in pixels, from {min} to {max} (e.g. \
+                 1200x700)"
+            )
+        };
+        let (width, height) = text.split_once(['x', 'X']).ok_or_else(bad)?;
+        let size = Self {
+            width: width.trim().parse().map_err(|_| bad())?,
+            height: height.trim().parse().map_err(|_| bad())?,
+        };
+        let within = |v: u32, lo: u32, hi: u32| (lo..=hi).contains(&v);
+        if within(size.width, min.width, max.width) && within(size.height, min.height, max.height) {
+            Ok(size)
+        } else {
+            Err(bad())
         }
     }
 }
@@ -89,6 +153,8 @@ pub struct CurvePlot<'a> {
     pub returned: Option<Returned>,
     /// Whether to draw the top axis with the seconds elapsed.
     pub seconds_axis: bool,
+    /// The picture's size.
+    pub size: PlotSize,
 }
 
 /// One row of a sweep: sizes and the worst-case estimate.
@@ -116,7 +182,7 @@ pub fn plot_curve(path: &Path, format: PlotFormat, curve: &CurvePlot) -> Result<
     }
 }
 
-/// Draws `sweep.svg` into `path` as `format`: a heatmap with one cell per
+/// Draws `sweep.svg` into `path` as `format`, `size` big: a heatmap with one cell per
 /// (defender size, adversary size), coloured by the certified lower bound
 /// (or, without certification, by the worst-case estimate) on a continuous
 /// scale over the values' range (the colour bar beside the cells), each
@@ -124,15 +190,15 @@ pub fn plot_curve(path: &Path, format: PlotFormat, curve: &CurvePlot) -> Result<
 /// worst-case estimate and the game upper bound.
 pub fn plot_sweep(
     path: &Path,
-    format: PlotFormat,
+    (format, size): (PlotFormat, PlotSize),
     title: &Title,
     points: &[SweepPoint],
 ) -> Result<(), OutputError> {
     #[cfg(feature = "plot")]
-    return draw::sweep(path, format, title, points);
+    return draw::sweep(path, (format, size), title, points);
     #[cfg(not(feature = "plot"))]
     {
-        let _ = (format, title, points);
+        let _ = (format, size, title, points);
         Err(not_built(path))
     }
 }
@@ -143,5 +209,29 @@ fn not_built(path: &Path) -> OutputError {
     OutputError::Plot {
         path: path.to_path_buf(),
         problem: "this build of posg-fsc draws no plots (cargo feature `plot`)".into(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn plot_sizes_read_width_x_height_within_bounds() {
+        let size: PlotSize = "1200x700".parse().unwrap();
+        assert_eq!((size.width, size.height), (1200, 700));
+        assert_eq!("900X520".parse::<PlotSize>().unwrap(), PlotSize::default());
+        for bad in [
+            "1200",
+            "x700",
+            "1200x",
+            "12.5x700",
+            "100x100",
+            "100000x700",
+            "-5x700",
+        ] {
+            let error = bad.parse::<PlotSize>().unwrap_err();
+            assert!(error.contains("WIDTHxHEIGHT"), "{bad}: {error}");
+        }
     }
 }

@@ -21,8 +21,8 @@ use crate::optimise::{
     StructureOutcome, StructureReport, optimise_expected_reward,
 };
 use crate::output::{
-    CurveCsv, CurvePlot, OutputError, PlotFormat, Returned, Title, create_dir, plot_curve,
-    write_file,
+    CurveCsv, CurvePlot, OutputError, PlotFormat, PlotSize, Returned, Title, create_dir,
+    plot_curve, write_file,
 };
 
 /// The files of a solve directory whose plots are in `format` (`None`:
@@ -51,6 +51,8 @@ pub struct SolveDirectory<'a> {
     /// The plots' file format; `None`: no plot (the CSV tables hold the
     /// same numbers). Drawing needs the cargo feature `plot`.
     pub plot_format: Option<PlotFormat>,
+    /// The plots' size.
+    pub plot_size: PlotSize,
     /// The command line recorded in `summary.json`.
     pub command_line: &'a [String],
     /// The property file's query the objective came from, if any:
@@ -147,6 +149,7 @@ impl SolveDirectory<'_> {
                 records: &records,
                 returned,
                 seconds_axis: self.seconds_axis,
+                size: self.plot_size,
             };
             let stem = curve_stem(count, &curve.structure);
             let path = self.path.join(format!("{stem}.{format}"));

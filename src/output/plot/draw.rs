@@ -17,12 +17,10 @@ use plotters::prelude::*;
 use plotters::style::colors::colormaps::ViridisRGB;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
-use super::{CurvePlot, PlotFormat, Returned, SweepPoint, Title};
-use crate::optimise::IterationRecord;
+use super::{CurvePlot, PlotFormat, PlotSize, Returned, SweepPoint, Title};
+use crate::optimise::{IterationRecord, RecordSource};
 use crate::output::OutputError;
 
-/// Width and height of every plot, in pixels.
-const SIZE: (u32, u32) = (900, 520);
 /// Width of the legend column right of the data.
 const LEGEND_WIDTH: u32 = 230;
 /// Height of the two title lines.
@@ -52,18 +50,18 @@ type DrawError = Box<dyn std::error::Error + Send + Sync>;
 
 /// Draws `curve` into `path` as `format` ([`super::plot_curve`]).
 pub(super) fn curve(path: &Path, format: PlotFormat, curve: &CurvePlot) -> Result<(), OutputError> {
-    render(path, format, curve)
+    render(path, (format, curve.size), curve)
 }
 
 /// Draws the heatmap of `points` into `path` as `format`
 /// ([`super::plot_sweep`]).
 pub(super) fn sweep(
     path: &Path,
-    format: PlotFormat,
+    (format, size): (PlotFormat, PlotSize),
     title: &Title,
     points: &[SweepPoint],
 ) -> Result<(), OutputError> {
-    render(path, format, &SweepPlot { title, points })
+    render(path, (format, size), &SweepPlot { title, points })
 }
 
 /// A plot drawn the same way on any plotters backend.
@@ -75,23 +73,29 @@ trait Figure {
 
 /// Draws `figure` into `path`: an SVG file, or a PNG image rendered into
 /// memory and encoded.
-fn render(path: &Path, format: PlotFormat, figure: &impl Figure) -> Result<(), OutputError> {
+fn render(
+    path: &Path,
+    (format, size): (PlotFormat, PlotSize),
+    figure: &impl Figure,
+) -> Result<(), OutputError> {
+    let dimensions = (size.width, size.height);
     let drawn = || -> Result<(), DrawError> {
         register_font()?;
         match format {
             PlotFormat::Svg => {
-                let root = SVGBackend::new(path, SIZE).into_drawing_area();
+                let root = SVGBackend::new(path, dimensions).into_drawing_area();
                 figure.draw(&root)?;
                 root.present()?;
             }
             PlotFormat::Png => {
-                let mut pixels = vec![0u8; SIZE.0 as usize * SIZE.1 as usize * 3];
+                let mut pixels = vec![0u8; size.width as usize * size.height as usize * 3];
                 {
-                    let root = BitMapBackend::with_buffer(&mut pixels, SIZE).into_drawing_area();
+                    let root =
+                        BitMapBackend::with_buffer(&mut pixels, dimensions).into_drawing_area();
                     figure.draw(&root)?;
                     root.present()?;
                 }
-                write_png(path, &pixels)?;
+                write_png(path, size, &pixels)?;
             }
         }
         Ok(())
@@ -116,11 +120,11 @@ fn register_font() -> Result<(), DrawError> {
     }
 }
 
-/// Encodes 8-bit RGB `pixels` of [`SIZE`] as a PNG file at `path`, with
+/// Encodes 8-bit RGB `pixels` of `size` as a PNG file at `path`, with
 /// the program and version as its `Software` text.
-fn write_png(path: &Path, pixels: &[u8]) -> Result<(), DrawError> {
+fn write_png(path: &Path, size: PlotSize, pixels: &[u8]) -> Result<(), DrawError> {
     let file = std::fs::File::create(path)?;
-    let mut encoder = png::Encoder::new(BufWriter::new(file), SIZE.0, SIZE.1);
+    let mut encoder = png::Encoder::new(BufWriter::new(file), size.width, size.height);
     encoder.set_color(png::ColorType::Rgb);
     encoder.set_depth(png::BitDepth::Eight);
     encoder.add_text_chunk(
@@ -177,7 +181,18 @@ fn draw_curve<DB: DrawingBackend>(
 where
     DB::ErrorType: 'static,
 {
-    let records = curve.records;
+    // The iterates; the returned record is drawn as the returned bracket,
+    // where its defender was found.
+    let records: Vec<IterationRecord> = curve
+        .records
+        .iter()
+        .filter(|r| !r.returned)
+        .copied()
+        .collect();
+    let records = &records[..];
+    let source = (curve.records.iter())
+        .find(|r| r.returned)
+        .map(|r| r.source);
     let at = |pick: fn(&IterationRecord) -> Option<f64>| -> Vec<(f64, f64)> {
         records
             .iter()
@@ -190,8 +205,11 @@ where
     let upper = at(|r| r.upper_bound);
     let returned = curve.returned.as_ref().map_or(Vec::new(), returned_points);
     let x_last = records.last().map_or(1.0, |r| r.iteration.max(1) as f64);
-    // The returned bracket stands a little right of the last iterate.
-    let x_returned = x_last * 1.04 + 0.25;
+    // The returned bracket stands at the iterate that found it, else (found
+    // by rounding or local search after the race) a little right of the
+    // last iterate.
+    let found_at = where_found(records, source);
+    let x_returned = found_at.map_or(x_last * 1.04 + 0.25, |t| t as f64);
     let x_end = x_last * 1.08 + 0.5;
     let all = values.iter().chain(&estimates).chain(&lower).chain(&upper);
     let (y_min, y_max) = padded_range(all.map(|&(_, y)| y).chain(returned.iter().copied()));
@@ -282,8 +300,8 @@ where
         legend.push(entry(&["game upper bound"], UPPER_COLOUR, kind));
     }
     if let Some(returned) = &curve.returned {
-        draw_returned(&mut chart, returned, x_returned, &estimates)?;
-        legend.push(returned_entry(returned));
+        draw_returned(&mut chart, returned, x_returned)?;
+        legend.push(returned_entry(returned, source, found_at));
     }
     if seconds_axis {
         draw_seconds_axis(root, &chart, records, x_end, y_max)?;
@@ -294,15 +312,28 @@ where
 
 type Chart<'a, DB> = ChartContext<'a, DB, Cartesian2d<Ticked, Ticked>>;
 
+/// The iteration whose iterate the structure returned: where gradient
+/// play made it (`source`), the first iterate with the best certified
+/// lower bound (else the best worst-case estimate); `None` where rounding
+/// or a local search made it, after the race.
+fn where_found(records: &[IterationRecord], source: Option<RecordSource>) -> Option<usize> {
+    if source != Some(RecordSource::Gradient) {
+        return None;
+    }
+    let score = |r: &IterationRecord| r.certified_lower.or(r.worst_case);
+    let best = records.iter().filter_map(score).reduce(f64::max)?;
+    (records.iter())
+        .find(|r| score(r) == Some(best))
+        .map(|r| r.iteration)
+}
+
 /// The returned bracket at `x`: a vertical bar from the certified lower
 /// bound to the upper bound with caps and a diamond at the lower bound (or
-/// a diamond at the estimate), joined by a dotted line to the last
-/// worst-case estimate of the curve.
+/// a diamond at the estimate).
 fn draw_returned<DB: DrawingBackend>(
     chart: &mut Chart<DB>,
     returned: &Returned,
     x: f64,
-    estimates: &[(f64, f64)],
 ) -> Result<(), DrawError>
 where
     DB::ErrorType: 'static,
@@ -311,14 +342,6 @@ where
         Some(b) => (b.certified_lower, b.upper_bound),
         None => (returned.worst_case, returned.worst_case),
     };
-    if let Some(&last) = estimates.last() {
-        chart.draw_series(std::iter::once(DashedPathElement::new(
-            vec![last, (x, low)],
-            2,
-            4,
-            RETURNED_COLOUR.stroke_width(1),
-        )))?;
-    }
     let style = RETURNED_COLOUR.stroke_width(2);
     chart.draw_series(std::iter::once(PathElement::new(
         vec![(x, low), (x, high)],
@@ -348,18 +371,31 @@ fn returned_points(returned: &Returned) -> Vec<f64> {
     }
 }
 
-/// The legend entry of the returned bracket, with its numbers as `solve`
-/// prints them (six decimals).
-fn returned_entry(returned: &Returned) -> LegendEntry {
-    let lines = match returned.certified {
-        Some(b) => vec![
-            "returned, certified:".to_string(),
+/// The legend entry of the returned bracket: what made the defender
+/// (`source`, at iteration `found_at` for gradient play) and its numbers
+/// as `solve` prints them (six decimals).
+fn returned_entry(
+    returned: &Returned,
+    source: Option<RecordSource>,
+    found_at: Option<usize>,
+) -> LegendEntry {
+    let made = match (source, found_at) {
+        (Some(RecordSource::Gradient), Some(t)) => format!("gradient play, iteration {t}"),
+        (Some(RecordSource::Gradient), None) => "gradient play".to_string(),
+        (Some(RecordSource::Rounding), _) => "rounding, after the race".to_string(),
+        (Some(RecordSource::LocalSearch), _) => "local search".to_string(),
+        (None, _) => "the run".to_string(),
+    };
+    let mut lines = vec!["returned, from".to_string(), made];
+    match returned.certified {
+        Some(b) => lines.extend([
+            "certified:".to_string(),
             format!("[{:.6}, {:.6}]", b.certified_lower, b.upper_bound),
-        ],
-        None => vec![
-            "returned, estimated:".to_string(),
+        ]),
+        None => lines.extend([
+            "estimated:".to_string(),
             format!("{:.6}", returned.worst_case),
-        ],
+        ]),
     };
     LegendEntry {
         lines,
@@ -395,8 +431,16 @@ where
     let (left, right) = (top(0.0), top(x_end));
     let style = TextStyle::from((FONT, 13).into_font()).pos(anchor(HPos::Center, VPos::Bottom));
     root.draw(&PathElement::new(vec![left, right], BLACK.stroke_width(1)))?;
+    // A label that would touch the one before it is left out (the seconds
+    // of a run can bunch up where its iterations are fast).
+    let mut free_from = i32::MIN;
     for (position, label) in seconds_ticks(records) {
         let (x, y) = top(position);
+        let half = root.estimate_text_size(&label, &style)?.0 as i32 / 2;
+        if x - half < free_from {
+            continue;
+        }
+        free_from = x + half + TICK_LABEL_GAP;
         root.draw(&PathElement::new(
             vec![(x, y), (x, y - 5)],
             BLACK.stroke_width(1),
@@ -411,6 +455,9 @@ where
     ))?;
     Ok(())
 }
+
+/// The least gap between two tick labels of the seconds axis, in pixels.
+const TICK_LABEL_GAP: i32 = 10;
 
 /// A linear axis over `range` with ticks exactly at `ticks` (plotters
 /// picks its own otherwise).
@@ -475,15 +522,57 @@ fn frame<DB: DrawingBackend>(
 where
     DB::ErrorType: 'static,
 {
-    let (head, body) = root.split_vertically(TITLE_HEIGHT);
-    let centre = (SIZE.0 / 2) as i32;
     let style =
         |size: u32| TextStyle::from((FONT, size).into_font()).pos(anchor(HPos::Center, VPos::Top));
-    head.draw(&Text::new(title.main.clone(), (centre, 8), style(20)))?;
-    if !title.detail.is_empty() {
-        head.draw(&Text::new(title.detail.clone(), (centre, 34), style(15)))?;
+    let (root_width, _) = root.dim_in_pixel();
+    let width = root_width - 2 * TITLE_MARGIN;
+    let main = wrapped(root, &title.main, &style(20), width)?;
+    let detail = wrapped(root, &title.detail, &style(15), width)?;
+    let extra = |lines: &[String], height: u32| height * (lines.len().max(1) as u32 - 1);
+    let (head, body) = root.split_vertically(TITLE_HEIGHT + extra(&main, 24) + extra(&detail, 19));
+    let centre = (root_width / 2) as i32;
+    let mut y = 8;
+    for line in main {
+        head.draw(&Text::new(line, (centre, y), style(20)))?;
+        y += 24;
     }
-    Ok(body.split_horizontally(SIZE.0 - LEGEND_WIDTH))
+    y += 2;
+    for line in detail {
+        head.draw(&Text::new(line, (centre, y), style(15)))?;
+        y += 19;
+    }
+    Ok(body.split_horizontally(root_width - LEGEND_WIDTH))
+}
+
+/// Left and right margin of the title, in pixels.
+const TITLE_MARGIN: u32 = 16;
+
+/// `text` broken at spaces into lines at most `width` pixels wide in
+/// `style` (a word wider than that gets a line of its own); no line for
+/// an empty text.
+fn wrapped<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    text: &str,
+    style: &TextStyle,
+    width: u32,
+) -> Result<Vec<String>, DrawError>
+where
+    DB::ErrorType: 'static,
+{
+    let mut lines: Vec<String> = Vec::new();
+    for word in text.split(' ') {
+        let joined = match lines.last() {
+            Some(line) => format!("{line} {word}"),
+            None => word.to_string(),
+        };
+        let fits = root.estimate_text_size(&joined, style)?.0 <= width;
+        match lines.last_mut() {
+            Some(line) if fits => *line = joined,
+            _ => lines.push(word.to_string()),
+        }
+    }
+    lines.retain(|line| !line.is_empty());
+    Ok(lines)
 }
 
 /// Vertical distance between two lines of legend text.
@@ -1053,6 +1142,42 @@ mod tests {
         }
     }
 
+    /// Issue 59: a long formula's title was clipped on both sides.
+    #[test]
+    fn a_long_title_is_wrapped_at_spaces_within_the_width() {
+        register_font().unwrap();
+        let mut svg = String::new();
+        let root = SVGBackend::with_string(&mut svg, (900, 520)).into_drawing_area();
+        let style = TextStyle::from((FONT, 20).into_font());
+        let text = "GF goal & G !unsafe & (GF goal | F G !unsafe) & G (unsafe -> X !goal) & \
+                    (F goal | G F goal) & G (goal -> X F goal)";
+        let lines = wrapped(&root, text, &style, 868).unwrap();
+        assert!(lines.len() >= 2, "{lines:?}");
+        assert_eq!(lines.join(" "), text);
+        for line in &lines {
+            assert!(
+                root.estimate_text_size(line, &style).unwrap().0 <= 868,
+                "{line}"
+            );
+        }
+        assert_eq!(wrapped(&root, "short", &style, 868).unwrap(), ["short"]);
+        assert!(wrapped(&root, "", &style, 868).unwrap().is_empty());
+    }
+
+    /// Issue 59: the returned defender stands where it was found: at the
+    /// first iterate with its score when gradient play made it, right of
+    /// the curve otherwise.
+    #[test]
+    fn the_returned_defender_is_placed_where_it_was_found() {
+        let mut records: Vec<IterationRecord> = (0..6).map(|t| record(t, t as f64)).collect();
+        for (t, lower) in [(1, 0.2), (3, 0.5), (5, 0.5)] {
+            records[t].certified_lower = Some(lower);
+        }
+        assert_eq!(where_found(&records, Some(RecordSource::Gradient)), Some(3));
+        assert_eq!(where_found(&records, Some(RecordSource::LocalSearch)), None);
+        assert_eq!(where_found(&records, Some(RecordSource::Rounding)), None);
+    }
+
     #[test]
     fn nice_steps_are_one_two_or_five_times_a_power_of_ten() {
         assert_eq!(nice_step(0.3), 0.5);
@@ -1074,11 +1199,16 @@ mod tests {
             worst_case: 0.5,
             certified: None,
         });
+        let size = PlotSize {
+            width: 1200,
+            height: 700,
+        };
         let curve = CurvePlot {
             title: &title,
             records: &records,
             returned,
             seconds_axis: true,
+            size,
         };
         let path = dir.join("curve.png");
         super::curve(&path, PlotFormat::Png, &curve).unwrap();
@@ -1086,10 +1216,11 @@ mod tests {
         assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n");
         let decoder = png::Decoder::new(std::io::Cursor::new(bytes));
         let mut reader = decoder.read_info().unwrap();
+        assert_eq!((reader.info().width, reader.info().height), (1200, 700));
         let mut pixels = vec![0; reader.output_buffer_size().unwrap()];
         reader.next_frame(&mut pixels).unwrap();
         // The title's text is drawn: the top strip is not blank.
-        let strip = &pixels[..(SIZE.0 * 3 * 40) as usize];
+        let strip = &pixels[..(size.width * 3 * 40) as usize];
         assert!(strip.iter().any(|&b| b < 128), "no text in the title strip");
         std::fs::remove_dir_all(&dir).unwrap();
     }
