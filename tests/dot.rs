@@ -178,3 +178,34 @@ fn posg_fsc_dot_of_a_uniform_controller_without_its_game_says_to_give_it() {
     let bad = dot_command(&["uniform:0", "--game", "x.posg.json"]);
     assert!(!bad.status.success());
 }
+
+/// Issue 59: a 16x16 grid's defender had edges with 100+ label lines. An
+/// edge with more than `MAX_EDGE_LINES` choices shows one line per action
+/// and probability, the largest groups first, at most `MAX_EDGE_LINES`.
+#[test]
+fn an_edge_with_many_choices_groups_them_by_action_and_probability() {
+    let observations = 40;
+    // Observation o: action 0 with 1 for o < 20; else action 1 with a
+    // probability of its own (0.5 + o / 100), the rest hidden below 0.01.
+    let blocks = (0..observations)
+        .map(|o| match o {
+            o if o < 20 => vec![choice(0, 0, 1.0)],
+            o => {
+                let p = 0.5 + o as f64 / 100.0;
+                vec![choice(0, 1, p), choice(0, 0, 1.0 - p)]
+            }
+        })
+        .collect();
+    let fsc = Fsc::new(Role::Defender, 1, observations, 2, vec![1.0], blocks).unwrap();
+    let names: Vec<String> = (0..observations).map(|o| format!("o{o}")).collect();
+    let dot = controller_dot(&fsc, &names, &self::names(&["a", "b"]), "t", 0.01);
+    let edge = dot.lines().find(|l| l.starts_with("  n0 -> n0")).unwrap();
+    let label = edge.split("label=\"").nth(1).unwrap();
+    let lines: Vec<&str> = label.split("\\l").filter(|l| !l.starts_with('"')).collect();
+    assert_eq!(lines.len(), posg_fsc::output::dot::MAX_EDGE_LINES, "{edge}");
+    assert_eq!(lines[0], "a  1: o0, o1, o2, o3 and 16 more", "{edge}");
+    assert_eq!(lines[1], "b  0.7: o20", "{edge}");
+    // The 40 single-choice groups (b with p, a with 1 - p) after the
+    // first: 10 shown, 30 folded.
+    assert_eq!(lines[11], "(30 more choices)", "{edge}");
+}

@@ -11,7 +11,9 @@ pub const DEFAULT_THRESHOLD: f64 = 0.01;
 /// A Graphviz `digraph` of `fsc`: one circle per node, an arrow from a start
 /// point to each initial node (labelled with its probability), and one edge
 /// `g -> g'` per pair of nodes that some choice connects, labelled with one
-/// line `observation / action  p` per choice `mu(g', u | g, o) >= threshold`.
+/// line `observation / action  p` per choice `mu(g', u | g, o) >= threshold`
+/// (on an edge of more than [`MAX_EDGE_LINES`] choices, one line per action
+/// and probability with the observations that choose it).
 /// Choices below the threshold are hidden; the edge says how many (and an
 /// edge whose choices are all below it is drawn dashed, without lines).
 /// `observations` and `actions` name the player's observations and actions;
@@ -57,25 +59,28 @@ fn edge(
     actions: &[String],
     threshold: f64,
 ) {
-    let mut lines = Vec::new();
+    let mut shown = Vec::new();
     let mut hidden = 0;
     for (o, name) in observations.iter().enumerate() {
         for c in fsc.choices(g, o).iter().filter(|c| c.next == next) {
             if c.probability >= threshold {
-                lines.push(format!(
-                    "{} / {}  {}",
-                    escape(name),
-                    escape(&actions[c.action]),
-                    probability(c.probability)
-                ));
+                let action = escape(&actions[c.action]);
+                shown.push((escape(name), action, probability(c.probability)));
             } else {
                 hidden += 1;
             }
         }
     }
-    if lines.is_empty() && hidden == 0 {
+    if shown.is_empty() && hidden == 0 {
         return;
     }
+    let mut lines: Vec<String> = if shown.len() <= MAX_EDGE_LINES {
+        (shown.iter())
+            .map(|(observation, action, p)| format!("{observation} / {action}  {p}"))
+            .collect()
+    } else {
+        grouped(&shown)
+    };
     if hidden > 0 {
         lines.push(format!("({hidden} below {threshold})"));
     }
@@ -86,6 +91,51 @@ fn edge(
     };
     let label: String = lines.iter().map(|l| format!("{l}\\l")).collect();
     writeln!(out, "  n{g} -> n{next} [label=\"{label}\"{style}];").expect("writing to a String");
+}
+
+/// An edge with more choices than this shows them grouped by action and
+/// probability ([`grouped`]), in at most this many lines.
+pub const MAX_EDGE_LINES: usize = 12;
+
+/// A group's line names at most this many observations.
+const NAMED_OBSERVATIONS: usize = 4;
+
+/// The lines of an edge with many `(observation, action, probability)`
+/// choices: one per action and probability, `U  1: s2, s14, s17, s18 and
+/// 54 more`, the groups with most observations first, at most
+/// [`MAX_EDGE_LINES`] (the last saying how many choices the others hold).
+fn grouped(shown: &[(String, String, String)]) -> Vec<String> {
+    let mut groups: Vec<((&str, &str), Vec<&str>)> = Vec::new();
+    for (observation, action, p) in shown {
+        let key = (action.as_str(), p.as_str());
+        match groups.iter_mut().find(|(k, _)| *k == key) {
+            Some((_, members)) => members.push(observation),
+            None => groups.push((key, vec![observation])),
+        }
+    }
+    groups.sort_by_key(|(_, members)| std::cmp::Reverse(members.len()));
+    let kept = if groups.len() > MAX_EDGE_LINES {
+        MAX_EDGE_LINES - 1
+    } else {
+        groups.len()
+    };
+    let mut lines: Vec<String> = (groups[..kept].iter())
+        .map(|((action, p), members)| {
+            let named = members[..members.len().min(NAMED_OBSERVATIONS)].join(", ");
+            let more = members.len().saturating_sub(NAMED_OBSERVATIONS);
+            let more = if more > 0 {
+                format!(" and {more} more")
+            } else {
+                String::new()
+            };
+            format!("{action}  {p}: {named}{more}")
+        })
+        .collect();
+    let folded: usize = groups[kept..].iter().map(|(_, m)| m.len()).sum();
+    if folded > 0 {
+        lines.push(format!("({folded} more choices)"));
+    }
+    lines
 }
 
 /// A probability with at most four decimals, trailing zeros dropped.
