@@ -248,6 +248,30 @@ mod malformed {
         );
     }
 
+    /// Issue 59: a controller written for another game says so, with the
+    /// names that do not fit beside the player's own; one wrong name is a
+    /// typo and gets the plain error.
+    #[test]
+    fn a_controller_of_another_game_names_what_does_not_fit() {
+        let mut v = base();
+        v["rules"][0]["observation"] = json!("s7");
+        v["rules"][1]["observation"] = json!("s8");
+        v["rules"][2]["choices"][0]["action"] = json!("jump");
+        let error = error_of(&v);
+        assert_error(&error, "rules[0].observation", "unknown observation `s7`");
+        assert!(
+            error.message.contains(
+                "the controller does not fit this game (written for another?): 2 observations \
+                 not the defender's (`s7`, `s8`); its observations are `correct`, `wrong`; 1 \
+                 action not the defender's (`jump`); its actions are "
+            ),
+            "{error}"
+        );
+        let mut v = base();
+        v["rules"][2]["observation"] = json!("s1");
+        assert!(!error_of(&v).message.contains("does not fit"));
+    }
+
     #[test]
     fn node_out_of_range() {
         let mut v = base();

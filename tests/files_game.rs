@@ -324,7 +324,21 @@ mod malformed {
     fn sum_below_one() {
         let mut v = base();
         v["transitions"][0]["next"] = json!({"a": 0.2, "b": 0.7});
-        assert_error(&error_of(&v), "transitions[0].next", "sum to 0.9");
+        let (state, defender) = (
+            &v["transitions"][0]["state"],
+            &v["transitions"][0]["defender"],
+        );
+        let adversary = match &v["transitions"][0]["adversary"] {
+            Value::String(a) => format!(", {a}"),
+            _ => String::new(),
+        };
+        // Issue 59: the message names the distribution, not only its path.
+        let whose = format!(
+            "sum to 0.9, not 1 (tolerance 1e-6), for T(. | {}, {}{adversary})",
+            state.as_str().unwrap(),
+            defender.as_str().unwrap()
+        );
+        assert_error(&error_of(&v), "transitions[0].next", &whose);
     }
 
     #[test]

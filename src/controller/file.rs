@@ -200,7 +200,12 @@ fn build(raw: RawFsc, at: &Located, player: &Player, role: Role) -> Result<Fsc, 
             .error("a controller needs at least one node"));
     }
     let initial = initial(&raw.initial, raw.nodes, &at.key("initial"))?;
-    let blocks = blocks(&raw, &at.key("rules"), player)?;
+    let blocks = blocks(&raw, &at.key("rules"), player).map_err(|mut error| {
+        if let Some(foreign) = foreign_names(&raw, player, role) {
+            error.message = format!("{}; {foreign}", error.message);
+        }
+        error
+    })?;
     Fsc::new(
         role,
         raw.nodes,
@@ -209,6 +214,65 @@ fn build(raw: RawFsc, at: &Located, player: &Player, role: Role) -> Result<Fsc, 
         initial,
         blocks,
     )
+}
+
+/// Where the rules use more than one observation or action name that
+/// `player` does not have (a controller written for another game): a
+/// sentence listing them (the first [`LISTED_NAMES`] of each kind, with
+/// their count) beside the player's own.
+fn foreign_names(raw: &RawFsc, player: &Player, role: Role) -> Option<String> {
+    let foreign = |used: &mut dyn Iterator<Item = &str>, own: &[String], kind: &str| {
+        let mut seen: Vec<&str> = Vec::new();
+        for name in used {
+            if index_of(own, name).is_none() && !seen.contains(&name) {
+                seen.push(name);
+            }
+        }
+        (!seen.is_empty()).then(|| {
+            let own: Vec<&str> = own.iter().map(String::as_str).collect();
+            let sentence = format!(
+                "{} not the {}'s ({}); its {kind}s are {}",
+                crate::output::counted(seen.len(), kind),
+                role.name(),
+                listed(&seen),
+                listed(&own)
+            );
+            (seen.len(), sentence)
+        })
+    };
+    let observations = &mut raw.rules.iter().map(|r| r.observation.as_str());
+    let actions = &mut (raw.rules.iter())
+        .flat_map(|r| &r.choices)
+        .map(|c| c.action.as_str());
+    let problems: Vec<(usize, String)> = [
+        foreign(observations, player.observations(), "observation"),
+        foreign(actions, player.actions(), "action"),
+    ]
+    .into_iter()
+    .flatten()
+    .collect();
+    let count: usize = problems.iter().map(|(n, _)| n).sum();
+    (count > 1).then(|| {
+        let sentences: Vec<String> = problems.into_iter().map(|(_, s)| s).collect();
+        format!(
+            "the controller does not fit this game (written for another?): {}",
+            sentences.join("; ")
+        )
+    })
+}
+
+/// How many names of a kind an error lists.
+const LISTED_NAMES: usize = 5;
+
+/// `a, b, c, d, e and 12 more`.
+fn listed(names: &[&str]) -> String {
+    let shown: Vec<String> = (names.iter().take(LISTED_NAMES))
+        .map(|n| format!("`{n}`"))
+        .collect();
+    match names.len().saturating_sub(LISTED_NAMES) {
+        0 => shown.join(", "),
+        more => format!("{} and {more} more", shown.join(", ")),
+    }
 }
 
 fn initial(raw: &[f64], nodes: usize, at: &Located) -> Result<Vec<f64>, ModelError> {

@@ -100,6 +100,20 @@ pub fn write(path: &Path, game: &Posg) -> Result<(), ModelError> {
     write_text(path, &to_json_string(game))
 }
 
+/// `error` in the distribution of the transition `t`, saying whose it is:
+/// `probabilities sum to 0.98, not 1 (...), for T(. | s0, U)`.
+fn of_triple(mut error: ModelError, t: &RawTransition) -> ModelError {
+    let adversary = t
+        .adversary
+        .as_ref()
+        .map_or(String::new(), |v| format!(", {}", &**v));
+    error.message = format!(
+        "{}, for T(. | {}, {}{adversary})",
+        error.message, &*t.state, &*t.defender
+    );
+    error
+}
+
 /// The distribution written as the object at `at` over outcomes found by
 /// `index` (`kind` names them in errors, e.g. "state"): checked, renormalised,
 /// zero entries dropped, sorted by outcome (so the order of keys in the file
@@ -643,13 +657,14 @@ impl<'a, 'r> Builder<'a, 'r> {
             let key =
                 self.transition_key(&t.state, &t.defender, t.adversary.as_deref(), &here, game)?;
             keys.push((key, i));
-            nexts.push(distribution_into(
+            let next = distribution_into(
                 &t.next,
                 || here().key("next"),
                 "state",
                 |n| self.state(n),
                 &mut next_entries,
-            )?);
+            );
+            nexts.push(next.map_err(|error| of_triple(error, t))?);
         }
         let keyed = Keyed::new(keys, game.states.len());
         let (nu, nv) = (game.defender.num_actions(), game.adversary.num_actions());
