@@ -18,10 +18,13 @@ use serde::Serialize;
 use thiserror::Error;
 
 use crate::automaton::Dra;
+use crate::controller::Support;
 use crate::controller::{Choice, Fsc};
 use crate::game::{AdversaryAction, DefenderAction, Posg, RewardModel};
 use crate::product::GmcState;
-use crate::value::Evaluator;
+use crate::value::{
+    DEFAULT_TOLERANCE, Evaluator, SolverSettings, ValueError, evaluate_controllers,
+};
 
 /// Why a simulation failed.
 #[derive(Debug, Error, Clone, PartialEq)]
@@ -39,6 +42,9 @@ pub enum SimulationError {
          method.md section 9): there is no mean to estimate"
     )]
     InfiniteReward,
+    /// The exact value to check the estimate against could not be computed.
+    #[error(transparent)]
+    Value(#[from] ValueError),
     /// A run did not reach a BSCC or a decided state within the step limit.
     #[error("run {run} did not reach a recurrence class (or the target) within {limit} steps")]
     StepLimit {
@@ -324,4 +330,116 @@ fn sample(rng: &mut ChaCha8Rng, outcomes: impl Iterator<Item = (usize, f64)>) ->
         threshold -= p;
     }
     last
+}
+
+/// What a simulation estimates: the probability of the formula of `Dra`
+/// (its value, method.md section 1), or the expected total reward of
+/// `rewards` until the target of the automaton of `F T` (section 9).
+#[derive(Debug, Clone, Copy)]
+pub enum Simulated<'a> {
+    /// `P(trace |= phi)`.
+    Probability(&'a Dra),
+    /// The expected reward until the target.
+    Reward {
+        /// The automaton of `F T`.
+        target: &'a Dra,
+        /// The reward model.
+        rewards: &'a RewardModel,
+    },
+}
+
+/// The estimate of a probability or of an expected reward.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[serde(untagged)]
+pub enum EstimateReport {
+    /// Of a probability (a Wilson interval).
+    Probability(Estimate),
+    /// Of an expected reward (a normal-approximation interval).
+    Reward(RewardEstimate),
+}
+
+impl EstimateReport {
+    /// `(lower, upper, confidence)` of the interval.
+    pub fn interval(&self) -> (f64, f64, f64) {
+        match self {
+            Self::Probability(e) => (e.lower, e.upper, e.confidence),
+            Self::Reward(e) => (e.lower, e.upper, e.confidence),
+        }
+    }
+}
+
+/// A simulation checked against the exact value (`posg-fsc simulate`,
+/// Python's `simulate`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct SimulationCheck {
+    /// The runs and the seed.
+    pub settings: SimulationSettings,
+    /// The estimate with its interval.
+    pub estimate: EstimateReport,
+    /// The value computed exactly (method.md sections 1 and 9).
+    pub exact_value: f64,
+    /// Whether the interval, widened by the solver's tolerance, holds the
+    /// exact value: false about once in twenty seeds by chance
+    /// ([`SimulationCheck::miss_note`]).
+    pub exact_within_interval: bool,
+}
+
+impl SimulationCheck {
+    /// Where the interval misses the exact value: a sentence saying what
+    /// that means (`seed` and `runs` name the settings as the caller's face
+    /// spells them).
+    pub fn miss_note(&self, seed: &str, runs: &str) -> Option<String> {
+        if self.exact_within_interval {
+            return None;
+        }
+        let (lower, upper, confidence) = self.estimate.interval();
+        Some(format!(
+            "the exact value {} lies outside the {}% interval [{lower}, {upper}]: such an \
+             interval misses the exact value in about one seed of {}; another {seed} or more \
+             {runs} tells chance from a fault",
+            self.exact_value,
+            confidence * 100.0,
+            (1.0 / (1.0 - confidence)).round()
+        ))
+    }
+}
+
+/// Estimates `simulated` for the controller pair by `settings.runs`
+/// sampled runs ([`simulate`], [`simulate_reward`]) and checks the estimate
+/// against the exact value.
+pub fn simulate_and_check(
+    game: &Posg,
+    simulated: Simulated,
+    (defender, adversary): (&Fsc, &Fsc),
+    settings: SimulationSettings,
+) -> Result<SimulationCheck, SimulationError> {
+    let solver = SolverSettings::default();
+    let (exact, estimate) = match simulated {
+        Simulated::Reward { target, rewards } => {
+            let (def, adv) = (Support::of(defender), Support::of(adversary));
+            let mut evaluator =
+                Evaluator::for_expected_reward(game, target, rewards, &def, &adv, &solver)?;
+            let probabilities = |fsc: &Fsc| Support::probabilities_of(fsc);
+            let exact =
+                (evaluator.evaluate(&probabilities(defender), &probabilities(adversary))?).value;
+            let estimate = simulate_reward(
+                game, target, rewards, defender, adversary, &evaluator, settings,
+            )?;
+            (exact, EstimateReport::Reward(estimate))
+        }
+        Simulated::Probability(dra) => {
+            let (evaluator, evaluation) =
+                evaluate_controllers(game, dra, defender, adversary, &solver)?;
+            let estimate = simulate(game, dra, defender, adversary, &evaluator, settings)?;
+            (evaluation.value, EstimateReport::Probability(estimate))
+        }
+    };
+    let (lower, upper, _) = estimate.interval();
+    let slack = DEFAULT_TOLERANCE * (1.0 + exact.abs());
+    Ok(SimulationCheck {
+        settings,
+        estimate,
+        exact_value: exact,
+        exact_within_interval: lower - slack <= exact && exact <= upper + slack,
+    })
 }

@@ -35,8 +35,8 @@ pub use crate::analysis::{Bscc, Recurrence, StateClass};
 pub use crate::product::{Exploration, Gmc, GmcState, ProductError};
 pub use crate::sensitivity::{ForwardGradient, ForwardSensitivities};
 pub use crate::simulate::{
-    CONFIDENCE, Estimate, RewardEstimate, STEP_LIMIT, SimulationError, SimulationSettings,
-    simulate, simulate_reward,
+    CONFIDENCE, Estimate, EstimateReport, RewardEstimate, STEP_LIMIT, Simulated, SimulationCheck,
+    SimulationError, SimulationSettings, simulate, simulate_and_check, simulate_reward,
 };
 pub use crate::solver::{
     DEFAULT_LU_LIMIT, DEFAULT_TOLERANCE, LuSolver, SolveReport, SolverError, SolverMethod,

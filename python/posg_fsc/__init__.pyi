@@ -62,10 +62,17 @@ class Game:
         error messages."""
     @staticmethod
     def from_drn(path: Path) -> Game:
-        """Imports a POMDP, MDP or DTMC from Storm's DRN format as a game
-        without adversary (docs/formats.md section 6), with its rewards;
-        action labels renamed because they are not names (SAYNT's `(init)`
-        is `_init_`) are reported as a warning."""
+        """Imports a model from Storm's DRN format (docs/formats.md section
+        6): a POMDP, MDP or DTMC as a game without adversary, an SMG or
+        POSMG (PAYNT's games) as a turn-based game with one, with its
+        rewards; action labels renamed because they are not names (SAYNT's
+        `(init)` is `_init_`) are reported as a warning."""
+    @staticmethod
+    def from_stormpy(model: Any) -> Game:
+        """A game from a model built by stormpy (a sparse POMDP, MDP, DTMC,
+        SMG or POSMG, as stormpy.build_model or PAYNT return it), with its
+        choice labels, observations and reward models, by way of Storm's
+        DRN export; errors name it `stormpy model`. Needs stormpy."""
     def to_json(self) -> str:
         """The game as JSON text, which Game.from_json reads back."""
     def save(self, path: Path, binary: bool = False) -> None:
@@ -340,6 +347,7 @@ def solve(
     defender: Optional[ControllerLike] = None,
     adversary: Optional[ControllerLike] = None,
     on_iteration: Optional[Callable[[dict[str, Any]], Optional[bool]]] = None,
+    progress: Union[bool, float, None] = None,
     out: Optional[Path] = None,
     force: bool = False,
     **settings: Any,
@@ -353,7 +361,11 @@ def solve(
     "informed", "sat", "paper"], tolerance, solver, round, ...); an unknown
     keyword is a TypeError. on_iteration(record) gets each iteration's record (a dict)
     from the optimiser's threads; returning False stops the run, which then
-    returns what it has; Ctrl-C stops it and raises KeyboardInterrupt. With
+    returns what it has; Ctrl-C stops it and raises KeyboardInterrupt.
+    progress=True writes the command line's progress lines to sys.stderr
+    while it runs (an event at once; the status, with the best certified
+    bracket, when nothing happened for 5 s, or the seconds given instead of
+    True). A misspelt keyword's TypeError suggests the closest one. With
     `out`, the solve directory is written there too (without `curve.svg`:
     plot `curve.csv` with matplotlib)."""
 
@@ -365,12 +377,31 @@ def sweep(
     *,
     props: Optional[Props] = None,
     on_iteration: Optional[Callable[[dict[str, Any]], Optional[bool]]] = None,
+    progress: Union[bool, float, None] = None,
     **settings: Any,
 ) -> list[dict[str, Any]]:
     """solve() for every size pair, as `posg-fsc sweep` (defaults 1..3 and
     1..2): defender sizes increasing, each warm-started from the next smaller
     one and kept at least as good. One dict per pair with the columns of
     sweep.csv (with `result`, the row in words) and the pair's SolveResult under "solved"."""
+
+def simulate(
+    game: Game,
+    ltl: Optional[str] = None,
+    *,
+    props: Optional[Props] = None,
+    defender: Optional[ControllerLike] = None,
+    adversary: Optional[ControllerLike] = None,
+    runs: int = 10000,
+    seed: int = 0,
+    allow_unused_propositions: bool = False,
+) -> dict[str, Any]:
+    """A Monte Carlo estimate of the controllers' value checked against the
+    exact value, as `posg-fsc simulate`: formula, settings, estimate (mean,
+    lower, upper, confidence, ...), exact_value, exact_within_interval,
+    seconds. For an expected-reward query of props=, the mean total reward
+    until the target. A 95% interval misses the exact value about once in
+    twenty seeds; a UserWarning says so when it does."""
 
 def certify(
     game: Game,

@@ -127,6 +127,63 @@ pub fn settings_from_json<T: DeserializeOwned>(function: &str, json: Value) -> P
     })
 }
 
+/// `function`'s keyword `key` among its settings (`**settings`): a
+/// TypeError suggesting the closest keyword when it is no setting.
+pub fn known_keyword(function: &str, key: &str) -> PyResult<()> {
+    let settings = setting_keywords();
+    if settings.iter().any(|k| k == key) {
+        return Ok(());
+    }
+    let all = settings.iter().map(String::as_str).chain(FUNCTION_KEYWORDS);
+    let hint = posg_fsc::game::closest(key, all)
+        .map_or(String::new(), |k| format!("; did you mean '{k}'?"));
+    Err(PyTypeError::new_err(format!(
+        "{function}() got an unexpected keyword argument '{key}'{hint}"
+    )))
+}
+
+/// The keywords of the settings, as Python names them
+/// (`tolerance`, `synthesis_time_budget`, the synthesis settings at the
+/// top).
+fn setting_keywords() -> Vec<String> {
+    let names = |value: serde_json::Result<Value>| match value {
+        Ok(Value::Object(map)) => map.keys().cloned().collect::<Vec<_>>(),
+        _ => Vec::new(),
+    };
+    let settings = names(serde_json::to_value(posg_fsc::optimise::Settings::default()));
+    let synthesis = names(serde_json::to_value(
+        posg_fsc::synthesis::Settings::default(),
+    ));
+    let renamed = |key: String| match key.as_str() {
+        "solver_tolerance" => Some("tolerance".to_string()),
+        "synthesis" => None,
+        _ => Some(key),
+    };
+    (settings.into_iter().filter_map(renamed))
+        .chain(synthesis.into_iter().map(|k| match k.as_str() {
+            "time_budget" => "synthesis_time_budget".to_string(),
+            _ => k,
+        }))
+        .collect()
+}
+
+/// The keywords of `solve`, `sweep`, `evaluate` and `certify` that are not
+/// settings.
+const FUNCTION_KEYWORDS: [&str; 12] = [
+    "ltl",
+    "props",
+    "def_nodes",
+    "adv_nodes",
+    "defender",
+    "adversary",
+    "on_iteration",
+    "progress",
+    "out",
+    "force",
+    "allow_unused_propositions",
+    "gradient",
+];
+
 /// A whole number (anything with `__index__`, not a bool or a float);
 /// a `TypeError` naming `name` otherwise.
 fn whole(name: &str, value: &Bound<'_, PyAny>) -> PyResult<i128> {

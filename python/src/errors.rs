@@ -202,6 +202,15 @@ impl Classify for ValueError {
     }
 }
 
+impl Classify for posg_fsc::value::SimulationError {
+    fn kind(&self) -> Kind {
+        match self {
+            posg_fsc::value::SimulationError::Value(error) => error.kind(),
+            _ => Kind::Other,
+        }
+    }
+}
+
 impl Classify for CertifyError {
     fn kind(&self) -> Kind {
         match self {

@@ -4,15 +4,16 @@
 
 use std::path::PathBuf;
 use std::sync::Arc;
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 use posg_fsc::game::grid::{GridSpec, ObservationModel, RandomUnsafe};
 use posg_fsc::game::{Player, Posg};
-use pyo3::exceptions::{PyTypeError, PyUserWarning, PyValueError};
+use pyo3::exceptions::{PyImportError, PyTypeError, PyUserWarning, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyString;
 
 use crate::convert::{count_of, size};
-use crate::errors::{compute, convert};
+use crate::errors::{Kind, compute, convert, raise};
 
 /// A partially observable stochastic game (POSG): states labelled with
 /// atomic propositions, a defender and an adversary with their actions and
@@ -34,6 +35,25 @@ impl Game {
     }
 }
 
+/// Numbers the DRN files `Game.from_stormpy` exports, apart within a process.
+static EXPORTS: AtomicUsize = AtomicUsize::new(0);
+
+impl Game {
+    /// The game of a DRN import, its warnings (renamed labels) raised as
+    /// Python warnings.
+    fn imported(py: Python<'_>, import: posg_fsc::game::drn::DrnImport) -> PyResult<Self> {
+        for warning in &import.warnings {
+            PyErr::warn(
+                py,
+                &py.get_type::<PyUserWarning>(),
+                &std::ffi::CString::new(warning.as_str())?,
+                1,
+            )?;
+        }
+        Ok(Self::new(import.game))
+    }
+}
+
 #[pymethods]
 impl Game {
     /// Reads and validates a game file: JSON (docs/formats.md section 1) or
@@ -52,22 +72,52 @@ impl Game {
         compute(py, || posg_fsc::game::file::from_json_str(text, name)).map(Self::new)
     }
 
-    /// Imports a POMDP, MDP or DTMC from Storm's DRN format as a game
-    /// without adversary (docs/formats.md section 6), as `posg-fsc
-    /// import-drn` does; action labels renamed because they are not names
-    /// (SAYNT's `(init)` is `_init_`) are reported as a Python warning.
+    /// Imports a model from Storm's DRN format, as `posg-fsc import-drn`
+    /// does (docs/formats.md section 6): a POMDP, MDP or DTMC as a game
+    /// without adversary, an SMG or POSMG (PAYNT's games) as a turn-based
+    /// game with one, with its rewards; action labels renamed because they
+    /// are not names (SAYNT's `(init)` is `_init_`) are reported as a Python
+    /// warning.
     #[staticmethod]
     fn from_drn(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
         let import = compute(py, || posg_fsc::game::drn::read(&path))?;
-        for warning in &import.warnings {
-            PyErr::warn(
-                py,
-                &py.get_type::<PyUserWarning>(),
-                &std::ffi::CString::new(warning.as_str())?,
-                1,
-            )?;
-        }
-        Ok(Self::new(import.game))
+        Self::imported(py, import)
+    }
+
+    /// A game from a model built by stormpy, the Python face of Storm: a
+    /// sparse POMDP, MDP, DTMC, SMG or POSMG (what `stormpy.build_model`,
+    /// `build_sparse_model_with_options` or PAYNT return), with its choice
+    /// labels, observations and reward models. The model goes through
+    /// Storm's own DRN export (`stormpy.io.export_to_drn`) and is read as
+    /// `Game.from_drn` reads it; errors name it `stormpy model`. Needs
+    /// stormpy.
+    #[staticmethod]
+    fn from_stormpy(py: Python<'_>, model: &Bound<'_, PyAny>) -> PyResult<Self> {
+        let stormpy = py.import("stormpy").map_err(|_| {
+            PyImportError::new_err("Game.from_stormpy needs stormpy: pip install stormpy")
+        })?;
+        let export = (stormpy
+            .getattr("io")
+            .and_then(|io| io.getattr("export_to_drn")))
+        .or_else(|_| stormpy.getattr("export_to_drn"))?;
+        let path = std::env::temp_dir().join(format!(
+            "posg-fsc-stormpy-{}-{}.drn",
+            std::process::id(),
+            EXPORTS.fetch_add(1, Ordering::Relaxed)
+        ));
+        let exported = export.call1((model, path.display().to_string()));
+        let text = exported.and_then(|_| Ok(std::fs::read_to_string(&path)?));
+        let _ = std::fs::remove_file(&path);
+        let text = text.map_err(|error| {
+            raise(
+                Kind::Game,
+                format!("stormpy could not export this model to DRN: {error}"),
+            )
+        })?;
+        let import = compute(py, || {
+            posg_fsc::game::drn::from_drn_str(&text, "stormpy model", None)
+        })?;
+        Self::imported(py, import)
     }
 
     /// The game as JSON text (docs/formats.md section 1), which

@@ -19,6 +19,7 @@ mod evaluate;
 mod game;
 mod objective;
 mod reward;
+mod simulate;
 mod solve;
 
 use pyo3::prelude::*;
@@ -44,6 +45,7 @@ fn posg_fsc_python(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add_function(wrap_pyfunction!(game::example_grid, module)?)?;
     module.add_function(wrap_pyfunction!(solve::solve, module)?)?;
     module.add_function(wrap_pyfunction!(solve::sweep, module)?)?;
+    module.add_function(wrap_pyfunction!(simulate::simulate, module)?)?;
     module.add_function(wrap_pyfunction!(certify::certify, module)?)?;
     module.add_function(wrap_pyfunction!(certify::support, module)?)?;
     module.add_function(wrap_pyfunction!(certify::translate, module)?)?;

@@ -29,7 +29,7 @@ use crate::objective::{self, Asked};
 /// [`Settings`]: `tolerance` is `solver_tolerance`, and the synthesis
 /// options (`synthesis_time_budget` is the synthesis `time_budget`) sit in
 /// `synthesis`.
-fn settings_json(kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<Value> {
+fn settings_json(function: &str, kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<Value> {
     let synthesis_keys: Vec<String> =
         match serde_json::to_value(posg_fsc::synthesis::Settings::default()) {
             Ok(Value::Object(map)) => map.keys().cloned().collect(),
@@ -40,6 +40,7 @@ fn settings_json(kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<Value> {
     if let Some(kwargs) = kwargs {
         for (key, value) in kwargs.iter() {
             let key: String = key.extract()?;
+            crate::convert::known_keyword(function, &key)?;
             let mut json = to_json(&key, &value)?;
             match key.as_str() {
                 "tolerance" => {
@@ -81,7 +82,7 @@ fn settings_json(kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<Value> {
 /// defaults, each keyword (the command line's option name with `_` for
 /// `-`) replacing one; validated.
 pub fn settings(function: &str, kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<Settings> {
-    let settings: Settings = settings_from_json(function, settings_json(kwargs)?)?;
+    let settings: Settings = settings_from_json(function, settings_json(function, kwargs)?)?;
     settings.validate().map_err(convert)?;
     Ok(settings)
 }
@@ -294,6 +295,7 @@ pub(crate) fn into_directory<T>(
         seconds_axis: false,
         command_line: &command_line,
         plot_format: None,
+        plot_size: Default::default(),
         query,
     };
     let result = write(&solve).map_err(convert)?;

@@ -140,3 +140,68 @@ def test_an_infinite_reward_is_inf_in_the_result_and_its_records():
     assert result.curve[-1]["returned"] and result.curve[-1]["value"] == math.inf
     assert result.query.target_probability is None
     assert result.dropped_starts == []
+
+
+def test_simulate_reports_what_the_command_reports(cli, tmp_path):
+    game = posg_fsc.Game.from_drn(PROBE)
+    ours = posg_fsc.simulate(game, props=PROBE_PROPS, runs=2000, seed=5)
+    theirs = cli_json(cli, "simulate", PROBE, "--props", PROBE_PROPS, "--runs", "2000", "--seed", "5")
+    for key in ["formula", "settings", "estimate", "exact_value", "exact_within_interval"]:
+        assert ours[key] == theirs[key], key
+    assert abs(ours["exact_value"] - 16 / 3) < 1e-12
+    assert ours["estimate"]["lower"] <= ours["estimate"]["mean"] <= ours["estimate"]["upper"]
+    grid = posg_fsc.example_grid()
+    probability = posg_fsc.simulate(grid, "F goal", runs=500, seed=1)
+    assert probability["estimate"]["runs"] == 500
+    assert 0 <= probability["estimate"]["lower"] <= probability["estimate"]["upper"] <= 1
+    with pytest.raises(posg_fsc.SettingsError, match="runs"):
+        posg_fsc.simulate(grid, "F goal", runs=0)
+
+
+def test_a_misspelt_keyword_gets_the_closest_one():
+    grid = posg_fsc.example_grid()
+    with pytest.raises(TypeError, match="did you mean 'max_iterations'"):
+        posg_fsc.solve(grid, "F goal", max_iteratons=3)
+    with pytest.raises(TypeError, match="did you mean 'on_iteration'"):
+        posg_fsc.solve(grid, "F goal", on_iteraton=print)
+    with pytest.raises(TypeError) as raised:
+        posg_fsc.solve(grid, "F goal", completely_unknown=1)
+    assert "did you mean" not in str(raised.value)
+
+
+def test_a_stormpy_model_becomes_the_game_of_its_drn_export(tmp_path):
+    stormpy = pytest.importorskip("stormpy")
+    prism = tmp_path / "probe.prism"
+    prism.write_text(
+        """pomdp
+observables o endobservables
+module m
+  s : [0..2] init 0;
+  o : [0..1] init 0;
+  [probe] s=0 -> 0.5 : (s'=1) & (o'=1) + 0.5 : (s'=2) & (o'=1);
+  [guess] s=0 -> (s'=1) & (o'=1);
+  [stay] s>0 -> (s'=s) & (o'=1);
+endmodule
+rewards "cost"
+  [probe] true : 2;
+  [guess] true : 5;
+endrewards
+label "goal" = s>0;
+"""
+    )
+    program = stormpy.parse_prism_program(str(prism))
+    options = stormpy.BuilderOptions()
+    options.set_build_choice_labels()
+    options.set_build_all_reward_models()
+    options.set_build_all_labels()
+    options.set_build_state_valuations()
+    if hasattr(stormpy, "build_sparse_model_with_options"):  # stormpy before 2.0
+        model = stormpy.build_sparse_model_with_options(program, options)
+    else:
+        model = stormpy.build_model(program, options=options)
+    game = posg_fsc.Game.from_stormpy(model)
+    assert sorted(game.defender_actions) == ["guess", "probe", "stay"]
+    evaluation = game.evaluate(props='R{"cost"}min=? [F "goal"]')
+    assert evaluation.value == 3.5  # uniform over {probe, guess}: (2 + 5) / 2
+    with pytest.raises(posg_fsc.GameFormatError, match="stormpy"):
+        posg_fsc.Game.from_stormpy("not a model")

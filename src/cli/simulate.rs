@@ -4,9 +4,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use clap::Args;
-use posg_fsc::controller::Support;
-use posg_fsc::value::{DEFAULT_TOLERANCE, Evaluator, SolverSettings, evaluate_controllers};
-use posg_fsc::value::{Estimate, RewardEstimate, SimulationSettings, simulate, simulate_reward};
+use posg_fsc::value::{Simulated, SimulationCheck, SimulationSettings, simulate_and_check};
 use serde::Serialize;
 
 use super::common::{self, ControllerArgs, ObjectiveArgs, Provenance};
@@ -37,28 +35,9 @@ struct Report {
     #[serde(flatten)]
     provenance: Provenance,
     formula: String,
-    settings: SimulationSettings,
-    estimate: EstimateReport,
-    exact_value: f64,
-    exact_within_interval: bool,
+    #[serde(flatten)]
+    check: SimulationCheck,
     seconds: f64,
-}
-
-/// The estimate of a probability or of an expected reward.
-#[derive(Serialize)]
-#[serde(untagged)]
-enum EstimateReport {
-    Probability(Estimate),
-    Reward(RewardEstimate),
-}
-
-impl EstimateReport {
-    fn interval(&self) -> (f64, f64, f64) {
-        match self {
-            Self::Probability(e) => (e.lower, e.upper, e.confidence),
-            Self::Reward(e) => (e.lower, e.upper, e.confidence),
-        }
-    }
 }
 
 /// Runs `simulate`.
@@ -71,66 +50,29 @@ pub fn run(args: SimulateArgs) -> anyhow::Result<()> {
         seed: args.seed,
     };
     anyhow::ensure!(settings.runs > 0, "--runs must be at least 1");
-    let solver = SolverSettings::default();
-    let (formula, exact, estimate) = match args.objective.reward_objective(&game)? {
+    let pair = (&defender, &adversary);
+    let (formula, check) = match args.objective.reward_objective(&game)? {
         Some(reward) => {
-            let (def, adv) = (Support::of(&defender), Support::of(&adversary));
-            let mut evaluator = Evaluator::for_expected_reward(
-                &game,
-                &reward.target,
-                &reward.rewards,
-                &def,
-                &adv,
-                &solver,
-            )?;
-            let exact = evaluator
-                .evaluate(
-                    &Support::probabilities_of(&defender),
-                    &Support::probabilities_of(&adversary),
-                )?
-                .value;
-            let estimate = simulate_reward(
-                &game,
-                &reward.target,
-                &reward.rewards,
-                &defender,
-                &adversary,
-                &evaluator,
-                settings,
-            )?;
-            (reward.description, exact, EstimateReport::Reward(estimate))
+            let simulated = Simulated::Reward {
+                target: &reward.target,
+                rewards: &reward.rewards,
+            };
+            let check = simulate_and_check(&game, simulated, pair, settings)?;
+            (reward.description, check)
         }
         None => {
             let (dra, formula) = common::objective(&args.objective, &game)?;
-            let (evaluator, evaluation) =
-                evaluate_controllers(&game, &dra, &defender, &adversary, &solver)?;
-            let estimate = simulate(&game, &dra, &defender, &adversary, &evaluator, settings)?;
-            (
-                formula,
-                evaluation.value,
-                EstimateReport::Probability(estimate),
-            )
+            let check = simulate_and_check(&game, Simulated::Probability(&dra), pair, settings)?;
+            (formula, check)
         }
     };
-    let (lower, upper, confidence) = estimate.interval();
-    let slack = DEFAULT_TOLERANCE * (1.0 + exact.abs());
-    let within = lower - slack <= exact && exact <= upper + slack;
-    if !within {
-        eprintln!(
-            "note: the exact value {exact} lies outside the {}% interval [{lower}, {upper}]: such \
-             an interval misses the exact value in about one seed of {}; another --seed or more \
-             --runs tells chance from a fault",
-            confidence * 100.0,
-            (1.0 / (1.0 - confidence)).round()
-        );
+    if let Some(note) = check.miss_note("--seed", "--runs") {
+        eprintln!("note: {note}");
     }
     common::print_json(&Report {
         provenance: Provenance::current(),
         formula,
-        settings,
-        estimate,
-        exact_value: exact,
-        exact_within_interval: within,
+        check,
         seconds: common::seconds_since(start),
     })
 }

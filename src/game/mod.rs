@@ -259,12 +259,7 @@ impl Posg {
     /// within two edits (and closer than `name` is long): the hint for a
     /// misspelt proposition.
     pub fn closest_proposition(&self, name: &str) -> Option<&str> {
-        self.propositions
-            .iter()
-            .map(|p| (edit_distance(name, p), p))
-            .filter(|&(d, _)| d <= 2 && d < name.chars().count())
-            .min_by_key(|&(d, _)| d)
-            .map(|(_, p)| p.as_str())
+        closest(name, self.propositions.iter().map(String::as_str))
     }
 
     /// `L(s)` as indices into [`Posg::propositions`].
@@ -326,6 +321,18 @@ impl Posg {
     pub fn reward_model(&self, name: &str) -> Option<&RewardModel> {
         self.rewards.iter().find(|r| r.name() == name)
     }
+}
+
+/// The candidate closest to `name` by edit distance, if one is within two
+/// edits (and closer than `name` is long; the first of equals): the hint
+/// for a misspelt name ("did you mean ...?").
+pub fn closest<'a>(name: &str, candidates: impl IntoIterator<Item = &'a str>) -> Option<&'a str> {
+    candidates
+        .into_iter()
+        .map(|c| (edit_distance(name, c), c))
+        .filter(|&(d, _)| d <= 2 && d < name.chars().count())
+        .min_by_key(|&(d, _)| d)
+        .map(|(_, c)| c)
 }
 
 /// The Levenshtein distance between two names (insertions, deletions and
