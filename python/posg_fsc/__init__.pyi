@@ -68,6 +68,31 @@ class Game:
         rewards; action labels renamed because they are not names (SAYNT's
         `(init)` is `_init_`) are reported as a warning."""
     @staticmethod
+    def from_arrays(
+        transitions: Any,
+        initial: Any = 0,
+        *,
+        observations: Any = None,
+        labels: Optional[dict[str, Any]] = None,
+        rewards: Optional[dict[str, Any]] = None,
+        states: Optional[Sequence[str]] = None,
+        actions: Optional[Sequence[str]] = None,
+        observation_names: Optional[Sequence[str]] = None,
+        adversary_observations: Any = None,
+        adversary_actions: Optional[Sequence[str]] = None,
+        adversary_observation_names: Optional[Sequence[str]] = None,
+        name: Optional[str] = None,
+    ) -> Game:
+        """A game from numpy arrays: transitions[s, a, s'] (a POMDP or MDP)
+        or transitions[s, a, b, s'] (a game), rows summing to 1 (all zero:
+        the action is left out of the state); initial a state index or a
+        distribution; observations per state an index or a (states,
+        observations) array of probabilities (default: the state is seen);
+        labels {proposition: state indices or a boolean array}; rewards
+        {name: (states,) state rewards or action rewards shaped like
+        transitions without its last axis}. Names default to s0, a0, o0,
+        b0, ... A problem is a SettingsError naming the array and index."""
+    @staticmethod
     def from_stormpy(model: Any) -> Game:
         """A game from a model built by stormpy (a sparse POMDP, MDP, DTMC,
         SMG or POSMG, as stormpy.build_model or PAYNT return it), with its

@@ -10,7 +10,7 @@ use posg_fsc::game::grid::{GridSpec, ObservationModel, RandomUnsafe};
 use posg_fsc::game::{Player, Posg};
 use pyo3::exceptions::{PyImportError, PyTypeError, PyUserWarning, PyValueError};
 use pyo3::prelude::*;
-use pyo3::types::PyString;
+use pyo3::types::{PyDict, PyString};
 
 use crate::convert::{count_of, size};
 use crate::errors::{Kind, compute, convert, raise};
@@ -118,6 +118,66 @@ impl Game {
             posg_fsc::game::drn::from_drn_str(&text, "stormpy model", None)
         })?;
         Self::imported(py, import)
+    }
+
+    /// A game from numpy arrays (or anything numpy reads):
+    /// `transitions[s, a, s']` (a POMDP or MDP) or `transitions[s, a, b,
+    /// s']` (a game: defender action `a`, adversary action `b`), each row
+    /// summing to 1, or all zero to leave the action out of the state;
+    /// `initial` a state index (default 0) or a distribution;
+    /// `observations` per state an observation index, or a `(states,
+    /// observations)` array of probabilities (default: the player sees the
+    /// state; `adversary_observations` the same for the adversary); the
+    /// states sharing an observation must offer the same actions. `labels`
+    /// maps a proposition to the states where it holds (indices, or a
+    /// boolean array); `rewards` maps a reward model's name to state
+    /// rewards `(states,)` or action rewards (the shape of `transitions`
+    /// without its last axis). `states`, `actions`, `observation_names`,
+    /// `adversary_actions` and `adversary_observation_names` name them
+    /// (default `s0`, `a0`, `o0`, `b0`, ...). A problem is a SettingsError
+    /// naming the array and the index (`transitions[3, 1] (state s3, action
+    /// a1) sums to 0.9`).
+    #[staticmethod]
+    #[pyo3(signature = (transitions, initial = None, *, observations = None, labels = None, rewards = None, states = None, actions = None, observation_names = None, adversary_observations = None, adversary_actions = None, adversary_observation_names = None, name = None))]
+    #[allow(clippy::too_many_arguments)]
+    fn from_arrays<'py>(
+        transitions: Bound<'py, PyAny>,
+        initial: Option<Bound<'py, PyAny>>,
+        observations: Option<Bound<'py, PyAny>>,
+        labels: Option<Bound<'py, PyDict>>,
+        rewards: Option<Bound<'py, PyDict>>,
+        states: Option<Vec<String>>,
+        actions: Option<Vec<String>>,
+        observation_names: Option<Vec<String>>,
+        adversary_observations: Option<Bound<'py, PyAny>>,
+        adversary_actions: Option<Vec<String>>,
+        adversary_observation_names: Option<Vec<String>>,
+        name: Option<String>,
+    ) -> PyResult<Self> {
+        let py = transitions.py();
+        let initial = match initial {
+            Some(initial) => initial,
+            None => 0usize.into_pyobject(py)?.into_any(),
+        };
+        let arrays = crate::arrays::GameArrays {
+            transitions,
+            initial,
+            states,
+            labels,
+            rewards,
+            defender: crate::arrays::PlayerArrays {
+                actions,
+                observations,
+                observation_names,
+            },
+            adversary: crate::arrays::PlayerArrays {
+                actions: adversary_actions,
+                observations: adversary_observations,
+                observation_names: adversary_observation_names,
+            },
+            name,
+        };
+        crate::arrays::game(arrays).map(Self::new)
     }
 
     /// The game as JSON text (docs/formats.md section 1), which

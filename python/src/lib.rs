@@ -11,6 +11,7 @@
 //! Python API is documented in `python/posg_fsc/__init__.pyi` (type stubs)
 //! and docs/guide.md, section "Python".
 
+mod arrays;
 mod certify;
 mod controller;
 mod convert;

@@ -165,3 +165,48 @@ def test_a_drn_model_imports_as_the_cli_imports_it(cli, tmp_path):
         game = posg_fsc.Game.from_drn(model)
     assert game.to_json() == posg_fsc.Game.load(tmp_path / "corridor.posg.json").to_json()
     assert not game.has_adversary and game.name == "dark-corridor"
+
+
+def test_a_game_from_numpy_arrays_is_the_json_game_it_describes():
+    import numpy as np
+
+    # The probe POMDP of tests/data/rewards: s0 (observed "start") probes or
+    # guesses; s1, s2 (observed "end") stay.
+    t = np.zeros((3, 3, 3))
+    t[0, 0] = [0.0, 0.5, 0.5]  # probe
+    t[0, 1] = [0.0, 1.0, 0.0]  # guess
+    t[1, 2, 1] = t[2, 2, 2] = 1.0  # stay
+    game = posg_fsc.Game.from_arrays(
+        t,
+        observations=[0, 1, 1],
+        observation_names=["start", "end"],
+        actions=["probe", "guess", "stay"],
+        labels={"goal": [1, 2]},
+        rewards={"cost": np.array([[2.0, 5.0, 0.0]] + [[0.0] * 3] * 2)},
+        name="probe",
+    )
+    assert game.defender_observations == ["start", "end"]
+    assert game.evaluate(props='R{"cost"}min=? [F "goal"]').value == 3.5
+    assert game.evaluate("F goal").value == 1.0
+    again = posg_fsc.Game.from_json(game.to_json())
+    assert again.to_json() == game.to_json()
+    labels = np.array([False, True, True])
+    assert posg_fsc.Game.from_arrays(t, observations=[0, 1, 1], labels={"goal": labels}).evaluate(
+        "F goal"
+    ).value == 1.0
+    # A game: the adversary's axis before the successor, full observation.
+    g = np.zeros((2, 1, 2, 2))
+    g[0, 0, 0] = [0.5, 0.5]
+    g[0, 0, 1] = [1.0, 0.0]
+    g[1, 0, :, 1] = 1.0
+    duel = posg_fsc.Game.from_arrays(g, labels={"goal": [1]}, adversary_actions=["let", "block"])
+    assert duel.adversary_actions == ["let", "block"]
+    assert duel.evaluate("F goal").value == 1.0  # the uniform adversary lets through eventually
+    bad = t.copy()
+    bad[0, 1] = [0.0, 0.9, 0.0]
+    with pytest.raises(posg_fsc.SettingsError, match=r"transitions\[0, 1\] \(state s0, action guess\) sums to 0.9"):
+        posg_fsc.Game.from_arrays(bad, observations=[0, 1, 1], actions=["probe", "guess", "stay"])
+    with pytest.raises(posg_fsc.SettingsError, match="share the observation"):
+        posg_fsc.Game.from_arrays(t, observations=[0, 0, 1])
+    with pytest.raises(posg_fsc.SettingsError, match="shape"):
+        posg_fsc.Game.from_arrays(np.zeros((3, 2)))

@@ -2,15 +2,18 @@
 and Ctrl-C stopping a run, the GIL released while Rust computes."""
 
 import _thread
+import csv
 import json
 import signal
+import subprocess
+import sys
 import threading
 import time
 
 import pytest
 
 import posg_fsc
-from conftest import FORMULA, run_cli
+from conftest import FORMULA, REPOSITORY, run_cli
 
 QUICK = dict(max_iterations=40, starts=1, restarts=1, best_response_iterations=30)
 # A run that only a stop ends early: no stall or gap rule, many iterations.
@@ -139,12 +142,6 @@ def test_sweep_rows_are_monotone_in_the_defender_size():
 
 
 def test_the_example_script_writes_its_table(tmp_path):
-    import csv
-    import subprocess
-    import sys
-
-    from conftest import REPOSITORY
-
     script = REPOSITORY / "examples" / "python" / "compare_sizes.py"
     subprocess.run(
         [sys.executable, str(script), "--def-nodes", "1", "2", "--max-iterations", "20",
@@ -155,6 +152,26 @@ def test_the_example_script_writes_its_table(tmp_path):
     assert [int(r["defender_nodes"]) for r in rows] == [1, 2]
     for row in rows:
         assert 0 <= float(row["certified_lower"]) <= float(row["upper_bound"]) <= 1
+
+
+def test_the_notebook_runs_and_its_curve_ends_at_the_certified_value(tmp_path):
+    pytest.importorskip("pandas")
+    script = REPOSITORY / "examples" / "python" / "notebook.py"
+    run = subprocess.run(
+        [sys.executable, str(script), "--out", str(tmp_path), "--max-iterations", "60"],
+        check=True, capture_output=True, text=True,
+    )
+    assert "2 nodes: done in" in run.stderr, run.stderr  # progress=True
+    summary = json.loads((tmp_path / "solve" / "summary.json").read_text())
+    curve = list(csv.DictReader((tmp_path / "solve" / "curve.csv").open()))
+    best = max(float(r["certified_lower"]) for r in curve if r["certified_lower"])
+    assert best == summary["certified"]["certified_lower"]
+    sizes = list(csv.DictReader((tmp_path / "sizes.csv").open()))
+    assert [int(r["defender_nodes"]) for r in sizes] == [1, 2]
+    assert float(sizes[1]["certified_lower"]) >= float(sizes[0]["certified_lower"])
+    simulation = json.loads((tmp_path / "simulation.json").read_text())
+    assert simulation["estimate"]["runs"] == 20_000
+    assert abs(simulation["estimate"]["mean"] - simulation["exact_value"]) < 0.01
 
 
 def test_eight_threads_at_once_give_the_results_of_one():
