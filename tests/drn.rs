@@ -135,7 +135,9 @@ fn an_mdp_is_fully_observed_with_actions_enabled_per_state() {
 fn a_dtmc_has_one_action_per_state() {
     let text = "@type: DTMC\n@nr_states\n2\n@model\nstate 0 init\n\taction __NOLABEL__\n\t\t0 : 1/4\n\t\t1 : 3/4\nstate 1 done\n\taction __NOLABEL__\n\t\t1 : 1\n";
     let g = drn(text).unwrap();
-    assert_eq!(g.defender().actions(), ["__NOLABEL__"]);
+    // Issue 59: Storm's `__NOLABEL__` is the state's choice `#0`.
+    assert_eq!(g.defender().actions(), ["unlabelled_0"]);
+    assert_eq!(g.defender().action_labels(), ["(unlabelled #0)"]);
     assert!((value(&g, "F done", "uniform:1") - 1.0).abs() < 1e-12);
     assert!((value(&g, "X done", "uniform:1") - 0.75).abs() < 1e-12);
 }

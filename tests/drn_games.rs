@@ -250,14 +250,14 @@ const ATTACKER_ONE_DEFENDER_PAYNT_1: [(&str, &str); 28] = [
     ("o33", "dup"),
     ("o34", "dup"),
     ("o35", "dup"),
-    ("o40", "__NOLABEL__"),
-    ("o41", "__NOLABEL__"),
-    ("o42", "__NOLABEL__"),
-    ("o43", "__NOLABEL__"),
-    ("o44", "__NOLABEL__"),
-    ("o45", "__NOLABEL__"),
-    ("o46", "__NOLABEL__"),
-    ("o47", "__NOLABEL__"),
+    ("o40", "unlabelled_0"),
+    ("o41", "unlabelled_0"),
+    ("o42", "unlabelled_0"),
+    ("o43", "unlabelled_0"),
+    ("o44", "unlabelled_0"),
+    ("o45", "unlabelled_0"),
+    ("o46", "unlabelled_0"),
+    ("o47", "unlabelled_0"),
 ];
 
 /// PAYNT's value of that controller, from its own check

@@ -104,9 +104,13 @@ fn labels_that_differ_only_outside_the_name_alphabet_stay_distinct() {
                 \taction [n]\n\t\t0 : 1\n\taction _n_\n\t\t0 : 1\n\taction __NOLABEL__\n\t\t0 : 1\n";
     let import = from_drn_str(text, "m.drn", None).unwrap();
     let defender = import.game.defender();
-    assert_eq!(defender.actions(), ["_n_.2", "_n_.3", "_n_", "__NOLABEL__"]);
+    assert_eq!(
+        defender.actions(),
+        ["_n_.2", "_n_.3", "_n_", "unlabelled_3"]
+    );
     let written: Vec<&str> = (0..4).map(|u| defender.action_label(u).unwrap()).collect();
-    assert_eq!(written, ["(n)", "[n]", "_n_", "__NOLABEL__"]);
+    assert_eq!(written, ["(n)", "[n]", "_n_", "(unlabelled #3)"]);
+    assert_eq!(defender.action_labels(), written);
     // Two choices of one state with the same label are still an error.
     let twice = text.replace("[n]", "(n)");
     assert!(

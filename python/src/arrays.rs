@@ -32,10 +32,14 @@ impl Dense {
         let shape = array.shape().to_vec();
         let values = array.to_vec().or_else(|_| {
             let copy = numpy.call_method1("ascontiguousarray", (&array,))?;
-            copy.cast_into::<PyArrayDyn<f64>>()?.to_vec().map_err(PyErr::from)
+            copy.cast_into::<PyArrayDyn<f64>>()?
+                .to_vec()
+                .map_err(PyErr::from)
         })?;
         if let Some(bad) = values.iter().find(|v| !v.is_finite()) {
-            return Err(settings(format!("{name}: holds {bad}; every entry must be finite")));
+            return Err(settings(format!(
+                "{name}: holds {bad}; every entry must be finite"
+            )));
         }
         Ok(Self { shape, values })
     }
@@ -108,7 +112,12 @@ pub fn game(arrays: GameArrays<'_>) -> PyResult<posg_fsc::game::Posg> {
     let states = names("states", arrays.states, n, "s")?;
     let defender_actions = names("actions", arrays.defender.actions.clone(), a, "a")?;
     let adversary_actions = match b {
-        Some(b) => Some(names("adversary_actions", arrays.adversary.actions.clone(), b, "b")?),
+        Some(b) => Some(names(
+            "adversary_actions",
+            arrays.adversary.actions.clone(),
+            b,
+            "b",
+        )?),
         None => None,
     };
     let width = b.unwrap_or(1);
@@ -205,11 +214,17 @@ pub fn game(arrays: GameArrays<'_>) -> PyResult<posg_fsc::game::Posg> {
     }
     if let Some(rewards) = &arrays.rewards {
         let shape = (n, a, b);
-        let names = (&states[..], &defender_actions[..], adversary_actions.as_deref());
+        let names = (
+            &states[..],
+            &defender_actions[..],
+            adversary_actions.as_deref(),
+        );
         game["rewards"] = reward_models(rewards, shape, names)?;
     }
     let text = game.to_string();
-    compute(py, || posg_fsc::game::file::from_json_str(&text, "Game.from_arrays"))
+    compute(py, || {
+        posg_fsc::game::file::from_json_str(&text, "Game.from_arrays")
+    })
 }
 
 /// `initial`: a state index, or a distribution over the states.

@@ -65,7 +65,7 @@ pub fn run(args: DotArgs) -> anyhow::Result<()> {
             controller_dot(
                 &fsc,
                 player.observations(),
-                player.actions(),
+                &player.action_labels(),
                 &title,
                 args.threshold,
             )

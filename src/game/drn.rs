@@ -18,7 +18,8 @@
 //! player [`DrnOptions::defender_player`] is the defender): state `k` is named `s{k}`; a POMDP's observation
 //! `k` becomes the defender's observation `o{k}` (observed with probability
 //! 1), an MDP or DTMC is fully observed; each choice label is an action
-//! (renamed when it is not a valid name: [`labels`]), and
+//! (renamed when it is not a valid name: [`labels`]; an unlabelled choice,
+//! `__NOLABEL__`, is `(unlabelled #i)` by its index in the state), and
 //! the `enabled` actions of each observation (or, fully observed, of each
 //! state) are the labels of its choices (formats.md section 6), so no
 //! transition has to be invented for actions a state does not offer. The
@@ -129,8 +130,8 @@ pub fn from_drn_str_with(
     let mut model = Model::parse(&mut lines, &header)?;
     model.rename_actions();
     let mut warnings = Vec::new();
-    if !model.renamed.is_empty() {
-        warnings.push(labels::renaming_warning(file_name, &model.renamed));
+    if let Some(warning) = labels::renaming_warning(file_name, &model.renamed) {
+        warnings.push(warning);
     }
     let game = if header.model_type.is_turn_based() {
         model.into_turn_based_game(&header, name, &lines, options)?
@@ -508,9 +509,15 @@ impl Model {
         })
     }
 
-    /// `action LABEL [[REWARDS]]`: any label without whitespace.
+    /// `action LABEL [[REWARDS]]`: any label without whitespace; Storm's
+    /// `__NOLABEL__` is the label `(unlabelled #i)` of the state's `i`-th
+    /// choice ([`labels::unlabelled`]).
     fn action_line(&mut self, rest: &str, n: usize, lines: &Lines) -> Result<(), ModelError> {
         let (label, after) = split_word(rest);
+        let state = self.states.last();
+        let unlabelled = (label == labels::NO_LABEL)
+            .then(|| labels::unlabelled(state.map_or(0, |s| s.choices.len())));
+        let label = unlabelled.as_deref().unwrap_or(label);
         let mut rewards = Vec::new();
         if let Some((inside, _)) = bracketed(after, '[', ']') {
             rewards = self.reward_annotation(inside, n, lines)?;

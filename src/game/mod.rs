@@ -142,6 +142,14 @@ impl Player {
         }
     }
 
+    /// Each action's label as the model wrote it ([`Player::action_label`]):
+    /// the names pictures show (`(init)`, `(unlabelled #0)`, `north`).
+    pub fn action_labels(&self) -> Vec<String> {
+        (0..self.actions.len())
+            .map(|u| self.action_label(u).unwrap_or_default().to_string())
+            .collect()
+    }
+
     /// `|U_*|`.
     pub fn num_actions(&self) -> usize {
         self.actions.len()

@@ -16,7 +16,8 @@ pub const DEFAULT_THRESHOLD: f64 = 0.01;
 /// and probability with the observations that choose it).
 /// Choices below the threshold are hidden; the edge says how many (and an
 /// edge whose choices are all below it is drawn dashed, without lines).
-/// `observations` and `actions` name the player's observations and actions;
+/// `observations` and `actions` name the player's observations and actions
+/// (the labels of an imported model, [`crate::game::Player::action_labels`]);
 /// `title` labels the graph.
 pub fn controller_dot(
     fsc: &Fsc,

@@ -263,7 +263,7 @@ impl SolveDirectory<'_> {
         let dot = crate::output::dot::controller_dot(
             &solution.defender,
             player.observations(),
-            player.actions(),
+            &player.action_labels(),
             &title,
             crate::output::dot::DEFAULT_THRESHOLD,
         );
@@ -381,7 +381,7 @@ fn write_defender_dot(
     let text = crate::output::dot::controller_dot(
         defender,
         player.observations(),
-        player.actions(),
+        &player.action_labels(),
         &title,
         crate::output::dot::DEFAULT_THRESHOLD,
     );

@@ -99,8 +99,30 @@ pub(super) fn renamed_labels<'a>(
     renamed
 }
 
-/// `label` with every character outside `[A-Za-z0-9_.:-]` replaced by `_`.
+/// The label Storm writes for a choice without one.
+pub(super) const NO_LABEL: &str = "__NOLABEL__";
+
+/// The label of the `index`-th choice of a state that Storm wrote without
+/// one (`__NOLABEL__`): `(unlabelled #index)`, named `unlabelled_index`
+/// ([`restricted`]).
+pub(super) fn unlabelled(index: usize) -> String {
+    format!("(unlabelled #{index})")
+}
+
+/// `i` of a label `(unlabelled #i)` ([`unlabelled`]).
+fn unlabelled_index(label: &str) -> Option<&str> {
+    label
+        .strip_prefix("(unlabelled #")
+        .and_then(|rest| rest.strip_suffix(')'))
+        .filter(|i| !i.is_empty() && i.bytes().all(|b| b.is_ascii_digit()))
+}
+
+/// `label` with every character outside `[A-Za-z0-9_.:-]` replaced by `_`;
+/// `(unlabelled #i)` ([`unlabelled`]) is `unlabelled_i`.
 fn restricted(label: &str) -> String {
+    if let Some(index) = unlabelled_index(label) {
+        return format!("unlabelled_{index}");
+    }
     label
         .chars()
         .map(|c| {
@@ -122,22 +144,27 @@ fn free_name(base: &str, taken: &FxHashSet<String>) -> String {
 }
 
 /// The sentence that tells the user the names of renamed labels (at most
-/// [`LISTED`] of them, then how many more).
-pub(super) fn renaming_warning(file_name: &str, renamed: &[(String, String)]) -> String {
-    let listed: Vec<String> = renamed
-        .iter()
-        .take(LISTED)
+/// [`LISTED`] of them, then how many more), if any label the model wrote
+/// was renamed (an unlabelled choice's name, `unlabelled_i`, is no news).
+pub(super) fn renaming_warning(file_name: &str, renamed: &[(String, String)]) -> Option<String> {
+    let written: Vec<&(String, String)> = (renamed.iter())
+        .filter(|(label, _)| unlabelled_index(label).is_none())
+        .collect();
+    if written.is_empty() {
+        return None;
+    }
+    let listed: Vec<String> = (written.iter().take(LISTED))
         .map(|(label, name)| format!("`{label}` is `{name}`"))
         .collect();
-    let more = match renamed.len().saturating_sub(LISTED) {
+    let more = match written.len().saturating_sub(LISTED) {
         0 => String::new(),
         n => format!(" and {n} more"),
     };
-    format!(
+    Some(format!(
         "{file_name}: action labels that are not names ([A-Za-z0-9_.:-]+) are renamed: {}{more} \
          (docs/formats.md section 6); controllers name the actions so",
         listed.join(", ")
-    )
+    ))
 }
 
 /// The most renamed labels a warning lists.
