@@ -410,6 +410,11 @@ def sweep(
     one and kept at least as good. One dict per pair with the columns of
     sweep.csv (with `result`, the row in words) and the pair's SolveResult under "solved"."""
 
+def settings() -> list[dict[str, Any]]:
+    """Every setting solve and sweep take as a keyword: a dict with keyword,
+    default and meaning (the command line's --help text); help(solve) and
+    help(sweep) list them too."""
+
 def simulate(
     game: Game,
     ltl: Optional[str] = None,

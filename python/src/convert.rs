@@ -130,7 +130,9 @@ pub fn settings_from_json<T: DeserializeOwned>(function: &str, json: Value) -> P
 /// `function`'s keyword `key` among its settings (`**settings`): a
 /// TypeError suggesting the closest keyword when it is no setting.
 pub fn known_keyword(function: &str, key: &str) -> PyResult<()> {
-    let settings = setting_keywords();
+    let settings: Vec<String> = (crate::help::settings().into_iter())
+        .map(|s| s.keyword)
+        .collect();
     if settings.iter().any(|k| k == key) {
         return Ok(());
     }
@@ -140,31 +142,6 @@ pub fn known_keyword(function: &str, key: &str) -> PyResult<()> {
     Err(PyTypeError::new_err(format!(
         "{function}() got an unexpected keyword argument '{key}'{hint}"
     )))
-}
-
-/// The keywords of the settings, as Python names them
-/// (`tolerance`, `synthesis_time_budget`, the synthesis settings at the
-/// top).
-fn setting_keywords() -> Vec<String> {
-    let names = |value: serde_json::Result<Value>| match value {
-        Ok(Value::Object(map)) => map.keys().cloned().collect::<Vec<_>>(),
-        _ => Vec::new(),
-    };
-    let settings = names(serde_json::to_value(posg_fsc::optimise::Settings::default()));
-    let synthesis = names(serde_json::to_value(
-        posg_fsc::synthesis::Settings::default(),
-    ));
-    let renamed = |key: String| match key.as_str() {
-        "solver_tolerance" => Some("tolerance".to_string()),
-        "synthesis" => None,
-        _ => Some(key),
-    };
-    (settings.into_iter().filter_map(renamed))
-        .chain(synthesis.into_iter().map(|k| match k.as_str() {
-            "time_budget" => "synthesis_time_budget".to_string(),
-            _ => k,
-        }))
-        .collect()
 }
 
 /// The keywords of `solve`, `sweep`, `evaluate` and `certify` that are not

@@ -18,6 +18,7 @@ mod convert;
 mod errors;
 mod evaluate;
 mod game;
+mod help;
 mod objective;
 mod reward;
 mod simulate;
@@ -47,6 +48,7 @@ fn posg_fsc_python(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add_function(wrap_pyfunction!(solve::solve, module)?)?;
     module.add_function(wrap_pyfunction!(solve::sweep, module)?)?;
     module.add_function(wrap_pyfunction!(simulate::simulate, module)?)?;
+    module.add_function(wrap_pyfunction!(help::settings_list, module)?)?;
     module.add_function(wrap_pyfunction!(certify::certify, module)?)?;
     module.add_function(wrap_pyfunction!(certify::support, module)?)?;
     module.add_function(wrap_pyfunction!(certify::translate, module)?)?;

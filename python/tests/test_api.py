@@ -210,3 +210,19 @@ def test_a_game_from_numpy_arrays_is_the_json_game_it_describes():
         posg_fsc.Game.from_arrays(t, observations=[0, 0, 1])
     with pytest.raises(posg_fsc.SettingsError, match="shape"):
         posg_fsc.Game.from_arrays(np.zeros((3, 2)))
+
+
+def test_help_lists_every_setting_with_its_default_and_meaning():
+    listed = {s["keyword"]: s for s in posg_fsc.settings()}
+    for keyword in ["max_iterations", "max_work", "starts", "tolerance", "lu_limit",
+                    "structures", "engine", "synthesis_time_budget", "grow_defender"]:
+        assert keyword in listed, keyword
+        assert listed[keyword]["meaning"], keyword
+    assert listed["max_iterations"]["default"] == 3000
+    assert "synthesis" not in listed and "mode" not in listed
+    for function in [posg_fsc.solve, posg_fsc.sweep]:
+        assert "max_work=3500000.0: The most work one start's max-min loop" in function.__doc__
+        assert function.__name__ in ("solve", "sweep")
+    # Every listed keyword is taken.
+    grid = posg_fsc.example_grid()
+    posg_fsc.solve(grid, "F goal", lu_limit=listed["lu_limit"]["default"], max_iterations=2, starts=1)
