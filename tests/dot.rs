@@ -208,4 +208,11 @@ fn an_edge_with_many_choices_groups_them_by_action_and_probability() {
     // The 40 single-choice groups (b with p, a with 1 - p) after the
     // first: 10 shown, 30 folded.
     assert_eq!(lines[11], "(30 more choices)", "{edge}");
+    // Choices below the threshold take the last of the 12 lines.
+    let dot = controller_dot(&fsc, &names, &self::names(&["a", "b"]), "t", 0.2);
+    let edge = dot.lines().find(|l| l.starts_with("  n0 -> n0")).unwrap();
+    let label = edge.split("label=\"").nth(1).unwrap();
+    let lines: Vec<&str> = label.split("\\l").filter(|l| !l.starts_with('"')).collect();
+    assert_eq!(lines.len(), posg_fsc::output::dot::MAX_EDGE_LINES, "{edge}");
+    assert!(lines[11].ends_with(" below 0.2)"), "{edge}");
 }

@@ -408,7 +408,9 @@ def sweep(
     """solve() for every size pair, as `posg-fsc sweep` (defaults 1..3 and
     1..2): defender sizes increasing, each warm-started from the next smaller
     one and kept at least as good. One dict per pair with the columns of
-    sweep.csv (with `result`, the row in words) and the pair's SolveResult under "solved"."""
+    sweep.csv (with `result`, the row in words) and the pair's SolveResult under "solved".
+    on_iteration and progress are solve()'s, for each pair (progress lines
+    begin with the pair and count the seconds since the sweep began)."""
 
 def settings() -> list[dict[str, Any]]:
     """Every setting solve and sweep take as a keyword: a dict with keyword,

@@ -168,9 +168,16 @@ pub fn game(arrays: GameArrays<'_>) -> PyResult<posg_fsc::game::Posg> {
                         ),
                         None => format!("state {}, action {}", states[s], defender_actions[u]),
                     };
+                    let why = match (total, b) {
+                        (0.0, Some(_)) => {
+                            "; both actions are offered in this state (by \
+                                           other rows), so every pair of them needs a \
+                                           distribution"
+                        }
+                        _ => "; a row of zeros leaves the action out of the state",
+                    };
                     return Err(settings(format!(
-                        "transitions{} ({whose}) sums to {total}, not 1; a row of zeros \
-                         leaves the action out of the state",
+                        "transitions{} ({whose}) sums to {total}, not 1{why}",
                         index(s, u, v)
                     )));
                 }
@@ -281,10 +288,12 @@ fn player(
     let (count, emitted): (usize, Vec<(usize, usize, f64)>) = match d.shape[..] {
         [len] if len == n => {
             let mut emitted = Vec::with_capacity(n);
+            // No more observations than names, or than states without names.
+            let limit = arrays.observation_names.as_ref().map_or(n, Vec::len);
             for (s, &o) in d.values.iter().enumerate() {
-                if o < 0.0 || o.fract() != 0.0 {
+                if o < 0.0 || o.fract() != 0.0 || o >= limit as f64 {
                     return Err(settings(format!(
-                        "{keyword}[{s}]: {o} is not an observation index"
+                        "{keyword}[{s}]: {o} is not an observation index (0..{limit})"
                     )));
                 }
                 emitted.push((s, o as usize, 1.0));
@@ -385,7 +394,15 @@ fn labelled(labels: &Bound<'_, PyDict>, states: &[String]) -> PyResult<Value> {
         let proposition: String = proposition.extract()?;
         let keyword = format!("labels[{proposition:?}]");
         let d = Dense::of(&keyword, &value)?;
-        let marked: Vec<usize> = if d.shape == [states.len()] && is_boolean(&value)? {
+        let boolean = is_boolean(&value)?;
+        if boolean && d.shape != [states.len()] {
+            return Err(settings(format!(
+                "{keyword}: a boolean array of shape {:?}; expected one entry per state ({})",
+                d.shape,
+                states.len()
+            )));
+        }
+        let marked: Vec<usize> = if boolean {
             (d.values.iter().enumerate())
                 .filter(|&(_, &x)| x != 0.0)
                 .map(|(s, _)| s)

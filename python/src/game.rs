@@ -35,8 +35,28 @@ impl Game {
     }
 }
 
-/// Numbers the DRN files `Game.from_stormpy` exports, apart within a process.
+/// Numbers the directories `Game.from_stormpy` exports into, apart within
+/// a process.
 static EXPORTS: AtomicUsize = AtomicUsize::new(0);
+
+/// A new directory of the temporary directory that only this user may
+/// enter (created, never reused: one that exists, a symbolic link planted
+/// by another user say, is an error), for `Game.from_stormpy`'s export.
+fn private_directory() -> PyResult<PathBuf> {
+    let nanos = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.subsec_nanos());
+    let path = std::env::temp_dir().join(format!(
+        "posg-fsc-stormpy-{}-{}-{nanos}",
+        std::process::id(),
+        EXPORTS.fetch_add(1, Ordering::Relaxed)
+    ));
+    let mut builder = std::fs::DirBuilder::new();
+    #[cfg(unix)]
+    std::os::unix::fs::DirBuilderExt::mode(&mut builder, 0o700);
+    builder.create(&path)?;
+    Ok(path)
+}
 
 impl Game {
     /// The game of a DRN import, its warnings (renamed labels) raised as
@@ -100,14 +120,11 @@ impl Game {
             .getattr("io")
             .and_then(|io| io.getattr("export_to_drn")))
         .or_else(|_| stormpy.getattr("export_to_drn"))?;
-        let path = std::env::temp_dir().join(format!(
-            "posg-fsc-stormpy-{}-{}.drn",
-            std::process::id(),
-            EXPORTS.fetch_add(1, Ordering::Relaxed)
-        ));
+        let directory = private_directory()?;
+        let path = directory.join("model.drn");
         let exported = export.call1((model, path.display().to_string()));
         let text = exported.and_then(|_| Ok(std::fs::read_to_string(&path)?));
-        let _ = std::fs::remove_file(&path);
+        let _ = std::fs::remove_dir_all(&directory);
         let text = text.map_err(|error| {
             raise(
                 Kind::Game,

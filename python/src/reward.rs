@@ -6,7 +6,6 @@
 
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex, PoisonError};
-use std::time::Duration;
 
 use posg_fsc::ltl::props::RewardQuery;
 use posg_fsc::optimise::{
@@ -14,6 +13,7 @@ use posg_fsc::optimise::{
 };
 use posg_fsc::pipeline::QueryValue;
 use posg_fsc::pipeline::RewardObjective;
+use posg_fsc::pipeline::progress::Progress;
 use pyo3::prelude::*;
 use pyo3::types::PyList;
 
@@ -93,7 +93,7 @@ pub fn solve(
     py: Python<'_>,
     game: &Bound<'_, Game>,
     request: Request<'_>,
-    (on_iteration, progress): (Option<Py<PyAny>>, Option<Duration>),
+    (on_iteration, progress): (Option<Py<PyAny>>, Option<Arc<Progress>>),
     out: Option<(&PathBuf, bool)>,
 ) -> PyResult<Py<PyAny>> {
     let posg = &game.get().inner;
@@ -118,7 +118,8 @@ pub fn solve(
         }),
     ];
     if let Some(progress) = &run.progress {
-        observers.push(Box::new(progress.observer("full", request.nodes)));
+        let minimise = objective.minimise;
+        observers.push(Box::new(progress.observer("full", request.nodes, minimise)));
     }
     let (nodes, settings) = (request.nodes, request.settings);
     let solution = with_signals(py, &run, || {

@@ -3,8 +3,9 @@
 //! iteration records streamed to a Python callback, and Ctrl-C.
 
 use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex, PoisonError};
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use posg_fsc::controller::Role;
 use posg_fsc::game::Posg;
@@ -97,23 +98,37 @@ pub(crate) struct Run {
     /// The board whose lines go to `sys.stderr` while the run runs
     /// (`progress=`).
     pub(crate) progress: Option<Arc<Progress>>,
+    /// Set when `sys.stderr` could not be written: progress stops, the run
+    /// goes on.
+    silenced: AtomicBool,
 }
 
 impl Run {
     /// A run calling `callback` with each record, its progress on a board
     /// with a status line every `progress` when given.
-    pub(crate) fn new(callback: Option<Py<PyAny>>, progress: Option<Duration>) -> Arc<Self> {
+    pub(crate) fn new(callback: Option<Py<PyAny>>, progress: Option<Arc<Progress>>) -> Arc<Self> {
         Arc::new(Run {
             callback,
             error: Mutex::new(None),
             stop: Cancel::new(),
-            progress: progress.map(Progress::new),
+            progress,
+            silenced: AtomicBool::new(false),
         })
     }
 
     /// Writes the board's due lines (or, `last`, its last events) to
-    /// `sys.stderr`.
-    fn report(&self, py: Python<'_>, last: bool) -> PyResult<()> {
+    /// `sys.stderr`; a stderr that cannot be written (`None` under
+    /// pythonw) silences the progress, never the run.
+    fn report(&self, py: Python<'_>, last: bool) {
+        if self.silenced.load(Ordering::Relaxed) {
+            return;
+        }
+        if self.write_progress(py, last).is_err() {
+            self.silenced.store(true, Ordering::Relaxed);
+        }
+    }
+
+    fn write_progress(&self, py: Python<'_>, last: bool) -> PyResult<()> {
         let Some(progress) = &self.progress else {
             return Ok(());
         };
@@ -221,7 +236,7 @@ pub(crate) const SIGNAL_POLL: Duration = Duration::from_millis(10);
 fn run_job(
     py: Python<'_>,
     mut job: Job,
-    (callback, progress): (Option<Py<PyAny>>, Option<Duration>),
+    (callback, progress): (Option<Py<PyAny>>, Option<Arc<Progress>>),
     out: Option<(&PathBuf, bool)>,
     query: Option<&Property>,
 ) -> PyResult<Outcome> {
@@ -254,13 +269,11 @@ pub(crate) fn with_signals<T: Send>(
             if let Err(interrupt) = py.check_signals() {
                 run.fail(interrupt);
             }
-            if let Err(error) = run.report(py, false) {
-                run.fail(error);
-            }
+            run.report(py, false);
         }
         worker.join()
     });
-    run.report(py, true)?;
+    run.report(py, true);
     if let Some(error) = run.stopped_by() {
         return Err(error);
     }
@@ -475,7 +488,10 @@ pub fn solve(
 ) -> PyResult<Py<PyAny>> {
     let asked = Asked::from_keywords(ltl, props)?;
     let settings = self::settings("solve", settings)?;
-    let watching = (on_iteration, progress_interval(progress)?);
+    let watching = (
+        on_iteration,
+        progress_interval(progress)?.map(Progress::new),
+    );
     if let Some(reward) = asked.reward() {
         if defender.is_some() || adversary.is_some() {
             return Err(raise(
@@ -576,6 +592,7 @@ pub fn sweep(
     settings: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<Py<PyList>> {
     let progress = progress_interval(progress)?;
+    let started = Instant::now();
     let asked = Asked::from_keywords(ltl, props)?;
     let ltl = &asked.formula("sweep")?;
     let settings = self::settings("sweep", settings)?;
@@ -608,7 +625,11 @@ pub fn sweep(
         for &n in &defender_sizes {
             let job = chain.job(n).map_err(convert)?;
             let callback = callback.as_ref().map(|c| c.clone_ref(py));
-            let outcome = run_job(py, job, (callback, progress), None, asked.property())?;
+            let board = progress.map(|interval| {
+                let pair = format!("defender {n}, adversary {m}");
+                Progress::labelled(interval, Some(pair), started)
+            });
+            let outcome = run_job(py, job, (callback, board), None, asked.property())?;
             let row = serialised(py, &chain.row(n, &outcome))?.cast_into::<PyDict>()?;
             row.set_item(
                 "solved",
@@ -635,19 +656,19 @@ fn progress_interval(progress: Option<&Bound<'_, PyAny>>) -> PyResult<Option<Dur
             "progress must be True, False or the seconds between two status lines",
         )
     })?;
-    posg_fsc::seconds::duration(seconds)
-        .filter(|d| !d.is_zero())
-        .map(Some)
-        .ok_or_else(|| {
-            raise(
-                Kind::Settings,
-                format!(
-                    "progress={seconds}: the seconds between two status lines must be positive"
-                ),
-            )
-        })
+    if seconds.is_nan() || seconds <= 0.0 {
+        return Err(raise(
+            Kind::Settings,
+            format!("progress={seconds}: the seconds between two status lines must be positive"),
+        ));
+    }
+    // Beyond the clock: events only, no status line (as the command line).
+    Ok(Some(
+        posg_fsc::seconds::duration(seconds).unwrap_or(Duration::MAX),
+    ))
 }
 
 /// The seconds between two status lines with `progress=True`, as the
 /// command line's `--progress-every`.
-const DEFAULT_PROGRESS_EVERY: Duration = Duration::from_secs(5);
+const DEFAULT_PROGRESS_EVERY: Duration =
+    Duration::from_secs(posg_fsc::pipeline::progress::DEFAULT_INTERVAL_SECONDS as u64);

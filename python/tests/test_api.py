@@ -210,6 +210,15 @@ def test_a_game_from_numpy_arrays_is_the_json_game_it_describes():
         posg_fsc.Game.from_arrays(t, observations=[0, 0, 1])
     with pytest.raises(posg_fsc.SettingsError, match="shape"):
         posg_fsc.Game.from_arrays(np.zeros((3, 2)))
+    with pytest.raises(posg_fsc.SettingsError, match="not an observation index"):
+        posg_fsc.Game.from_arrays(t, observations=[0, 1e300, 1])
+    with pytest.raises(posg_fsc.SettingsError, match="boolean array"):
+        posg_fsc.Game.from_arrays(t, observations=[0, 1, 1], labels={"goal": [True, False]})
+    blocked = np.zeros((2, 2, 2, 2))
+    blocked[0, 0, 0] = blocked[0, 1, 1] = [0.0, 1.0]
+    blocked[1, :, :, 1] = 1.0
+    with pytest.raises(posg_fsc.SettingsError, match="every pair of them needs a distribution"):
+        posg_fsc.Game.from_arrays(blocked)
 
 
 def test_help_lists_every_setting_with_its_default_and_meaning():

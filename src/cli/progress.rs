@@ -11,7 +11,7 @@ use std::time::{Duration, Instant};
 
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
-use posg_fsc::pipeline::progress::Progress;
+use posg_fsc::pipeline::progress::{DEFAULT_INTERVAL_SECONDS, Progress};
 
 /// Output options shared by `solve` and `sweep`.
 #[derive(Debug, Clone, Args)]
@@ -24,7 +24,7 @@ pub struct OutputArgs {
     pub quiet: bool,
     /// Seconds between two progress lines when stderr is not a terminal
     /// (logs, pipes, cluster jobs).
-    #[arg(long, default_value_t = 5.0, value_parser = posg_fsc::seconds::parse_positive)]
+    #[arg(long, default_value_t = DEFAULT_INTERVAL_SECONDS, value_parser = posg_fsc::seconds::parse_positive)]
     pub progress_every: f64,
     /// Label the top of curve.svg with the seconds elapsed.
     #[arg(long)]
@@ -72,14 +72,15 @@ pub struct Reporter {
 
 impl Reporter {
     /// A reporter of a new board (whose lines begin with `label`, if
-    /// given), or `None` in [`ProgressMode::Quiet`].
-    pub fn start(mode: ProgressMode, label: Option<String>) -> Option<Self> {
+    /// given, stamped with the seconds since `started`), or `None` in
+    /// [`ProgressMode::Quiet`].
+    pub fn start(mode: ProgressMode, label: Option<String>, started: Instant) -> Option<Self> {
         let interval = match mode {
             ProgressMode::Quiet => return None,
             ProgressMode::Lines(interval) => interval,
             ProgressMode::Bars => Duration::MAX,
         };
-        let progress = Progress::labelled(interval, label);
+        let progress = Progress::labelled(interval, label, started);
         let (stop, stopped) = mpsc::channel();
         let board = Arc::clone(&progress);
         let thread = std::thread::spawn(move || match mode {
@@ -208,6 +209,7 @@ impl SweepProgress {
             ProgressMode::Lines(_) => Reporter::start(
                 self.mode,
                 Some(format!("defender {defender}, adversary {adversary}")),
+                self.start,
             ),
             _ => None,
         }

@@ -10,6 +10,7 @@
 use std::path::{Path, PathBuf};
 
 use std::sync::Arc;
+use std::time::Instant;
 
 use clap::Args;
 
@@ -156,7 +157,7 @@ fn agree(
 /// Runs `solve`.
 pub fn run(args: SolveArgs) -> anyhow::Result<()> {
     let settings = settings(&args.settings, &args.solver)?;
-    let reporter = Reporter::start(ProgressMode::detect(&args.output), None);
+    let reporter = Reporter::start(ProgressMode::detect(&args.output), None, Instant::now());
     let progress = reporter.as_ref().map(Reporter::progress);
     if let Some(progress) = progress {
         progress.begin(format!("reading {}", args.game.display()));
@@ -316,7 +317,7 @@ fn solve_expected_reward(
     let cancel = Cancel::new();
     super::interrupt::stop_gracefully(&cancel);
     let observer: Box<dyn Observer + Send> = match progress {
-        Some(progress) => Box::new(progress.observer("full", nodes)),
+        Some(progress) => Box::new(progress.observer("full", nodes, reward.minimise)),
         None => Box::new(()),
     };
     let command_line = super::common::command_line();

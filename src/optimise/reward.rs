@@ -116,6 +116,7 @@ pub fn optimise_expected_reward(
         let solution = infinite_on_full_support(objective, structure.defender, started)?;
         (solution, 0, settings.logit_bound, RecordSource::Gradient)
     } else {
+        observer.phase(&super::Phase::Race);
         grown(game, objective, nodes, settings, cancel, observer, started)?
     };
     observer.observe(&IterationRecord {

@@ -75,12 +75,14 @@ fn edge(
     if shown.is_empty() && hidden == 0 {
         return;
     }
-    let mut lines: Vec<String> = if shown.len() <= MAX_EDGE_LINES {
+    // The line counting the hidden choices takes one of the edge's lines.
+    let room = MAX_EDGE_LINES - usize::from(hidden > 0);
+    let mut lines: Vec<String> = if shown.len() <= room {
         (shown.iter())
             .map(|(observation, action, p)| format!("{observation} / {action}  {p}"))
             .collect()
     } else {
-        grouped(&shown)
+        grouped(&shown, room)
     };
     if hidden > 0 {
         lines.push(format!("({hidden} below {threshold})"));
@@ -104,8 +106,8 @@ const NAMED_OBSERVATIONS: usize = 4;
 /// The lines of an edge with many `(observation, action, probability)`
 /// choices: one per action and probability, `U  1: s2, s14, s17, s18 and
 /// 54 more`, the groups with most observations first, at most
-/// [`MAX_EDGE_LINES`] (the last saying how many choices the others hold).
-fn grouped(shown: &[(String, String, String)]) -> Vec<String> {
+/// `room` lines (the last saying how many choices the others hold).
+fn grouped(shown: &[(String, String, String)], room: usize) -> Vec<String> {
     let mut groups: Vec<((&str, &str), Vec<&str>)> = Vec::new();
     for (observation, action, p) in shown {
         let key = (action.as_str(), p.as_str());
@@ -115,8 +117,8 @@ fn grouped(shown: &[(String, String, String)]) -> Vec<String> {
         }
     }
     groups.sort_by_key(|(_, members)| std::cmp::Reverse(members.len()));
-    let kept = if groups.len() > MAX_EDGE_LINES {
-        MAX_EDGE_LINES - 1
+    let kept = if groups.len() > room {
+        room - 1
     } else {
         groups.len()
     };

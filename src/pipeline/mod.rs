@@ -240,9 +240,6 @@ pub struct Slot<'a> {
     /// The defender's size in this run: a grown run ([`Settings::grow_defender`])
     /// optimises every smaller size first.
     pub defender_nodes: usize,
-    /// Whether this is the job's own size (else a smaller size of a grown run,
-    /// whose outcome only warm-starts and floors the next).
-    pub final_size: bool,
 }
 
 /// A step of a run that concerns no one structure, announced to
@@ -562,8 +559,8 @@ fn pad_defenders(outcome: &mut Outcome, nodes: usize, reason: &str) -> Result<()
 }
 
 /// [`run`] at the job's size alone; `final_nodes` is the size a grown run
-/// ends at (the job's own when it does not grow), which tells the observers
-/// whether it is the job's own size or a smaller one of a grown run.
+/// ends at (the job's own when it does not grow), which [`Step::Supports`]
+/// tells the watch.
 fn run_size(job: Job, watch: &impl Watch, final_nodes: usize) -> Result<Outcome, PipelineError> {
     let clock = Instant::now();
     let Job {
@@ -577,7 +574,6 @@ fn run_size(job: Job, watch: &impl Watch, final_nodes: usize) -> Result<Outcome,
     let (phi, not_phi) = (&automata.phi, automata.not_phi.as_ref());
     let belief = BeliefBoundOnce::new(game, phi, settings.solver_settings());
     let defender_nodes = start.defender.num_nodes();
-    let final_size = defender_nodes == final_nodes;
     watch.step(&Step::Supports {
         defender_nodes,
         final_nodes,
@@ -598,7 +594,6 @@ fn run_size(job: Job, watch: &impl Watch, final_nodes: usize) -> Result<Outcome,
                 count,
                 structure,
                 defender_nodes: structure.defender.num_nodes(),
-                final_size,
             });
             let recorder = Recorder(Arc::clone(&records[index]));
             Box::new(vec![given, Box::new(recorder)]) as Box<dyn Observer + Send>

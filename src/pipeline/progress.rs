@@ -20,6 +20,10 @@ use crate::optimise::{IterationRecord, Observer, Phase, RecordSource, SearchReco
 /// How long a run may stay silent before its first status line.
 pub const FIRST_LINE_AFTER: Duration = Duration::from_secs(1);
 
+/// The seconds between two status lines unless the face says otherwise
+/// (`--progress-every`, Python's `progress=True`).
+pub const DEFAULT_INTERVAL_SECONDS: f64 = 5.0;
+
 /// The board of one run (shared by its observers: hold it in an [`Arc`]).
 #[derive(Debug)]
 pub struct Progress {
@@ -46,8 +50,10 @@ struct Board {
     upper: Option<f64>,
     /// The best worst-case estimate so far (shown where nothing is
     /// certified: an objective given as an automaton, a single player
-    /// before its final certificate).
+    /// before its final certificate, an expected reward).
     estimate: Option<f64>,
+    /// Whether a lower estimate is better (a minimised expected cost).
+    minimise: bool,
     /// Event lines not yet handed out.
     events: Vec<String>,
     /// When the last line was handed out.
@@ -77,14 +83,15 @@ impl Progress {
     /// A board made now, whose status line is due when no line came for
     /// `interval` (the first after [`FIRST_LINE_AFTER`]).
     pub fn new(interval: Duration) -> Arc<Self> {
-        Self::labelled(interval, None)
+        Self::labelled(interval, None, Instant::now())
     }
 
     /// A board as [`Progress::new`] whose lines begin with `label` (`defender
-    /// 2, adversary 1`).
-    pub fn labelled(interval: Duration, label: Option<String>) -> Arc<Self> {
+    /// 2, adversary 1`), stamped with the seconds since `started` (a
+    /// sweep's pairs share the sweep's clock).
+    pub fn labelled(interval: Duration, label: Option<String>, started: Instant) -> Arc<Self> {
         Arc::new(Self {
-            started: Instant::now(),
+            started,
             interval,
             label,
             board: Mutex::new(Board::default()),
@@ -105,9 +112,17 @@ impl Progress {
     }
 
     /// An observer of a lone optimisation (no pipeline around it) of the
-    /// structure `name` with a defender of `defender_nodes` nodes.
-    pub fn observer(self: &Arc<Self>, name: &str, defender_nodes: usize) -> ProgressObserver {
+    /// structure `name` with a defender of `defender_nodes` nodes; with
+    /// `minimise`, a lower worst-case estimate is the better (an expected
+    /// cost).
+    pub fn observer(
+        self: &Arc<Self>,
+        name: &str,
+        defender_nodes: usize,
+        minimise: bool,
+    ) -> ProgressObserver {
         let mut board = self.board();
+        board.minimise = minimise;
         board.size = Some((defender_nodes, defender_nodes));
         board.step = None;
         board.structures = vec![Some(Optimising::new(name))];
@@ -369,7 +384,11 @@ impl Observer for ProgressObserver {
             board.upper = Some(board.upper.map_or(upper, |u| u.min(upper)));
         }
         if let Some(worst_case) = record.worst_case {
-            board.estimate = Some(board.estimate.map_or(worst_case, |e| e.max(worst_case)));
+            let better = |e: f64| match board.minimise {
+                true => e.min(worst_case),
+                false => e.max(worst_case),
+            };
+            board.estimate = Some(board.estimate.map_or(worst_case, better));
         }
         let Some(structure) = board.optimising(self.index) else {
             return;

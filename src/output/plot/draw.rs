@@ -526,8 +526,11 @@ where
         |size: u32| TextStyle::from((FONT, size).into_font()).pos(anchor(HPos::Center, VPos::Top));
     let (root_width, _) = root.dim_in_pixel();
     let width = root_width - 2 * TITLE_MARGIN;
-    let main = wrapped(root, &title.main, &style(20), width)?;
-    let detail = wrapped(root, &title.detail, &style(15), width)?;
+    let main = at_most(wrapped(root, &title.main, &style(20), width)?, TITLE_LINES);
+    let detail = at_most(
+        wrapped(root, &title.detail, &style(15), width)?,
+        TITLE_LINES,
+    );
     let extra = |lines: &[String], height: u32| height * (lines.len().max(1) as u32 - 1);
     let (head, body) = root.split_vertically(TITLE_HEIGHT + extra(&main, 24) + extra(&detail, 19));
     let centre = (root_width / 2) as i32;
@@ -546,6 +549,22 @@ where
 
 /// Left and right margin of the title, in pixels.
 const TITLE_MARGIN: u32 = 16;
+
+/// The most lines each part of a title wraps to (the rest is cut, `...`
+/// said), so that the chart keeps its room on the smallest plot.
+const TITLE_LINES: usize = 3;
+
+/// The first `most` of `lines`, the last of them ending in ` ...` where
+/// some were cut.
+fn at_most(mut lines: Vec<String>, most: usize) -> Vec<String> {
+    if lines.len() > most {
+        lines.truncate(most);
+        if let Some(last) = lines.last_mut() {
+            last.push_str(" ...");
+        }
+    }
+    lines
+}
 
 /// `text` broken at spaces into lines at most `width` pixels wide in
 /// `style` (a word wider than that gets a line of its own); no line for
