@@ -378,12 +378,17 @@ fn solve_writes_png_plots_with_format_png() {
         "png",
         "--size",
         "1000x600",
+        "--dpi",
+        "200",
     ]);
     let png = std::fs::read(dir.join("out/curve.png")).unwrap();
     assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n");
     // The header chunk's width and height, big-endian.
     let dimension = |at: usize| u32::from_be_bytes(png[at..at + 4].try_into().unwrap());
     assert_eq!((dimension(16), dimension(20)), (1000, 600));
+    // The pHYs chunk: 200 dots per inch are 7874 per metre.
+    let phys = png.windows(4).position(|w| w == b"pHYs").unwrap();
+    assert_eq!(dimension(phys + 4), 7874);
     assert!(!dir.join("out/curve.svg").exists());
     let summary = read(dir.join("out/summary.json"));
     assert!(summary.contains("\"curve.png\""), "{summary}");

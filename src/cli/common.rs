@@ -160,6 +160,20 @@ pub struct PlotArgs {
     /// canvas in the same units.
     #[arg(long, default_value_t = PlotSize::default(), value_parser = plot_size)]
     pub size: PlotSize,
+    /// The resolution a PNG records, in dots per inch: it prints
+    /// WIDTH / DPI inches wide (SVG ignores it).
+    #[arg(long, default_value_t = PlotSize::DEFAULT_DPI, value_parser = clap::value_parser!(u32).range(10..=2400))]
+    pub dpi: u32,
+}
+
+impl PlotArgs {
+    /// The plots' size with its resolution.
+    pub fn picture(&self) -> PlotSize {
+        PlotSize {
+            dpi: self.dpi,
+            ..self.size
+        }
+    }
 }
 
 fn plot_format(text: &str) -> Result<PlotFormat, String> {

@@ -91,6 +91,7 @@ fn solve_with_defaults(game: &Posg, automata: &Automata, place: &Place) -> anyho
         PlotArgs {
             format: PlotFormat::Svg,
             size: PlotSize::default(),
+            dpi: PlotSize::DEFAULT_DPI,
         },
         None,
     )

@@ -108,7 +108,7 @@ const HEADINGS: &[(&str, &[&str])] = &[
         ],
     ),
     ("Linear solver", &["solver", "lu_limit", "tolerance"]),
-    ("Output", &["progress_every", "seconds_axis", "size"]),
+    ("Output", &["progress_every", "seconds_axis", "size", "dpi"]),
 ];
 
 /// The heading of an option in no list (one added later).

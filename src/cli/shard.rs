@@ -419,7 +419,7 @@ pub fn write_sweep(
     let name = format!("sweep.{format}");
     let plot = dir.join(&name);
     let temporary = dir.join(format!(".{name}.partial-{}", std::process::id()));
-    plot_sweep(&temporary, (format, style.size), title, &points).map_err(|e| {
+    plot_sweep(&temporary, (format, style.picture()), title, &points).map_err(|e| {
         ShardError::Malformed {
             path: plot.clone(),
             problem: e.to_string(),

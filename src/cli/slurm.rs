@@ -122,6 +122,9 @@ pub fn merge_script(sweep: &SlurmSweep) -> String {
     if sweep.plot.size != PlotSize::default() {
         format += &format!(" --size {}", sweep.plot.size);
     }
+    if sweep.plot.dpi != PlotSize::DEFAULT_DPI {
+        format += &format!(" --dpi {}", sweep.plot.dpi);
+    }
     text += &format!(
         "exec {} sweep-merge {}{format}\n",
         shell_quote(&sweep.program.display().to_string()),

@@ -119,7 +119,7 @@ pub fn solve_into(
         path,
         seconds_axis,
         plot_format: Some(plot.format),
-        plot_size: plot.size,
+        plot_size: plot.picture(),
         command_line: &command_line,
         query,
     };

@@ -54,13 +54,17 @@ impl FromStr for PlotFormat {
 }
 
 /// The size of a plot (`--size WIDTHxHEIGHT`): pixels of a PNG image, or
-/// the SVG canvas in the same units; 900 x 520 by default.
+/// the SVG canvas in the same units; 900 x 520 by default. Read from and
+/// written as `WIDTHxHEIGHT`, with the default resolution.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct PlotSize {
     /// Width in pixels.
     pub width: u32,
     /// Height in pixels.
     pub height: u32,
+    /// The resolution a PNG image records (`--dpi`, its `pHYs` chunk): it
+    /// prints `width / dpi` inches wide. SVG ignores it.
+    pub dpi: u32,
 }
 
 impl PlotSize {
@@ -68,12 +72,16 @@ impl PlotSize {
     pub const MIN: PlotSize = PlotSize {
         width: 640,
         height: 400,
+        dpi: Self::DEFAULT_DPI,
     };
     /// The largest size (a PNG of it is drawn in about 100 MB of memory).
     pub const MAX: PlotSize = PlotSize {
         width: 6000,
         height: 6000,
+        dpi: Self::DEFAULT_DPI,
     };
+    /// The resolution recorded unless `--dpi` says otherwise.
+    pub const DEFAULT_DPI: u32 = 96;
 }
 
 impl Default for PlotSize {
@@ -81,6 +89,7 @@ impl Default for PlotSize {
         Self {
             width: 900,
             height: 520,
+            dpi: Self::DEFAULT_DPI,
         }
     }
 }
@@ -106,6 +115,7 @@ impl FromStr for PlotSize {
         let size = Self {
             width: width.trim().parse().map_err(|_| bad())?,
             height: height.trim().parse().map_err(|_| bad())?,
+            dpi: Self::DEFAULT_DPI,
         };
         let within = |v: u32, lo: u32, hi: u32| (lo..=hi).contains(&v);
         if within(size.width, min.width, max.width) && within(size.height, min.height, max.height) {

@@ -125,6 +125,12 @@ fn register_font() -> Result<(), DrawError> {
 fn write_png(path: &Path, size: PlotSize, pixels: &[u8]) -> Result<(), DrawError> {
     let file = std::fs::File::create(path)?;
     let mut encoder = png::Encoder::new(BufWriter::new(file), size.width, size.height);
+    let per_metre = (f64::from(size.dpi) / 0.0254).round() as u32;
+    encoder.set_pixel_dims(Some(png::PixelDimensions {
+        xppu: per_metre,
+        yppu: per_metre,
+        unit: png::Unit::Meter,
+    }));
     encoder.set_color(png::ColorType::Rgb);
     encoder.set_depth(png::BitDepth::Eight);
     encoder.add_text_chunk(
@@ -1221,6 +1227,7 @@ mod tests {
         let size = PlotSize {
             width: 1200,
             height: 700,
+            dpi: 150,
         };
         let curve = CurvePlot {
             title: &title,
@@ -1236,6 +1243,8 @@ mod tests {
         let decoder = png::Decoder::new(std::io::Cursor::new(bytes));
         let mut reader = decoder.read_info().unwrap();
         assert_eq!((reader.info().width, reader.info().height), (1200, 700));
+        let dims = reader.info().pixel_dims.unwrap();
+        assert_eq!((dims.xppu, dims.unit), (5906, png::Unit::Meter));
         let mut pixels = vec![0; reader.output_buffer_size().unwrap()];
         reader.next_frame(&mut pixels).unwrap();
         // The title's text is drawn: the top strip is not blank.
