@@ -127,21 +127,16 @@ pub fn settings_from_json<T: DeserializeOwned>(function: &str, json: Value) -> P
     })
 }
 
-/// `function`'s keyword `key` among its settings (`**settings`): a
-/// TypeError suggesting the closest keyword when it is no setting.
-pub fn known_keyword(function: &str, key: &str) -> PyResult<()> {
-    let settings: Vec<String> = (crate::help::settings().into_iter())
-        .map(|s| s.keyword)
-        .collect();
-    if settings.iter().any(|k| k == key) {
-        return Ok(());
-    }
-    let all = settings.iter().map(String::as_str).chain(FUNCTION_KEYWORDS);
+/// The TypeError of `function`'s keyword `key`, which is none of its
+/// `settings`, suggesting the closest keyword of the settings and of the
+/// functions' own.
+pub fn unknown_keyword(function: &str, key: &str, settings: &[crate::help::Setting]) -> PyErr {
+    let all = (settings.iter().map(|s| s.keyword.as_str())).chain(FUNCTION_KEYWORDS);
     let hint = posg_fsc::game::closest(key, all)
         .map_or(String::new(), |k| format!("; did you mean '{k}'?"));
-    Err(PyTypeError::new_err(format!(
+    PyTypeError::new_err(format!(
         "{function}() got an unexpected keyword argument '{key}'{hint}"
-    )))
+    ))
 }
 
 /// The keywords of `solve`, `sweep`, `evaluate` and `certify` that are not

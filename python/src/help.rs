@@ -21,9 +21,10 @@ pub struct Setting {
     /// `synthesis_time_budget` for the synthesis' `time_budget`).
     pub keyword: String,
     /// The field's name in its struct.
-    field: String,
-    /// Whether the field is the synthesis'.
-    synthesis: bool,
+    pub field: String,
+    /// Whether the field is the synthesis' (inside the optimiser's
+    /// `synthesis`).
+    pub synthesis: bool,
     /// The field's documentation, on one line.
     pub meaning: String,
 }
@@ -54,31 +55,44 @@ fn fields(source: &str) -> Vec<(String, String)> {
 /// synthesis' (not its `mode`, which the `sat` source chooses itself; not
 /// `synthesis`, whose fields are keywords of their own).
 pub fn settings() -> Vec<Setting> {
-    let optimiser = fields(OPTIMISER)
-        .into_iter()
-        .filter(|(name, _)| name != "synthesis")
-        .map(|(field, meaning)| Setting {
-            keyword: match field.as_str() {
-                "solver_tolerance" => "tolerance".into(),
-                _ => field.clone(),
-            },
-            field,
-            synthesis: false,
-            meaning,
-        });
-    let synthesis = fields(SYNTHESIS)
-        .into_iter()
-        .filter(|(name, _)| name != "mode")
-        .map(|(field, meaning)| Setting {
-            keyword: match field.as_str() {
-                "time_budget" => "synthesis_time_budget".into(),
-                _ => field.clone(),
-            },
-            field,
-            synthesis: true,
-            meaning,
-        });
+    let optimiser = of(
+        OPTIMISER,
+        false,
+        "synthesis",
+        ("solver_tolerance", "tolerance"),
+    );
+    let synthesis = of(
+        SYNTHESIS,
+        true,
+        "mode",
+        ("time_budget", "synthesis_time_budget"),
+    );
     optimiser.chain(synthesis).collect()
+}
+
+/// The settings of the struct in `source` (the synthesis' with
+/// `synthesis`), without the field `left_out`, the field `renamed.0`
+/// under the keyword `renamed.1`.
+fn of(
+    source: &str,
+    synthesis: bool,
+    left_out: &str,
+    renamed: (&'static str, &'static str),
+) -> impl Iterator<Item = Setting> {
+    let left_out = left_out.to_string();
+    fields(source)
+        .into_iter()
+        .filter(move |(name, _)| *name != left_out)
+        .map(move |(field, meaning)| Setting {
+            keyword: if field == renamed.0 {
+                renamed.1.to_string()
+            } else {
+                field.clone()
+            },
+            field,
+            synthesis,
+            meaning,
+        })
 }
 
 /// Each setting's default, as JSON (`None` where the default is not

@@ -26,52 +26,35 @@ use crate::evaluate::Query;
 use crate::game::Game;
 use crate::objective::{self, Asked};
 
-/// Keyword arguments with the command line's names that live elsewhere in
-/// [`Settings`]: `tolerance` is `solver_tolerance`, and the synthesis
-/// options (`synthesis_time_budget` is the synthesis `time_budget`) sit in
-/// `synthesis`.
+/// Keyword arguments as the JSON of [`Settings`]: each keyword's field
+/// ([`crate::help::settings`]: `tolerance` is `solver_tolerance`, the
+/// synthesis' fields sit in `synthesis`, its `time_budget` is
+/// `synthesis_time_budget`); `structures` may be one comma-separated
+/// string. A keyword that is no setting is a TypeError suggesting the
+/// closest one.
 fn settings_json(function: &str, kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<Value> {
-    let synthesis_keys: Vec<String> =
-        match serde_json::to_value(posg_fsc::synthesis::Settings::default()) {
-            Ok(Value::Object(map)) => map.keys().cloned().collect(),
-            _ => Vec::new(),
-        };
+    let settings = crate::help::settings();
     let mut top = Map::new();
     let mut synthesis = Map::new();
-    if let Some(kwargs) = kwargs {
-        for (key, value) in kwargs.iter() {
-            let key: String = key.extract()?;
-            crate::convert::known_keyword(function, &key)?;
-            let mut json = to_json(&key, &value)?;
-            match key.as_str() {
-                "tolerance" => {
-                    top.insert("solver_tolerance".into(), json);
-                }
-                "synthesis_time_budget" => {
-                    synthesis.insert("time_budget".into(), json);
-                }
-                "structures" => {
-                    if let Value::String(list) = &json {
-                        json = Value::Array(
-                            list.split(',')
-                                .map(|s| Value::String(s.trim().into()))
-                                .collect(),
-                        );
-                    }
-                    top.insert(key, json);
-                }
-                // The optimiser's own; the synthesis one is synthesis_time_budget.
-                "time_budget" => {
-                    top.insert(key, json);
-                }
-                other if other != "mode" && synthesis_keys.iter().any(|k| k == other) => {
-                    synthesis.insert(key, json);
-                }
-                _ => {
-                    top.insert(key, json);
-                }
-            }
+    for (key, value) in kwargs.into_iter().flat_map(|kwargs| kwargs.iter()) {
+        let key: String = key.extract()?;
+        let Some(setting) = settings.iter().find(|s| s.keyword == key) else {
+            return Err(crate::convert::unknown_keyword(function, &key, &settings));
+        };
+        let mut json = to_json(&key, &value)?;
+        if let ("structures", Value::String(list)) = (key.as_str(), &json) {
+            json = Value::Array(
+                list.split(',')
+                    .map(|s| Value::String(s.trim().into()))
+                    .collect(),
+            );
         }
+        let owner = if setting.synthesis {
+            &mut synthesis
+        } else {
+            &mut top
+        };
+        owner.insert(setting.field.clone(), json);
     }
     if !synthesis.is_empty() {
         top.insert("synthesis".into(), Value::Object(synthesis));
