@@ -359,6 +359,14 @@ pub enum EstimateReport {
 }
 
 impl EstimateReport {
+    /// The runs' mean.
+    pub fn mean(&self) -> f64 {
+        match self {
+            Self::Probability(e) => e.mean,
+            Self::Reward(e) => e.mean,
+        }
+    }
+
     /// `(lower, upper, confidence)` of the interval.
     pub fn interval(&self) -> (f64, f64, f64) {
         match self {

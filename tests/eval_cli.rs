@@ -108,3 +108,46 @@ fn simulate_explains_an_interval_that_misses_the_exact_value() {
     assert!(missed > 0 && met > 0, "missed {missed}, met {met}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// `simulate --props` restates a `Pmin=? [F "goal"]` query in its own
+/// terms: the tool samples the complement `G !goal`, and `query` gives the
+/// probability of `F goal` itself (here 1/2, with an interval that turns
+/// over with it), beside the complement's estimate.
+#[test]
+fn simulate_restates_a_pmin_query_as_the_probability_of_its_path() {
+    let dir = std::env::temp_dir().join(format!("posg-fsc-simulate-pmin-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let game = dir.join("pass-or-trap.posg.json");
+    std::fs::write(&game, PASS_OR_TRAP).unwrap();
+    let props = dir.join("pmin.props");
+    std::fs::write(&props, "Pmin=? [F \"goal\"]\n").unwrap();
+    let output = Command::new(env!("CARGO_BIN_EXE_posg-fsc"))
+        .arg("simulate")
+        .arg(&game)
+        .arg("--props")
+        .arg(&props)
+        .args(["--runs", "400", "--seed", "3"])
+        .output()
+        .unwrap();
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    let report: Value = serde_json::from_slice(&output.stdout).unwrap();
+    let query = &report["query"];
+    assert_eq!(query["text"], "Pmin=? [F \"goal\"]");
+    assert!(close(&query["exact_value"], 0.5), "{query}");
+    assert!(close(&report["exact_value"], 0.5), "{report}");
+    let complement = report["estimate"]["mean"].as_f64().unwrap();
+    // (This seed's estimate is not 1/2, so restating shows.)
+    assert!((complement - 0.5).abs() > 1e-3, "{report}");
+    assert!(close(&query["mean"], 1.0 - complement), "{report}");
+    let [lower, upper] = [0, 1].map(|i| query["interval"][i].as_f64().unwrap());
+    let [c_lower, c_upper] =
+        ["lower", "upper"].map(|k| report["estimate"][k].as_f64().unwrap());
+    assert!((lower - (1.0 - c_upper)).abs() < 1e-12, "{report}");
+    assert!((upper - (1.0 - c_lower)).abs() < 1e-12, "{report}");
+    assert!(lower < upper && lower < 0.5 + 0.1 && upper > 0.5 - 0.1, "{query}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -5,6 +5,7 @@
 use std::time::Instant;
 
 use posg_fsc::controller::Role;
+use posg_fsc::pipeline::QueryEstimate;
 use posg_fsc::value::{Simulated, SimulationSettings, simulate_and_check};
 use pyo3::prelude::*;
 
@@ -22,8 +23,10 @@ use crate::objective::{self, Asked};
 /// section 9). `defender` and `adversary` are Controllers, paths or
 /// `"uniform:K"` (default `"uniform:1"`). Returns a dict with the names of
 /// the command's JSON: `formula`, `settings`, `estimate` (`mean`, `lower`,
-/// `upper`, `confidence`, ...), `exact_value`, `exact_within_interval` and
-/// `seconds`. Such an interval misses the exact value in about one seed of
+/// `upper`, `confidence`, ...), `exact_value`, `exact_within_interval`,
+/// `seconds`, and with `props=` the `query` restated in its own terms
+/// (`text`, `mean`, `interval`, `confidence`, `exact_value`: a `Pmin`
+/// query's own probability, not its complement's). Such an interval misses the exact value in about one seed of
 /// twenty: where it does, a `UserWarning` says so.
 #[pyfunction]
 #[pyo3(signature = (game, ltl = None, *, props = None, defender = None, adversary = None, runs = 10_000, seed = 0, allow_unused_propositions = false))]
@@ -75,6 +78,10 @@ pub fn simulate(
     }
     let report = serialised(py, &check)?;
     report.set_item("formula", formula)?;
+    if let Some(property) = asked.property() {
+        let query = QueryEstimate::simulated(property, &check);
+        report.set_item("query", serialised(py, &query)?)?;
+    }
     report.set_item("seconds", clock.elapsed().as_secs_f64())?;
     Ok(report.unbind())
 }

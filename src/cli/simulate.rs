@@ -4,6 +4,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use clap::Args;
+use posg_fsc::pipeline::QueryEstimate;
 use posg_fsc::value::{Simulated, SimulationCheck, SimulationSettings, simulate_and_check};
 use serde::Serialize;
 
@@ -35,6 +36,9 @@ struct Report {
     #[serde(flatten)]
     provenance: Provenance,
     formula: String,
+    /// The query of `--props` restated in its own terms.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    query: Option<QueryEstimate>,
     #[serde(flatten)]
     check: SimulationCheck,
     seconds: f64,
@@ -69,9 +73,11 @@ pub fn run(args: SimulateArgs) -> anyhow::Result<()> {
     if let Some(note) = check.miss_note("--seed", "--runs") {
         eprintln!("note: {note}");
     }
+    let query = (args.objective.property()?).map(|p| QueryEstimate::simulated(&p, &check));
     common::print_json(&Report {
         provenance: Provenance::current(),
         formula,
+        query,
         check,
         seconds: common::seconds_since(start),
     })

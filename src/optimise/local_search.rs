@@ -27,6 +27,7 @@
 
 use std::cell::{Cell, OnceCell, RefCell};
 use std::collections::HashMap;
+use std::hash::{DefaultHasher, Hasher};
 use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
 use std::time::Instant;
 
@@ -192,8 +193,17 @@ fn lock<T>(map: &Mutex<T>) -> MutexGuard<'_, T> {
 /// choices and its choices (next node, action, the probability's bits).
 /// Blocks out of use are never played, so defenders that differ only
 /// there have the same product.
-#[derive(Debug, Clone, PartialEq, Eq, Hash)]
-struct EvaluationKey(Vec<u64>);
+///
+/// The key is a 128-bit digest of that sequence of words (two SipHash-1-3
+/// hashes of it under different prefixes), not the words themselves: on a
+/// 96x96 grid one defender's words take megabytes, and the memo of a run
+/// held hundreds of them (about 180 MB at its peak). Two different
+/// defenders share a digest with probability about `n^2 / 2^129` for `n`
+/// keys; even then only the search's path changes, never a reported
+/// number: a structure scores the defender it returns again from the
+/// defender itself (its final candidates' certified lower bounds).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+struct EvaluationKey([u64; 2]);
 
 impl EvaluationKey {
     /// The key of `defender` in the game of `steps`.
@@ -209,21 +219,53 @@ impl EvaluationKey {
 
     /// The key of `defender` with the blocks `b` where `blocks[b]`.
     fn with_blocks(defender: &Fsc, blocks: &[bool]) -> Self {
-        let mut key = vec![defender.num_nodes() as u64];
-        key.extend(defender.initial().iter().map(|p| p.to_bits()));
+        let mut digest = KeyDigest::new();
+        digest.word(defender.num_nodes() as u64);
+        for p in defender.initial() {
+            digest.word(p.to_bits());
+        }
         for (b, block) in defender
             .blocks
             .iter()
             .enumerate()
             .filter(|&(b, _)| blocks[b])
         {
-            key.extend([b as u64, block.len() as u64]);
+            digest.word(b as u64);
+            digest.word(block.len() as u64);
             for choice in block {
-                key.push(((choice.next as u64) << 32) | choice.action as u64);
-                key.push(choice.probability.to_bits());
+                digest.word(((choice.next as u64) << 32) | choice.action as u64);
+                digest.word(choice.probability.to_bits());
             }
         }
-        Self(key)
+        digest.finish()
+    }
+}
+
+/// Two SipHash-1-3 states (the standard library's fixed-key hasher) fed
+/// the same words after different one-word prefixes: together a 128-bit
+/// digest of the words ([`EvaluationKey`]).
+struct KeyDigest([DefaultHasher; 2]);
+
+impl KeyDigest {
+    /// The digest of no words yet.
+    fn new() -> Self {
+        Self([0_u64, 1].map(|prefix| {
+            let mut hasher = DefaultHasher::new();
+            hasher.write_u64(prefix);
+            hasher
+        }))
+    }
+
+    /// Feeds one word.
+    fn word(&mut self, word: u64) {
+        for hasher in &mut self.0 {
+            hasher.write_u64(word);
+        }
+    }
+
+    /// The key of the words fed.
+    fn finish(&self) -> EvaluationKey {
+        EvaluationKey(self.0.each_ref().map(Hasher::finish))
     }
 }
 

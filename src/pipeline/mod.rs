@@ -32,7 +32,7 @@ mod reward;
 mod sweep;
 
 pub use propositions::{PropositionCheck, check_propositions};
-pub use query::QueryValue;
+pub use query::{QueryEstimate, QueryValue};
 pub use reward::RewardObjective;
 pub use sweep::Chain;
 

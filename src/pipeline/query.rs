@@ -1,6 +1,7 @@
 //! A property file's query restated in its own terms (docs/formats.md
 //! sections 6 and 9): `eval`'s and `summary.json`'s `query`, Python's
-//! `Evaluation.query` and `SolveResult.query`. A `Pmin=? [PATH]` query is
+//! `Evaluation.query` and `SolveResult.query`; `simulate`'s estimate
+//! ([`QueryEstimate`]). A `Pmin=? [PATH]` query is
 //! solved as the probability of the complement of `PATH`; restated, its
 //! value is 1 minus that probability, and its certified bracket turns over.
 
@@ -8,7 +9,7 @@ use serde::Serialize;
 
 use crate::certify::Bracket;
 use crate::ltl::props::{Property, Query};
-use crate::value::{Evaluation, number_or_inf};
+use crate::value::{Evaluation, SimulationCheck, number_or_inf};
 
 /// A query with its value, as the query asks it.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -89,6 +90,41 @@ impl QueryValue {
             error_bound,
             certified: None,
             target_probability: value.is_finite().then_some(1.0),
+        }
+    }
+}
+
+/// A query estimated by simulation (`simulate --props`, Python's
+/// `simulate(props=...)`), as the query asks it: for `Pmin=? [PATH]`, the
+/// runs' estimate of the probability of `PATH` itself, not of the
+/// complement the tool optimises.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct QueryEstimate {
+    /// The query as written.
+    pub text: String,
+    /// The runs' mean.
+    pub mean: f64,
+    /// The interval around it, `[lower, upper]`.
+    pub interval: [f64; 2],
+    /// The interval's confidence level.
+    pub confidence: f64,
+    /// The value computed exactly (`"inf"` in JSON for an infinite
+    /// expected reward).
+    #[serde(serialize_with = "number_or_inf")]
+    pub exact_value: f64,
+}
+
+impl QueryEstimate {
+    /// The query of `property` for the simulation `check` of its objective.
+    pub fn simulated(property: &Property, check: &SimulationCheck) -> Self {
+        let (lower, upper, confidence) = check.estimate.interval();
+        let (lower, upper) = (restated(property, lower), restated(property, upper));
+        Self {
+            text: property.text.clone(),
+            mean: restated(property, check.estimate.mean()),
+            interval: [lower.min(upper), lower.max(upper)],
+            confidence,
+            exact_value: restated(property, check.exact_value),
         }
     }
 }
