@@ -144,10 +144,12 @@ fn simulate_restates_a_pmin_query_as_the_probability_of_its_path() {
     assert!((complement - 0.5).abs() > 1e-3, "{report}");
     assert!(close(&query["mean"], 1.0 - complement), "{report}");
     let [lower, upper] = [0, 1].map(|i| query["interval"][i].as_f64().unwrap());
-    let [c_lower, c_upper] =
-        ["lower", "upper"].map(|k| report["estimate"][k].as_f64().unwrap());
+    let [c_lower, c_upper] = ["lower", "upper"].map(|k| report["estimate"][k].as_f64().unwrap());
     assert!((lower - (1.0 - c_upper)).abs() < 1e-12, "{report}");
     assert!((upper - (1.0 - c_lower)).abs() < 1e-12, "{report}");
-    assert!(lower < upper && lower < 0.5 + 0.1 && upper > 0.5 - 0.1, "{query}");
+    assert!(
+        lower < upper && lower < 0.5 + 0.1 && upper > 0.5 - 0.1,
+        "{query}"
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -485,9 +485,11 @@ fn solve_reward(game: &str, props: &str, extra: &[&str]) -> Result<Value, String
     let summary = std::fs::read_to_string(out.join("summary.json")).unwrap();
     let curve = std::fs::read_to_string(out.join("curve.csv")).unwrap();
     let last = curve.lines().last().unwrap().to_string();
+    let picture = std::fs::read_to_string(out.join("curve.svg")).unwrap();
     std::fs::remove_dir_all(&dir).unwrap();
     let mut summary: Value = serde_json::from_str(&summary).unwrap();
     summary["last_curve_row"] = Value::String(last);
+    summary["curve_svg"] = Value::String(picture);
     Ok(summary)
 }
 
@@ -501,6 +503,21 @@ fn solve_finds_the_probing_controller_whose_cost_is_one() {
     .unwrap();
     // The ascent ends next to the deterministic optimum; its rounding is it.
     assert_eq!(summary["value"], 1.0);
+    // The picture names the reward's axis and says the value is exact.
+    let picture = summary["curve_svg"].as_str().unwrap();
+    // (The model's only reward model is `cost`; SVG escapes the quotes.)
+    assert!(
+        picture.contains("expected reward &quot;cost&quot;, minimised"),
+        "{picture}"
+    );
+    assert!(picture.contains("exact:") && picture.contains("1.000000"));
+    assert!(!picture.contains("probability of phi"));
+    assert!(
+        summary["files"]
+            .as_array()
+            .unwrap()
+            .contains(&Value::from("curve.svg"))
+    );
     assert_eq!(summary["query"]["value"], 1.0);
     assert_eq!(summary["query"]["text"], "Rmin=? [F \"goal\"]");
     let last = summary["last_curve_row"].as_str().unwrap();

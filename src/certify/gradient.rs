@@ -62,9 +62,9 @@ pub fn lower_bound_gradient(
 }
 
 /// [`lower_bound_gradient`] for many controllers, usually of one support:
-/// from the third controller of one support (and seeds) in a row, the
+/// from the fourth controller of one support (and seeds) in a row, the
 /// product is the previous one refilled by the recipe recorded while
-/// exploring the second, not explored again (`src/certify/product.rs`);
+/// exploring the third, not explored again (`src/certify/product.rs`);
 /// where the product MDP has the graph of the previous one
 /// (`Mdp::same_graph`), its graph analysis (accepting end components,
 /// qualitative reachability) is reused and policy iteration starts from
@@ -77,14 +77,15 @@ pub struct LowerBoundGradients<'a> {
     work: f64,
 }
 
-/// The last product, the support and seeds it was explored for, its
-/// recipe (where one was recorded), its graph analysis (in its policies'
-/// linear systems: one symbolic analysis for the graph) and its optimal
-/// strategy.
+/// The last product, the support and seeds it was explored for, how
+/// many times in a row a product of them was explored, its recipe (where
+/// one was recorded), its graph analysis (in its policies' linear
+/// systems: one symbolic analysis for the graph) and its optimal strategy.
 struct LastAnalysis {
     product: Product,
     support: Support,
     seeds: Seeds,
+    explorations: usize,
     recipe: Option<Recipe>,
     systems: PolicySystems,
     strategy: Vec<usize>,
@@ -112,10 +113,20 @@ impl LastAnalysis {
     }
 
     /// Whether `defender` explored from `seeds` has the last product's
-    /// graph (the same support and seeds): the second of a run of such
-    /// controllers, for which the product is explored with its recipe.
+    /// graph (the same support and seeds).
     fn repeats(&self, defender: &Fsc, seeds: Seeds) -> bool {
         self.seeds == seeds && self.support.describes(defender)
+    }
+
+    /// Whether the next product of this graph is explored with its recipe:
+    /// from the third exploration in a row. A check judges two defenders
+    /// of one support and then forgets a large product
+    /// ([`LowerBoundGradients::forget_if_large`]): a recipe recorded at
+    /// the second would never be used (on the 96x96 grid of issue 62,
+    /// about 100 MB at the run's peak), while the guarantee ascent's
+    /// runs of evaluations on one support refill from the fourth on.
+    fn records_next(&self) -> bool {
+        self.explorations >= 2
     }
 }
 
@@ -230,7 +241,11 @@ impl<'a> LowerBoundGradients<'a> {
             last => {
                 let support = Support::of(defender);
                 let repeats = last.as_ref().is_some_and(|l| l.repeats(defender, seeds));
-                let explored = if repeats {
+                let explorations = match &last {
+                    Some(last) if repeats => last.explorations + 1,
+                    _ => 1,
+                };
+                let explored = if repeats && last.as_ref().is_some_and(LastAnalysis::records_next) {
                     Product::explore_with_recipe(game, dra, defender, Role::Defender, seeds)
                 } else {
                     Product::explore(game, dra, defender, Role::Defender, seeds).map(|p| (p, None))
@@ -248,10 +263,11 @@ impl<'a> LowerBoundGradients<'a> {
                         product,
                         support,
                         seeds,
+                        explorations,
                         recipe,
                         ..last
                     },
-                    _ => self.analyse_graph(product, support, seeds, recipe)?,
+                    _ => self.analyse_graph(product, (support, seeds, explorations), recipe)?,
                 }
             }
         };
@@ -267,13 +283,13 @@ impl<'a> LowerBoundGradients<'a> {
     }
 
     /// The graph analysis of a new `product` (explored for `support` and
-    /// `seeds`): its accepting end components, qualitative reachability and
-    /// policy systems, starting from the greedy strategy.
+    /// `seeds`, the `explorations`-th time in a row): its accepting end
+    /// components, qualitative reachability and policy systems, starting
+    /// from the greedy strategy.
     fn analyse_graph(
         &self,
         product: Product,
-        support: Support,
-        seeds: Seeds,
+        (support, seeds, explorations): (Support, Seeds, usize),
         recipe: Option<Recipe>,
     ) -> Result<LastAnalysis, CertifyError> {
         let pairs = product.lift(self.dra_not_phi.pairs());
@@ -287,6 +303,7 @@ impl<'a> LowerBoundGradients<'a> {
             product,
             support,
             seeds,
+            explorations,
             recipe,
         })
     }

@@ -18,7 +18,7 @@ use posg_fsc::controller::{self, Role};
 use posg_fsc::game::Posg;
 use posg_fsc::ltl::props::Property;
 use posg_fsc::optimise::{Cancel, Observer, Settings};
-use posg_fsc::output::{OutputDirectory, PlotSize};
+use posg_fsc::output::OutputDirectory;
 use posg_fsc::pipeline::directory::SolveDirectory;
 use posg_fsc::pipeline::progress::Progress;
 use posg_fsc::pipeline::{Automata, Job, Outcome, QueryValue, RewardObjective, Sizes, Unwatched};
@@ -324,9 +324,9 @@ fn solve_expected_reward(
     let property = args.objective.property()?;
     let directory = SolveDirectory {
         path: out.path(),
-        seconds_axis: false,
-        plot_format: None,
-        plot_size: PlotSize::default(),
+        seconds_axis: args.output.seconds_axis,
+        plot_format: Some(args.plot.format),
+        plot_size: args.plot.picture(),
         command_line: &command_line,
         query: property.as_ref(),
     };
@@ -356,9 +356,10 @@ fn solve_expected_reward(
             .to_string(),
     };
     print_text(&format!(
-        "{query}: {how}, {:.1} s\nwrote curve.csv, defender.fsc.json, defender.dot, summary.json \
+        "{query}: {how}, {:.1} s\nwrote curve.csv, curve.{}, defender.fsc.json, defender.dot, summary.json \
          to {}\n",
         solution.seconds,
+        args.plot.format,
         args.out.display()
     ))
 }

@@ -424,7 +424,7 @@ impl<'a> Landscape<'a> {
                     states: ranked.analysis.states.len(),
                     met: ranked.blocks.into(),
                 };
-                let solved = (key.clone(), ranked.analysis);
+                let solved = (*key, ranked.analysis);
                 self.last_solved.replace(Some(solved));
                 Ok(judged)
             }

@@ -144,6 +144,10 @@ pub struct Returned {
     pub worst_case: f64,
     /// Its certified bracket (method.md section 6), when computed.
     pub certified: Option<Bracket>,
+    /// Whether `worst_case` is the defender's exact value (a game without
+    /// adversary: an expected reward, method.md section 9), not an
+    /// estimate; the legend says which.
+    pub exact: bool,
 }
 
 /// `curve.svg` of one structure: the shaded band `[certified lower bound,
@@ -165,6 +169,24 @@ pub struct CurvePlot<'a> {
     pub seconds_axis: bool,
     /// The picture's size.
     pub size: PlotSize,
+    /// What the value axis measures ([`PROBABILITY_AXIS`], or an expected
+    /// reward's name and direction, [`reward_axis`]).
+    pub quantity: &'a str,
+}
+
+/// The value axis of a probability objective's curve.
+pub const PROBABILITY_AXIS: &str = "probability of phi";
+
+/// The value axis of an expected-reward objective's curve (method.md
+/// section 9): the reward model's name (`None` for a game's only one) and
+/// whether the defender minimises it, e.g. `expected reward "steps",
+/// minimised`.
+pub fn reward_axis(name: Option<&str>, minimise: bool) -> String {
+    let direction = if minimise { "minimised" } else { "maximised" };
+    match name {
+        Some(name) => format!("expected reward \"{name}\", {direction}"),
+        None => format!("expected reward, {direction}"),
+    }
 }
 
 /// One row of a sweep: sizes and the worst-case estimate.

@@ -6,11 +6,13 @@
 //! `curve.csv`/`curve.svg`).
 
 use std::path::Path;
+use std::sync::{Arc, Mutex, PoisonError};
 
 use serde::Serialize;
 
 use super::{
-    Automata, Job, Outcome, PipelineError, QueryValue, RewardObjective, SizeResult, Watch, run,
+    Automata, Job, Outcome, PipelineError, QueryValue, Recorder, RewardObjective, SizeResult,
+    Watch, run,
 };
 use crate::certify::Bracket;
 use crate::controller::{self, Fsc};
@@ -21,8 +23,8 @@ use crate::optimise::{
     StructureOutcome, StructureReport, optimise_expected_reward,
 };
 use crate::output::{
-    CurveCsv, CurvePlot, OutputError, PlotFormat, PlotSize, Returned, Title, create_dir,
-    plot_curve, write_file,
+    CurveCsv, CurvePlot, OutputError, PROBABILITY_AXIS, PlotFormat, PlotSize, Returned, Title,
+    counted, create_dir, plot_curve, reward_axis, write_file,
 };
 
 /// The files of a solve directory whose plots are in `format` (`None`:
@@ -35,6 +37,16 @@ pub fn files(format: Option<PlotFormat>) -> Vec<String> {
         "adversary.fsc.json",
         "summary.json",
     ];
+    (std::iter::once("curve.csv".to_string()).chain(plot))
+        .chain(others.map(String::from))
+        .collect()
+}
+
+/// The files of an expected-reward solve directory whose plot is in
+/// `format` (`None`: no plot), as its `summary.json` lists them.
+fn reward_files(format: Option<PlotFormat>) -> Vec<String> {
+    let plot = format.map(|format| format!("curve.{format}"));
+    let others = ["defender.fsc.json", "defender.dot", "summary.json"];
     (std::iter::once("curve.csv".to_string()).chain(plot))
         .chain(others.map(String::from))
         .collect()
@@ -134,6 +146,7 @@ impl SolveDirectory<'_> {
                 Returned {
                     worst_case: report.worst_case,
                     certified,
+                    exact: false,
                 }
             });
             // The records of the kept start (start 0's for a structure
@@ -150,6 +163,7 @@ impl SolveDirectory<'_> {
                 returned,
                 seconds_axis: self.seconds_axis,
                 size: self.plot_size,
+                quantity: PROBABILITY_AXIS,
             };
             let stem = curve_stem(count, &curve.structure);
             let path = self.path.join(format!("{stem}.{format}"));
@@ -227,8 +241,9 @@ impl SolveDirectory<'_> {
 impl SolveDirectory<'_> {
     /// Runs the expected-reward optimiser ([`optimise_expected_reward`],
     /// method.md section 9) for a defender of `nodes` nodes with `observer`
-    /// beside `curve.csv`, then writes `defender.fsc.json`, `defender.dot`
-    /// and `summary.json` (no picture yet: `curve.csv` holds the curve).
+    /// beside `curve.csv`, then draws the best start's curve (`curve.svg`,
+    /// its value axis named by the reward and its direction) and writes
+    /// `defender.fsc.json`, `defender.dot` and `summary.json`.
     pub fn solve_expected_reward(
         &self,
         game: &Posg,
@@ -240,7 +255,12 @@ impl SolveDirectory<'_> {
     ) -> Result<RewardSolution, PipelineError> {
         create_dir(self.path)?;
         let curve = CurveCsv::create(&self.path.join("curve.csv"))?;
-        let mut observers: Vec<Box<dyn Observer + Send>> = vec![Box::new(curve), observer];
+        let records = Arc::new(Mutex::new(Vec::new()));
+        let mut observers: Vec<Box<dyn Observer + Send>> = vec![
+            Box::new(curve),
+            Box::new(Recorder(Arc::clone(&records))),
+            observer,
+        ];
         let solution = optimise_expected_reward(
             game,
             objective.optimised(),
@@ -249,6 +269,11 @@ impl SolveDirectory<'_> {
             cancel,
             &mut observers,
         )?;
+        drop(observers);
+        let records = Arc::into_inner(records)
+            .map(|records| records.into_inner().unwrap_or_else(PoisonError::into_inner))
+            .unwrap_or_default();
+        self.draw_reward_curve(game, objective, nodes, &solution, &records)?;
         let description = &objective.description;
         let title = format!(
             "defender for {}: {description} ({nodes} nodes)",
@@ -284,18 +309,66 @@ impl SolveDirectory<'_> {
             starts: &solution.starts,
             dropped_starts: &solution.dropped_starts,
             seconds: solution.seconds,
-            files: [
-                "curve.csv",
-                "defender.fsc.json",
-                "defender.dot",
-                "summary.json",
-            ],
+            files: reward_files(self.plot_format),
         };
         write_file(
             &self.path.join("summary.json"),
             serde_json::to_string_pretty(&summary)? + "\n",
         )?;
         Ok(solution)
+    }
+
+    /// Draws `curve.svg` of an expected-reward run: the best start's
+    /// records and the returned defender's exact value, against the
+    /// reward's own axis.
+    fn draw_reward_curve(
+        &self,
+        game: &Posg,
+        objective: &RewardObjective,
+        nodes: usize,
+        solution: &RewardSolution,
+        records: &[IterationRecord],
+    ) -> Result<(), OutputError> {
+        let Some(format) = self.plot_format else {
+            return Ok(());
+        };
+        let records: Vec<IterationRecord> = (records.iter())
+            .filter(|r| r.start == solution.best_start)
+            .copied()
+            .collect();
+        let title = Title {
+            main: format!(
+                "{}: {}",
+                game.name().unwrap_or("game"),
+                objective.description
+            ),
+            detail: match solution.starts.len() {
+                0 => format!(
+                    "defender {}, uniform: the target is missed with positive probability",
+                    counted(nodes, "node")
+                ),
+                starts => format!(
+                    "defender {}, best of {}",
+                    counted(nodes, "node"),
+                    counted(starts, "start")
+                ),
+            },
+        };
+        let name = Some(objective.rewards.name()).filter(|name| !name.is_empty());
+        let quantity = reward_axis(name, objective.minimise);
+        let plot = CurvePlot {
+            title: &title,
+            records: &records,
+            returned: Some(Returned {
+                worst_case: solution.value,
+                certified: None,
+                exact: true,
+            }),
+            seconds_axis: self.seconds_axis,
+            size: self.plot_size,
+            quantity: &quantity,
+        };
+        plot_curve(&self.path.join(format!("curve.{format}")), format, &plot)
     }
 }
 
@@ -321,7 +394,7 @@ struct RewardSummary<'a> {
     #[serde(skip_serializing_if = "<[String]>::is_empty")]
     dropped_starts: &'a [String],
     seconds: f64,
-    files: [&'static str; 4],
+    files: Vec<String>,
 }
 
 /// `summary.json` (docs/formats.md section 9).

@@ -236,7 +236,7 @@ where
     chart
         .configure_mesh()
         .x_desc("iteration")
-        .y_desc("probability of phi")
+        .y_desc(curve.quantity)
         .x_label_formatter(&|x| format!("{x:.0}"))
         .y_label_formatter(&|y| format!("{y:.decimals$}"))
         .label_style((FONT, 15))
@@ -270,15 +270,17 @@ where
         let kind = line_kind(5, false, Some(Marker::Circle));
         legend.push(entry(&["worst-case estimate"], ESTIMATE_COLOUR, kind));
     }
-    chart.draw_series(LineSeries::new(
-        values.iter().copied(),
-        VALUE_COLOUR.stroke_width(1),
-    ))?;
-    legend.push(entry(
-        &["value (last iterate)"],
-        VALUE_COLOUR,
-        line_kind(1, false, None),
-    ));
+    if !values.is_empty() {
+        chart.draw_series(LineSeries::new(
+            values.iter().copied(),
+            VALUE_COLOUR.stroke_width(1),
+        ))?;
+        legend.push(entry(
+            &["value (last iterate)"],
+            VALUE_COLOUR,
+            line_kind(1, false, None),
+        ));
+    }
     if !lower.is_empty() {
         chart.draw_series(LineSeries::new(
             lower.iter().copied(),
@@ -306,7 +308,11 @@ where
         legend.push(entry(&["game upper bound"], UPPER_COLOUR, kind));
     }
     if let Some(returned) = &curve.returned {
-        draw_returned(&mut chart, returned, x_returned)?;
+        // An infinite expected reward has no place on the axis: the
+        // legend alone says it.
+        if returned_points(returned).iter().all(|y| y.is_finite()) {
+            draw_returned(&mut chart, returned, x_returned)?;
+        }
         legend.push(returned_entry(returned, source, found_at));
     }
     if seconds_axis {
@@ -399,7 +405,12 @@ fn returned_entry(
             format!("[{:.6}, {:.6}]", b.certified_lower, b.upper_bound),
         ]),
         None => lines.extend([
-            "estimated:".to_string(),
+            if returned.exact {
+                "exact:"
+            } else {
+                "estimated:"
+            }
+            .to_string(),
             format!("{:.6}", returned.worst_case),
         ]),
     };
@@ -1223,6 +1234,7 @@ mod tests {
         let returned = Some(Returned {
             worst_case: 0.5,
             certified: None,
+            exact: false,
         });
         let size = PlotSize {
             width: 1200,
@@ -1235,6 +1247,7 @@ mod tests {
             returned,
             seconds_axis: true,
             size,
+            quantity: super::super::PROBABILITY_AXIS,
         };
         let path = dir.join("curve.png");
         super::curve(&path, PlotFormat::Png, &curve).unwrap();
