@@ -556,8 +556,32 @@ fn solve_maximises_a_discounted_reward_and_refuses_what_it_cannot_optimise() {
           {"state": "pit", "defender": "*", "next": {"pit": 1.0}}],
         "rewards": {"steps": {"states": {"s": 1.0, "pit": 1.0}}}}"#,
     );
-    let error = solve_reward(&pit, "Rmin=? [F \"goal\"]", &[]).unwrap_err();
-    assert!(error.contains("infinite expected cost"), "{error}");
+    // Every controller of the full support may jump: infinite. The
+    // almost-sure support synthesis finds the support of `go` alone,
+    // whose cost is 1.
+    let summary = solve_reward(&pit, "Rmin=? [F \"goal\"]", &["--def-nodes", "2"]).unwrap();
+    assert!(
+        (summary["value"].as_f64().unwrap() - 1.0).abs() < 1e-12,
+        "{summary}"
+    );
+    assert_eq!(summary["query"]["target_probability"], 1.0);
+    // Where `go` too may fall into the pit, no support reaches the goal
+    // almost surely, and that is proved.
+    let no_escape = write(
+        "no-escape.posg.json",
+        &std::fs::read_to_string(&pit).unwrap().replacen(
+            r#""next": {"goal": 1.0}}"#,
+            r#""next": {"goal": 0.5, "pit": 0.5}}"#,
+            1,
+        ),
+    );
+    let error = solve_reward(&no_escape, "Rmin=? [F \"goal\"]", &[]).unwrap_err();
+    assert!(error.contains("its expected cost is infinite"), "{error}");
+    assert!(
+        error.contains("1 node reaching it almost surely"),
+        "{error}"
+    );
+    assert!(error.contains("proved"), "{error}");
     let summary = solve_reward(&pit, "Rmax=? [F \"goal\"]", &[]).unwrap();
     assert_eq!(summary["value"], "inf");
     // Finite on the full support, but `stay` alone never reaches the goal:
@@ -598,6 +622,7 @@ fn optimised(game: &Posg, objective: &RewardObjective, nodes: usize) -> Option<f
     };
     let expected = posg_fsc::optimise::ExpectedReward {
         target: &objective.target,
+        not_target: &objective.not_target,
         rewards: &objective.rewards,
         minimise: objective.minimise,
     };

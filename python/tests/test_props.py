@@ -146,9 +146,10 @@ def test_simulate_reports_what_the_command_reports(cli, tmp_path):
     game = posg_fsc.Game.from_drn(PROBE)
     ours = posg_fsc.simulate(game, props=PROBE_PROPS, runs=2000, seed=5)
     theirs = cli_json(cli, "simulate", PROBE, "--props", PROBE_PROPS, "--runs", "2000", "--seed", "5")
-    for key in ["formula", "settings", "estimate", "exact_value", "exact_within_interval"]:
+    for key in ["formula", "query", "settings", "estimate", "exact_value", "exact_within_interval"]:
         assert ours[key] == theirs[key], key
     assert abs(ours["exact_value"] - 16 / 3) < 1e-12
+    assert ours["query"]["text"] == PROBE_PROPS.read_text().strip()
     assert ours["estimate"]["lower"] <= ours["estimate"]["mean"] <= ours["estimate"]["upper"]
     grid = posg_fsc.example_grid()
     probability = posg_fsc.simulate(grid, "F goal", runs=500, seed=1)
@@ -156,6 +157,13 @@ def test_simulate_reports_what_the_command_reports(cli, tmp_path):
     assert 0 <= probability["estimate"]["lower"] <= probability["estimate"]["upper"] <= 1
     with pytest.raises(posg_fsc.SettingsError, match="runs"):
         posg_fsc.simulate(grid, "F goal", runs=0)
+    # A Pmin query is sampled as its complement and restated as itself.
+    pmin = posg_fsc.simulate(grid, props='Pmin=? [F "goal"]', runs=500, seed=1)
+    complement = pmin["estimate"]
+    assert pmin["formula"] == "G !goal"
+    assert abs(pmin["query"]["mean"] - (1 - complement["mean"])) < 1e-12
+    assert pmin["query"]["interval"] == pytest.approx([1 - complement["upper"], 1 - complement["lower"]])
+    assert abs(pmin["query"]["exact_value"] - (1 - pmin["exact_value"])) < 1e-12
 
 
 def test_a_misspelt_keyword_gets_the_closest_one():

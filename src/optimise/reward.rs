@@ -29,6 +29,7 @@ use super::{WARM_START_MIX, embed, pad};
 use crate::automaton::Dra;
 use crate::controller::{Choice, Fsc, Support};
 use crate::game::{Posg, RewardModel};
+use crate::synthesis::{Mode, synthesise};
 use crate::value::{Evaluation, Evaluator};
 
 /// An expected-reward objective as the optimiser takes it: the automaton
@@ -37,6 +38,9 @@ use crate::value::{Evaluation, Evaluator};
 pub struct ExpectedReward<'a> {
     /// The automaton of `F T`.
     pub target: &'a Dra,
+    /// The automaton of `!F T`, for the almost-sure support synthesis of
+    /// a cost ([`reward_structure`]).
+    pub not_target: &'a Dra,
     /// The reward model.
     pub rewards: &'a RewardModel,
     /// Whether the defender minimises the expected reward (a cost).
@@ -110,8 +114,10 @@ pub fn optimise_expected_reward(
     let started = Instant::now();
     let structure = Structure::full(game, nodes, 1, settings.optimise_initial);
     // Whether the target can be missed is a fact of the support's graph:
-    // the evaluator's analysis says it without a solve.
-    let infinite = evaluator(game, objective, &structure.defender, settings)?.is_infinite();
+    // the evaluator's analysis says it without a solve. For a cost, the
+    // sizes race on supports that reach the target ([`reward_structure`]).
+    let infinite = !objective.minimise
+        && evaluator(game, objective, &structure.defender, settings)?.is_infinite();
     let (solution, iterations, logit_bound, source) = if infinite {
         let solution = infinite_on_full_support(objective, structure.defender, started)?;
         (solution, 0, settings.logit_bound, RecordSource::Gradient)
@@ -168,14 +174,22 @@ fn grown(
         } else {
             &mut quiet
         };
-        let structure = Structure::full(game, size, 1, settings.optimise_initial);
+        let structure = reward_structure(game, objective, size, settings)?;
+        let synthesised = structure.name != "full";
         let warm = match &previous {
-            Some((smaller, ..)) => Some(embed(
+            Some((smaller, ..)) => match embed(
                 &smaller.defender,
                 &structure.defender,
                 WARM_START_MIX,
                 settings.optimise_initial,
-            )?),
+            ) {
+                Ok(warm) => Some(warm),
+                // A synthesised support need not hold the smaller
+                // defender's pairs: that size races without it (and its
+                // result is still compared with the smaller one below).
+                Err(_) if synthesised => None,
+                Err(error) => return Err(error.into()),
+            },
             None => None,
         };
         let mut result = race(
@@ -269,26 +283,66 @@ fn race(
     Ok((solution, best.iterations, logit_bound, source))
 }
 
+/// The structure a size of a cost races on: the full support where every
+/// controller of it reaches the target almost surely, else the maximised
+/// almost-sure support of the SAT synthesis for `F T` (method.md sections
+/// 7 and 9: the uniform defender on it reaches `T` with probability 1,
+/// which depends only on the support, so every controller the race plays
+/// on it has a finite expected cost). An error where no support of `size`
+/// nodes reaches `T` almost surely (every defender's cost is then
+/// infinite) or the synthesis could not decide it. A reward to maximise
+/// always races on the full support.
+fn reward_structure(
+    game: &Posg,
+    objective: ExpectedReward<'_>,
+    size: usize,
+    settings: &Settings,
+) -> Result<Structure, OptimiseError> {
+    let full = Structure::full(game, size, 1, settings.optimise_initial);
+    if !objective.minimise || !evaluator(game, objective, &full.defender, settings)?.is_infinite() {
+        return Ok(full);
+    }
+    let almost_sure = crate::synthesis::Settings {
+        mode: Mode::AlmostSure,
+        ..settings.synthesis.clone()
+    };
+    let found = synthesise(
+        game,
+        objective.target,
+        objective.not_target,
+        size,
+        &almost_sure,
+    )?;
+    let nodes = crate::output::counted(size, "node");
+    match found.defender {
+        Some(defender) => Ok(Structure {
+            name: format!("sat-{}", Mode::AlmostSure.name()),
+            defender,
+            ..full
+        }),
+        None => Err(OptimiseError::Unsupported(format!(
+            "every controller of {nodes} on the full support misses the target with positive \
+             probability, so its expected cost is infinite, and no support of {nodes} \
+             reaching it almost surely was found: {}{} (docs/method.md sections 7 and 9)",
+            found.reason,
+            if found.exact {
+                ""
+            } else {
+                " (not a proof: the search was cut short)"
+            }
+        ))),
+    }
+}
+
 /// The result where the full support's expected reward is infinite (the
-/// target is missed with positive probability): for `Rmax` that is the
-/// optimum, which the uniform defender attains; for a cost it is an error,
-/// since only supports that avoid the target's misses have a finite cost
-/// and they are not searched yet.
+/// target is missed with positive probability) for `Rmax`: that is the
+/// optimum, which the uniform defender attains.
 fn infinite_on_full_support(
     objective: ExpectedReward<'_>,
     defender: Fsc,
     started: Instant,
 ) -> Result<RewardSolution, OptimiseError> {
-    if objective.minimise {
-        return Err(OptimiseError::Unsupported(
-            "on the full support of the defender's controller the target is missed with \
-             positive probability (some enabled action leads where the target cannot be \
-             reached), so every controller of that support has an infinite expected cost; \
-             supports that avoid those actions are not searched for expected rewards yet \
-             (docs/method.md section 9)"
-                .into(),
-        ));
-    }
+    debug_assert!(!objective.minimise);
     Ok(RewardSolution {
         defender,
         value: f64::INFINITY,

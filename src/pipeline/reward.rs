@@ -21,6 +21,9 @@ pub struct RewardObjective {
     /// The automaton of `F T`, whose accepting states mark the runs that
     /// have reached `T`.
     pub target: Dra,
+    /// The automaton of `!F T`, with which the almost-sure support
+    /// synthesis certifies a cost's supports (method.md sections 7, 9).
+    pub not_target: Dra,
     /// Whether the defender minimises the expected reward (`Rmin`, a cost)
     /// rather than maximises it (`Rmax`).
     pub minimise: bool,
@@ -44,6 +47,7 @@ impl RewardObjective {
         let rewards = reward_model(game, query.model.as_deref())?.clone();
         let reach = query.reach_target();
         let target = ltl::translate_within(&reach, budget)?;
+        let not_target = ltl::translate_within(&reach.negate(), budget)?;
         let description = format!(
             "R{{\"{}\"}}{}=? [{reach}]",
             rewards.name(),
@@ -56,6 +60,7 @@ impl RewardObjective {
         let objective = Self {
             rewards,
             target,
+            not_target,
             minimise,
             description,
         };
@@ -69,6 +74,7 @@ impl RewardObjective {
     pub fn optimised(&self) -> ExpectedReward<'_> {
         ExpectedReward {
             target: &self.target,
+            not_target: &self.not_target,
             rewards: &self.rewards,
             minimise: self.minimise,
         }
