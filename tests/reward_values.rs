@@ -665,3 +665,26 @@ fn more_memory_never_does_worse_on_random_pomdps() {
     }
     assert!(compared >= 3, "only {compared} random POMDPs compared");
 }
+
+/// A cost that needs memory to be finite (`tests/data/rewards/
+/// remember-the-side.posg.json`): the side `a` or `b` is seen once, then
+/// `aa` and `bb` look alike and need opposite actions. No 1-node support
+/// reaches the goal almost surely (proved), so `--def-nodes 1` is an
+/// error; `--def-nodes 2` grows past that size to the 2-node support that
+/// remembers the side, cost 3 (s0, a or b, aa or bb), and 3 nodes keep it.
+#[test]
+fn a_cost_that_needs_memory_grows_past_the_size_without_a_finite_one() {
+    let game = "tests/data/rewards/remember-the-side.posg.json";
+    let query = "R{\"steps\"}min=? [F \"goal\"]";
+    let error = solve_reward(game, query, &["--def-nodes", "1"]).unwrap_err();
+    assert!(
+        error.contains("no support of 1 node reaching it almost surely"),
+        "{error}"
+    );
+    assert!(error.contains("proved"), "{error}");
+    for nodes in ["2", "3"] {
+        let summary = solve_reward(game, query, &["--def-nodes", nodes, "--seed", "1"]).unwrap();
+        let value = summary["value"].as_f64().unwrap();
+        assert!((value - 3.0).abs() < 1e-9, "{nodes} nodes: {summary}");
+    }
+}

@@ -29,7 +29,7 @@ use super::{WARM_START_MIX, embed, pad};
 use crate::automaton::Dra;
 use crate::controller::{Choice, Fsc, Support};
 use crate::game::{Posg, RewardModel};
-use crate::synthesis::{Mode, synthesise};
+use crate::synthesis::{Mode, SynthesisError, synthesise};
 use crate::value::{Evaluation, Evaluator};
 
 /// An expected-reward objective as the optimiser takes it: the automaton
@@ -174,14 +174,33 @@ fn grown(
         } else {
             &mut quiet
         };
-        let structure = reward_structure(game, objective, size, settings)?;
+        let structure = match reward_structure(game, objective, size, settings)? {
+            Ok(structure) => structure,
+            // Memory may be what reaching the target needs: a smaller size
+            // without an almost-sure support is passed over, and the size
+            // asked for keeps the smaller defender found, padded.
+            Err(_) if size < nodes => continue,
+            Err(reason) => match previous.take() {
+                Some((smaller, iterations, logit_bound, source)) => {
+                    let padded = RewardSolution {
+                        defender: pad(&smaller.defender, size)?,
+                        ..smaller
+                    };
+                    previous = Some((padded, iterations, logit_bound, source));
+                    continue;
+                }
+                None => return Err(OptimiseError::Unsupported(reason)),
+            },
+        };
         let synthesised = structure.name != "full";
         let warm = match &previous {
+            // The synthesised support is proved from its initial node
+            // only: the warm start keeps the smaller defender's.
             Some((smaller, ..)) => match embed(
                 &smaller.defender,
                 &structure.defender,
                 WARM_START_MIX,
-                settings.optimise_initial,
+                settings.optimise_initial && !synthesised,
             ) {
                 Ok(warm) => Some(warm),
                 // A synthesised support need not hold the smaller
@@ -288,39 +307,45 @@ fn race(
 /// almost-sure support of the SAT synthesis for `F T` (method.md sections
 /// 7 and 9: the uniform defender on it reaches `T` with probability 1,
 /// which depends only on the support, so every controller the race plays
-/// on it has a finite expected cost). An error where no support of `size`
-/// nodes reaches `T` almost surely (every defender's cost is then
-/// infinite) or the synthesis could not decide it. A reward to maximise
-/// always races on the full support.
+/// on it has a finite expected cost). `Err(why)` where no support of
+/// `size` nodes reaching `T` almost surely was found (every defender of
+/// that size then has an infinite cost, where the synthesis proves it).
+/// A reward to maximise always races on the full support.
 fn reward_structure(
     game: &Posg,
     objective: ExpectedReward<'_>,
     size: usize,
     settings: &Settings,
-) -> Result<Structure, OptimiseError> {
+) -> Result<Result<Structure, String>, OptimiseError> {
     let full = Structure::full(game, size, 1, settings.optimise_initial);
     if !objective.minimise || !evaluator(game, objective, &full.defender, settings)?.is_infinite() {
-        return Ok(full);
+        return Ok(Ok(full));
     }
     let almost_sure = crate::synthesis::Settings {
         mode: Mode::AlmostSure,
         ..settings.synthesis.clone()
     };
-    let found = synthesise(
-        game,
-        objective.target,
-        objective.not_target,
-        size,
-        &almost_sure,
-    )?;
     let nodes = crate::output::counted(size, "node");
-    match found.defender {
+    let (target, not_target) = (objective.target, objective.not_target);
+    let found = match synthesise(game, target, not_target, size, &almost_sure) {
+        Ok(found) => found,
+        Err(SynthesisError::TimeBudget { calls, seconds }) => {
+            return Ok(Err(format!(
+                "every controller of {nodes} on the full support misses the target with \
+                 positive probability, and the almost-sure support synthesis gave no answer \
+                 within its time budget ({calls} SAT calls, {seconds:.1} s; \
+                 --synthesis-time-budget) (docs/method.md sections 7 and 9)"
+            )));
+        }
+        Err(error) => return Err(error.into()),
+    };
+    Ok(match found.defender {
         Some(defender) => Ok(Structure {
             name: format!("sat-{}", Mode::AlmostSure.name()),
             defender,
             ..full
         }),
-        None => Err(OptimiseError::Unsupported(format!(
+        None => Err(format!(
             "every controller of {nodes} on the full support misses the target with positive \
              probability, so its expected cost is infinite, and no support of {nodes} \
              reaching it almost surely was found: {}{} (docs/method.md sections 7 and 9)",
@@ -330,8 +355,8 @@ fn reward_structure(
             } else {
                 " (not a proof: the search was cut short)"
             }
-        ))),
-    }
+        )),
+    })
 }
 
 /// The result where the full support's expected reward is infinite (the

@@ -172,6 +172,9 @@ pub struct CurvePlot<'a> {
     /// What the value axis measures ([`PROBABILITY_AXIS`], or an expected
     /// reward's name and direction, [`reward_axis`]).
     pub quantity: &'a str,
+    /// Whether lower values are better (a minimised expected cost): the
+    /// iterate that found the returned defender is then the lowest.
+    pub minimise: bool,
 }
 
 /// The value axis of a probability objective's curve.

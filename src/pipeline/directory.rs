@@ -73,20 +73,25 @@ pub struct SolveDirectory<'a> {
 }
 
 impl SolveDirectory<'_> {
-    /// Runs `job` ([`run`]) under `watch` (each structure's observer and
-    /// the run's steps), then writes the curve tables, draws the curves and
-    /// writes the other files.
-    pub fn solve(&self, job: Job, watch: impl Watch) -> Result<Outcome, PipelineError> {
-        if let Some(format) = self.plot_format.filter(|_| !cfg!(feature = "plot")) {
-            // Refused before the run, not after it.
-            return Err(OutputError::Plot {
+    /// An error, before any run, where a plot is asked for and this build
+    /// cannot draw one (without the cargo feature `plot`).
+    fn refuse_unbuilt_plots(&self) -> Result<(), OutputError> {
+        match self.plot_format.filter(|_| !cfg!(feature = "plot")) {
+            Some(format) => Err(OutputError::Plot {
                 path: self.path.join(format!("curve.{format}")),
                 problem: "this build of posg-fsc draws no plots (cargo feature `plot`); ask \
                           for none"
                     .into(),
-            }
-            .into());
+            }),
+            None => Ok(()),
         }
+    }
+
+    /// Runs `job` ([`run`]) under `watch` (each structure's observer and
+    /// the run's steps), then writes the curve tables, draws the curves and
+    /// writes the other files.
+    pub fn solve(&self, job: Job, watch: impl Watch) -> Result<Outcome, PipelineError> {
+        self.refuse_unbuilt_plots()?;
         create_dir(self.path)?;
         let (game, automata, settings) = (job.game, job.automata, job.settings);
         let outcome = run(job, watch)?;
@@ -164,6 +169,7 @@ impl SolveDirectory<'_> {
                 seconds_axis: self.seconds_axis,
                 size: self.plot_size,
                 quantity: PROBABILITY_AXIS,
+                minimise: false,
             };
             let stem = curve_stem(count, &curve.structure);
             let path = self.path.join(format!("{stem}.{format}"));
@@ -253,6 +259,7 @@ impl SolveDirectory<'_> {
         cancel: &Cancel,
         observer: Box<dyn Observer + Send>,
     ) -> Result<RewardSolution, PipelineError> {
+        self.refuse_unbuilt_plots()?;
         create_dir(self.path)?;
         let curve = CurveCsv::create(&self.path.join("curve.csv"))?;
         let records = Arc::new(Mutex::new(Vec::new()));
@@ -273,7 +280,6 @@ impl SolveDirectory<'_> {
         let records = Arc::into_inner(records)
             .map(|records| records.into_inner().unwrap_or_else(PoisonError::into_inner))
             .unwrap_or_default();
-        self.draw_reward_curve(game, objective, nodes, &solution, &records)?;
         let description = &objective.description;
         let title = format!(
             "defender for {}: {description} ({nodes} nodes)",
@@ -315,6 +321,7 @@ impl SolveDirectory<'_> {
             &self.path.join("summary.json"),
             serde_json::to_string_pretty(&summary)? + "\n",
         )?;
+        self.draw_reward_curve(game, objective, nodes, &solution, &records)?;
         Ok(solution)
     }
 
@@ -367,6 +374,7 @@ impl SolveDirectory<'_> {
             seconds_axis: self.seconds_axis,
             size: self.plot_size,
             quantity: &quantity,
+            minimise: objective.minimise,
         };
         plot_curve(&self.path.join(format!("curve.{format}")), format, &plot)
     }

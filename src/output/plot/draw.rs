@@ -214,7 +214,7 @@ where
     // The returned bracket stands at the iterate that found it, else (found
     // by rounding or local search after the race) a little right of the
     // last iterate.
-    let found_at = where_found(records, source);
+    let found_at = where_found(records, source, curve.minimise);
     let x_returned = found_at.map_or(x_last * 1.04 + 0.25, |t| t as f64);
     let x_end = x_last * 1.08 + 0.5;
     let all = values.iter().chain(&estimates).chain(&lower).chain(&upper);
@@ -326,14 +326,20 @@ type Chart<'a, DB> = ChartContext<'a, DB, Cartesian2d<Ticked, Ticked>>;
 
 /// The iteration whose iterate the structure returned: where gradient
 /// play made it (`source`), the first iterate with the best certified
-/// lower bound (else the best worst-case estimate); `None` where rounding
-/// or a local search made it, after the race.
-fn where_found(records: &[IterationRecord], source: Option<RecordSource>) -> Option<usize> {
+/// lower bound (else the best worst-case estimate: the lowest where
+/// `minimise`, a cost's curve); `None` where rounding or a local search
+/// made it, after the race.
+fn where_found(
+    records: &[IterationRecord],
+    source: Option<RecordSource>,
+    minimise: bool,
+) -> Option<usize> {
     if source != Some(RecordSource::Gradient) {
         return None;
     }
     let score = |r: &IterationRecord| r.certified_lower.or(r.worst_case);
-    let best = records.iter().filter_map(score).reduce(f64::max)?;
+    let better = if minimise { f64::min } else { f64::max };
+    let best = records.iter().filter_map(score).reduce(better)?;
     (records.iter())
         .find(|r| score(r) == Some(best))
         .map(|r| r.iteration)
@@ -1209,9 +1215,35 @@ mod tests {
         for (t, lower) in [(1, 0.2), (3, 0.5), (5, 0.5)] {
             records[t].certified_lower = Some(lower);
         }
-        assert_eq!(where_found(&records, Some(RecordSource::Gradient)), Some(3));
-        assert_eq!(where_found(&records, Some(RecordSource::LocalSearch)), None);
-        assert_eq!(where_found(&records, Some(RecordSource::Rounding)), None);
+        assert_eq!(
+            where_found(&records, Some(RecordSource::Gradient), false),
+            Some(3)
+        );
+        assert_eq!(
+            where_found(&records, Some(RecordSource::LocalSearch), false),
+            None
+        );
+        assert_eq!(
+            where_found(&records, Some(RecordSource::Rounding), false),
+            None
+        );
+        // A cost's curve (expected rewards in `worst_case`): the lowest.
+        let costs: Vec<IterationRecord> = [3.0, 2.0, 1.5, 1.5, 4.0]
+            .into_iter()
+            .enumerate()
+            .map(|(t, cost)| IterationRecord {
+                worst_case: Some(cost),
+                ..record(t, t as f64)
+            })
+            .collect();
+        assert_eq!(
+            where_found(&costs, Some(RecordSource::Gradient), true),
+            Some(2)
+        );
+        assert_eq!(
+            where_found(&costs, Some(RecordSource::Gradient), false),
+            Some(4)
+        );
     }
 
     #[test]
@@ -1248,6 +1280,7 @@ mod tests {
             seconds_axis: true,
             size,
             quantity: super::super::PROBABILITY_AXIS,
+            minimise: false,
         };
         let path = dir.join("curve.png");
         super::curve(&path, PlotFormat::Png, &curve).unwrap();
