@@ -192,8 +192,11 @@ pub struct Settings {
     /// redrawn, 4 at a time, until they have spent as much work as the
     /// restarts (iterated local search). The best end point is the
     /// candidate `local-search`. Each climb ends by itself, when it has
-    /// spent `local_search_work`, or at the time budget's final deadline;
-    /// off: `--no-local-search`.
+    /// spent `local_search_work`, or at the time budget's final deadline.
+    /// An expected reward's run (docs/method.md section 9) climbs its
+    /// expected reward from its best rounding and from
+    /// `local_search_restarts` random deterministic controllers on the
+    /// structure's support. Off: `--no-local-search`.
     #[cfg_attr(feature = "cli", arg(long = "no-local-search", action = clap::ArgAction::SetFalse))]
     pub local_search: bool,
     /// How many random memoryless starts the local search climbs from
