@@ -284,7 +284,7 @@ fn race(
         game,
         objective,
         (defender, evaluation, source),
-        (settings.max_work, settings),
+        (settings.max_work, 0.0, settings),
         cancel,
     )?;
     let (defender, evaluation, source) = restarted(
@@ -461,9 +461,10 @@ fn rounded(
 /// `settings.local_search_restarts` random deterministic controllers on
 /// `structure`'s support (each block one of its `(next node, action)`
 /// pairs, drawn uniformly; seeded by `settings.seed`, on streams of their
-/// own), which together explore at most `settings.local_search_work` GMC
-/// states (a small game gets every restart; on SAYNT's rocks-12 that much
-/// work per restart had made 2 nodes take minutes); none without
+/// own), which together spend at most `settings.local_search_work` of
+/// work (each evaluation's GMC states, at least the game's states: an
+/// evaluator's tables span the game), and none where one evaluation leaves
+/// each restart fewer than [`MIN_EVALUATIONS_PER_RESTART`]; none without
 /// `settings.local_search`. The ascent and the climb
 /// from its rounding end in one basin; where the optimum needs memory
 /// used in a coordinated way (SAYNT's stand-tiger-95: listen, then open,
@@ -482,6 +483,9 @@ fn restarted(
     }
     let sense = objective.sense();
     let budget = settings.local_search_work as f64;
+    // An evaluation costs at least its game's size (the evaluator's tables
+    // span every state), however few states the controller reaches.
+    let floor = game.num_states() as f64;
     let mut work = 0.0;
     for restart in 0..settings.local_search_restarts {
         if cancel.is_cancelled() || work >= budget {
@@ -492,7 +496,15 @@ fn restarted(
         let start = random_deterministic(&structure.defender, &mut rng);
         let evaluation = match exact_value_and_work(game, objective, &start, settings) {
             Ok((evaluation, spent)) => {
+                let spent = spent.max(floor);
                 work += spent;
+                // Restarts that cannot afford a few evaluations each find
+                // nothing: where one evaluation costs that much, stop.
+                if spent * (MIN_EVALUATIONS_PER_RESTART * settings.local_search_restarts) as f64
+                    > budget
+                {
+                    break;
+                }
                 evaluation
             }
             Err(error) if error.is_numerical() => continue,
@@ -502,7 +514,7 @@ fn restarted(
             game,
             objective,
             (start, evaluation, RecordSource::LocalSearch),
-            ((budget - work).max(f64::MIN_POSITIVE), settings),
+            ((budget - work).max(f64::MIN_POSITIVE), floor, settings),
             cancel,
         )?;
         work += spent;
@@ -512,6 +524,14 @@ fn restarted(
     }
     Ok(best)
 }
+
+/// The fewest evaluations each of [`restarted`]'s restarts must be able
+/// to afford within the shared work budget, else the restarts stop after
+/// the first evaluation: on SAYNT's rocks-12 (6,553 states), whose random
+/// controllers reach few of them, 16 restarts counted by GMC states alone
+/// made about a thousand evaluations, found nothing and took 25 s of CPU
+/// beside the 10 s of the run.
+const MIN_EVALUATIONS_PER_RESTART: usize = 4;
 
 /// The first random stream of [`restarted`]'s restarts (the starts use
 /// streams from 0).
@@ -541,22 +561,22 @@ fn random_deterministic(support: &Fsc, rng: &mut ChaCha8Rng) -> Fsc {
 /// in each, every other `(next node, enabled action)` choice, moving to the
 /// first that improves the expected reward in the query's direction by
 /// more than both values' error bounds; passes repeat until one improves
-/// nothing, the evaluations have explored `budget` GMC states (0: no
-/// limit) or the run is cancelled. The gradient's optima are often
-/// randomised; where a deterministic controller beats them in a basin the
-/// ascent did not find, this finds it. Returns the better of `from` and
-/// the climb's end, and the GMC states the climb explored.
+/// nothing, the evaluations' work (each evaluation's GMC states, at
+/// least `floor`) reaches `budget` (0: no limit) or the run is cancelled.
+/// The gradient's optima are often randomised; where a deterministic
+/// controller beats them in a basin the ascent did not find, this finds
+/// it. Returns the better of `from` and the climb's end, and its work.
 fn climb(
     game: &Posg,
     objective: ExpectedReward<'_>,
     from: (Fsc, Evaluation, RecordSource),
-    (budget, settings): (f64, &Settings),
+    (budget, floor, settings): (f64, f64, &Settings),
     cancel: &Cancel,
 ) -> Result<((Fsc, Evaluation, RecordSource), f64), OptimiseError> {
     let sense = objective.sense();
     let mut here = truncated(&from.0, f64::INFINITY)?;
     let (mut value, mut work) = match exact_value_and_work(game, objective, &here, settings) {
-        Ok(found) => found,
+        Ok((value, spent)) => (value, spent.max(floor)),
         Err(error) if error.is_numerical() => return Ok((from, 0.0)),
         Err(error) => return Err(error),
     };
@@ -592,7 +612,7 @@ fn climb(
                         Err(error) if error.is_numerical() => continue,
                         Err(error) => return Err(error),
                     };
-                work += spent;
+                work += spent.max(floor);
                 let margin = evaluation.error_bound + value.error_bound;
                 if sense * (evaluation.value - value.value) > margin {
                     here = candidate;
