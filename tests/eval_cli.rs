@@ -1,6 +1,8 @@
 //! `posg-fsc eval --gradient` end to end, on a game whose value and
 //! gradient are known on paper.
 
+use std::ffi::OsStr;
+use std::path::PathBuf;
 use std::process::Command;
 
 use serde_json::Value;
@@ -22,20 +24,21 @@ const PASS_OR_TRAP: &str = r#"{
   ]
 }"#;
 
-fn close(value: &Value, expected: f64) -> bool {
-    (value.as_f64().unwrap() - expected).abs() < 1e-12
-}
-
-#[test]
-fn eval_with_gradient_reports_the_norms_of_the_adjoint_gradient() {
-    let dir = std::env::temp_dir().join(format!("posg-fsc-eval-{}", std::process::id()));
+/// A fresh directory `posg-fsc-NAME-PID` under the temporary directory,
+/// holding `PASS_OR_TRAP` as `pass-or-trap.posg.json`: the directory and
+/// the game's path.
+fn pass_or_trap(name: &str) -> (PathBuf, PathBuf) {
+    let dir = std::env::temp_dir().join(format!("posg-fsc-{name}-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let game = dir.join("pass-or-trap.posg.json");
     std::fs::write(&game, PASS_OR_TRAP).unwrap();
+    (dir, game)
+}
+
+/// The JSON `posg-fsc ARGS` prints, after checking that it succeeded.
+fn posg_fsc_json(args: &[&OsStr]) -> Value {
     let output = Command::new(env!("CARGO_BIN_EXE_posg-fsc"))
-        .arg("eval")
-        .arg(&game)
-        .args(["--ltl", "F goal", "--gradient"])
+        .args(args)
         .output()
         .unwrap();
     assert!(
@@ -43,7 +46,23 @@ fn eval_with_gradient_reports_the_norms_of_the_adjoint_gradient() {
         "{}",
         String::from_utf8_lossy(&output.stderr)
     );
-    let report: Value = serde_json::from_slice(&output.stdout).unwrap();
+    serde_json::from_slice(&output.stdout).unwrap()
+}
+
+fn close(value: &Value, expected: f64) -> bool {
+    (value.as_f64().unwrap() - expected).abs() < 1e-12
+}
+
+#[test]
+fn eval_with_gradient_reports_the_norms_of_the_adjoint_gradient() {
+    let (dir, game) = pass_or_trap("eval");
+    let report = posg_fsc_json(&[
+        "eval".as_ref(),
+        game.as_os_str(),
+        "--ltl".as_ref(),
+        "F goal".as_ref(),
+        "--gradient".as_ref(),
+    ]);
     assert!(close(&report["value"], 0.5), "{report}");
     let gradient = &report["gradient"];
     // One block per state (full observation): only s0's entries move the value.
@@ -71,10 +90,7 @@ fn eval_with_gradient_reports_the_norms_of_the_adjoint_gradient() {
 /// stderr that a 95% interval does so about once in twenty.
 #[test]
 fn simulate_explains_an_interval_that_misses_the_exact_value() {
-    let dir = std::env::temp_dir().join(format!("posg-fsc-simulate-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let game = dir.join("pass-or-trap.posg.json");
-    std::fs::write(&game, PASS_OR_TRAP).unwrap();
+    let (dir, game) = pass_or_trap("simulate");
     let (mut missed, mut met) = (0, 0);
     for seed in 0..200 {
         if missed > 0 && met > 0 {
@@ -115,26 +131,19 @@ fn simulate_explains_an_interval_that_misses_the_exact_value() {
 /// over with it), beside the complement's estimate.
 #[test]
 fn simulate_restates_a_pmin_query_as_the_probability_of_its_path() {
-    let dir = std::env::temp_dir().join(format!("posg-fsc-simulate-pmin-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let game = dir.join("pass-or-trap.posg.json");
-    std::fs::write(&game, PASS_OR_TRAP).unwrap();
+    let (dir, game) = pass_or_trap("simulate-pmin");
     let props = dir.join("pmin.props");
     std::fs::write(&props, "Pmin=? [F \"goal\"]\n").unwrap();
-    let output = Command::new(env!("CARGO_BIN_EXE_posg-fsc"))
-        .arg("simulate")
-        .arg(&game)
-        .arg("--props")
-        .arg(&props)
-        .args(["--runs", "400", "--seed", "3"])
-        .output()
-        .unwrap();
-    assert!(
-        output.status.success(),
-        "{}",
-        String::from_utf8_lossy(&output.stderr)
-    );
-    let report: Value = serde_json::from_slice(&output.stdout).unwrap();
+    let report = posg_fsc_json(&[
+        "simulate".as_ref(),
+        game.as_os_str(),
+        "--props".as_ref(),
+        props.as_os_str(),
+        "--runs".as_ref(),
+        "400".as_ref(),
+        "--seed".as_ref(),
+        "3".as_ref(),
+    ]);
     let query = &report["query"];
     assert_eq!(query["text"], "Pmin=? [F \"goal\"]");
     assert!(close(&query["exact_value"], 0.5), "{query}");

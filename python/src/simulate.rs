@@ -26,8 +26,9 @@ use crate::objective::{self, Asked};
 /// `upper`, `confidence`, ...), `exact_value`, `exact_within_interval`,
 /// `seconds`, and with `props=` the `query` restated in its own terms
 /// (`text`, `mean`, `interval`, `confidence`, `exact_value`: a `Pmin`
-/// query's own probability, not its complement's). Such an interval misses the exact value in about one seed of
-/// twenty: where it does, a `UserWarning` says so.
+/// query's own probability, not its complement's). Such an interval
+/// misses the exact value in about one seed of twenty: where it does, a
+/// `UserWarning` says so.
 #[pyfunction]
 #[pyo3(signature = (game, ltl = None, *, props = None, defender = None, adversary = None, runs = 10_000, seed = 0, allow_unused_propositions = false))]
 #[allow(clippy::too_many_arguments)]

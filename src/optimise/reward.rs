@@ -575,8 +575,15 @@ fn climb(
 ) -> Result<((Fsc, Evaluation, RecordSource), f64), OptimiseError> {
     let sense = objective.sense();
     let mut here = truncated(&from.0, f64::INFINITY)?;
-    let (mut value, mut work) = match exact_value_and_work(game, objective, &here, settings) {
-        Ok((value, spent)) => (value, spent.max(floor)),
+    // A deterministic `from` is its own rounding: its evaluation stands.
+    let evaluated = if here == from.0 {
+        Ok((from.1, 0.0))
+    } else {
+        exact_value_and_work(game, objective, &here, settings)
+            .map(|(value, spent)| (value, spent.max(floor)))
+    };
+    let (mut value, mut work) = match evaluated {
+        Ok(found) => found,
         Err(error) if error.is_numerical() => return Ok((from, 0.0)),
         Err(error) => return Err(error),
     };

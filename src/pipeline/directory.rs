@@ -30,25 +30,31 @@ use crate::output::{
 /// The files of a solve directory whose plots are in `format` (`None`:
 /// no plot), as `summary.json` lists them.
 pub fn files(format: Option<PlotFormat>) -> Vec<String> {
-    let plot = format.map(|format| format!("curve.{format}"));
-    let others = [
-        "defender.fsc.json",
-        "defender.dot",
-        "adversary.fsc.json",
-        "summary.json",
-    ];
-    (std::iter::once("curve.csv".to_string()).chain(plot))
-        .chain(others.map(String::from))
-        .collect()
+    listed(
+        format,
+        &[
+            "defender.fsc.json",
+            "defender.dot",
+            "adversary.fsc.json",
+            "summary.json",
+        ],
+    )
 }
 
-/// The files of an expected-reward solve directory whose plot is in
-/// `format` (`None`: no plot), as its `summary.json` lists them.
+/// The files of an expected-reward solve directory (no adversary's
+/// controller), as its `summary.json` lists them.
 fn reward_files(format: Option<PlotFormat>) -> Vec<String> {
+    listed(
+        format,
+        &["defender.fsc.json", "defender.dot", "summary.json"],
+    )
+}
+
+/// `curve.csv`, the curve's picture in `format` if any, then `others`.
+fn listed(format: Option<PlotFormat>, others: &[&str]) -> Vec<String> {
     let plot = format.map(|format| format!("curve.{format}"));
-    let others = ["defender.fsc.json", "defender.dot", "summary.json"];
     (std::iter::once("curve.csv".to_string()).chain(plot))
-        .chain(others.map(String::from))
+        .chain(others.iter().map(|name| name.to_string()))
         .collect()
 }
 
