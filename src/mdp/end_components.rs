@@ -53,7 +53,18 @@ impl Digraph for Enabled<'_> {
 /// `within[s]` (actions that may leave `within` are not part of it), ordered
 /// by their smallest state. Disjoint by construction.
 pub fn maximal_end_components(mdp: &Mdp, within: &[bool]) -> Vec<EndComponent> {
-    let mut pruning = Pruning::new(mdp, within);
+    let every_action = vec![true; mdp.num_state_actions()];
+    maximal_end_components_using(mdp, within, &every_action)
+}
+
+/// [`maximal_end_components`] of the sub-MDP that keeps only the global
+/// actions `a` with `actions[a]` (numbered state after state).
+pub fn maximal_end_components_using(
+    mdp: &Mdp,
+    within: &[bool],
+    actions: &[bool],
+) -> Vec<EndComponent> {
+    let mut pruning = Pruning::new(mdp, within, actions);
     loop {
         let component = strongly_connected_components(&Enabled {
             mdp,
@@ -98,8 +109,9 @@ struct Pruning<'a> {
 }
 
 impl<'a> Pruning<'a> {
-    /// All actions of the states in `within`, minus those that may leave it.
-    fn new(mdp: &'a Mdp, within: &[bool]) -> Self {
+    /// The `actions` of the states in `within`, minus those that may leave
+    /// it.
+    fn new(mdp: &'a Mdp, within: &[bool], actions: &[bool]) -> Self {
         let n = mdp.num_states();
         let mut enabled = vec![false; mdp.num_state_actions()];
         let mut remaining = vec![0; n];
@@ -115,6 +127,11 @@ impl<'a> Pruning<'a> {
             remaining,
             dead: (0..n).filter(|&s| !within[s]).collect(),
         };
+        for s in (0..n).filter(|&s| within[s]) {
+            for a in mdp.global_actions(s).filter(|&a| !actions[a]) {
+                pruning.disable(s, a);
+            }
+        }
         pruning.propagate();
         pruning
     }

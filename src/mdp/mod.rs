@@ -23,8 +23,9 @@ pub mod end_components;
 mod optimality;
 pub mod rabin;
 pub mod reachability;
+pub mod total_reward;
 
-pub use end_components::{EndComponent, maximal_end_components};
+pub use end_components::{EndComponent, maximal_end_components, maximal_end_components_using};
 pub use rabin::{
     AcceptingComponent, accepting_end_components, accepting_union, max_rabin_analysis,
     max_rabin_qualitative,
@@ -33,6 +34,7 @@ pub use reachability::{
     PolicySystems, QualitativeReachability, Reachability, max_reachability, max_reachability_with,
     qualitative_reachability,
 };
+pub use total_reward::{Optimum, TotalReward, optimal_total_reward};
 
 use thiserror::Error;
 
@@ -58,6 +60,11 @@ pub enum MdpError {
     /// (method.md section 6, the optimality certificate).
     #[error("the optimum of the best response could not be proved: {0}")]
     OptimalityUnproved(String),
+    /// An expected total reward whose optimum this analysis does not prove:
+    /// an end component outside the target with an action that earns
+    /// nothing or less (method.md section 9).
+    #[error("the optimal expected reward is not computed here: {0}")]
+    RewardCycle(String),
 }
 
 impl MdpError {
