@@ -69,6 +69,7 @@ pub mod gradient;
 mod product;
 use product::Product;
 pub mod refutation;
+pub mod reward;
 pub mod strategy;
 
 /// Why a bound could not be computed.

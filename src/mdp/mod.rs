@@ -34,7 +34,7 @@ pub use reachability::{
     PolicySystems, QualitativeReachability, Reachability, max_reachability, max_reachability_with,
     qualitative_reachability,
 };
-pub use total_reward::{Optimum, TotalReward, optimal_total_reward};
+pub use total_reward::{Optimum, optimal_total_reward};
 
 use thiserror::Error;
 

@@ -486,7 +486,14 @@ impl PolicySystem {
             let rhs = self.factorise(mdp, strategy, rewards)?;
             let trial = self.solver_mut()?.solve_trial(&rhs, &mut x)?;
             let bound = trial.error_bound.unwrap_or(f64::INFINITY);
-            if !self.improve(mdp, rewards, optimum, threshold.max(4.0 * bound), &x, strategy) {
+            if !self.improve(
+                mdp,
+                rewards,
+                optimum,
+                threshold.max(4.0 * bound),
+                &x,
+                strategy,
+            ) {
                 let proved = self.solver_mut()?.solve(&rhs, &mut x)?;
                 return Ok((x, proved.error_bound.unwrap_or(0.0)));
             }
@@ -523,7 +530,10 @@ impl PolicySystem {
                 .global_actions(s)
                 .filter(|&a| self.kept[a])
                 .filter_map(|a| score(a - first).map(|v| (a - first, sign * v)))
-                .fold((strategy[s], current), |best, c| if c.1 > best.1 { c } else { best });
+                .fold(
+                    (strategy[s], current),
+                    |best, c| if c.1 > best.1 { c } else { best },
+                );
             if best.1 > current + threshold {
                 strategy[s] = best.0;
                 switched = true;
@@ -592,7 +602,10 @@ impl<'a> ByState<'a> {
     /// `c + sum_t P(t | action) v(t) - v(s)` for unknown `s` (position
     /// `i`), and the sum of its terms' magnitudes (for its rounding).
     fn advance(&self, mdp: &Mdp, (i, action): (usize, usize), constant: f64) -> (f64, f64) {
-        let (mut sum, mut size) = (constant - self.values[i], constant.abs() + self.values[i].abs());
+        let (mut sum, mut size) = (
+            constant - self.values[i],
+            constant.abs() + self.values[i].abs(),
+        );
         for &(t, p) in mdp.global_distribution(action) {
             sum += p * self.at(t);
             size += (p * self.at(t)).abs();
@@ -702,7 +715,10 @@ mod tests {
             ((min.lower[0], min.upper[0]), 2.0),
             ((min.lower[1], min.upper[1]), 3.5),
         ] {
-            assert!(bracket.0 <= expected && expected <= bracket.1, "{bracket:?} {expected}");
+            assert!(
+                bracket.0 <= expected && expected <= bracket.1,
+                "{bracket:?} {expected}"
+            );
             assert!(bracket.1 - bracket.0 < 1e-9, "{bracket:?}");
         }
         assert_eq!((max.strategy[0], min.strategy[0]), (0, 1));
@@ -719,7 +735,10 @@ mod tests {
         let m = mdp(&[&[&[(0, 1.0)], &[(1, 1.0)]], &[&[(1, 1.0)]]]);
         let target = [false, true];
         let max = optimal_total_reward(&m, &target, &[1.0, 5.0, 0.0], Optimum::Max, &settings());
-        assert_eq!(max.unwrap().from_initial(&[(0, 1.0)]), (f64::INFINITY, f64::INFINITY));
+        assert_eq!(
+            max.unwrap().from_initial(&[(0, 1.0)]),
+            (f64::INFINITY, f64::INFINITY)
+        );
         let min = optimal_total_reward(&m, &target, &[1.0, 5.0, 0.0], Optimum::Min, &settings());
         let (low, high) = min.unwrap().from_initial(&[(0, 1.0)]);
         assert!(low <= 5.0 && 5.0 <= high && high - low < 1e-9);
@@ -804,7 +823,10 @@ mod tests {
         loop {
             let before = reaches.clone();
             for s in 0..n {
-                reaches[s] |= m.distribution(s, choice[s]).iter().any(|&(t, _)| reaches[t]);
+                reaches[s] |= m
+                    .distribution(s, choice[s])
+                    .iter()
+                    .any(|&(t, _)| reaches[t]);
             }
             if reaches == before {
                 break;
@@ -859,11 +881,20 @@ mod tests {
         for (s, &e) in expected.iter().enumerate() {
             let (low, high) = (result.lower[s], result.upper[s]);
             if e.is_infinite() {
-                assert!(low.is_infinite() && high.is_infinite(), "state {s}: {low} {high} {e}");
+                assert!(
+                    low.is_infinite() && high.is_infinite(),
+                    "state {s}: {low} {high} {e}"
+                );
             } else {
                 let slack = 1e-9 * e.abs().max(1.0);
-                assert!(low <= e + slack && e <= high + slack, "state {s}: [{low}, {high}] {e}");
-                assert!(high - low <= 1e-7 * e.abs().max(1.0), "state {s}: [{low}, {high}]");
+                assert!(
+                    low <= e + slack && e <= high + slack,
+                    "state {s}: [{low}, {high}] {e}"
+                );
+                assert!(
+                    high - low <= 1e-7 * e.abs().max(1.0),
+                    "state {s}: [{low}, {high}]"
+                );
             }
         }
     }
