@@ -164,14 +164,14 @@ proptest! {
             &game,
             (&objective.target, &objective.rewards, objective.minimise),
             &def,
-            None,
+            &[],
             &SolverSettings::default(),
         );
         match certified {
             Ok(certificate) => {
                 let worst = certificate.worst_case;
                 assert_within((worst.lower, worst.upper), best);
-                let guaranteed = certificate.guaranteed();
+                let guaranteed = certificate.guaranteed;
                 let slack = 1e-8 * (1.0 + best.abs());
                 let safe = guaranteed == best || match minimise {
                     true => guaranteed >= best - slack,
@@ -185,4 +185,100 @@ proptest! {
             Err(e) => prop_assert!(false, "{e}"),
         }
     }
+}
+
+fn posg_fsc(args: &[&str]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_posg-fsc"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+/// `tests/data/rewards/two-roads.posg.json`: each round the defender takes
+/// road `a` or `b` and the adversary guards one; a guarded road costs 3 and
+/// leads back to the start half the time, a free one costs 1 and reaches the
+/// goal. Against a defender taking `a` with probability `p`, a guard of `a`
+/// makes `x = (1 + 2p) / (1 - p/2)`: the game's value is `8/3`, at `p =
+/// 1/2`, and a deterministic defender (the adversary guards its road)
+/// costs 6.
+const TWO_ROADS: &str = "tests/data/rewards/two-roads.posg.json";
+
+#[test]
+fn solve_certifies_the_value_of_a_game_with_a_mixed_optimum() {
+    let dir = std::env::temp_dir().join(format!("posg-fsc-two-roads-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let props = dir.join("cost.props");
+    std::fs::write(&props, "R{\"cost\"}min=? [F \"goal\"]\n").unwrap();
+    let out = dir.join("out");
+    let output = posg_fsc(&[
+        "solve",
+        TWO_ROADS,
+        "--props",
+        props.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert!(output.status.success(), "{output:?}");
+    let summary: Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let value = summary["value"].as_f64().unwrap();
+    let certificate = &summary["certificate"];
+    let guaranteed = certificate["guaranteed"].as_f64().unwrap();
+    let best_possible = certificate["best_possible"].as_f64().unwrap();
+    assert_eq!(value, guaranteed);
+    // Sound: no defender guarantees less than 8/3, and no defender gets
+    // below the bound; found: within 1% of the optimum.
+    assert!(
+        guaranteed >= 8.0 / 3.0 - 1e-9 && guaranteed < 8.0 / 3.0 * 1.01,
+        "{summary}"
+    );
+    assert!(
+        best_possible <= 8.0 / 3.0 + 1e-9 && best_possible <= guaranteed,
+        "{summary}"
+    );
+
+    // `certify` of the returned defender says the same, and of the
+    // deterministic defender that always takes `a`: 6.
+    let defender = out.join("defender.fsc.json");
+    let certified = certify(&[
+        TWO_ROADS,
+        "--props",
+        props.to_str().unwrap(),
+        "--defender",
+        defender.to_str().unwrap(),
+    ]);
+    assert!((certified["guaranteed"].as_f64().unwrap() - guaranteed).abs() < 1e-12);
+    assert_eq!(certified["best_possible"], Value::Null);
+    let always_a = dir.join("a.fsc.json");
+    std::fs::write(
+        &always_a,
+        r#"{"fsc": 1, "player": "defender", "nodes": 1, "initial": [1.0], "rules": [
+          {"node": 0, "observation": "start", "choices": [{"next": 0, "action": "a", "p": 1.0}]},
+          {"node": 0, "observation": "goal", "choices": [{"next": 0, "action": "a", "p": 1.0}]}]}"#,
+    )
+    .unwrap();
+    let certified = certify(&[
+        TWO_ROADS,
+        "--props",
+        props.to_str().unwrap(),
+        "--defender",
+        always_a.to_str().unwrap(),
+        "--adversary",
+        "uniform:1",
+    ]);
+    assert!(
+        (certified["guaranteed"].as_f64().unwrap() - 6.0).abs() < 1e-9,
+        "{certified}"
+    );
+    // Against the uniform guard, the defender that sees the state gets 8/3.
+    assert!((certified["best_possible"].as_f64().unwrap() - 8.0 / 3.0).abs() < 1e-9);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// `certify`'s JSON for `args`.
+fn certify(args: &[&str]) -> Value {
+    let output = posg_fsc(&[&["certify"], args].concat());
+    assert!(output.status.success(), "{output:?}");
+    serde_json::from_slice(&output.stdout).unwrap()
 }

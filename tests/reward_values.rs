@@ -347,7 +347,7 @@ fn eval_restates_a_reward_query_and_says_inf_where_the_target_can_be_missed() {
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert!(!output.status.success());
     assert!(
-        stderr.contains("optimised on games without an adversary"),
+        stderr.contains("no support of 1 node reaching it almost surely was found"),
         "{stderr}"
     );
 }
@@ -540,8 +540,13 @@ fn solve_maximises_a_discounted_reward_and_refuses_what_it_cannot_optimise() {
     assert!((value - 0.55 / 0.19).abs() < 1e-12, "{value}");
 
     let blocking = write("blocking.posg.json", BLOCKING);
+    // The adversary can block the goal from every defender: proved.
     let error = solve_reward(&blocking, "R{\"steps\"}min=? [F \"goal\"]", &[]).unwrap_err();
-    assert!(error.contains("on games without an adversary"), "{error}");
+    assert!(
+        error.contains("reaching it almost surely was found: "),
+        "{error}"
+    );
+    assert!(error.contains("proved"), "{error}");
 
     // `jump` falls into a pit the goal cannot be reached from.
     let pit = write(
@@ -630,7 +635,7 @@ fn optimised(game: &Posg, objective: &RewardObjective, nodes: usize) -> Option<f
     let solved = posg_fsc::optimise::optimise_expected_reward(
         game,
         expected,
-        nodes,
+        (nodes, 1),
         &settings,
         &cancel,
         &mut (),

@@ -31,8 +31,9 @@ pub struct Request<'a> {
     pub asked: &'a Asked,
     /// Its reward query.
     pub reward: &'a RewardQuery,
-    /// The defender's nodes.
-    pub nodes: usize,
+    /// The defender's nodes and the adversary's (in the gradient play of a
+    /// game with an adversary).
+    pub nodes: (usize, usize),
     /// The optimiser's settings.
     pub settings: &'a Settings,
     /// `allow_unused_propositions=`.
@@ -57,6 +58,11 @@ pub struct RewardSolveResult {
     pub starts: Py<PyList>,
     /// The starts dropped for numerical trouble, with why.
     pub dropped_starts: Vec<String>,
+    /// On a game with an adversary, the returned defender's certificate (a
+    /// dict as in `summary.json`: `guaranteed`, the value it holds against
+    /// every adversary, and `best_possible`, what no defender beats against
+    /// the adversary found; docs/method.md section 9); `None` otherwise.
+    pub certificate: Option<Py<PyAny>>,
     /// Every iteration's record of every start, then the returned one (a
     /// dict each, as the rows of `curve.csv`).
     pub curve: Py<PyList>,
@@ -119,7 +125,11 @@ pub fn solve(
     ];
     if let Some(progress) = &run.progress {
         let minimise = objective.minimise;
-        observers.push(Box::new(progress.observer("full", request.nodes, minimise)));
+        observers.push(Box::new(progress.observer(
+            "full",
+            request.nodes.0,
+            minimise,
+        )));
     }
     let (nodes, settings) = (request.nodes, request.settings);
     let solution = with_signals(py, &run, || {
@@ -145,6 +155,10 @@ pub fn solve(
         best_start: solution.best_start,
         starts: starts.unbind(),
         dropped_starts: solution.dropped_starts,
+        certificate: solution
+            .certificate
+            .map(|certificate| serialised(py, &certificate).map(Bound::unbind))
+            .transpose()?,
         curve: curve.unbind(),
         seconds: solution.seconds,
     };
@@ -156,7 +170,7 @@ pub fn solve(
 fn optimise(
     game: &posg_fsc::game::Posg,
     objective: &RewardObjective,
-    nodes: usize,
+    nodes: (usize, usize),
     settings: &Settings,
     cancel: &Cancel,
     mut observers: Vec<Box<dyn Observer + Send>>,

@@ -479,8 +479,8 @@ pub fn solve(
         if defender.is_some() || adversary.is_some() {
             return Err(raise(
                 Kind::Settings,
-                "an expected-reward query is optimised from the full support of def_nodes nodes \
-                 on a game without adversary: drop defender= and adversary=",
+                "an expected-reward query is optimised from the full supports of def_nodes and \
+                 adv_nodes nodes: drop defender= and adversary=",
             ));
         }
         let sizes = Sizes {
@@ -488,11 +488,10 @@ pub fn solve(
             adversary: adv_nodes.map_or(Ok(1), |n| size("adv_nodes", n))?,
         };
         check_sizes(&game.get().inner, sizes)?;
-        let nodes = sizes.defender;
         let request = crate::reward::Request {
             asked: &asked,
             reward,
-            nodes,
+            nodes: (sizes.defender, sizes.adversary),
             settings: &settings,
             allow_unused: allow_unused_propositions,
         };

@@ -129,49 +129,49 @@ fn step_rewards(
 
 /// What a defender guarantees for an expected reward against every
 /// adversary and, with an adversary's controller, what any defender can
-/// get against it (module documentation).
+/// get against it (module documentation): `certify`'s report for a reward
+/// query.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct RewardCertificate {
     /// Whether the defender minimises the expected reward (`Rmin`).
     pub minimise: bool,
+    /// The defender's certified value: the expected cost stays at most
+    /// this (`Rmin`), the expected reward at least this (`Rmax`), whatever
+    /// the adversary (`"inf"` in JSON where it is infinite).
+    #[serde(serialize_with = "number_or_inf")]
+    pub guaranteed: f64,
+    /// With an adversary: no defender controller gets a cost below this
+    /// (`Rmin`) or a reward above it (`Rmax`) against every adversary.
+    #[serde(serialize_with = "option_number_or_inf")]
+    pub best_possible: Option<f64>,
     /// The adversary's optimum against the defender.
     pub worst_case: RewardBound,
     /// The optimum of the defender that sees the state against the given
-    /// adversary.
+    /// adversary that bounds it best (the tightest [`Self::best_possible`]).
     pub best_response: Option<RewardBound>,
 }
 
-impl RewardCertificate {
-    /// The defender's certified value: the expected cost stays at most
-    /// this (`Rmin`), the expected reward at least this (`Rmax`), whatever
-    /// the adversary.
-    pub fn guaranteed(&self) -> f64 {
-        match self.minimise {
-            true => self.worst_case.upper,
-            false => self.worst_case.lower,
-        }
-    }
-
-    /// With an adversary: no defender controller gets a cost below this
-    /// (`Rmin`) or a reward above it (`Rmax`) against every adversary.
-    pub fn best_possible(&self) -> Option<f64> {
-        self.best_response.map(|b| match self.minimise {
-            true => b.lower,
-            false => b.upper,
-        })
+/// [`number_or_inf`] for an optional value (`null` for none).
+fn option_number_or_inf<S: serde::Serializer>(
+    value: &Option<f64>,
+    serializer: S,
+) -> Result<S::Ok, S::Error> {
+    match value {
+        Some(value) => number_or_inf(value, serializer),
+        None => serializer.serialize_none(),
     }
 }
 
-/// The [`RewardCertificate`] of `defender` (and `adversary`, when given)
-/// for the expected reward of `rewards` until the target of `target`,
-/// minimised or maximised by the defender. A guarantee better than the
-/// best possible is an error ([`CertifyError::Inconsistent`]): exact
-/// numbers never are.
+/// The [`RewardCertificate`] of `defender` (and of the best bound over
+/// `adversaries`, when any are given) for the expected reward of `rewards`
+/// until the target of `target`, minimised or maximised by the defender. A
+/// guarantee better than the best possible is an error
+/// ([`CertifyError::Inconsistent`]): exact numbers never are.
 pub fn reward_certificate(
     game: &Posg,
     (target, rewards, minimise): (&Dra, &RewardModel, bool),
     defender: &Fsc,
-    adversary: Option<&Fsc>,
+    adversaries: &[&Fsc],
     settings: &SolverSettings,
 ) -> Result<RewardCertificate, CertifyError> {
     let (adversary_optimum, defender_optimum) = match minimise {
@@ -186,19 +186,27 @@ pub fn reward_certificate(
         adversary_optimum,
         settings,
     )?;
-    let best_response = adversary
-        .map(|adversary| {
-            let fixed = (adversary, Role::Adversary);
-            optimal_response(game, objective, fixed, defender_optimum, settings)
-        })
-        .transpose()?;
-    let certificate = RewardCertificate {
-        minimise,
-        worst_case,
-        best_response,
+    let possible = |b: &RewardBound| match minimise {
+        true => b.lower,
+        false => -b.upper,
     };
-    if let Some(best) = certificate.best_possible() {
-        let guaranteed = certificate.guaranteed();
+    let mut best_response: Option<RewardBound> = None;
+    for adversary in adversaries {
+        let fixed = (*adversary, Role::Adversary);
+        let bound = optimal_response(game, objective, fixed, defender_optimum, settings)?;
+        if best_response.is_none_or(|best| possible(&bound) > possible(&best)) {
+            best_response = Some(bound);
+        }
+    }
+    let guaranteed = match minimise {
+        true => worst_case.upper,
+        false => worst_case.lower,
+    };
+    let best_possible = best_response.map(|b| match minimise {
+        true => b.lower,
+        false => b.upper,
+    });
+    if let Some(best) = best_possible {
         let better = match minimise {
             true => guaranteed < best,
             false => guaranteed > best,
@@ -212,6 +220,13 @@ pub fn reward_certificate(
             });
         }
     }
+    let certificate = RewardCertificate {
+        minimise,
+        guaranteed,
+        best_possible,
+        worst_case,
+        best_response,
+    };
     Ok(certificate)
 }
 
@@ -276,16 +291,16 @@ mod tests {
             &game,
             (&target, &rewards, true),
             &defender,
-            Some(&wait),
+            &[&wait],
             &SolverSettings::default(),
         )
         .unwrap();
         assert!(
-            (certificate.guaranteed() - 8.0).abs() < 1e-9,
+            (certificate.guaranteed - 8.0).abs() < 1e-9,
             "{certificate:?}"
         );
         assert!(certificate.worst_case.lower <= 8.0 && 8.0 <= certificate.worst_case.upper);
-        let best = certificate.best_possible().unwrap();
+        let best = certificate.best_possible.unwrap();
         assert!((best - 2.0).abs() < 1e-9 && best <= 2.0, "{certificate:?}");
     }
 
@@ -301,15 +316,15 @@ mod tests {
             &game,
             (&target, &rewards, false),
             &defender,
-            Some(&push),
+            &[&push],
             &SolverSettings::default(),
         )
         .unwrap();
         assert!(
-            (certificate.guaranteed() - 2.0).abs() < 1e-9,
+            (certificate.guaranteed - 2.0).abs() < 1e-9,
             "{certificate:?}"
         );
-        assert!(certificate.guaranteed() <= 2.0);
-        assert!((certificate.best_possible().unwrap() - 8.0).abs() < 1e-9);
+        assert!(certificate.guaranteed <= 2.0);
+        assert!((certificate.best_possible.unwrap() - 8.0).abs() < 1e-9);
     }
 }

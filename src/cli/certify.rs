@@ -9,16 +9,25 @@
 //! best any defender of any memory achieves. The strategies behind them
 //! are written to files on request (`--attack`, `--response`; format in
 //! docs/formats.md section 7, read back by `posg-fsc strategy`).
+//!
+//! With an expected-reward query (`--props` with `R{"r"}min=? [F T]` or
+//! `Rmax`; method.md section 9) it prints the reward's certificate instead:
+//! `guaranteed`, the cost the defender never exceeds (the reward it always
+//! gets) against every adversary, and with `--adversary`, `best_possible`,
+//! the cost no defender gets below (the reward none exceeds) against it;
+//! each with the bracket of the optimum behind it.
 
 use std::path::{Path, PathBuf};
 
 use clap::Args;
 use posg_fsc::automaton::Dra;
+use posg_fsc::certify::reward::{RewardCertificate, reward_certificate};
 use posg_fsc::certify::strategy::StrategyFile;
 use posg_fsc::certify::{Bound, CertificateReport, certificate};
 use posg_fsc::controller::Role;
 use posg_fsc::controller::file::resolve;
 use posg_fsc::game::Posg;
+use posg_fsc::pipeline::RewardObjective;
 use serde::Serialize;
 
 use super::common::{self, ObjectiveArgs, Provenance};
@@ -63,9 +72,23 @@ struct Report {
     certificate: CertificateReport,
 }
 
+/// The certificate of an expected-reward query.
+#[derive(Serialize)]
+struct RewardReport {
+    #[serde(flatten)]
+    provenance: Provenance,
+    game: String,
+    query: String,
+    #[serde(flatten)]
+    certificate: RewardCertificate,
+}
+
 /// Computes and prints the bounds.
 pub fn run(args: CertifyArgs) -> anyhow::Result<()> {
     let game = common::read_game_for(&args.game, &args.objective)?;
+    if let Some(reward) = args.objective.reward_objective(&game)? {
+        return run_reward(&args, &game, &reward);
+    }
     let (phi_dra, formula) = common::objective(&args.objective, &game)?;
     let not_phi_dra =
         common::negated_objective(&args.objective, args.negated_automaton.as_deref(), &game)?;
@@ -104,6 +127,34 @@ pub fn run(args: CertifyArgs) -> anyhow::Result<()> {
         game: args.game.display().to_string(),
         formula: formula.clone(),
         certificate: certificate.report(),
+    })
+}
+
+/// The certificate of the expected-reward query `reward` (module
+/// documentation).
+fn run_reward(args: &CertifyArgs, game: &Posg, reward: &RewardObjective) -> anyhow::Result<()> {
+    if args.attack.is_some() || args.response.is_some() {
+        anyhow::bail!(
+            "--attack and --response write the strategies of probability queries; an \
+             expected-reward query has none written yet"
+        );
+    }
+    let defender = resolve(&args.defender, game, Role::Defender)?;
+    let adversary = (args.adversary.as_ref())
+        .map(|spec| resolve(spec, game, Role::Adversary))
+        .transpose()?;
+    let certificate = reward_certificate(
+        game,
+        (&reward.target, &reward.rewards, reward.minimise),
+        &defender,
+        &adversary.iter().collect::<Vec<_>>(),
+        &args.solver.settings(),
+    )?;
+    common::print_json(&RewardReport {
+        provenance: Provenance::current(),
+        game: args.game.display().to_string(),
+        query: reward.description.clone(),
+        certificate,
     })
 }
 

@@ -30,10 +30,9 @@ pub struct ObjectiveArgs {
     /// A Storm/PRISM property file with one query `<<P>> Pmax=? [ PATH ]`
     /// (phi = PATH) or `<<P>> Pmin=? [ PATH ]` (phi = !PATH, e.g. `G !goal`),
     /// instead of --ltl; for a turn-based DRN game, player P is the defender
-    /// (docs/formats.md section 6). `eval`, `simulate` and `solve` (on a
-    /// game without adversary) also take an expected-reward query
-    /// `R{"r"}min=? [ F T ]` or `R{"r"}max=? [ F T ]` (docs/method.md
-    /// section 9).
+    /// (docs/formats.md section 6). `eval`, `simulate`, `certify` and
+    /// `solve` also take an expected-reward query `R{"r"}min=? [ F T ]` or
+    /// `R{"r"}max=? [ F T ]` (docs/method.md section 9).
     #[arg(long, value_name = "FILE.props", conflicts_with = "automaton")]
     pub props: Option<PathBuf>,
     /// A deterministic automaton for phi in HOA v1 or v1.1 (instead of
@@ -59,7 +58,7 @@ impl ObjectiveArgs {
 
     /// The text of phi: `--ltl`, or the objective of `--props`; `None` for
     /// `--automaton`. An expected-reward query is an error: the commands
-    /// that take one (`eval`, `simulate`, `solve`) ask
+    /// that take one (`eval`, `simulate`, `certify`, `solve`) ask
     /// [`Self::reward_objective`] first.
     pub fn formula_text(&self) -> anyhow::Result<Option<String>> {
         if let Some(text) = &self.ltl {
@@ -72,9 +71,9 @@ impl ObjectiveArgs {
             Some(objective) => Ok(Some(objective.to_string())),
             None => anyhow::bail!(
                 "{}: `{}` is an expected-reward query: `posg-fsc eval` computes its value for \
-                 given controllers, `simulate` estimates it and `solve` optimises it on a game \
-                 without adversary; this command takes probability queries (`Pmax=?`, `Pmin=?`) \
-                 so far (docs/method.md section 9)",
+                 given controllers, `simulate` estimates it, `certify` bounds it against every \
+                 adversary and `solve` optimises it; this command takes probability queries \
+                 (`Pmax=?`, `Pmin=?`) so far (docs/method.md section 9)",
                 property.position(&self.props_name()),
                 property.text
             ),

@@ -14,6 +14,7 @@ use std::time::Instant;
 
 use clap::Args;
 
+use posg_fsc::certify::reward::RewardCertificate;
 use posg_fsc::controller::{self, Role};
 use posg_fsc::game::Posg;
 use posg_fsc::ltl::props::Property;
@@ -285,8 +286,30 @@ fn restated_query(property: &Property, query: &QueryValue) -> String {
     )
 }
 
+/// What the certified value of an expected-reward solve on a game with an
+/// adversary means, in words: the returned defender's guarantee against
+/// every adversary, and the bound no defender beats against the
+/// adversaries found.
+fn certified_words(certificate: &RewardCertificate, width: f64) -> String {
+    let (guarantee, beyond) = match certificate.minimise {
+        true => ("at most", "below"),
+        false => ("at least", "above"),
+    };
+    let bound = match certificate.best_possible {
+        Some(best) => {
+            format!("; no defender gets {beyond} {best:.6} against the adversaries found")
+        }
+        None => String::new(),
+    };
+    format!(
+        "what the returned defender guarantees against every adversary: {guarantee} this, \
+         certified within {width:.1e}{bound}"
+    )
+}
+
 /// `solve` of an expected-reward query (docs/method.md section 9): the
-/// defender of `--def-nodes` nodes optimised on a game without adversary,
+/// defender of `--def-nodes` nodes optimised (against adversaries of
+/// `--adv-nodes` nodes in the gradient play of a game with an adversary),
 /// into the solve directory.
 fn solve_expected_reward(
     args: &SolveArgs,
@@ -330,8 +353,14 @@ fn solve_expected_reward(
         command_line: &command_line,
         query: property.as_ref(),
     };
-    let solution =
-        directory.solve_expected_reward(game, reward, nodes, settings, &cancel, observer)?;
+    let solution = directory.solve_expected_reward(
+        game,
+        reward,
+        (nodes, sizes.adversary),
+        settings,
+        &cancel,
+        observer,
+    )?;
     out.commit()?;
     if super::interrupt::received() {
         eprintln!("interrupted: the results below are those of the defender found before it");
@@ -341,12 +370,18 @@ fn solve_expected_reward(
         eprintln!("warning: dropped for numerical trouble: {dropped}");
     }
     let best = (solution.starts.iter()).find(|start| start.start == solution.best_start);
+    let what = match &solution.certificate {
+        None => format!(
+            "the returned defender's expected reward, exact within {:.1e}",
+            solution.error_bound
+        ),
+        Some(certificate) => certified_words(certificate, solution.error_bound),
+    };
     let how = match best {
         Some(best) => format!(
-            "{:.6} (the returned defender's expected reward, exact within {:.1e}; {nodes} nodes, \
-             best of {}, {} of start {})",
+            "{:.6} ({what}; {}, best of {}, {} of start {})",
             solution.value,
-            solution.error_bound,
+            posg_fsc::output::counted(nodes, "node"),
             posg_fsc::output::counted(solution.starts.len(), "start"),
             posg_fsc::output::counted(best.iterations, "iteration"),
             solution.best_start,

@@ -1,15 +1,19 @@
-//! The expected-reward optimiser (method.md section 9) for a game without
+//! The expected-reward optimiser (method.md section 9). On a game without
 //! adversary (a POMDP or an MDP): the single-player ascent under the one
 //! driver ([`Optimiser`] with [`Method::Ascent`]: L-BFGS on the defender's
 //! logits, the same stopping rules and observers as a probability
 //! objective), climbing the expected reward itself (negated for a cost,
 //! so that the defender always maximises), from `settings.starts` seeded
-//! starts in parallel on the full support of the given size. The returned
-//! defender is the best start's incumbent or one of its roundings (the
-//! softmax keeps every supported choice above `exp(-2c)`; a rounding
-//! removes that residue), its expected reward evaluated again exactly
-//! (within its error bound, method.md section 8): with no adversary, that
-//! number is the defender's guarantee.
+//! starts in parallel on the full support of the given size. On a game
+//! with an adversary: the alternating ascent-descent of method.md section
+//! 4 ([`Method::MaxMin`]) on the same objective, with best-response checks
+//! for its worst-case estimate. The returned defender is the best start's
+//! incumbent or one of its roundings (the softmax keeps every supported
+//! choice above `exp(-2c)`; a rounding removes that residue) or a hill
+//! climb's end, judged by what it guarantees ([`judged`]): its expected
+//! reward evaluated again exactly (within its error bound, method.md
+//! section 8) where there is no adversary, and its certified worst case
+//! against every adversary ([`crate::certify::reward`]) where there is one.
 
 use std::sync::{Mutex, PoisonError};
 use std::time::Instant;
@@ -27,8 +31,11 @@ use super::softmax::Softmax;
 use super::{Cancel, Method, OptimiseError, Settings, Status, Structure, keep_solved};
 use super::{WARM_START_MIX, embed, pad};
 use crate::automaton::Dra;
-use crate::controller::{Choice, Fsc, Support};
+use crate::certify::reward::{RewardCertificate, optimal_response, reward_certificate};
+use crate::certify::{CertifyError, MdpError};
+use crate::controller::{Choice, Fsc, Role, Support};
 use crate::game::{Posg, RewardModel};
+use crate::mdp::Optimum;
 use crate::synthesis::{Mode, SynthesisError, synthesise};
 use crate::value::{Evaluation, Evaluator};
 
@@ -77,10 +84,21 @@ pub struct RewardStart {
 pub struct RewardSolution {
     /// The best defender found.
     pub defender: Fsc,
-    /// Its expected reward, evaluated exactly (method.md section 9).
+    /// What it guarantees ([`judged`]): its expected reward, evaluated
+    /// exactly, on a game without adversary; its certified worst case
+    /// against every adversary on a game with one (method.md section 9).
     pub value: f64,
-    /// A bound on `|value - exact value|` (method.md section 8).
+    /// A bound on `|value - exact value|` (method.md section 8); on a game
+    /// with an adversary, the width of the worst case's certified bracket.
     pub error_bound: f64,
+    /// On a game with an adversary: the returned defender's certificate,
+    /// with the bound from the best start's adversary
+    /// ([`RewardCertificate::best_possible`]).
+    pub certificate: Option<RewardCertificate>,
+    /// On a game with an adversary: the starts' adversaries (each the best
+    /// response to its start's best defender), which bound what any
+    /// defender can get, with the uniform one.
+    pub adversaries: Vec<Fsc>,
     /// Each start's result, in start order.
     pub starts: Vec<RewardStart>,
     /// The start whose defender was returned ([`RewardStart::start`]).
@@ -91,40 +109,58 @@ pub struct RewardSolution {
     pub seconds: f64,
 }
 
-/// Optimises a defender of `nodes` nodes for `objective` on `game`, which
-/// has no adversary; every iteration's record goes to `observer` (the
-/// expected reward in `value` and `worst_case`, with its sign), then one
-/// `returned` record for the defender returned. Stops early when `cancel`
-/// is set.
+/// Optimises a defender of `nodes` nodes (against adversaries of
+/// `adversary_nodes` nodes in the gradient play of a game with an
+/// adversary) for `objective` on `game`; every iteration's record goes to
+/// `observer` (the expected reward in `value` and `worst_case`, with its
+/// sign), then one `returned` record for the defender returned. Stops
+/// early when `cancel` is set.
 pub fn optimise_expected_reward(
     game: &Posg,
     objective: ExpectedReward<'_>,
-    nodes: usize,
+    (nodes, adversary_nodes): (usize, usize),
     settings: &Settings,
     cancel: &Cancel,
     observer: &mut (dyn Observer + Send),
 ) -> Result<RewardSolution, OptimiseError> {
-    if game.has_adversary() {
+    let started = Instant::now();
+    let structure = Structure::full(game, nodes, adversary_nodes, settings.optimise_initial);
+    // Whether the target can be missed is a fact of the supports' graph:
+    // the evaluator's analysis says it without a solve. For a cost, the
+    // sizes race on supports that reach the target ([`reward_structure`]).
+    let infinite =
+        !objective.minimise && evaluator(game, objective, &structure, settings)?.is_infinite();
+    if infinite && game.has_adversary() {
         return Err(OptimiseError::Unsupported(
-            "expected-reward objectives are optimised on games without an adversary (POMDPs, \
-             MDPs) so far; `eval` evaluates them on every game (docs/method.md section 9)"
+            "every pair of controllers on the full supports misses the target with positive \
+             probability, so the gradient play has no finite reward to climb; a game with an \
+             adversary is optimised for `Rmax` where they reach it (docs/method.md section 9)"
                 .into(),
         ));
     }
-    let started = Instant::now();
-    let structure = Structure::full(game, nodes, 1, settings.optimise_initial);
-    // Whether the target can be missed is a fact of the support's graph:
-    // the evaluator's analysis says it without a solve. For a cost, the
-    // sizes race on supports that reach the target ([`reward_structure`]).
-    let infinite = !objective.minimise
-        && evaluator(game, objective, &structure.defender, settings)?.is_infinite();
-    let (solution, iterations, logit_bound, source) = if infinite {
+    let (mut solution, iterations, logit_bound, source) = if infinite {
         let solution = infinite_on_full_support(objective, structure.defender, started)?;
         (solution, 0, settings.logit_bound, RecordSource::Gradient)
     } else {
         observer.phase(&super::Phase::Race);
-        grown(game, objective, nodes, settings, cancel, observer, started)?
+        let sizes = (nodes, adversary_nodes);
+        grown(game, objective, sizes, settings, cancel, observer, started)?
     };
+    if game.has_adversary() {
+        let uniform = Fsc::uniform_enabled(Role::Adversary, adversary_nodes, game.adversary());
+        let tried: Vec<&Fsc> = solution.adversaries.iter().chain([&uniform]).collect();
+        let certificate = reward_certificate(
+            game,
+            (objective.target, objective.rewards, objective.minimise),
+            &solution.defender,
+            &tried,
+            &settings.solver_settings(),
+        )?;
+        solution.value = certificate.guaranteed;
+        solution.error_bound =
+            bracket_width(certificate.worst_case.lower, certificate.worst_case.upper);
+        solution.certificate = Some(certificate);
+    }
     observer.observe(&IterationRecord {
         start: solution.best_start,
         iteration: iterations,
@@ -156,7 +192,7 @@ pub fn optimise_expected_reward(
 fn grown(
     game: &Posg,
     objective: ExpectedReward<'_>,
-    nodes: usize,
+    (nodes, adversary_nodes): (usize, usize),
     settings: &Settings,
     cancel: &Cancel,
     observer: &mut (dyn Observer + Send),
@@ -174,7 +210,8 @@ fn grown(
         } else {
             &mut quiet
         };
-        let structure = match reward_structure(game, objective, size, settings)? {
+        let structure = match reward_structure(game, objective, (size, adversary_nodes), settings)?
+        {
             Ok(structure) => structure,
             // Memory may be what reaching the target needs: a smaller size
             // without an almost-sure support is passed over, and the size
@@ -251,7 +288,7 @@ fn race(
         ..structure.clone()
     });
     let starts = settings.starts + usize::from(warm.is_some());
-    let results: Vec<Result<(Fsc, RewardStart, f64), OptimiseError>> = (0..starts)
+    let results: Vec<Result<StartResult, OptimiseError>> = (0..starts)
         .into_par_iter()
         .map(|start| {
             let mut signed = Signed {
@@ -274,11 +311,16 @@ fn race(
     // A start whose system cannot be solved to the tolerance is dropped, as
     // in the probability race; all of them failing is the error.
     let (kept, dropped) = keep_solved(results)?;
-    let runs: Vec<(Fsc, RewardStart, f64)> = kept.into_iter().map(|(_, run)| run).collect();
+    let runs: Vec<StartResult> = kept.into_iter().map(|(_, run)| run).collect();
     let best = (0..runs.len())
-        .max_by(|&a, &b| (sense * runs[a].1.value).total_cmp(&(sense * runs[b].1.value)))
+        .max_by(|&a, &b| (sense * runs[a].start.value).total_cmp(&(sense * runs[b].start.value)))
         .ok_or(OptimiseError::NoStructure)?;
-    let (looped, best, logit_bound) = runs[best].clone();
+    let StartResult {
+        defender: looped,
+        start: best,
+        logit_bound,
+        ..
+    } = runs[best].clone();
     let (defender, evaluation, source) = rounded(game, objective, looped, settings)?;
     let ((defender, evaluation, source), _) = climb(
         game,
@@ -299,7 +341,12 @@ fn race(
         defender,
         value: evaluation.value,
         error_bound: evaluation.error_bound,
-        starts: runs.iter().map(|(_, start, _)| *start).collect(),
+        certificate: None,
+        adversaries: match game.has_adversary() {
+            true => runs.iter().map(|run| run.adversary.clone()).collect(),
+            false => Vec::new(),
+        },
+        starts: runs.iter().map(|run| run.start).collect(),
         best_start: best.start,
         dropped_starts: dropped
             .into_iter()
@@ -322,11 +369,11 @@ fn race(
 fn reward_structure(
     game: &Posg,
     objective: ExpectedReward<'_>,
-    size: usize,
+    (size, adversary_nodes): (usize, usize),
     settings: &Settings,
 ) -> Result<Result<Structure, String>, OptimiseError> {
-    let full = Structure::full(game, size, 1, settings.optimise_initial);
-    if !objective.minimise || !evaluator(game, objective, &full.defender, settings)?.is_infinite() {
+    let full = Structure::full(game, size, adversary_nodes, settings.optimise_initial);
+    if !objective.minimise || !evaluator(game, objective, &full, settings)?.is_infinite() {
         return Ok(Ok(full));
     }
     let almost_sure = crate::synthesis::Settings {
@@ -380,6 +427,8 @@ fn infinite_on_full_support(
         defender,
         value: f64::INFINITY,
         error_bound: 0.0,
+        certificate: None,
+        adversaries: Vec::new(),
         starts: Vec::new(),
         best_start: 0,
         dropped_starts: Vec::new(),
@@ -387,9 +436,22 @@ fn infinite_on_full_support(
     })
 }
 
-/// One seeded start: the driver running the single-player ascent on the
-/// structure's objective. Returns its best defender, its result and the
-/// logit bound it ended with.
+/// What one start of the race ends with.
+#[derive(Clone)]
+struct StartResult {
+    /// Its best defender.
+    defender: Fsc,
+    /// The adversary of that defender's last best response (the only
+    /// adversary of a game without one).
+    adversary: Fsc,
+    start: RewardStart,
+    /// The logit bound it ended with.
+    logit_bound: f64,
+}
+
+/// One seeded start: the driver running the single-player ascent (the
+/// alternating ascent-descent on a game with an adversary) on the
+/// structure's objective.
 fn run_start(
     game: &Posg,
     objective: ExpectedReward<'_>,
@@ -398,7 +460,7 @@ fn run_start(
     start: usize,
     cancel: &Cancel,
     observer: &mut dyn Observer,
-) -> Result<(Fsc, RewardStart, f64), OptimiseError> {
+) -> Result<StartResult, OptimiseError> {
     let clock = Instant::now();
     let settings = settings.for_start(start);
     let objective = Objective::for_expected_reward(
@@ -411,21 +473,30 @@ fn run_start(
     let sense = objective.sense();
     let mut rng = ChaCha8Rng::seed_from_u64(settings.seed);
     rng.set_stream(start as u64);
-    let mut optimiser =
-        Optimiser::new(Method::Ascent, objective, &settings, rng).with_cancel(cancel);
+    let method = match game.has_adversary() {
+        true => Method::MaxMin,
+        false => Method::Ascent,
+    };
+    let mut optimiser = Optimiser::new(method, objective, &settings, rng).with_cancel(cancel);
     let mut run = optimiser.begin(clock)?;
     let stopped = optimiser.advance(&mut run, settings.max_iterations, observer)?;
     let outcome = optimiser.finish(run, stopped.unwrap_or(Status::MaxIterations))?;
     let (objective, _) = optimiser.into_parts();
     let defender = objective.defender().controller(&outcome.best.defender)?;
-    let result = RewardStart {
+    let adversary = objective.adversary().controller(&outcome.best.adversary)?;
+    let start = RewardStart {
         start,
         value: sense * outcome.best.worst_case,
         iterations: outcome.iterations,
         status: outcome.status,
         seconds: clock.elapsed().as_secs_f64(),
     };
-    Ok((defender, result, outcome.logit_bound))
+    Ok(StartResult {
+        defender,
+        adversary,
+        start,
+        logit_bound: outcome.logit_bound,
+    })
 }
 
 /// The best of `defender` and its roundings ([`rounded_candidates`]: the
@@ -440,14 +511,14 @@ fn rounded(
     settings: &Settings,
 ) -> Result<(Fsc, Evaluation, RecordSource), OptimiseError> {
     let sense = objective.sense();
-    let evaluation = exact_value(game, objective, &defender, settings)?;
+    let (evaluation, _) = judged(game, objective, &defender, settings)?;
     let mut best = (defender, evaluation, RecordSource::Gradient);
     for (_, candidate) in rounded_candidates(&best.0)? {
         // An infinite value is the worst cost and the best reward (Storm's
         // convention, method.md section 9): the comparison sees both.
-        let evaluation = match exact_value(game, objective, &candidate, settings) {
-            Ok(evaluation) => evaluation,
-            Err(error) if error.is_numerical() => continue,
+        let evaluation = match judged(game, objective, &candidate, settings) {
+            Ok((evaluation, _)) => evaluation,
+            Err(error) if passes_over(&error) => continue,
             Err(error) => return Err(error),
         };
         if sense * evaluation.value > sense * best.1.value {
@@ -494,7 +565,7 @@ fn restarted(
         let mut rng = ChaCha8Rng::seed_from_u64(settings.seed);
         rng.set_stream(RESTART_STREAMS + restart as u64);
         let start = random_deterministic(&structure.defender, &mut rng);
-        let evaluation = match exact_value_and_work(game, objective, &start, settings) {
+        let evaluation = match judged(game, objective, &start, settings) {
             Ok((evaluation, spent)) => {
                 let spent = spent.max(floor);
                 work += spent;
@@ -507,7 +578,7 @@ fn restarted(
                 }
                 evaluation
             }
-            Err(error) if error.is_numerical() => continue,
+            Err(error) if passes_over(&error) => continue,
             Err(error) => return Err(error),
         };
         let ((end, value, _), spent) = climb(
@@ -579,12 +650,11 @@ fn climb(
     let evaluated = if here == from.0 {
         Ok((from.1, 0.0))
     } else {
-        exact_value_and_work(game, objective, &here, settings)
-            .map(|(value, spent)| (value, spent.max(floor)))
+        judged(game, objective, &here, settings).map(|(value, spent)| (value, spent.max(floor)))
     };
     let (mut value, mut work) = match evaluated {
         Ok(found) => found,
-        Err(error) if error.is_numerical() => return Ok((from, 0.0)),
+        Err(error) if passes_over(&error) => return Ok((from, 0.0)),
         Err(error) => return Err(error),
     };
     let budget_left = |work: f64| budget <= 0.0 || work < budget;
@@ -613,12 +683,11 @@ fn climb(
                     probability: 1.0,
                     logit: None,
                 }];
-                let (evaluation, spent) =
-                    match exact_value_and_work(game, objective, &candidate, settings) {
-                        Ok(found) => found,
-                        Err(error) if error.is_numerical() => continue,
-                        Err(error) => return Err(error),
-                    };
+                let (evaluation, spent) = match judged(game, objective, &candidate, settings) {
+                    Ok(found) => found,
+                    Err(error) if passes_over(&error) => continue,
+                    Err(error) => return Err(error),
+                };
                 work += spent.max(floor);
                 let margin = evaluation.error_bound + value.error_bound;
                 if sense * (evaluation.value - value.value) > margin {
@@ -636,51 +705,88 @@ fn climb(
     }
 }
 
-/// [`exact_value`] and the GMC states its evaluation explored (the unit of
-/// `settings.max_work`).
-fn exact_value_and_work(
+/// What `defender` guarantees, and the states its computation explored
+/// (the unit of `settings.max_work`): on a game without adversary its
+/// expected reward, evaluated exactly on its own support (GMC states); on
+/// a game with one, its certified worst case against every adversary
+/// ([`optimal_response`], product MDP states), with the width of that
+/// bracket as its error bound.
+fn judged(
     game: &Posg,
     objective: ExpectedReward<'_>,
     defender: &Fsc,
     settings: &Settings,
 ) -> Result<(Evaluation, f64), OptimiseError> {
-    let mut evaluator = evaluator(game, objective, defender, settings)?;
-    let adversary = Support::probabilities_of(&only_adversary(game));
+    if game.has_adversary() {
+        let adversary_optimum = match objective.minimise {
+            true => Optimum::Max,
+            false => Optimum::Min,
+        };
+        let bound = optimal_response(
+            game,
+            (objective.target, objective.rewards),
+            (defender, Role::Defender),
+            adversary_optimum,
+            &settings.solver_settings(),
+        )?;
+        let guaranteed = match objective.minimise {
+            true => bound.upper,
+            false => bound.lower,
+        };
+        let evaluation = Evaluation {
+            value: guaranteed,
+            residual: 0.0,
+            iterations: 0,
+            error_bound: bracket_width(bound.lower, bound.upper),
+        };
+        return Ok((evaluation, bound.mdp_states as f64));
+    }
+    let structure = Structure {
+        defender: defender.clone(),
+        ..Structure::full(game, defender.num_nodes(), 1, settings.optimise_initial)
+    };
+    let mut evaluator = evaluator(game, objective, &structure, settings)?;
+    let adversary = Support::probabilities_of(&structure.adversary);
     let evaluation = evaluator.evaluate(&Support::probabilities_of(defender), &adversary)?;
     Ok((evaluation, evaluator.gmc().num_states() as f64))
 }
 
-/// The evaluator of `objective` on `defender`'s support (against the
-/// adversary's only controller: the game has no adversary).
+/// `upper - lower`, 0 where both are infinite.
+fn bracket_width(lower: f64, upper: f64) -> f64 {
+    if lower.is_infinite() && upper.is_infinite() {
+        0.0
+    } else {
+        upper - lower
+    }
+}
+
+/// Whether a candidate's judgement failed in a way that passes over it
+/// rather than stopping the run: numerical trouble, or a worst case the
+/// analysis does not compute (a minimising adversary with a cycle outside
+/// the target that earns nothing or less, method.md section 9).
+fn passes_over(error: &OptimiseError) -> bool {
+    error.is_numerical()
+        || matches!(
+            error,
+            OptimiseError::Certify(CertifyError::Mdp(MdpError::RewardCycle(_)))
+        )
+}
+
+/// The evaluator of `objective` on `structure`'s supports.
 fn evaluator(
     game: &Posg,
     objective: ExpectedReward<'_>,
-    defender: &Fsc,
+    structure: &Structure,
     settings: &Settings,
 ) -> Result<Evaluator, OptimiseError> {
     Ok(Evaluator::for_expected_reward(
         game,
         objective.target,
         objective.rewards,
-        &Support::of(defender),
-        &Support::of(&only_adversary(game)),
+        &Support::of(&structure.defender),
+        &Support::of(&structure.adversary),
         &settings.solver_settings(),
     )?)
-}
-
-/// The one-node controller of a game without adversary's adversary.
-fn only_adversary(game: &Posg) -> Fsc {
-    Fsc::uniform_enabled(crate::controller::Role::Adversary, 1, game.adversary())
-}
-
-/// The expected reward of `defender`, evaluated afresh on its own support.
-fn exact_value(
-    game: &Posg,
-    objective: ExpectedReward<'_>,
-    defender: &Fsc,
-    settings: &Settings,
-) -> Result<Evaluation, OptimiseError> {
-    Ok(exact_value_and_work(game, objective, defender, settings)?.0)
 }
 
 /// One start's view of the shared observer: each record, marked with the

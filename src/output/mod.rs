@@ -24,8 +24,8 @@ pub use directory::{
     Abandoned, OutputDirectory, OutputError, abandon_uncommitted, create_dir, write_file,
 };
 pub use plot::{
-    CurvePlot, PROBABILITY_AXIS, PlotFormat, PlotSize, Returned, SweepPoint, Title, plot_curve,
-    plot_sweep, reward_axis,
+    CurvePlot, PROBABILITY_AXIS, PlotFormat, PlotSize, Returned, ReturnedValue, SweepPoint, Title,
+    plot_curve, plot_sweep, reward_axis,
 };
 
 use std::fs::File;

@@ -144,10 +144,21 @@ pub struct Returned {
     pub worst_case: f64,
     /// Its certified bracket (method.md section 6), when computed.
     pub certified: Option<Bracket>,
-    /// Whether `worst_case` is the defender's exact value (a game without
-    /// adversary: an expected reward, method.md section 9), not an
-    /// estimate; the legend says which.
-    pub exact: bool,
+    /// What `worst_case` is where no bracket is drawn; the legend says it.
+    pub kind: ReturnedValue,
+}
+
+/// What a returned defender's single value is ([`Returned::worst_case`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ReturnedValue {
+    /// A best-response estimate of its worst case.
+    Estimated,
+    /// Its exact value (a game without adversary: an expected reward,
+    /// method.md section 9).
+    Exact,
+    /// What it guarantees against every adversary, certified (an expected
+    /// reward on a game with an adversary, method.md section 9).
+    Guaranteed,
 }
 
 /// `curve.svg` of one structure: the shaded band `[certified lower bound,

@@ -15,6 +15,7 @@ use super::{
     Watch, run,
 };
 use crate::certify::Bracket;
+use crate::certify::reward::RewardCertificate;
 use crate::controller::{self, Fsc};
 use crate::game::Posg;
 use crate::ltl::props::Property;
@@ -23,8 +24,8 @@ use crate::optimise::{
     StructureOutcome, StructureReport, optimise_expected_reward,
 };
 use crate::output::{
-    CurveCsv, CurvePlot, OutputError, PROBABILITY_AXIS, PlotFormat, PlotSize, Returned, Title,
-    counted, create_dir, plot_curve, reward_axis, write_file,
+    CurveCsv, CurvePlot, OutputError, PROBABILITY_AXIS, PlotFormat, PlotSize, Returned,
+    ReturnedValue, Title, counted, create_dir, plot_curve, reward_axis, write_file,
 };
 
 /// The files of a solve directory whose plots are in `format` (`None`:
@@ -157,7 +158,7 @@ impl SolveDirectory<'_> {
                 Returned {
                     worst_case: report.worst_case,
                     certified,
-                    exact: false,
+                    kind: ReturnedValue::Estimated,
                 }
             });
             // The records of the kept start (start 0's for a structure
@@ -252,7 +253,8 @@ impl SolveDirectory<'_> {
 
 impl SolveDirectory<'_> {
     /// Runs the expected-reward optimiser ([`optimise_expected_reward`],
-    /// method.md section 9) for a defender of `nodes` nodes with `observer`
+    /// method.md section 9) for a defender of `nodes` nodes (the adversary's
+    /// in its gradient play of `adversary_nodes`) with `observer`
     /// beside `curve.csv`, then draws the best start's curve (`curve.svg`,
     /// its value axis named by the reward and its direction) and writes
     /// `defender.fsc.json`, `defender.dot` and `summary.json`.
@@ -260,7 +262,7 @@ impl SolveDirectory<'_> {
         &self,
         game: &Posg,
         objective: &RewardObjective,
-        nodes: usize,
+        (nodes, adversary_nodes): (usize, usize),
         settings: &Settings,
         cancel: &Cancel,
         observer: Box<dyn Observer + Send>,
@@ -277,7 +279,7 @@ impl SolveDirectory<'_> {
         let solution = optimise_expected_reward(
             game,
             objective.optimised(),
-            nodes,
+            (nodes, adversary_nodes),
             settings,
             cancel,
             &mut observers,
@@ -317,6 +319,7 @@ impl SolveDirectory<'_> {
             settings,
             value: solution.value,
             error_bound: solution.error_bound,
+            certificate: solution.certificate.as_ref(),
             best_start: solution.best_start,
             starts: &solution.starts,
             dropped_starts: &solution.dropped_starts,
@@ -372,17 +375,38 @@ impl SolveDirectory<'_> {
         let plot = CurvePlot {
             title: &title,
             records: &records,
-            returned: Some(Returned {
-                worst_case: solution.value,
-                certified: None,
-                exact: true,
-            }),
+            returned: Some(reward_returned(solution)),
             seconds_axis: self.seconds_axis,
             size: self.plot_size,
             quantity: &quantity,
             minimise: objective.minimise,
         };
         plot_curve(&self.path.join(format!("curve.{format}")), format, &plot)
+    }
+}
+
+/// What `curve.svg` shows of an expected-reward run's returned defender: on
+/// a game without adversary its exact value; on a game with one, the
+/// bracket between what it guarantees and what no defender beats against
+/// the adversary found, where both are finite, else its guarantee.
+fn reward_returned(solution: &RewardSolution) -> Returned {
+    let Some(certificate) = &solution.certificate else {
+        return Returned {
+            worst_case: solution.value,
+            certified: None,
+            kind: ReturnedValue::Exact,
+        };
+    };
+    let bracket = (certificate.best_possible)
+        .filter(|best| best.is_finite() && certificate.guaranteed.is_finite())
+        .map(|best| Bracket {
+            certified_lower: best.min(certificate.guaranteed),
+            upper_bound: best.max(certificate.guaranteed),
+        });
+    Returned {
+        worst_case: certificate.guaranteed,
+        certified: bracket,
+        kind: ReturnedValue::Guaranteed,
     }
 }
 
@@ -397,11 +421,17 @@ struct RewardSummary<'a> {
     query: Option<QueryValue>,
     defender_nodes: usize,
     settings: &'a Settings,
-    /// The returned defender's expected reward, evaluated exactly.
+    /// What the returned defender guarantees: its expected reward,
+    /// evaluated exactly, on a game without adversary; its certified worst
+    /// case against every adversary on a game with one.
     #[serde(serialize_with = "crate::value::number_or_inf")]
     value: f64,
-    /// A bound on `|value - exact value|` (method.md section 8).
+    /// A bound on `|value - exact value|` (method.md section 8), or the
+    /// width of the worst case's certified bracket.
     error_bound: f64,
+    /// On a game with an adversary: the returned defender's certificate.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    certificate: Option<&'a RewardCertificate>,
     best_start: usize,
     starts: &'a [RewardStart],
     /// The starts dropped for numerical trouble, with why.

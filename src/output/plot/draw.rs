@@ -17,7 +17,7 @@ use plotters::prelude::*;
 use plotters::style::colors::colormaps::ViridisRGB;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
-use super::{CurvePlot, PlotFormat, PlotSize, Returned, SweepPoint, Title};
+use super::{CurvePlot, PlotFormat, PlotSize, Returned, ReturnedValue, SweepPoint, Title};
 use crate::optimise::{IterationRecord, RecordSource};
 use crate::output::OutputError;
 
@@ -411,10 +411,10 @@ fn returned_entry(
             format!("[{:.6}, {:.6}]", b.certified_lower, b.upper_bound),
         ]),
         None => lines.extend([
-            if returned.exact {
-                "exact:"
-            } else {
-                "estimated:"
+            match returned.kind {
+                ReturnedValue::Estimated => "estimated:",
+                ReturnedValue::Exact => "exact:",
+                ReturnedValue::Guaranteed => "guaranteed:",
             }
             .to_string(),
             format!("{:.6}", returned.worst_case),
@@ -1266,7 +1266,7 @@ mod tests {
         let returned = Some(Returned {
             worst_case: 0.5,
             certified: None,
-            exact: false,
+            kind: ReturnedValue::Estimated,
         });
         let size = PlotSize {
             width: 1200,
