@@ -230,7 +230,7 @@ fn solve_certifies_the_value_of_a_game_with_a_mixed_optimum() {
     // Sound: no defender guarantees less than 8/3, and no defender gets
     // below the bound; found: within 1% of the optimum.
     assert!(
-        guaranteed >= 8.0 / 3.0 - 1e-9 && guaranteed < 8.0 / 3.0 * 1.01,
+        (8.0 / 3.0 - 1e-9..8.0 / 3.0 * 1.01).contains(&guaranteed),
         "{summary}"
     );
     assert!(

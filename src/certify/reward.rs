@@ -70,7 +70,7 @@ pub fn optimal_response(
     let reached = reached_target(game, target, &product);
     let step_rewards = step_rewards(game, rewards, controller, fixed, &product);
     let optimal = optimal_total_reward(&product.mdp, &reached, &step_rewards, optimum, settings)?;
-    let (lower, upper) = optimal.from_initial(&product.initial);
+    let (lower, upper) = optimal.of_initial(&product.initial);
     Ok(RewardBound {
         lower,
         upper,

@@ -119,7 +119,7 @@ impl TotalReward {
     /// `initial` (`(state, probability)` pairs), widened by the rounding of
     /// the sums; `(+inf, +inf)` where an initial state of positive
     /// probability has an infinite value.
-    pub fn from_initial(&self, initial: &[(usize, f64)]) -> (f64, f64) {
+    pub fn of_initial(&self, initial: &[(usize, f64)]) -> (f64, f64) {
         let weighted = |values: &[f64], direction: f64| {
             let (mut sum, mut magnitude) = (0.0, 0.0);
             for &(s, p) in initial.iter().filter(|&&(_, p)| p > 0.0) {
@@ -736,11 +736,11 @@ mod tests {
         let target = [false, true];
         let max = optimal_total_reward(&m, &target, &[1.0, 5.0, 0.0], Optimum::Max, &settings());
         assert_eq!(
-            max.unwrap().from_initial(&[(0, 1.0)]),
+            max.unwrap().of_initial(&[(0, 1.0)]),
             (f64::INFINITY, f64::INFINITY)
         );
         let min = optimal_total_reward(&m, &target, &[1.0, 5.0, 0.0], Optimum::Min, &settings());
-        let (low, high) = min.unwrap().from_initial(&[(0, 1.0)]);
+        let (low, high) = min.unwrap().of_initial(&[(0, 1.0)]);
         assert!(low <= 5.0 && 5.0 <= high && high - low < 1e-9);
         for cycle_reward in [0.0, -1.0] {
             let rewards = [cycle_reward, 5.0, 0.0];
@@ -859,12 +859,11 @@ mod tests {
                 .max_by(|&x, &y| a[x][col].abs().total_cmp(&a[y][col].abs()))
                 .unwrap();
             a.swap(col, pivot);
-            for row in 0..k {
-                if row != col {
-                    let factor = a[row][col] / a[col][col];
-                    for c in col..=k {
-                        a[row][c] -= factor * a[col][c];
-                    }
+            let pivot_row = a[col].clone();
+            for (_, entries) in a.iter_mut().enumerate().filter(|&(row, _)| row != col) {
+                let factor = entries[col] / pivot_row[col];
+                for (entry, &p) in entries[col..].iter_mut().zip(&pivot_row[col..]) {
+                    *entry -= factor * p;
                 }
             }
         }
