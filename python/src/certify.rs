@@ -3,6 +3,7 @@
 //! (section 7) and the LTL translation, as the commands of the same names.
 
 use posg_fsc::certify::certificate;
+use posg_fsc::certify::reward::reward_certificate;
 use posg_fsc::controller::Role;
 use posg_fsc::ltl;
 use posg_fsc::synthesis::{self, Mode};
@@ -27,6 +28,14 @@ use crate::objective::{self, Asked};
 /// (every belief explored); `None` on a game with an adversary, or where
 /// the bound cannot be had (docs/method.md section 6).
 /// Controllers are `Controller`s, paths or `"uniform:K"`.
+///
+/// With an expected-reward query (`props='R{"r"}min=? [F "goal"]'`, or
+/// `Rmax`; docs/method.md section 9) the dict is the reward's certificate,
+/// as `posg-fsc certify` prints it: `query`, `minimise`, `guaranteed` (the
+/// cost the defender never exceeds, or the reward it always gets, against
+/// every adversary), `best_possible` (with an adversary: the cost no
+/// defender gets below, or the reward none exceeds, against it; else
+/// `None`), and the brackets behind them, `worst_case` and `best_response`.
 #[pyfunction]
 #[pyo3(signature = (game, ltl = None, defender = None, adversary = None, *, props = None))]
 pub fn certify<'py>(
@@ -37,7 +46,7 @@ pub fn certify<'py>(
     adversary: Option<&Bound<'py, PyAny>>,
     props: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let ltl = &Asked::from_keywords(ltl, props)?.formula("certify")?;
+    let asked = Asked::from_keywords(ltl, props)?;
     let defender = defender.ok_or_else(|| {
         raise(
             Kind::Settings,
@@ -49,6 +58,24 @@ pub fn certify<'py>(
     let adversary = adversary
         .map(|a| Controller::resolve("adversary", Some(a), posg, Role::Adversary))
         .transpose()?;
+    if let (Some(query), Some(property)) = (asked.reward(), asked.property()) {
+        let reward = objective::reward(py, posg, query, property.maximise, false)?;
+        let certificate = compute(py, || {
+            let objective = (&reward.target, &reward.rewards, reward.minimise);
+            let adversaries: Vec<_> = adversary.iter().collect();
+            let settings = SolverSettings::default();
+            reward_certificate(posg, objective, &defender, &adversaries, &settings)
+        })?;
+        let report = PyDict::new(py);
+        report.set_item("query", &reward.description)?;
+        report.update(
+            serialised(py, &certificate)?
+                .cast_into::<PyDict>()?
+                .as_mapping(),
+        )?;
+        return Ok(report);
+    }
+    let ltl = &asked.formula("certify")?;
     let objective = objective::automata(py, posg, ltl, false, true)?;
     let not_phi = objective
         .not_phi

@@ -213,3 +213,27 @@ label "goal" = s>0;
     assert evaluation.value == 3.5  # uniform over {probe, guess}: (2 + 5) / 2
     with pytest.raises(posg_fsc.GameFormatError, match="stormpy"):
         posg_fsc.Game.from_stormpy("not a model")
+
+
+TWO_ROADS = REPOSITORY / "tests" / "data" / "rewards" / "two-roads.posg.json"
+
+
+def test_a_cost_on_a_game_is_certified_against_every_adversary_as_the_cli_does(cli, tmp_path):
+    # Each round the defender takes a road the adversary may guard: the
+    # game's value is 8/3, at the mixed strategy (docs/method.md section 9).
+    game = posg_fsc.Game.load(TWO_ROADS)
+    props = 'R{"cost"}min=? [F "goal"]'
+    result = posg_fsc.solve(game, props=props, seed=1, out=tmp_path / "out")
+    certificate = result.certificate
+    assert result.value == certificate["guaranteed"]
+    assert 8 / 3 - 1e-9 <= certificate["guaranteed"] < 8 / 3 * 1.01
+    assert certificate["best_possible"] <= 8 / 3 + 1e-9
+    defender = tmp_path / "out" / "defender.fsc.json"
+    by_python = posg_fsc.certify(game, props=props, defender=defender, adversary="uniform:1")
+    (tmp_path / "cost.props").write_text(props + "\n")
+    by_cli = cli_json(cli, "certify", TWO_ROADS, "--props", tmp_path / "cost.props", "--defender",
+                      defender, "--adversary", "uniform:1")
+    for key in ["guaranteed", "best_possible", "minimise", "query"]:
+        assert by_python[key] == by_cli[key]
+    assert by_python["guaranteed"] == pytest.approx(certificate["guaranteed"], abs=1e-12)
+    assert by_python["best_possible"] == pytest.approx(8 / 3, abs=1e-9)
