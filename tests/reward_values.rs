@@ -523,6 +523,12 @@ fn solve_finds_the_probing_controller_whose_cost_is_one() {
     let last = summary["last_curve_row"].as_str().unwrap();
     assert!(last.ends_with(",1.0,,,10.0,rounding,true"), "{last}");
     assert_eq!(summary["starts"].as_array().unwrap().len(), 4);
+    // The defender that sees the side guesses right at once: no defender
+    // of any memory gets below 0, and the certificate says so.
+    let certificate = &summary["certificate"];
+    let best = certificate["best_possible"].as_f64().unwrap();
+    assert!(best.abs() < 1e-9, "{certificate}");
+    assert!((certificate["guaranteed"].as_f64().unwrap() - 1.0).abs() < 1e-9);
 }
 
 #[test]

@@ -29,7 +29,7 @@ use std::time::Instant;
 
 use serde::Serialize;
 
-use super::{CertifyError, Product};
+use super::{CertifyError, MdpError, Product};
 use crate::automaton::Dra;
 use crate::controller::{Fsc, Mixture, Role, Support};
 use crate::game::{AdversaryAction, DefenderAction, Posg, RewardModel};
@@ -164,7 +164,9 @@ fn option_number_or_inf<S: serde::Serializer>(
 
 /// The [`RewardCertificate`] of `defender` (and of the best bound over
 /// `adversaries`, when any are given) for the expected reward of `rewards`
-/// until the target of `target`, minimised or maximised by the defender. A
+/// until the target of `target`, minimised or maximised by the defender.
+/// An adversary against which the defender's minimum is refused
+/// ([`MdpError::RewardCycle`]) bounds nothing and is passed over. A
 /// guarantee better than the best possible is an error
 /// ([`CertifyError::Inconsistent`]): exact numbers never are.
 pub fn reward_certificate(
@@ -193,7 +195,13 @@ pub fn reward_certificate(
     let mut best_response: Option<RewardBound> = None;
     for adversary in adversaries {
         let fixed = (*adversary, Role::Adversary);
-        let bound = optimal_response(game, objective, fixed, defender_optimum, settings)?;
+        let bound = match optimal_response(game, objective, fixed, defender_optimum, settings) {
+            Ok(bound) => bound,
+            // A minimum this analysis refuses bounds nothing: that
+            // adversary is passed over.
+            Err(CertifyError::Mdp(MdpError::RewardCycle(_))) => continue,
+            Err(error) => return Err(error),
+        };
         if best_response.is_none_or(|best| possible(&bound) > possible(&best)) {
             best_response = Some(bound);
         }

@@ -14,11 +14,10 @@ use std::time::Instant;
 
 use clap::Args;
 
-use posg_fsc::certify::reward::RewardCertificate;
 use posg_fsc::controller::{self, Role};
 use posg_fsc::game::Posg;
 use posg_fsc::ltl::props::Property;
-use posg_fsc::optimise::{Cancel, Observer, Settings};
+use posg_fsc::optimise::{Cancel, Observer, RewardSolution, Settings};
 use posg_fsc::output::OutputDirectory;
 use posg_fsc::pipeline::directory::SolveDirectory;
 use posg_fsc::pipeline::progress::Progress;
@@ -286,25 +285,41 @@ fn restated_query(property: &Property, query: &QueryValue) -> String {
     )
 }
 
-/// What the certified value of an expected-reward solve on a game with an
-/// adversary means, in words: the returned defender's guarantee against
-/// every adversary, and the bound no defender beats against the
-/// adversaries found.
-fn certified_words(certificate: &RewardCertificate, width: f64) -> String {
+/// What the value of an expected-reward solve means, in words: on a game
+/// without adversary the returned defender's exact expected reward, on a
+/// game with one its certified guarantee against every adversary; then the
+/// bound no defender beats (against the adversaries found, or seeing the
+/// state of a game without adversary).
+fn reward_words(game: &Posg, solution: &RewardSolution) -> String {
+    let width = solution.error_bound;
+    let Some(certificate) = &solution.certificate else {
+        return format!("the returned defender's expected reward, exact within {width:.1e}");
+    };
     let (guarantee, beyond) = match certificate.minimise {
         true => ("at most", "below"),
         false => ("at least", "above"),
     };
-    let bound = match certificate.best_possible {
-        Some(best) => {
-            format!("; no defender gets {beyond} {best:.6} against the adversaries found")
-        }
-        None => String::new(),
+    let (what, against) = match game.has_adversary() {
+        true => (
+            format!(
+                "what the returned defender guarantees against every adversary: {guarantee} \
+                 this, certified within {width:.1e}"
+            ),
+            "against the adversaries found",
+        ),
+        false => (
+            format!("the returned defender's expected reward, exact within {width:.1e}"),
+            "even seeing the state",
+        ),
     };
-    format!(
-        "what the returned defender guarantees against every adversary: {guarantee} this, \
-         certified within {width:.1e}{bound}"
-    )
+    match certificate.best_possible {
+        // A bound that rounds to 0 at the digits shown reads 0, not -0.
+        Some(best) => {
+            let shown = if best.abs() < 5e-7 { 0.0 } else { best };
+            format!("{what}; no defender gets {beyond} {shown:.6} {against}")
+        }
+        None => what,
+    }
 }
 
 /// `solve` of an expected-reward query (docs/method.md section 9): the
@@ -370,13 +385,7 @@ fn solve_expected_reward(
         eprintln!("warning: dropped for numerical trouble: {dropped}");
     }
     let best = (solution.starts.iter()).find(|start| start.start == solution.best_start);
-    let what = match &solution.certificate {
-        None => format!(
-            "the returned defender's expected reward, exact within {:.1e}",
-            solution.error_bound
-        ),
-        Some(certificate) => certified_words(certificate, solution.error_bound),
-    };
+    let what = reward_words(game, &solution);
     let how = match best {
         Some(best) => format!(
             "{:.6} ({what}; {}, best of {}, {} of start {})",

@@ -91,9 +91,12 @@ pub struct RewardSolution {
     /// A bound on `|value - exact value|` (method.md section 8); on a game
     /// with an adversary, the width of the worst case's certified bracket.
     pub error_bound: f64,
-    /// On a game with an adversary: the returned defender's certificate,
-    /// with the bound from the best start's adversary
-    /// ([`RewardCertificate::best_possible`]).
+    /// The returned defender's certificate: its worst case against every
+    /// adversary (on a game without adversary, its exact value again) and
+    /// the bound from the defender that sees the state against the
+    /// adversaries found and the uniform one
+    /// ([`RewardCertificate::best_possible`]); `None` only where the full
+    /// support's reward is infinite.
     pub certificate: Option<RewardCertificate>,
     /// On a game with an adversary: the starts' adversaries (each the best
     /// response to its start's best defender), which bound what any
@@ -146,21 +149,25 @@ pub fn optimise_expected_reward(
         let sizes = (nodes, adversary_nodes);
         grown(game, objective, sizes, settings, cancel, observer, started)?
     };
+    // The bound of the defender that sees the state against the
+    // adversaries found and the uniform one (a game without adversary's
+    // only one: the MDP bound); on a game with an adversary the certified
+    // worst case is the value returned.
+    let uniform = Fsc::uniform_enabled(Role::Adversary, adversary_nodes, game.adversary());
+    let tried: Vec<&Fsc> = solution.adversaries.iter().chain([&uniform]).collect();
+    let certificate = reward_certificate(
+        game,
+        (objective.target, objective.rewards, objective.minimise),
+        &solution.defender,
+        &tried,
+        &settings.solver_settings(),
+    )?;
     if game.has_adversary() {
-        let uniform = Fsc::uniform_enabled(Role::Adversary, adversary_nodes, game.adversary());
-        let tried: Vec<&Fsc> = solution.adversaries.iter().chain([&uniform]).collect();
-        let certificate = reward_certificate(
-            game,
-            (objective.target, objective.rewards, objective.minimise),
-            &solution.defender,
-            &tried,
-            &settings.solver_settings(),
-        )?;
         solution.value = certificate.guaranteed;
         solution.error_bound =
             bracket_width(certificate.worst_case.lower, certificate.worst_case.upper);
-        solution.certificate = Some(certificate);
     }
+    solution.certificate = Some(certificate);
     observer.observe(&IterationRecord {
         start: solution.best_start,
         iteration: iterations,
@@ -500,10 +507,10 @@ fn run_start(
 }
 
 /// The best of `defender` and its roundings ([`rounded_candidates`]: the
-/// partial and the argmax roundings, each on its own support) by expected
-/// reward, evaluated exactly; a rounding whose expected reward is infinite
-/// (it dropped every way to the target somewhere) is left out. Returns the
-/// defender, its evaluation and where it came from.
+/// partial and the argmax roundings, each on its own support) by what it
+/// guarantees ([`judged`]; an infinite value counts as the worst cost and
+/// the best reward). Returns the defender, its judgement and where it came
+/// from.
 fn rounded(
     game: &Posg,
     objective: ExpectedReward<'_>,
@@ -630,10 +637,11 @@ fn random_deterministic(support: &Fsc, rng: &mut ChaCha8Rng) -> Fsc {
 /// Hill-climbing over deterministic controllers from the argmax rounding
 /// of `from`'s defender: each pass visits the blocks `(g, o)` in order and,
 /// in each, every other `(next node, enabled action)` choice, moving to the
-/// first that improves the expected reward in the query's direction by
-/// more than both values' error bounds; passes repeat until one improves
-/// nothing, the evaluations' work (each evaluation's GMC states, at
-/// least `floor`) reaches `budget` (0: no limit) or the run is cancelled.
+/// first that improves what the defender guarantees ([`judged`]) in the
+/// query's direction by more than both values' error bounds; passes repeat
+/// until one improves nothing, the judgements' work (each one's explored
+/// states, at least `floor`) reaches `budget` (0: no limit) or the run is
+/// cancelled.
 /// The gradient's optima are often randomised; where a deterministic
 /// controller beats them in a basin the ascent did not find, this finds
 /// it. Returns the better of `from` and the climb's end, and its work.

@@ -375,7 +375,7 @@ impl SolveDirectory<'_> {
         let plot = CurvePlot {
             title: &title,
             records: &records,
-            returned: Some(reward_returned(solution)),
+            returned: Some(reward_returned(game, solution)),
             seconds_axis: self.seconds_axis,
             size: self.plot_size,
             quantity: &quantity,
@@ -389,8 +389,12 @@ impl SolveDirectory<'_> {
 /// a game without adversary its exact value; on a game with one, the
 /// bracket between what it guarantees and what no defender beats against
 /// the adversary found, where both are finite, else its guarantee.
-fn reward_returned(solution: &RewardSolution) -> Returned {
-    let Some(certificate) = &solution.certificate else {
+fn reward_returned(game: &Posg, solution: &RewardSolution) -> Returned {
+    let Some(certificate) = solution
+        .certificate
+        .as_ref()
+        .filter(|_| game.has_adversary())
+    else {
         return Returned {
             worst_case: solution.value,
             certified: None,
@@ -429,7 +433,7 @@ struct RewardSummary<'a> {
     /// A bound on `|value - exact value|` (method.md section 8), or the
     /// width of the worst case's certified bracket.
     error_bound: f64,
-    /// On a game with an adversary: the returned defender's certificate.
+    /// The returned defender's certificate ([`RewardSolution::certificate`]).
     #[serde(skip_serializing_if = "Option::is_none")]
     certificate: Option<&'a RewardCertificate>,
     best_start: usize,
