@@ -12,7 +12,9 @@ For each model and k, one tool at a time:
 
 * posg-fsc: `posg-fsc solve model.drn --props sketch.props --def-nodes K
   --out DIR --quiet` (docs/method.md section 9); its value is summary.json's
-  `value`, the returned defender's expected reward evaluated exactly;
+  `value`, the returned defender's expected reward evaluated exactly, and
+  `mdp_bound` its certificate's `best_possible`: what no controller of any
+  memory beats, from the defender that sees the state;
 * Storm (stormpy 2.0) re-evaluates that defender: `posg-fsc export-gmc
   model.drn --defender DIR/defender.fsc.json` writes the chain with the
   one-step rewards, and Storm checks `R{"r"}=? [F T]` in its fresh initial
@@ -141,7 +143,9 @@ def run_posg(directory, k, limit):
                 "wall_seconds": wall, "cpu_seconds": cpu}
     with open(os.path.join(out, "summary.json")) as handle:
         summary = json.load(handle)
+    bound = (summary.get("certificate") or {}).get("best_possible")
     return {"status": "ok", "value": float(summary["value"]), "error_bound": summary["error_bound"],
+            "bound": None if bound is None else float(bound),
             "wall_seconds": wall, "cpu_seconds": cpu, "out": out}
 
 
@@ -232,6 +236,7 @@ def main():
             row = {
                 "model": name, "half": half, "query": props, "nodes": k,
                 "posg_fsc": posg.get("value"), "posg_fsc_error_bound": posg.get("error_bound"),
+                "mdp_bound": posg.get("bound"),
                 "storm_on_posg_fsc_controller": storm,
                 "storm_difference": None if storm is None else abs(storm - posg["value"]),
                 "paynt": paynt["value"], "paynt_status": paynt["status"],

@@ -166,7 +166,8 @@ fn option_number_or_inf<S: serde::Serializer>(
 /// `adversaries`, when any are given) for the expected reward of `rewards`
 /// until the target of `target`, minimised or maximised by the defender.
 /// An adversary against which the defender's minimum is refused
-/// ([`MdpError::RewardCycle`]) bounds nothing and is passed over. A
+/// ([`MdpError::RewardCycle`]) or cannot be solved to the tolerance
+/// ([`CertifyError::is_numerical`]) bounds nothing and is passed over. A
 /// guarantee better than the best possible is an error
 /// ([`CertifyError::Inconsistent`]): exact numbers never are.
 pub fn reward_certificate(
@@ -197,8 +198,9 @@ pub fn reward_certificate(
         let fixed = (*adversary, Role::Adversary);
         let bound = match optimal_response(game, objective, fixed, defender_optimum, settings) {
             Ok(bound) => bound,
-            // A minimum this analysis refuses bounds nothing: that
-            // adversary is passed over.
+            // A minimum this analysis refuses, or cannot solve to the
+            // tolerance, bounds nothing: that adversary is passed over.
+            Err(error) if error.is_numerical() => continue,
             Err(CertifyError::Mdp(MdpError::RewardCycle(_))) => continue,
             Err(error) => return Err(error),
         };

@@ -18,12 +18,13 @@
 //!    cost `+inf`) and are dropped. What remains of a minimum may hold an
 //!    end component outside `B`: staying in it forever misses `B`, so it
 //!    costs `+inf`, and leaving it after `n` rounds costs `n` times its
-//!    rounds' reward. Where every action inside such a component earns a
-//!    positive reward, staying is never worth it and the minimum is
-//!    attained; otherwise (a round that earns nothing or less) the minimum
-//!    may be `-inf` or need the component collapsed, and the function
-//!    refuses it ([`MdpError::RewardCycle`]) rather than return a number it
-//!    cannot prove.
+//!    rounds' reward. Where no action inside such a component loses and
+//!    the actions that earn nothing form no end component of their own,
+//!    every round earns a positive reward, staying is never worth it and
+//!    the minimum is attained; otherwise (a round that earns nothing or
+//!    less) the minimum may be `-inf` or need the component collapsed, and
+//!    the function refuses it ([`MdpError::RewardCycle`]) rather than
+//!    return a number it cannot prove.
 //! 2. **Policy iteration** on the finite non-target states (the unknowns),
 //!    from a proper strategy (a backward search from `B` over the kept
 //!    actions gives each unknown an action with an edge to a state found
@@ -38,14 +39,17 @@
 //!    bound `x*` on one side.
 //! 3. **The certificate** bounds it on the other. With `T >= 0` a
 //!    potential (the expected number of steps to `B` under the last
-//!    strategy, or where that does not prove it, the largest over all
-//!    strategies) and `y = x + eps T` for a maximum (`x - eps T` for a
-//!    minimum), the Bellman operator `F` satisfies `F(y) <= y` (`>= y`)
-//!    when, for every kept action `a` of every unknown `s`,
+//!    strategy, or where that does not prove it, the largest over the
+//!    strategies that play actions within [`NEAR_OPTIMAL`] of the best)
+//!    and `y = x + eps T` for a maximum (`x - eps T` for a minimum), the
+//!    Bellman operator `F` of the model the policy systems solve (whose
+//!    self-loops leave the diagonal as the probability of leaving)
+//!    satisfies `F(y) <= y` (`>= y`) when, for every kept action `a` of
+//!    every unknown `s`,
 //!
 //!    ```text
-//!    g_a(s) <= eps d_a(s),   g_a(s) = +-(r(s, a) + sum_t P(t | s, a) x(t) - x(s)),
-//!                            d_a(s) = T(s) - sum_t P(t | s, a) T(t),
+//!    g_a(s) <= eps d_a(s),   g_a(s) = +-(r(s, a) + sum_{t != s} P(t | s, a) (x(t) - x(s))),
+//!                            d_a(s) = sum_{t != s} P(t | s, a) (T(s) - T(t)),
 //!    ```
 //!
 //!    and then `x* <= y` (`>= y`): `F` is monotone and its iterates from
@@ -53,8 +57,9 @@
 //!    positive reward or none is possible. Both sides are evaluated in
 //!    double precision and widened by a bound on their rounding, so the
 //!    check proves the inequality for the doubles `x` and `T` as they are;
-//!    the smallest admissible `eps` is taken. No admissible `eps` is an
-//!    error ([`MdpError::OptimalityUnproved`]), never a number.
+//!    the smallest admissible `eps` is taken. No admissible `eps` (or a
+//!    value or potential that is not finite) is an error
+//!    ([`MdpError::OptimalityUnproved`]), never a number.
 
 use super::{
     EndComponent, Mdp, MdpError, maximal_end_components, maximal_end_components_using,
@@ -173,7 +178,8 @@ pub fn optimal_total_reward(
     };
     let mut system = PolicySystem::new(mdp, &unknowns, &kept, &scaled)?;
     let threshold = REWARD_IMPROVEMENT_THRESHOLD * largest;
-    let (values, error) = system.iterate(mdp, rewards, optimum, threshold, &mut strategy)?;
+    let (values, error) =
+        system.iterate(mdp, rewards, (optimum, threshold), true, &mut strategy)?;
     let steps = system.expected_steps()?;
     let scale = Scale {
         kept: &kept,
@@ -263,8 +269,11 @@ fn components_within(mdp: &Mdp, unknowns: &[usize], kept: &[bool]) -> Vec<EndCom
 }
 
 /// An error where an end component among the unknowns (with kept actions
-/// only) has an action that earns no positive reward (module
-/// documentation, step 1).
+/// only) has an action that earns a negative reward, or where the actions
+/// that earn nothing form an end component of their own (module
+/// documentation, step 1). What passes has a positive reward on every
+/// round of every end component: each round uses an action that earns
+/// something, and none loses.
 fn check_cycles(
     mdp: &Mdp,
     unknowns: &[usize],
@@ -274,14 +283,24 @@ fn check_cycles(
     for component in components_within(mdp, unknowns, kept) {
         for (&s, actions) in component.states.iter().zip(&component.actions) {
             let first = mdp.global_actions(s).start;
-            if let Some(&a) = actions.iter().find(|&&a| rewards[first + a] <= 0.0) {
+            if let Some(&a) = actions.iter().find(|&&a| rewards[first + a] < 0.0) {
                 return Err(MdpError::RewardCycle(format!(
                     "state {s} lies in an end component outside the target whose action {a} \
-                     earns {}: the optimum may be -inf or need the component collapsed",
+                     earns {}: the optimum may be -inf",
                     rewards[first + a]
                 )));
             }
         }
+    }
+    let free: Vec<bool> = (kept.iter().zip(rewards))
+        .map(|(&k, &r)| k && r == 0.0)
+        .collect();
+    if let Some(component) = components_within(mdp, unknowns, &free).first() {
+        return Err(MdpError::RewardCycle(format!(
+            "states {:?} form an end component outside the target whose rounds earn nothing \
+             (collapsing it is not done)",
+            component.states
+        )));
     }
     Ok(())
 }
@@ -303,8 +322,10 @@ fn longest_steps(
     let ones = vec![1.0; mdp.num_state_actions()];
     let mut strategy = proper_start(mdp, target, unknowns, allowed)?;
     let mut system = PolicySystem::new(mdp, unknowns, allowed, settings)?;
+    // A potential needs no proved accuracy: the certificate's check makes
+    // its errors harmless.
     let threshold = REWARD_IMPROVEMENT_THRESHOLD;
-    system.iterate(mdp, &ones, Optimum::Max, threshold, &mut strategy)?;
+    system.iterate(mdp, &ones, (Optimum::Max, threshold), false, &mut strategy)?;
     system.expected_steps().map(Some)
 }
 
@@ -468,14 +489,16 @@ impl PolicySystem {
     }
 
     /// Policy iteration from the proper `strategy` (module documentation,
-    /// step 2); returns the last strategy's values on the unknowns and
-    /// their proved error bound, and leaves its system factorised.
+    /// step 2), switching for gains above `threshold`; returns the last
+    /// strategy's values on the unknowns and their error bound (proved to
+    /// the tolerance where `prove`, else that of a trial solve), and leaves
+    /// its system factorised.
     fn iterate(
         &mut self,
         mdp: &Mdp,
         rewards: &[f64],
-        optimum: Optimum,
-        threshold: f64,
+        (optimum, threshold): (Optimum, f64),
+        prove: bool,
         strategy: &mut [usize],
     ) -> Result<(Vec<f64>, f64), MdpError> {
         let mut x = vec![0.0; self.unknowns.len()];
@@ -494,8 +517,11 @@ impl PolicySystem {
                 &x,
                 strategy,
             ) {
+                if !prove {
+                    return Ok((x, bound));
+                }
                 let proved = self.solver_mut()?.solve(&rhs, &mut x)?;
-                return Ok((x, proved.error_bound.unwrap_or(0.0)));
+                return Ok((x, proved.error_bound.unwrap_or(f64::INFINITY)));
             }
         }
         Err(MdpError::NotConverged(MAX_ITERATIONS))
@@ -599,16 +625,26 @@ impl<'a> ByState<'a> {
         }
     }
 
-    /// `c + sum_t P(t | action) v(t) - v(s)` for unknown `s` (position
-    /// `i`), and the sum of its terms' magnitudes (for its rounding).
-    fn advance(&self, mdp: &Mdp, (i, action): (usize, usize), constant: f64) -> (f64, f64) {
-        let (mut sum, mut size) = (
-            constant - self.values[i],
-            constant.abs() + self.values[i].abs(),
-        );
-        for &(t, p) in mdp.global_distribution(action) {
-            sum += p * self.at(t);
-            size += (p * self.at(t)).abs();
+    /// `c + sum_{t != s} P(t | action) (v(t) - v(s))` for unknown `s`
+    /// (position `i`), the Bellman gap of the model the policy systems
+    /// solve (whose diagonal is the probability of leaving `s`, method.md
+    /// section 8), and the sum of its terms' magnitudes (for its rounding).
+    fn advance(
+        &self,
+        mdp: &Mdp,
+        (s, i, action): (usize, usize, usize),
+        constant: f64,
+    ) -> (f64, f64) {
+        let here = self.values[i];
+        let (mut sum, mut size) = (constant, constant.abs());
+        for &(t, p) in mdp
+            .global_distribution(action)
+            .iter()
+            .filter(|&&(t, _)| t != s)
+        {
+            let there = self.at(t);
+            sum += p * (there - here);
+            size += p * (there.abs() + here.abs());
         }
         (sum, size)
     }
@@ -622,7 +658,7 @@ impl Scale<'_> {
         let mut near = vec![false; mdp.num_state_actions()];
         for (i, &s) in unknowns.iter().enumerate() {
             for action in mdp.global_actions(s).filter(|&a| self.kept[a]) {
-                let (gain, _) = values.advance(mdp, (i, action), self.rewards[action]);
+                let (gain, _) = values.advance(mdp, (s, i, action), self.rewards[action]);
                 near[action] = self.optimum.sign() * gain >= -tau;
             }
         }
@@ -646,12 +682,17 @@ impl Scale<'_> {
         let (mut least, mut most) = (0.0_f64, f64::INFINITY);
         for (i, &s) in unknowns.iter().enumerate() {
             for action in mdp.global_actions(s).filter(|&a| self.kept[a]) {
-                let (gain, gain_size) = values.advance(mdp, (i, action), self.rewards[action]);
-                let (rise, rise_size) = potential.advance(mdp, (i, action), 0.0);
+                let (gain, gain_size) = values.advance(mdp, (s, i, action), self.rewards[action]);
+                let (rise, rise_size) = potential.advance(mdp, (s, i, action), 0.0);
                 let terms = mdp.global_distribution(action).len() + 3;
                 let rounding = terms as f64 * UNIT_ROUNDOFF * 1.01;
                 let g = sign * gain + rounding * gain_size;
                 let d = -rise - rounding * rise_size;
+                if !(g.is_finite() && d.is_finite()) {
+                    // A potential or a value that is not finite proves
+                    // nothing.
+                    return Ok(None);
+                }
                 if d > 0.0 {
                     least = least.max(g / d * (1.0 + 4.0 * UNIT_ROUNDOFF));
                 } else if g > 0.0 {
@@ -670,7 +711,8 @@ impl Scale<'_> {
                 .zip(steps)
                 .map(|(&v, &t)| {
                     let y = v + sign * eps * t;
-                    y + sign * 2.0 * UNIT_ROUNDOFF * (v.abs() + eps * t.abs())
+                    let rounding = 4.0 * UNIT_ROUNDOFF * (v.abs() + eps * t.abs());
+                    y + sign * (rounding + f64::MIN_POSITIVE)
                 })
                 .collect(),
         ))
@@ -747,6 +789,33 @@ mod tests {
             let min = optimal_total_reward(&m, &target, &rewards, Optimum::Min, &settings());
             assert!(matches!(min, Err(MdpError::RewardCycle(_))), "{min:?}");
         }
+    }
+
+    /// State 0 moves to 1 for nothing (action 0) or pays 10 for the target
+    /// (action 1); 1 moves back to 0 for 1 (action 0) or pays 5 for the
+    /// target (action 1). Every round of the cycle earns 1, though one of
+    /// its actions earns nothing: the minimum is attained, 5 from both.
+    #[test]
+    fn a_free_action_on_a_cycle_that_costs_is_accepted() {
+        let m = mdp(&[
+            &[&[(1, 1.0)], &[(2, 1.0)]],
+            &[&[(0, 1.0)], &[(2, 1.0)]],
+            &[&[(2, 1.0)]],
+        ]);
+        let rewards = [0.0, 10.0, 1.0, 5.0, 0.0];
+        let min = optimal_total_reward(
+            &m,
+            &[false, false, true],
+            &rewards,
+            Optimum::Min,
+            &settings(),
+        )
+        .unwrap();
+        for s in 0..2 {
+            assert!(min.lower[s] <= 5.0 && 5.0 <= min.upper[s], "{min:?}");
+            assert!(min.upper[s] - min.lower[s] < 1e-9, "{min:?}");
+        }
+        assert_eq!(min.strategy[..2], [0, 1]);
     }
 
     /// A random MDP: `n` states, the last one the target (absorbing), each

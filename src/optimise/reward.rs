@@ -155,19 +155,25 @@ pub fn optimise_expected_reward(
     // worst case is the value returned.
     let uniform = Fsc::uniform_enabled(Role::Adversary, adversary_nodes, game.adversary());
     let tried: Vec<&Fsc> = solution.adversaries.iter().chain([&uniform]).collect();
-    let certificate = reward_certificate(
+    let certified = reward_certificate(
         game,
         (objective.target, objective.rewards, objective.minimise),
         &solution.defender,
         &tried,
         &settings.solver_settings(),
-    )?;
-    if game.has_adversary() {
+    );
+    solution.certificate = match certified {
+        Ok(certificate) => Some(certificate),
+        // On a game without adversary the value is exact without it: a
+        // bound that cannot be had is left out.
+        Err(error) if !game.has_adversary() && error.is_numerical() => None,
+        Err(error) => return Err(error.into()),
+    };
+    if let Some(certificate) = solution.certificate.filter(|_| game.has_adversary()) {
         solution.value = certificate.guaranteed;
         solution.error_bound =
             bracket_width(certificate.worst_case.lower, certificate.worst_case.upper);
     }
-    solution.certificate = Some(certificate);
     observer.observe(&IterationRecord {
         start: solution.best_start,
         iteration: iterations,
@@ -509,8 +515,9 @@ fn run_start(
 /// The best of `defender` and its roundings ([`rounded_candidates`]: the
 /// partial and the argmax roundings, each on its own support) by what it
 /// guarantees ([`judged`]; an infinite value counts as the worst cost and
-/// the best reward). Returns the defender, its judgement and where it came
-/// from.
+/// the best reward), passing over those it cannot judge ([`passes_over`];
+/// the error of the first where none can be). Returns the defender, its
+/// judgement and where it came from.
 fn rounded(
     game: &Posg,
     objective: ExpectedReward<'_>,
@@ -518,21 +525,33 @@ fn rounded(
     settings: &Settings,
 ) -> Result<(Fsc, Evaluation, RecordSource), OptimiseError> {
     let sense = objective.sense();
-    let (evaluation, _) = judged(game, objective, &defender, settings)?;
-    let mut best = (defender, evaluation, RecordSource::Gradient);
-    for (_, candidate) in rounded_candidates(&best.0)? {
+    let roundings = rounded_candidates(&defender)?;
+    let candidates = std::iter::once((defender, RecordSource::Gradient)).chain(
+        roundings
+            .into_iter()
+            .map(|(_, c)| (c, RecordSource::Rounding)),
+    );
+    let mut best: Option<(Fsc, Evaluation, RecordSource)> = None;
+    let mut first_error = None;
+    for (candidate, source) in candidates {
         // An infinite value is the worst cost and the best reward (Storm's
         // convention, method.md section 9): the comparison sees both.
         let evaluation = match judged(game, objective, &candidate, settings) {
             Ok((evaluation, _)) => evaluation,
-            Err(error) if passes_over(&error) => continue,
+            Err(error) if passes_over(&error) => {
+                first_error.get_or_insert(error);
+                continue;
+            }
             Err(error) => return Err(error),
         };
-        if sense * evaluation.value > sense * best.1.value {
-            best = (candidate, evaluation, RecordSource::Rounding);
+        if best
+            .as_ref()
+            .is_none_or(|b| sense * evaluation.value > sense * b.1.value)
+        {
+            best = Some((candidate, evaluation, source));
         }
     }
-    Ok(best)
+    best.ok_or_else(|| first_error.unwrap_or(OptimiseError::NoStructure))
 }
 
 /// The better of `best` and the hill climbs ([`climb`]) from
