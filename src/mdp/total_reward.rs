@@ -18,13 +18,14 @@
 //!    cost `+inf`) and are dropped. What remains of a minimum may hold an
 //!    end component outside `B`: staying in it forever misses `B`, so it
 //!    costs `+inf`, and leaving it after `n` rounds costs `n` times its
-//!    rounds' reward. Where no action inside such a component loses and
-//!    the actions that earn nothing form no end component of their own,
-//!    every round earns a positive reward, staying is never worth it and
-//!    the minimum is attained; otherwise (a round that earns nothing or
-//!    less) the minimum may be `-inf` or need the component collapsed, and
-//!    the function refuses it ([`MdpError::RewardCycle`]) rather than
-//!    return a number it cannot prove.
+//!    rounds' reward. The end components whose actions earn nothing are
+//!    collapsed first, as Storm does ([`collapsed`]: the minimiser moves
+//!    inside one for free, to its best way out). Then, where no action
+//!    inside an end component loses, every round earns a positive reward,
+//!    staying is never worth it and the minimum is attained; where one
+//!    loses, the minimum may be `-inf` and the function refuses it
+//!    ([`MdpError::RewardCycle`]) rather than return a number it cannot
+//!    prove.
 //! 2. **Policy iteration** on the finite non-target states (the unknowns),
 //!    from a proper strategy (a backward search from `B` over the kept
 //!    actions gives each unknown an action with an edge to a state found
@@ -62,7 +63,7 @@
 //!    ([`MdpError::OptimalityUnproved`]), never a number.
 
 use super::{
-    EndComponent, Mdp, MdpError, maximal_end_components, maximal_end_components_using,
+    EndComponent, Mdp, MdpBuilder, MdpError, maximal_end_components, maximal_end_components_using,
     qualitative_reachability,
 };
 use crate::solver::{LinearSolver, SolverSettings, SparsePattern};
@@ -166,6 +167,26 @@ pub fn optimal_total_reward(
             "the reward of action {a} is not finite"
         )));
     }
+    if optimum == Optimum::Min {
+        let free = free_components(mdp, target, rewards)?;
+        if !free.is_empty() {
+            return collapsed(mdp, target, rewards, &free, settings);
+        }
+    }
+    optimum_without_free_cycles(mdp, target, rewards, optimum, settings)
+}
+
+/// [`optimal_total_reward`] where no end component of actions that earn
+/// nothing lies among a minimum's unknowns (module documentation, steps 1
+/// to 3).
+fn optimum_without_free_cycles(
+    mdp: &Mdp,
+    target: &[bool],
+    rewards: &[f64],
+    optimum: Optimum,
+    settings: &SolverSettings,
+) -> Result<TotalReward, MdpError> {
+    let n = mdp.num_states();
     let finite = finite_states(mdp, target, optimum)?;
     let kept = kept_actions(mdp, &finite);
     let unknowns: Vec<usize> = (0..n).filter(|&s| finite[s] && !target[s]).collect();
@@ -258,6 +279,115 @@ fn kept_actions(mdp: &Mdp, finite: &[bool]) -> Vec<bool> {
         .collect()
 }
 
+/// The end components of a minimum's unknowns whose actions earn nothing
+/// (kept actions of reward 0): the minimiser moves inside one for free.
+fn free_components(
+    mdp: &Mdp,
+    target: &[bool],
+    rewards: &[f64],
+) -> Result<Vec<EndComponent>, MdpError> {
+    let finite = finite_states(mdp, target, Optimum::Min)?;
+    let kept = kept_actions(mdp, &finite);
+    let unknowns: Vec<usize> = (0..mdp.num_states())
+        .filter(|&s| finite[s] && !target[s])
+        .collect();
+    let free: Vec<bool> = (kept.iter().zip(rewards))
+        .map(|(&k, &r)| k && r == 0.0)
+        .collect();
+    Ok(components_within(mdp, &unknowns, &free))
+}
+
+/// The minimum where the end components `free` earn nothing (Storm's
+/// collapse): the minimiser moves inside each for free, so every state of
+/// one has the same optimum, that of the best way out. The quotient MDP
+/// has one state per component, with the actions of its states that are
+/// not the component's own free ones (a positive reward inside it becomes
+/// a self-loop that costs); its optimum, brackets included, is the
+/// original's ([`optimum_without_free_cycles`]: it has no free component
+/// left, since a free one of the quotient would make a larger one of the
+/// original). The strategy leaves a component by the quotient's chosen
+/// action, from its state, and every other state of the component walks
+/// there along the component's free actions (almost surely, at no cost).
+fn collapsed(
+    mdp: &Mdp,
+    target: &[bool],
+    rewards: &[f64],
+    free: &[EndComponent],
+    settings: &SolverSettings,
+) -> Result<TotalReward, MdpError> {
+    let n = mdp.num_states();
+    let mut class = vec![usize::MAX; n];
+    let mut members: Vec<Vec<usize>> = Vec::new();
+    let mut internal = vec![false; mdp.num_state_actions()];
+    for component in free {
+        for (&s, actions) in component.states.iter().zip(&component.actions) {
+            class[s] = members.len();
+            let first = mdp.global_actions(s).start;
+            for &a in actions {
+                internal[first + a] = true;
+            }
+        }
+        members.push(component.states.clone());
+    }
+    for s in 0..n {
+        if class[s] == usize::MAX {
+            class[s] = members.len();
+            members.push(vec![s]);
+        }
+    }
+    let mut builder = MdpBuilder::new();
+    let mut origin = Vec::new();
+    let mut quotient_rewards = Vec::new();
+    for states in &members {
+        for &s in states {
+            for action in mdp.global_actions(s).filter(|&a| !internal[a]) {
+                let distribution = mdp.global_distribution(action);
+                builder.add_action(distribution.iter().map(|&(t, p)| (class[t], p)));
+                origin.push((s, action - mdp.global_actions(s).start));
+                quotient_rewards.push(rewards[action]);
+            }
+        }
+        builder.end_state();
+    }
+    let quotient = builder.build()?;
+    let quotient_target: Vec<bool> = members.iter().map(|m| target[m[0]]).collect();
+    let solved = optimum_without_free_cycles(
+        &quotient,
+        &quotient_target,
+        &quotient_rewards,
+        Optimum::Min,
+        settings,
+    )?;
+    let mut strategy = vec![0; n];
+    let predecessors = mdp.predecessors();
+    let mut routed = vec![false; n];
+    for (q, states) in members.iter().enumerate() {
+        let (exit, action) = origin[quotient.global_actions(q).start + solved.strategy[q]];
+        strategy[exit] = action;
+        routed[exit] = true;
+        // Backwards from the exit along the component's free actions.
+        let mut found = vec![exit];
+        let mut next = 0;
+        while next < found.len() {
+            let t = found[next];
+            next += 1;
+            for &(s, a) in predecessors.of(t) {
+                if class[s] == q && !routed[s] && internal[mdp.global_actions(s).start + a] {
+                    strategy[s] = a;
+                    routed[s] = true;
+                    found.push(s);
+                }
+            }
+        }
+        debug_assert!(found.len() == states.len(), "a component reaches its exit");
+    }
+    Ok(TotalReward {
+        lower: (0..n).map(|s| solved.lower[class[s]]).collect(),
+        upper: (0..n).map(|s| solved.upper[class[s]]).collect(),
+        strategy,
+    })
+}
+
 /// The end components among `unknowns` with `kept` actions only (where
 /// staying costs `+inf`, so only a minimum's have any).
 fn components_within(mdp: &Mdp, unknowns: &[usize], kept: &[bool]) -> Vec<EndComponent> {
@@ -269,11 +399,12 @@ fn components_within(mdp: &Mdp, unknowns: &[usize], kept: &[bool]) -> Vec<EndCom
 }
 
 /// An error where an end component among the unknowns (with kept actions
-/// only) has an action that earns a negative reward, or where the actions
-/// that earn nothing form an end component of their own (module
-/// documentation, step 1). What passes has a positive reward on every
-/// round of every end component: each round uses an action that earns
-/// something, and none loses.
+/// only) has an action that earns a negative reward (module
+/// documentation, step 1), or (a malformed call: [`collapsed`] removed
+/// them) where the actions that earn nothing form an end component of
+/// their own. What passes has a positive reward on every round of every
+/// end component: each round uses an action that earns something, and
+/// none loses.
 fn check_cycles(
     mdp: &Mdp,
     unknowns: &[usize],
@@ -296,9 +427,8 @@ fn check_cycles(
         .map(|(&k, &r)| k && r == 0.0)
         .collect();
     if let Some(component) = components_within(mdp, unknowns, &free).first() {
-        return Err(MdpError::RewardCycle(format!(
-            "states {:?} form an end component outside the target whose rounds earn nothing \
-             (collapsing it is not done)",
+        return Err(MdpError::Malformed(format!(
+            "states {:?} form an end component whose rounds earn nothing after the collapse",
             component.states
         )));
     }
@@ -769,9 +899,9 @@ mod tests {
 
     /// State 0 may loop (action 0) or go to the target (action 1). The
     /// maximum is infinite (looping misses the target); the minimum is
-    /// action 1's reward where the loop earns a positive reward, and
-    /// refused where it earns nothing (collapsing is not done) or less
-    /// (the minimum is `-inf`).
+    /// action 1's reward where the loop earns a positive reward or nothing
+    /// (collapsed: staying forever is not a way out), and refused where it
+    /// loses (the minimum is `-inf`).
     #[test]
     fn a_loop_makes_the_maximum_infinite_and_the_minimum_refused_unless_it_costs() {
         let m = mdp(&[&[&[(0, 1.0)], &[(1, 1.0)]], &[&[(1, 1.0)]]]);
@@ -784,11 +914,14 @@ mod tests {
         let min = optimal_total_reward(&m, &target, &[1.0, 5.0, 0.0], Optimum::Min, &settings());
         let (low, high) = min.unwrap().of_initial(&[(0, 1.0)]);
         assert!(low <= 5.0 && 5.0 <= high && high - low < 1e-9);
-        for cycle_reward in [0.0, -1.0] {
-            let rewards = [cycle_reward, 5.0, 0.0];
-            let min = optimal_total_reward(&m, &target, &rewards, Optimum::Min, &settings());
-            assert!(matches!(min, Err(MdpError::RewardCycle(_))), "{min:?}");
-        }
+        let free = optimal_total_reward(&m, &target, &[0.0, 5.0, 0.0], Optimum::Min, &settings());
+        let free = free.unwrap();
+        assert_eq!(free.strategy[0], 1);
+        let (low, high) = free.of_initial(&[(0, 1.0)]);
+        assert!(low <= 5.0 && 5.0 <= high && high - low < 1e-9);
+        let losing = [-1.0, 5.0, 0.0];
+        let min = optimal_total_reward(&m, &target, &losing, Optimum::Min, &settings());
+        assert!(matches!(min, Err(MdpError::RewardCycle(_))), "{min:?}");
     }
 
     /// State 0 moves to 1 for nothing (action 0) or pays 10 for the target
@@ -982,6 +1115,18 @@ mod tests {
             let (m, target, rewards) = random_mdp(seed, n, (0.25, 3.0));
             let result = optimal_total_reward(&m, &target, &rewards, Optimum::Min, &settings()).unwrap();
             assert_brackets(&result, &brute_force(&m, &target, &rewards, Optimum::Min));
+        }
+
+        /// Rewards of 0 a third of the time: the free end components are
+        /// collapsed, and nothing is refused.
+        #[test]
+        fn the_minimum_of_rewards_that_never_lose_is_the_best_strategy_s(seed in any::<u64>(), n in 2usize..7) {
+            let (m, target, rewards) = random_mdp(seed, n, (-1.0, 2.0));
+            let rewards: Vec<f64> = rewards.iter().map(|r| r.max(0.0)).collect();
+            let result = optimal_total_reward(&m, &target, &rewards, Optimum::Min, &settings()).unwrap();
+            assert_brackets(&result, &brute_force(&m, &target, &rewards, Optimum::Min));
+            let played = strategy_values(&m, &target, &rewards, &result.strategy);
+            assert_brackets(&result, &played);
         }
 
         #[test]
