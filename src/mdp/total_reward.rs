@@ -329,9 +329,9 @@ fn collapsed(
         }
         members.push(component.states.clone());
     }
-    for s in 0..n {
-        if class[s] == usize::MAX {
-            class[s] = members.len();
+    for (s, class) in class.iter_mut().enumerate() {
+        if *class == usize::MAX {
+            *class = members.len();
             members.push(vec![s]);
         }
     }
