@@ -25,7 +25,7 @@ its "=?"), or the path of such a file (docs/formats.md section 6). Every
 function takes `props=` instead of `ltl=`; `Pmin=? [PATH]` makes the
 complement of PATH the objective. An expected-reward query
 ('R{"steps"}min=? [F "goal"]', docs/method.md section 9) is taken by
-Game.evaluate and, on a game without adversary, by solve, so far."""
+Game.evaluate, certify and solve, so far."""
 
 class Error(Exception):
     """Base class of every error posg_fsc raises; the message is the one the
@@ -279,16 +279,23 @@ class Evaluation:
     """dV/d init_adv, shape (nodes,)."""
 
 class RewardSolveResult:
-    """The result of solve() for an expected-reward query (props=, on a game
-    without adversary; docs/method.md section 9), with the names of its
-    summary.json (docs/formats.md section 9)."""
+    """The result of solve() for an expected-reward query (props=;
+    docs/method.md section 9), with the names of its summary.json
+    (docs/formats.md section 9)."""
 
     defender: Controller
     """The best defender found."""
     value: float
-    """Its expected reward, evaluated exactly (inf where it is infinite)."""
+    """What it guarantees (inf where it is infinite): its expected reward,
+    evaluated exactly, on a game without adversary; its certified worst
+    case against every adversary on a game with one."""
     error_bound: float
-    """A bound on |value - exact value| (docs/method.md section 8)."""
+    """A bound on |value - exact value| (docs/method.md section 8), or the
+    width of the worst case's certified bracket."""
+    certificate: Optional[dict[str, Any]]
+    """As summary.json's: guaranteed, best_possible (what no defender beats:
+    against the adversaries found, or seeing the state of a game without
+    adversary), and the brackets worst_case and best_response."""
     query: Optional[Query]
     """The query restated in its own terms."""
     best_start: int
@@ -378,8 +385,9 @@ def solve(
     **settings: Any,
 ) -> Union[SolveResult, RewardSolveResult]:
     """Tunes a defender against a worst-case adversary, as `posg-fsc solve`;
-    for an expected-reward query (props=, on a game without adversary) the
-    defender of def_nodes nodes that optimises it (a RewardSolveResult).
+    for an expected-reward query (props=) the defender of def_nodes nodes
+    that optimises it (a RewardSolveResult; on a game with an adversary,
+    the one whose certified worst case is best).
 
     `settings` are the command line's options with _ for - and the same
     defaults (seed=0, max_iterations=3000, starts=4, structures=["full",
@@ -448,7 +456,10 @@ def certify(
     defender does against `adversary`, None without one); each a dict with
     value, mdp_states, seconds, residual, error_bound. "belief": for a
     one-player game, the best any defender of any memory does (a dict with
-    value, beliefs, complete), else None."""
+    value, beliefs, complete), else None. For an expected-reward query
+    (props=), the reward's certificate as `posg-fsc certify` prints it:
+    query, minimise, guaranteed (against every adversary), best_possible
+    (against `adversary`, else None), worst_case and best_response."""
 
 def support(
     game: Game,

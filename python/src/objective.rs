@@ -121,9 +121,9 @@ impl Asked {
                     Kind::Settings,
                     format!(
                         "`{}` is an expected-reward query: Game.evaluate computes its value for \
-                         given controllers and solve optimises it on a game without adversary; \
-                         {function} takes probability queries (Pmax=?, Pmin=?) so far \
-                         (docs/method.md section 9)",
+                         given controllers, certify bounds it against every adversary and solve \
+                         optimises it; {function} takes probability queries (Pmax=?, Pmin=?) so \
+                         far (docs/method.md section 9)",
                         property.text
                     ),
                 )),

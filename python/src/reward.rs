@@ -1,5 +1,5 @@
 //! `posg_fsc.solve` of an expected-reward query (docs/method.md section 9):
-//! the library's expected-reward optimiser on a game without adversary
+//! the library's expected-reward optimiser
 //! ([`posg_fsc::optimise::optimise_expected_reward`]), into a solve
 //! directory when `out=` is given, with the same callback, Ctrl-C and
 //! thread handling as a probability objective.
@@ -58,10 +58,11 @@ pub struct RewardSolveResult {
     pub starts: Py<PyList>,
     /// The starts dropped for numerical trouble, with why.
     pub dropped_starts: Vec<String>,
-    /// On a game with an adversary, the returned defender's certificate (a
-    /// dict as in `summary.json`: `guaranteed`, the value it holds against
-    /// every adversary, and `best_possible`, what no defender beats against
-    /// the adversary found; docs/method.md section 9); `None` otherwise.
+    /// The returned defender's certificate (a dict as in `summary.json`:
+    /// `guaranteed`, the value it holds against every adversary, and
+    /// `best_possible`, what no defender beats against the adversaries found,
+    /// or seeing the state of a game without adversary; docs/method.md
+    /// section 9); `None` where the full support's reward is infinite.
     pub certificate: Option<Py<PyAny>>,
     /// Every iteration's record of every start, then the returned one (a
     /// dict each, as the rows of `curve.csv`).
