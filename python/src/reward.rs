@@ -62,7 +62,8 @@ pub struct RewardSolveResult {
     /// `guaranteed`, the value it holds against every adversary, and
     /// `best_possible`, what no defender beats against the adversaries found,
     /// or seeing the state of a game without adversary; docs/method.md
-    /// section 9); `None` where the full support's reward is infinite.
+    /// section 9); `None` only where a game without adversary's product
+    /// could not be solved to the tolerance.
     pub certificate: Option<Py<PyAny>>,
     /// Every iteration's record of every start, then the returned one (a
     /// dict each, as the rows of `curve.csv`).

@@ -95,8 +95,9 @@ pub struct RewardSolution {
     /// adversary (on a game without adversary, its exact value again) and
     /// the bound from the defender that sees the state against the
     /// adversaries found and the uniform one
-    /// ([`RewardCertificate::best_possible`]); `None` only where the full
-    /// support's reward is infinite.
+    /// ([`RewardCertificate::best_possible`]); `None` only on a game without
+    /// adversary whose product could not be solved to the tolerance (its
+    /// value is exact without it).
     pub certificate: Option<RewardCertificate>,
     /// On a game with an adversary: the starts' adversaries (each the best
     /// response to its start's best defender), which bound what any
