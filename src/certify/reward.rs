@@ -3,7 +3,7 @@
 //!
 //! As for a probability (section 6), one player's controller is fixed and
 //! the other sees `(s, q, node)` and remembers everything: the product
-//! MDP of [`Product`] with the automaton of `F T`, whose states where `T`
+//! MDP of section 6 (`certify::product`) with the automaton of `F T`, whose states where `T`
 //! has held are the target. Its action `w` in `(s, q, g)` earns
 //!
 //! ```text
@@ -11,7 +11,7 @@
 //! ```
 //!
 //! the reward of the GMC's step (section 9) with the free player's action
-//! drawn as `w`. [`crate::mdp::optimal_total_reward`] brackets the free
+//! drawn as `w`. `mdp::optimal_total_reward` brackets the free
 //! player's optimum, infinite where Storm's convention makes it so:
 //!
 //! * **What a defender guarantees** ([`RewardCertificate::guaranteed`]):

@@ -84,7 +84,7 @@ pub struct RewardStart {
 pub struct RewardSolution {
     /// The best defender found.
     pub defender: Fsc,
-    /// What it guarantees ([`judged`]): its expected reward, evaluated
+    /// What it guarantees: its expected reward, evaluated
     /// exactly, on a game without adversary; its certified worst case
     /// against every adversary on a game with one (method.md section 9).
     pub value: f64,
