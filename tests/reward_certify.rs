@@ -282,3 +282,43 @@ fn certify(args: &[&str]) -> Value {
     assert!(output.status.success(), "{output:?}");
     serde_json::from_slice(&output.stdout).unwrap()
 }
+
+/// `tests/data/rewards/trap-door.posg.json`: the defender walks to the goal
+/// (cost 1) or takes a door behind which the adversary may keep it forever.
+/// A uniform adversary opens the door half the time, so the chain of the
+/// full supports reaches the goal; the adversary that sees the state never
+/// does, so every defender that may take the door has an infinite worst
+/// case. The race runs on the almost-sure support (walking only) and every
+/// start certifies 1.
+#[test]
+fn a_cost_races_where_every_adversary_lets_the_defender_reach_the_target() {
+    let dir = std::env::temp_dir().join(format!("posg-fsc-trap-door-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let props = dir.join("steps.props");
+    std::fs::write(&props, "R{\"steps\"}min=? [F \"goal\"]\n").unwrap();
+    let out = dir.join("out");
+    let output = posg_fsc(&[
+        "solve",
+        "tests/data/rewards/trap-door.posg.json",
+        "--props",
+        props.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert!(output.status.success(), "{output:?}");
+    let summary: Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert!(
+        (summary["value"].as_f64().unwrap() - 1.0).abs() < 1e-9,
+        "{summary}"
+    );
+    assert!(summary.get("dropped_starts").is_none(), "{summary}");
+    for start in summary["starts"].as_array().unwrap() {
+        assert!(
+            (start["value"].as_f64().unwrap() - 1.0).abs() < 1e-6,
+            "{summary}"
+        );
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -372,14 +372,16 @@ fn race(
 }
 
 /// The structure a size of a cost races on: the full support where every
-/// controller of it reaches the target almost surely, else the maximised
-/// almost-sure support of the SAT synthesis for `F T` (method.md sections
-/// 7 and 9: the uniform defender on it reaches `T` with probability 1,
-/// which depends only on the support, so every controller the race plays
-/// on it has a finite expected cost). `Err(why)` where no support of
-/// `size` nodes reaching `T` almost surely was found (every defender of
-/// that size then has an infinite cost, where the synthesis proves it).
-/// A reward to maximise always races on the full support.
+/// controller of it reaches the target almost surely (on a game with an
+/// adversary: where the uniform defender's certified worst case is
+/// finite, against every adversary), else the maximised almost-sure
+/// support of the SAT synthesis for `F T` (method.md sections 7 and 9: the
+/// uniform defender on it reaches `T` with probability 1 against every
+/// adversary, which depends only on the support, so every controller the
+/// race plays on it has a finite expected cost). `Err(why)` where no
+/// support of `size` nodes reaching `T` almost surely was found (every
+/// defender of that size then has an infinite cost, where the synthesis
+/// proves it). A reward to maximise always races on the full support.
 fn reward_structure(
     game: &Posg,
     objective: ExpectedReward<'_>,
@@ -387,7 +389,19 @@ fn reward_structure(
     settings: &Settings,
 ) -> Result<Result<Structure, String>, OptimiseError> {
     let full = Structure::full(game, size, adversary_nodes, settings.optimise_initial);
-    if !objective.minimise || !evaluator(game, objective, &full, settings)?.is_infinite() {
+    if !objective.minimise {
+        return Ok(Ok(full));
+    }
+    // An adversary that sees the state may keep the target away where one
+    // of the supports' controllers would not.
+    let misses = match game.has_adversary() {
+        true => judged(game, objective, &full.defender, settings)?
+            .0
+            .value
+            .is_infinite(),
+        false => evaluator(game, objective, &full, settings)?.is_infinite(),
+    };
+    if !misses {
         return Ok(Ok(full));
     }
     let almost_sure = crate::synthesis::Settings {
