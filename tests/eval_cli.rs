@@ -162,3 +162,41 @@ fn simulate_restates_a_pmin_query_as_the_probability_of_its_path() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// `--props` takes the query itself, recognised by its `=?`, as Python's
+/// props= does: the same value as from a file, and a mistake in it is
+/// cited as `--props` with its position.
+#[test]
+fn props_take_a_query_written_inline_as_a_file_would() {
+    let (dir, game) = pass_or_trap("inline-props");
+    let query = "Pmax=? [F \"goal\"]";
+    let file = dir.join("q.props");
+    std::fs::write(&file, query).unwrap();
+    let eval = |props: &OsStr| {
+        posg_fsc_json(&[
+            "eval".as_ref(),
+            game.as_os_str(),
+            "--props".as_ref(),
+            props,
+            "--adversary".as_ref(),
+            "uniform:1".as_ref(),
+        ])
+    };
+    let inline = eval(query.as_ref());
+    let from_file = eval(file.as_os_str());
+    assert!(close(&inline["query"]["value"], 0.5), "{inline}");
+    assert_eq!(inline["query"], from_file["query"]);
+    let output = Command::new(env!("CARGO_BIN_EXE_posg-fsc"))
+        .args([
+            "eval".as_ref(),
+            game.as_os_str(),
+            "--props".as_ref(),
+            "Pmax=? [F (\"goal\"]".as_ref(),
+        ])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(!output.status.success());
+    assert!(stderr.contains("--props: line 1, column"), "{stderr}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

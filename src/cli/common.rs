@@ -29,10 +29,12 @@ pub struct ObjectiveArgs {
     pub ltl: Option<String>,
     /// A Storm/PRISM property file with one query `<<P>> Pmax=? [ PATH ]`
     /// (phi = PATH) or `<<P>> Pmin=? [ PATH ]` (phi = !PATH, e.g. `G !goal`),
-    /// instead of --ltl; for a turn-based DRN game, player P is the defender
-    /// (docs/formats.md section 6). `eval`, `simulate`, `certify` and
-    /// `solve` also take an expected-reward query `R{"r"}min=? [ F T ]` or
-    /// `R{"r"}max=? [ F T ]` (docs/method.md section 9).
+    /// instead of --ltl, or the query itself (recognised by its `=?`, as
+    /// Python's props=: `--props 'Pmax=? [F "goal"]'`); for a turn-based
+    /// DRN game, player P is the defender (docs/formats.md section 6).
+    /// `eval`, `simulate`, `certify` and `solve` also take an
+    /// expected-reward query `R{"r"}min=? [ F T ]` or `R{"r"}max=? [ F T ]`
+    /// (docs/method.md section 9).
     #[arg(long, value_name = "FILE.props", conflicts_with = "automaton")]
     pub props: Option<PathBuf>,
     /// A deterministic automaton for phi in HOA v1 or v1.1 (instead of
@@ -110,10 +112,7 @@ impl ObjectiveArgs {
 
     /// The property file's name as errors show it.
     fn props_name(&self) -> String {
-        self.props
-            .as_deref()
-            .map(|p| p.display().to_string())
-            .unwrap_or_default()
+        self.props.as_deref().map(props_name).unwrap_or_default()
     }
 
     /// The automaton of `formula` within the translation budget.
@@ -125,14 +124,34 @@ impl ObjectiveArgs {
     }
 }
 
-/// The query of the property file at `path`.
+/// The query of the property file at `path`, or of the query given inline
+/// in its place ([`is_inline_query`]).
 pub fn read_props(path: &Path) -> anyhow::Result<Property> {
+    if is_inline_query(path) {
+        let text = path.to_string_lossy();
+        return Ok(posg_fsc::ltl::props::from_props_str(&text, "--props")?);
+    }
     let text =
         std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
     Ok(posg_fsc::ltl::props::from_props_str(
         &text,
         &path.display().to_string(),
     )?)
+}
+
+/// Whether `--props` gave the query itself: no file of that name, and an
+/// `=?` in it (as Python's props= tells a query from a path).
+fn is_inline_query(given: &Path) -> bool {
+    !given.exists() && given.to_string_lossy().contains("=?")
+}
+
+/// The name `--props` is cited by in messages: the file's, or `--props`
+/// for a query given inline.
+fn props_name(given: &Path) -> String {
+    match is_inline_query(given) {
+        true => "--props".to_string(),
+        false => given.display().to_string(),
+    }
 }
 
 /// The two controllers.
