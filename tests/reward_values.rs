@@ -217,6 +217,12 @@ fn reward_models_are_looked_up_by_name_or_as_the_only_one() {
         check.warnings[0].contains("did you mean discount_sink?"),
         "{check:?}"
     );
+    // A target never reached makes every expected reward infinite, not 0.
+    let error = check.error.unwrap();
+    assert!(
+        error.contains("the target is never reached: every expected reward is infinite"),
+        "{error}"
+    );
 }
 
 #[test]

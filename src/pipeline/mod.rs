@@ -31,7 +31,7 @@ mod query;
 mod reward;
 mod sweep;
 
-pub use propositions::{PropositionCheck, check_propositions};
+pub use propositions::{PropositionCheck, check_propositions, check_target_propositions};
 pub use query::{QueryEstimate, QueryValue};
 pub use reward::RewardObjective;
 pub use sweep::Chain;

@@ -28,6 +28,31 @@ pub fn check_propositions(
     objective: &str,
     allow: bool,
 ) -> PropositionCheck {
+    let consequence = "false everywhere it makes every value 0";
+    check_against_labels(dra, game, (objective, consequence), allow)
+}
+
+/// [`check_propositions`] for the automaton of an expected reward's `F T`
+/// (docs/method.md section 9): a target that is never reached makes every
+/// value infinite, which the error says.
+pub fn check_target_propositions(
+    target: &Dra,
+    game: &Posg,
+    objective: &str,
+    allow: bool,
+) -> PropositionCheck {
+    let consequence = "the target is never reached: every expected reward is infinite";
+    check_against_labels(target, game, (objective, consequence), allow)
+}
+
+/// The check, its error saying what an objective that can never hold
+/// means (`consequence`).
+fn check_against_labels(
+    dra: &Dra,
+    game: &Posg,
+    (objective, consequence): (&str, &str),
+    allow: bool,
+) -> PropositionCheck {
     let mut unused_mask = 0;
     let mut warnings = Vec::new();
     let mut hints = Vec::new();
@@ -48,8 +73,8 @@ pub fn check_propositions(
     let never_holds = unused_mask != 0 && !dra.accepts_some_word(|a| a & unused_mask == 0);
     let error = (never_holds && !allow).then(|| {
         format!(
-            "the objective {objective} can never hold: {} labels no state of the game, and false \
-             everywhere it makes every value 0. Fix the name, or allow unused propositions \
+            "the objective {objective} can never hold: {} labels no state of the game, and \
+             {consequence}. Fix the name, or allow unused propositions \
              (--allow-unused-propositions; allow_unused_propositions=True in Python) to \
              compute with it anyway",
             hints.join(", ")

@@ -3,7 +3,7 @@
 //! with its reward model looked up and the automaton of `F T` translated
 //! and checked against the game's labels.
 
-use super::{PipelineError, check_propositions};
+use super::{PipelineError, check_target_propositions};
 use crate::automaton::Dra;
 use crate::controller::{Probabilities, Support};
 use crate::game::{ModelError, Posg, RewardModel};
@@ -53,7 +53,7 @@ impl RewardObjective {
             rewards.name(),
             if minimise { "min" } else { "max" }
         );
-        let check = check_propositions(&target, game, &description, allow_unused);
+        let check = check_target_propositions(&target, game, &description, allow_unused);
         if check.error.is_some() {
             return Err(PipelineError::Propositions(check));
         }
