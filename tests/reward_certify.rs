@@ -7,9 +7,11 @@
 
 mod common;
 
+use std::path::PathBuf;
+
 use posg_fsc::certify::reward::reward_certificate;
 use posg_fsc::certify::{CertifyError, MdpError};
-use posg_fsc::controller::{Choice, Fsc, Role, Support};
+use posg_fsc::controller::{Fsc, Role, Support};
 use posg_fsc::game::Posg;
 use posg_fsc::game::file::from_json_str;
 use posg_fsc::ltl::TranslationBudget;
@@ -60,30 +62,9 @@ fn game_seen_by(seed: u64, player: &str) -> Option<Posg> {
 
 /// `role`'s controller playing `choice[s]` in state `s` (its observation).
 fn memoryless(game: &Posg, role: Role, choice: &[usize]) -> Fsc {
-    let player = match role {
-        Role::Defender => game.defender(),
-        Role::Adversary => game.adversary(),
-    };
-    let blocks = choice
-        .iter()
-        .map(|&action| {
-            vec![Choice {
-                next: 0,
-                action,
-                probability: 1.0,
-                logit: None,
-            }]
-        })
-        .collect();
-    Fsc::new(
-        role,
-        1,
-        player.num_observations(),
-        player.num_actions(),
-        vec![1.0],
-        blocks,
-    )
-    .unwrap()
+    let rows: Vec<[(usize, f64); 1]> = choice.iter().map(|&action| [(action, 1.0)]).collect();
+    let rows: Vec<&[(usize, f64)]> = rows.iter().map(|row| row.as_slice()).collect();
+    common::memoryless(game, role, &rows)
 }
 
 fn expected_reward(game: &Posg, objective: &RewardObjective, def: &Fsc, adv: &Fsc) -> f64 {
@@ -247,25 +228,30 @@ fn posg_fsc(args: &[&str]) -> std::process::Output {
 /// costs 6.
 const TWO_ROADS: &str = "tests/data/rewards/two-roads.posg.json";
 
-#[test]
-fn solve_certifies_the_value_of_a_game_with_a_mixed_optimum() {
-    let dir = std::env::temp_dir().join(format!("posg-fsc-two-roads-{}", std::process::id()));
+/// `posg-fsc solve GAME --props QUERY` into `out` under a fresh directory
+/// `posg-fsc-NAME-PID`: the directory and `summary.json`.
+fn solve(game: &str, query: &str, name: &str) -> (PathBuf, Value) {
+    let dir = std::env::temp_dir().join(format!("posg-fsc-{name}-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    let props = dir.join("cost.props");
-    std::fs::write(&props, "R{\"cost\"}min=? [F \"goal\"]\n").unwrap();
     let out = dir.join("out");
     let output = posg_fsc(&[
         "solve",
-        TWO_ROADS,
+        game,
         "--props",
-        props.to_str().unwrap(),
+        query,
         "--out",
         out.to_str().unwrap(),
         "--quiet",
     ]);
     assert!(output.status.success(), "{output:?}");
-    let summary: Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let summary = std::fs::read_to_string(out.join("summary.json")).unwrap();
+    (dir, serde_json::from_str(&summary).unwrap())
+}
+
+#[test]
+fn solve_certifies_the_value_of_a_game_with_a_mixed_optimum() {
+    let query = "R{\"cost\"}min=? [F \"goal\"]";
+    let (dir, summary) = solve(TWO_ROADS, query, "two-roads");
     let value = summary["value"].as_f64().unwrap();
     let certificate = &summary["certificate"];
     let guaranteed = certificate["guaranteed"].as_f64().unwrap();
@@ -284,11 +270,11 @@ fn solve_certifies_the_value_of_a_game_with_a_mixed_optimum() {
 
     // `certify` of the returned defender says the same, and of the
     // deterministic defender that always takes `a`: 6.
-    let defender = out.join("defender.fsc.json");
+    let defender = dir.join("out").join("defender.fsc.json");
     let certified = certify(&[
         TWO_ROADS,
         "--props",
-        props.to_str().unwrap(),
+        query,
         "--defender",
         defender.to_str().unwrap(),
     ]);
@@ -305,7 +291,7 @@ fn solve_certifies_the_value_of_a_game_with_a_mixed_optimum() {
     let certified = certify(&[
         TWO_ROADS,
         "--props",
-        props.to_str().unwrap(),
+        query,
         "--defender",
         always_a.to_str().unwrap(),
         "--adversary",
@@ -336,23 +322,8 @@ fn certify(args: &[&str]) -> Value {
 /// start certifies 1.
 #[test]
 fn a_cost_races_where_every_adversary_lets_the_defender_reach_the_target() {
-    let dir = std::env::temp_dir().join(format!("posg-fsc-trap-door-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let props = dir.join("steps.props");
-    std::fs::write(&props, "R{\"steps\"}min=? [F \"goal\"]\n").unwrap();
-    let out = dir.join("out");
-    let output = posg_fsc(&[
-        "solve",
-        "tests/data/rewards/trap-door.posg.json",
-        "--props",
-        props.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--quiet",
-    ]);
-    assert!(output.status.success(), "{output:?}");
-    let summary: Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let game = "tests/data/rewards/trap-door.posg.json";
+    let (dir, summary) = solve(game, "R{\"steps\"}min=? [F \"goal\"]", "trap-door");
     assert!(
         (summary["value"].as_f64().unwrap() - 1.0).abs() < 1e-9,
         "{summary}"

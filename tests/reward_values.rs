@@ -8,7 +8,7 @@ mod common;
 
 use std::process::Command;
 
-use posg_fsc::controller::{Choice, Fsc, Probabilities, Role, Support};
+use posg_fsc::controller::{Fsc, Probabilities, Role, Support};
 use posg_fsc::game::Posg;
 use posg_fsc::game::file::from_json_str;
 use posg_fsc::ltl::TranslationBudget;
@@ -65,27 +65,17 @@ fn memoryless(game: &Posg, role: Role, actions: &[&str]) -> Fsc {
         Role::Defender => game.defender(),
         Role::Adversary => game.adversary(),
     };
-    let blocks = actions
+    let rows: Vec<[(usize, f64); 1]> = actions
         .iter()
         .map(|name| {
-            let action = player.actions().iter().position(|a| a == name).unwrap();
-            vec![Choice {
-                next: 0,
-                action,
-                probability: 1.0,
-                logit: None,
-            }]
+            [(
+                player.actions().iter().position(|a| a == name).unwrap(),
+                1.0,
+            )]
         })
         .collect();
-    Fsc::new(
-        role,
-        1,
-        player.num_observations(),
-        player.num_actions(),
-        vec![1.0],
-        blocks,
-    )
-    .unwrap()
+    let rows: Vec<&[(usize, f64)]> = rows.iter().map(|row| row.as_slice()).collect();
+    common::memoryless(game, role, &rows)
 }
 
 fn probe() -> Posg {

@@ -4,7 +4,7 @@
 mod common;
 
 use posg_fsc::automaton::Dra;
-use posg_fsc::controller::{Choice, Fsc, Probabilities, Role, Support};
+use posg_fsc::controller::{Fsc, Probabilities, Role, Support};
 use posg_fsc::game::Posg;
 use posg_fsc::game::file::from_json_str;
 use posg_fsc::optimise::Softmax;
@@ -41,38 +41,6 @@ fn uniform(game: &Posg, role: Role, nodes: usize) -> Fsc {
         game.adversary()
     };
     Fsc::uniform(role, nodes, player.num_observations(), player.num_actions())
-}
-
-/// One-node controller of a fully observing player, deterministic or mixed
-/// per state: `rows[s]` lists `(action, probability)`.
-fn memoryless(game: &Posg, role: Role, rows: &[&[(usize, f64)]]) -> Fsc {
-    let player = if role == Role::Defender {
-        game.defender()
-    } else {
-        game.adversary()
-    };
-    let blocks = rows
-        .iter()
-        .map(|row| {
-            row.iter()
-                .map(|&(action, probability)| Choice {
-                    next: 0,
-                    action,
-                    probability,
-                    logit: None,
-                })
-                .collect()
-        })
-        .collect();
-    Fsc::new(
-        role,
-        1,
-        player.num_observations(),
-        player.num_actions(),
-        vec![1.0],
-        blocks,
-    )
-    .unwrap()
 }
 
 const LOOP_THEN_SPLIT: &str = r#"{
@@ -148,7 +116,7 @@ fn attacker(g: &Posg, p: f64) -> Fsc {
         &[(1, 1.0)]
     };
     let idle: &[(usize, f64)] = &[(1, 1.0)];
-    memoryless(g, Role::Adversary, &[idle, idle, mixed, idle, idle])
+    common::memoryless(g, Role::Adversary, &[idle, idle, mixed, idle, idle])
 }
 
 #[test]

@@ -269,11 +269,23 @@ mod tests {
                            "actions": [{"state": "s1", "defender": "go", "adversary": "push", "reward": 2.0}]}}
     }"#;
 
-    fn corridor() -> (Posg, Dra, RewardModel) {
+    /// The corridor's certificate of its only defender, the cost minimised
+    /// or not, with the adversary that always plays `action` as the one
+    /// the defender that sees the state responds to.
+    fn corridor_certificate(minimise: bool, action: usize) -> RewardCertificate {
         let game = from_json_str(CORRIDOR, "corridor.posg.json").unwrap();
         let target = ltl::translate(&ltl::parse("F goal").unwrap()).unwrap();
         let rewards = game.reward_model("cost").unwrap().clone();
-        (game, target, rewards)
+        let defender = Fsc::uniform(Role::Defender, 1, 1, 1);
+        let adversary = always(Role::Adversary, action);
+        reward_certificate(
+            &game,
+            (&target, &rewards, minimise),
+            &defender,
+            &[&adversary],
+            &SolverSettings::default(),
+        )
+        .unwrap()
     }
 
     /// The 1-node controller of one observation and two actions that
@@ -294,17 +306,7 @@ mod tests {
     /// the waiting adversary gets 2 (it has one action).
     #[test]
     fn the_worst_case_cost_of_a_corridor_is_the_one_on_paper() {
-        let (game, target, rewards) = corridor();
-        let defender = Fsc::uniform(Role::Defender, 1, 1, 1);
-        let wait = always(Role::Adversary, 0);
-        let certificate = reward_certificate(
-            &game,
-            (&target, &rewards, true),
-            &defender,
-            &[&wait],
-            &SolverSettings::default(),
-        )
-        .unwrap();
+        let certificate = corridor_certificate(true, 0);
         assert!(
             (certificate.guaranteed - 8.0).abs() < 1e-9,
             "{certificate:?}"
@@ -319,17 +321,7 @@ mod tests {
     /// gets more than 8 against a pushing adversary.
     #[test]
     fn a_maximised_reward_turns_the_bracket_over() {
-        let (game, target, rewards) = corridor();
-        let defender = Fsc::uniform(Role::Defender, 1, 1, 1);
-        let push = always(Role::Adversary, 1);
-        let certificate = reward_certificate(
-            &game,
-            (&target, &rewards, false),
-            &defender,
-            &[&push],
-            &SolverSettings::default(),
-        )
-        .unwrap();
+        let certificate = corridor_certificate(false, 1);
         assert!(
             (certificate.guaranteed - 2.0).abs() < 1e-9,
             "{certificate:?}"

@@ -21,6 +21,7 @@
 
 pub mod end_components;
 mod optimality;
+mod pattern;
 pub mod rabin;
 pub mod reachability;
 pub mod total_reward;

@@ -71,6 +71,7 @@ use crate::graph::backward_reachable;
 use crate::solver::{LinearSolver, SolverSettings, SparsePattern};
 
 use super::optimality::Certificate;
+use super::pattern::{Slot, union_pattern};
 use super::{Mdp, MdpError, Predecessors};
 
 /// Policy iteration switches an action only if it improves the expected
@@ -399,21 +400,6 @@ pub struct PolicySystems {
     settings: SolverSettings,
 }
 
-/// Where one transition `s -> t` of a maybe state's action goes in its
-/// policy's system.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Slot {
-    /// An off-diagonal entry `-P(t | s)` at this position of the values.
-    Inside(usize),
-    /// Leaving `M`: into the exits, and into `b` when `t` is in the target.
-    Leaving {
-        /// `t` is a target state.
-        target: bool,
-    },
-    /// A self-loop (or an entry of a state outside `M`): not in the system.
-    Unused,
-}
-
 impl PolicySystems {
     /// The systems of `mdp`'s policies on the maybe states of
     /// `qualitative`, `mdp`'s qualitative step (neither 0 nor 1 by the
@@ -437,58 +423,8 @@ impl PolicySystems {
         for (i, &s) in maybe.iter().enumerate() {
             index[s] = i;
         }
-        let mut row_offsets = vec![0];
-        let mut columns = Vec::new();
-        let mut slots = vec![Slot::Unused; mdp.entries.len()];
-        for (i, &s) in maybe.iter().enumerate() {
-            let row_start = columns.len();
-            // The diagonal is formed by the solver from the exits (method.md
-            // section 8); the pattern holds its place.
-            columns.push(i);
-            for action in mdp.global_actions(s) {
-                let inside = mdp.global_distribution(action).iter().map(|&(t, _)| t);
-                columns.extend(
-                    inside
-                        .filter(|&t| t != s)
-                        .map(|t| index[t])
-                        .filter(|&j| j != usize::MAX),
-                );
-            }
-            columns[row_start..].sort_unstable();
-            let mut kept = row_start;
-            for k in row_start..columns.len() {
-                if k == row_start || columns[k] != columns[kept - 1] {
-                    columns[kept] = columns[k];
-                    kept += 1;
-                }
-            }
-            columns.truncate(kept);
-            let row = &columns[row_start..];
-            for action in mdp.global_actions(s) {
-                let entries = mdp.entry_offsets[action]..mdp.entry_offsets[action + 1];
-                for (slot, &(t, _)) in slots[entries.clone()].iter_mut().zip(&mdp.entries[entries])
-                {
-                    *slot = if t == s {
-                        Slot::Unused
-                    } else if index[t] == usize::MAX {
-                        Slot::Leaving {
-                            target: qualitative.almost_sure[t],
-                        }
-                    } else {
-                        let offset = row
-                            .binary_search(&index[t])
-                            .expect("every edge inside M is in the union pattern");
-                        Slot::Inside(row_start + offset)
-                    };
-                }
-            }
-            row_offsets.push(columns.len());
-        }
-        let pattern = SparsePattern {
-            n: maybe.len(),
-            row_offsets,
-            columns,
-        };
+        let (pattern, slots) =
+            union_pattern(mdp, (&maybe, &index), &qualitative.almost_sure, |_| true);
         Ok(Self {
             maybe,
             slots,

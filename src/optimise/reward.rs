@@ -132,8 +132,14 @@ pub fn optimise_expected_reward(
     // Whether the target can be missed is a fact of the supports' graph:
     // the evaluator's analysis says it without a solve. For a cost, the
     // sizes race on supports that reach the target ([`reward_structure`]).
-    let infinite =
-        !objective.minimise && evaluator(game, objective, &structure, settings)?.is_infinite();
+    let infinite = !objective.minimise
+        && evaluator(
+            game,
+            objective,
+            (&structure.defender, &structure.adversary),
+            settings,
+        )?
+        .is_infinite();
     if infinite && game.has_adversary() {
         return Err(OptimiseError::Unsupported(
             "every pair of controllers on the full supports misses the target with positive \
@@ -399,7 +405,9 @@ fn reward_structure(
             .0
             .value
             .is_infinite(),
-        false => evaluator(game, objective, &full, settings)?.is_infinite(),
+        false => {
+            evaluator(game, objective, (&full.defender, &full.adversary), settings)?.is_infinite()
+        }
     };
     if !misses {
         return Ok(Ok(full));
@@ -783,13 +791,11 @@ fn judged(
         };
         return Ok((evaluation, bound.mdp_states as f64));
     }
-    let structure = Structure {
-        defender: defender.clone(),
-        ..Structure::full(game, defender.num_nodes(), 1, settings.optimise_initial)
-    };
-    let mut evaluator = evaluator(game, objective, &structure, settings)?;
-    let adversary = Support::probabilities_of(&structure.adversary);
-    let evaluation = evaluator.evaluate(&Support::probabilities_of(defender), &adversary)?;
+    // The game has no adversary: its only controller.
+    let adversary = Fsc::uniform_enabled(Role::Adversary, 1, game.adversary());
+    let mut evaluator = evaluator(game, objective, (defender, &adversary), settings)?;
+    let probabilities = Support::probabilities_of(&adversary);
+    let evaluation = evaluator.evaluate(&Support::probabilities_of(defender), &probabilities)?;
     Ok((evaluation, evaluator.gmc().num_states() as f64))
 }
 
@@ -814,19 +820,19 @@ fn passes_over(error: &OptimiseError) -> bool {
         )
 }
 
-/// The evaluator of `objective` on `structure`'s supports.
+/// The evaluator of `objective` on the supports of the two controllers.
 fn evaluator(
     game: &Posg,
     objective: ExpectedReward<'_>,
-    structure: &Structure,
+    (defender, adversary): (&Fsc, &Fsc),
     settings: &Settings,
 ) -> Result<Evaluator, OptimiseError> {
     Ok(Evaluator::for_expected_reward(
         game,
         objective.target,
         objective.rewards,
-        &Support::of(&structure.defender),
-        &Support::of(&structure.adversary),
+        &Support::of(defender),
+        &Support::of(adversary),
         &settings.solver_settings(),
     )?)
 }

@@ -6,7 +6,7 @@
 
 use dense::{DMatrix, DVector};
 use posg_fsc::automaton::{Dra, RabinPair};
-use posg_fsc::controller::Fsc;
+use posg_fsc::controller::{Choice, Fsc, Role};
 use posg_fsc::game::{AdversaryAction, DefenderAction, Posg};
 
 /// A state-based DRA from a per-state transition function over the letters of `aps`.
@@ -362,4 +362,35 @@ pub fn block_directions(support: &posg_fsc::controller::Support) -> Vec<(usize, 
             block.skip(1).map(move |k| (first, k))
         })
         .collect()
+}
+
+/// The one-node controller of `role` playing, after observation `o`, the
+/// `(action, probability)` pairs of `rows[o]` (deterministic or mixed).
+pub fn memoryless(game: &Posg, role: Role, rows: &[&[(usize, f64)]]) -> Fsc {
+    let player = match role {
+        Role::Defender => game.defender(),
+        Role::Adversary => game.adversary(),
+    };
+    let blocks = rows
+        .iter()
+        .map(|row| {
+            row.iter()
+                .map(|&(action, probability)| Choice {
+                    next: 0,
+                    action,
+                    probability,
+                    logit: None,
+                })
+                .collect()
+        })
+        .collect();
+    Fsc::new(
+        role,
+        1,
+        player.num_observations(),
+        player.num_actions(),
+        vec![1.0],
+        blocks,
+    )
+    .unwrap()
 }

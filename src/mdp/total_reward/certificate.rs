@@ -4,9 +4,12 @@
 use super::{Optimum, UNIT_ROUNDOFF};
 use crate::mdp::{Mdp, MdpError};
 
-/// What the certificate's check reads: the kept actions, the rewards and
+/// What the certificate's check reads: the unknowns and their position by
+/// state (`usize::MAX` for the others), the kept actions, the rewards and
 /// the direction.
 pub(super) struct Scale<'a> {
+    pub(super) unknowns: &'a [usize],
+    pub(super) index: &'a [usize],
     pub(super) kept: &'a [bool],
     pub(super) rewards: &'a [f64],
     pub(super) optimum: Optimum,
@@ -14,19 +17,11 @@ pub(super) struct Scale<'a> {
 
 /// The values of the unknowns read by state: 0 on the target.
 struct ByState<'a> {
-    index: Vec<usize>,
+    index: &'a [usize],
     values: &'a [f64],
 }
 
-impl<'a> ByState<'a> {
-    fn new(mdp: &Mdp, unknowns: &[usize], values: &'a [f64]) -> Self {
-        let mut index = vec![usize::MAX; mdp.num_states()];
-        for (i, &s) in unknowns.iter().enumerate() {
-            index[s] = i;
-        }
-        Self { index, values }
-    }
-
+impl ByState<'_> {
     fn at(&self, t: usize) -> f64 {
         match self.index[t] {
             usize::MAX => 0.0,
@@ -60,18 +55,20 @@ impl<'a> ByState<'a> {
 }
 
 impl Scale<'_> {
+    /// `values` (one per unknown) read by state.
+    fn by_state<'v>(&'v self, values: &'v [f64]) -> ByState<'v> {
+        ByState {
+            index: self.index,
+            values,
+        }
+    }
+
     /// The kept actions whose gain `+-(r + P x - x)` is at least `-tau`
     /// (the others lose more than `tau` against `x`).
-    pub(super) fn near_optimal(
-        &self,
-        mdp: &Mdp,
-        unknowns: &[usize],
-        x: &[f64],
-        tau: f64,
-    ) -> Vec<bool> {
-        let values = ByState::new(mdp, unknowns, x);
+    pub(super) fn near_optimal(&self, mdp: &Mdp, x: &[f64], tau: f64) -> Vec<bool> {
+        let values = self.by_state(x);
         let mut near = vec![false; mdp.num_state_actions()];
-        for (i, &s) in unknowns.iter().enumerate() {
+        for (i, &s) in self.unknowns.iter().enumerate() {
             for action in mdp.global_actions(s).filter(|&a| self.kept[a]) {
                 let (gain, _) = values.advance(mdp, (s, i, action), self.rewards[action]);
                 near[action] = self.optimum.sign() * gain >= -tau;
@@ -86,16 +83,14 @@ impl Scale<'_> {
     pub(super) fn certify(
         &self,
         mdp: &Mdp,
-        unknowns: &[usize],
         x: &[f64],
         steps: &[f64],
     ) -> Result<Option<Vec<f64>>, MdpError> {
-        let values = ByState::new(mdp, unknowns, x);
-        let potential = ByState::new(mdp, unknowns, steps);
+        let (values, potential) = (self.by_state(x), self.by_state(steps));
         let sign = self.optimum.sign();
         // Each constraint `g <= eps d`, with `g` rounded up and `d` down.
         let (mut least, mut most) = (0.0_f64, f64::INFINITY);
-        for (i, &s) in unknowns.iter().enumerate() {
+        for (i, &s) in self.unknowns.iter().enumerate() {
             for action in mdp.global_actions(s).filter(|&a| self.kept[a]) {
                 let (gain, gain_size) = values.advance(mdp, (s, i, action), self.rewards[action]);
                 let (rise, rise_size) = potential.advance(mdp, (s, i, action), 0.0);

@@ -174,53 +174,87 @@ pub fn optimal_total_reward(
             "the reward of action {a} is not finite"
         )));
     }
+    let region = Region::of(mdp, target, optimum)?;
     if optimum == Optimum::Min {
-        let free = free_components(mdp, target, rewards)?;
+        let free = region.free_components(mdp, rewards);
         if !free.is_empty() {
             return collapsed(mdp, target, rewards, &free, settings);
         }
+        check_losing_cycles(mdp, &region, rewards)?;
     }
-    optimum_without_free_cycles(mdp, target, rewards, optimum, settings)
+    optimum_on(mdp, target, rewards, (optimum, &region), settings)
 }
 
-/// [`optimal_total_reward`] where no end component of actions that earn
-/// nothing lies among a minimum's unknowns (module documentation, steps 1
-/// to 3).
-fn optimum_without_free_cycles(
+/// The states and actions policy iteration works on (module
+/// documentation, step 1).
+struct Region {
+    /// The finite states outside the target, increasing.
+    unknowns: Vec<usize>,
+    /// Per global action: whether all its successors are finite (the
+    /// actions policy iteration may play).
+    kept: Vec<bool>,
+}
+
+impl Region {
+    /// The region of `optimum` for `target`.
+    fn of(mdp: &Mdp, target: &[bool], optimum: Optimum) -> Result<Self, MdpError> {
+        let finite = finite_states(mdp, target, optimum)?;
+        let kept = (0..mdp.num_state_actions())
+            .map(|a| mdp.global_distribution(a).iter().all(|&(t, _)| finite[t]))
+            .collect();
+        let unknowns = (0..mdp.num_states())
+            .filter(|&s| finite[s] && !target[s])
+            .collect();
+        Ok(Self { unknowns, kept })
+    }
+
+    /// The end components among the unknowns whose actions earn nothing
+    /// (kept actions of reward 0): a minimiser moves inside one for free.
+    fn free_components(&self, mdp: &Mdp, rewards: &[f64]) -> Vec<EndComponent> {
+        let free: Vec<bool> = (self.kept.iter().zip(rewards))
+            .map(|(&k, &r)| k && r == 0.0)
+            .collect();
+        components_within(mdp, &self.unknowns, &free)
+    }
+}
+
+/// [`optimal_total_reward`] on `region`, where no end component of actions
+/// that earn nothing or less lies among a minimum's unknowns (module
+/// documentation, steps 2 and 3).
+fn optimum_on(
     mdp: &Mdp,
     target: &[bool],
     rewards: &[f64],
-    optimum: Optimum,
+    (optimum, region): (Optimum, &Region),
     settings: &SolverSettings,
 ) -> Result<TotalReward, MdpError> {
     let n = mdp.num_states();
-    let finite = finite_states(mdp, target, optimum)?;
-    let kept = kept_actions(mdp, &finite);
-    let unknowns: Vec<usize> = (0..n).filter(|&s| finite[s] && !target[s]).collect();
-    check_cycles(mdp, &unknowns, &kept, rewards)?;
-    let mut strategy = proper_start(mdp, target, &unknowns, &kept)?;
+    let Region { unknowns, kept } = region;
+    let mut strategy = proper_start(mdp, target, unknowns, kept)?;
     let largest = rewards.iter().fold(1.0_f64, |m, r| m.max(r.abs()));
     let scaled = SolverSettings {
         tolerance: settings.tolerance * largest,
         ..*settings
     };
-    let mut system = PolicySystem::new(mdp, &unknowns, &kept, &scaled)?;
+    let mut system = PolicySystem::new(mdp, target, (unknowns, kept), &scaled)?;
     let threshold = REWARD_IMPROVEMENT_THRESHOLD * largest;
     let (values, error) =
         system.iterate(mdp, rewards, (optimum, threshold), true, &mut strategy)?;
     let steps = system.expected_steps()?;
     let scale = Scale {
-        kept: &kept,
+        unknowns,
+        index: system.index(),
+        kept,
         rewards,
         optimum,
     };
-    let certified = match scale.certify(mdp, &unknowns, &values, &steps)? {
+    let certified = match scale.certify(mdp, &values, &steps)? {
         Some(y) => y,
         None => {
-            let near = scale.near_optimal(mdp, &unknowns, &values, NEAR_OPTIMAL * largest);
-            let longest = longest_steps(mdp, target, &unknowns, &near, &scaled)?;
+            let near = scale.near_optimal(mdp, &values, NEAR_OPTIMAL * largest);
+            let longest = longest_steps(mdp, target, unknowns, &near, &scaled)?;
             longest
-                .and_then(|longest| scale.certify(mdp, &unknowns, &values, &longest).transpose())
+                .and_then(|longest| scale.certify(mdp, &values, &longest).transpose())
                 .transpose()?
                 .ok_or_else(|| {
                     MdpError::OptimalityUnproved(
@@ -278,41 +312,13 @@ fn finite_states(mdp: &Mdp, target: &[bool], optimum: Optimum) -> Result<Vec<boo
     }
 }
 
-/// Per global action: whether all its successors are `finite` (the
-/// actions of a finite state that policy iteration may play).
-fn kept_actions(mdp: &Mdp, finite: &[bool]) -> Vec<bool> {
-    (0..mdp.num_state_actions())
-        .map(|a| mdp.global_distribution(a).iter().all(|&(t, _)| finite[t]))
-        .collect()
-}
-
-/// The end components of a minimum's unknowns whose actions earn nothing
-/// (kept actions of reward 0): the minimiser moves inside one for free.
-fn free_components(
-    mdp: &Mdp,
-    target: &[bool],
-    rewards: &[f64],
-) -> Result<Vec<EndComponent>, MdpError> {
-    let finite = finite_states(mdp, target, Optimum::Min)?;
-    let kept = kept_actions(mdp, &finite);
-    let unknowns: Vec<usize> = (0..mdp.num_states())
-        .filter(|&s| finite[s] && !target[s])
-        .collect();
-    let free: Vec<bool> = (kept.iter().zip(rewards))
-        .map(|(&k, &r)| k && r == 0.0)
-        .collect();
-    Ok(components_within(mdp, &unknowns, &free))
-}
-
 /// The minimum where the end components `free` earn nothing (Storm's
 /// collapse): the minimiser moves inside each for free, so every state of
 /// one has the same optimum, that of the best way out. The quotient MDP
 /// has one state per component, with the actions of its states that are
 /// not the component's own free ones (a positive reward inside it becomes
 /// a self-loop that costs); its optimum, brackets included, is the
-/// original's ([`optimum_without_free_cycles`]: it has no free component
-/// left, since a free one of the quotient would make a larger one of the
-/// original). The strategy leaves a component by the quotient's chosen
+/// original's. The strategy leaves a component by the quotient's chosen
 /// action, from its state, and every other state of the component walks
 /// there along the component's free actions (almost surely, at no cost).
 fn collapsed(
@@ -358,11 +364,15 @@ fn collapsed(
     }
     let quotient = builder.build()?;
     let quotient_target: Vec<bool> = members.iter().map(|m| target[m[0]]).collect();
-    let solved = optimum_without_free_cycles(
+    // A free component of the quotient would make a larger one of the
+    // original: the quotient has none.
+    let region = Region::of(&quotient, &quotient_target, Optimum::Min)?;
+    check_losing_cycles(&quotient, &region, &quotient_rewards)?;
+    let solved = optimum_on(
         &quotient,
         &quotient_target,
         &quotient_rewards,
-        Optimum::Min,
+        (Optimum::Min, &region),
         settings,
     )?;
     let mut strategy = vec![0; n];
@@ -405,20 +415,13 @@ fn components_within(mdp: &Mdp, unknowns: &[usize], kept: &[bool]) -> Vec<EndCom
     maximal_end_components_using(mdp, &within, kept)
 }
 
-/// An error where an end component among the unknowns (with kept actions
-/// only) has an action that earns a negative reward (module
-/// documentation, step 1), or (a malformed call: [`collapsed`] removed
-/// them) where the actions that earn nothing form an end component of
-/// their own. What passes has a positive reward on every round of every
-/// end component: each round uses an action that earns something, and
-/// none loses.
-fn check_cycles(
-    mdp: &Mdp,
-    unknowns: &[usize],
-    kept: &[bool],
-    rewards: &[f64],
-) -> Result<(), MdpError> {
-    for component in components_within(mdp, unknowns, kept) {
+/// An error where an end component among a minimum's unknowns (with kept
+/// actions only) has an action that earns a negative reward (module
+/// documentation, step 1). Once the free components are collapsed, what
+/// passes has a positive reward on every round of every end component:
+/// each round uses an action that earns something, and none loses.
+fn check_losing_cycles(mdp: &Mdp, region: &Region, rewards: &[f64]) -> Result<(), MdpError> {
+    for component in components_within(mdp, &region.unknowns, &region.kept) {
         for (&s, actions) in component.states.iter().zip(&component.actions) {
             let first = mdp.global_actions(s).start;
             if let Some(&a) = actions.iter().find(|&&a| rewards[first + a] < 0.0) {
@@ -429,15 +432,6 @@ fn check_cycles(
                 )));
             }
         }
-    }
-    let free: Vec<bool> = (kept.iter().zip(rewards))
-        .map(|(&k, &r)| k && r == 0.0)
-        .collect();
-    if let Some(component) = components_within(mdp, unknowns, &free).first() {
-        return Err(MdpError::Malformed(format!(
-            "states {:?} form an end component whose rounds earn nothing after the collapse",
-            component.states
-        )));
     }
     Ok(())
 }

@@ -4,8 +4,9 @@
 //! on.
 
 use super::{MAX_ITERATIONS, Optimum, REWARD_IMPROVEMENT_THRESHOLD, components_within};
+use crate::mdp::pattern::{Slot, union_pattern};
 use crate::mdp::{Mdp, MdpError};
-use crate::solver::{LinearSolver, SolverSettings, SparsePattern};
+use crate::solver::{LinearSolver, SolverSettings};
 
 /// The largest expected number of steps to the target over the strategies
 /// that play `allowed` actions on the unknowns: policy iteration for the
@@ -23,7 +24,7 @@ pub(super) fn longest_steps(
     }
     let ones = vec![1.0; mdp.num_state_actions()];
     let mut strategy = proper_start(mdp, target, unknowns, allowed)?;
-    let mut system = PolicySystem::new(mdp, unknowns, allowed, settings)?;
+    let mut system = PolicySystem::new(mdp, target, (unknowns, allowed), settings)?;
     // A potential needs no proved accuracy: the certificate's check makes
     // its errors harmless.
     let threshold = REWARD_IMPROVEMENT_THRESHOLD;
@@ -63,17 +64,6 @@ pub(super) fn proper_start(
     }
 }
 
-/// Where one transition of an unknown's action goes in a policy's system.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Slot {
-    /// An off-diagonal entry `-P(t | s)` at this position of the values.
-    Inside(usize),
-    /// Into the target (value 0): only into the exits.
-    Leaving,
-    /// A self-loop, or an entry of an action not kept.
-    Unused,
-}
-
 /// The systems `(I - Q_sigma) x = r_sigma` of the strategies on the
 /// unknowns (kept actions only), on the union of their patterns.
 pub(super) struct PolicySystem {
@@ -89,55 +79,17 @@ pub(super) struct PolicySystem {
 impl PolicySystem {
     pub(super) fn new(
         mdp: &Mdp,
-        unknowns: &[usize],
-        kept: &[bool],
+        target: &[bool],
+        (unknowns, kept): (&[usize], &[bool]),
         settings: &SolverSettings,
     ) -> Result<Self, MdpError> {
         let mut index = vec![usize::MAX; mdp.num_states()];
         for (i, &s) in unknowns.iter().enumerate() {
             index[s] = i;
         }
-        let mut row_offsets = vec![0];
-        let mut columns = Vec::new();
-        let mut slots = vec![Slot::Unused; mdp.entries.len()];
-        for (i, &s) in unknowns.iter().enumerate() {
-            let row_start = columns.len();
-            columns.push(i);
-            for action in mdp.global_actions(s).filter(|&a| kept[a]) {
-                columns.extend(
-                    mdp.global_distribution(action)
-                        .iter()
-                        .filter(|&&(t, _)| t != s && index[t] != usize::MAX)
-                        .map(|&(t, _)| index[t]),
-                );
-            }
-            columns[row_start..].sort_unstable();
-            let mut row: Vec<usize> = columns.drain(row_start..).collect();
-            row.dedup();
-            for action in mdp.global_actions(s).filter(|&a| kept[a]) {
-                let entries = mdp.entry_offsets[action]..mdp.entry_offsets[action + 1];
-                for (slot, &(t, _)) in slots[entries.clone()].iter_mut().zip(&mdp.entries[entries])
-                {
-                    *slot = if t == s {
-                        Slot::Unused
-                    } else if index[t] == usize::MAX {
-                        Slot::Leaving
-                    } else {
-                        let offset = row
-                            .binary_search(&index[t])
-                            .expect("every kept edge among the unknowns is in the pattern");
-                        Slot::Inside(row_start + offset)
-                    };
-                }
-            }
-            columns.extend(row);
-            row_offsets.push(columns.len());
-        }
-        let pattern = SparsePattern {
-            n: unknowns.len(),
-            row_offsets,
-            columns,
-        };
+        // Every state outside the unknowns that a kept action reaches is
+        // in the target (value 0): the right-hand side is the reward alone.
+        let (pattern, slots) = union_pattern(mdp, (unknowns, &index), target, |a| kept[a]);
         let solver = match unknowns.is_empty() {
             true => None,
             false => Some(LinearSolver::new(pattern, settings)?),
@@ -149,6 +101,12 @@ impl PolicySystem {
             kept: kept.to_vec(),
             solver,
         })
+    }
+
+    /// The position of each state among the unknowns (`usize::MAX` for
+    /// the others).
+    pub(super) fn index(&self) -> &[usize] {
+        &self.index
     }
 
     /// Factorises the system of `strategy`; returns `r_sigma` on the
@@ -180,7 +138,7 @@ impl PolicySystem {
                     {
                         match *slot {
                             Slot::Inside(k) => values[k] = -p,
-                            Slot::Leaving => exits[i] += p,
+                            Slot::Leaving { .. } => exits[i] += p,
                             Slot::Unused => {}
                         }
                     }
