@@ -124,8 +124,10 @@ impl CertifyError {
     }
 
     /// Whether a policy evaluation could not be solved to the tolerance
-    /// because the product mixes too slowly (method.md section 8): the
-    /// bound is unknown, not wrong, and the trivial bound stays sound.
+    /// because the product mixes too slowly (method.md section 8; BiCGSTAB
+    /// not converging within its budget where no LU can be built is the
+    /// same): the bound is unknown, not wrong, and the trivial bound stays
+    /// sound.
     pub fn is_slow_mixing(&self) -> bool {
         matches!(
             self,
@@ -133,6 +135,7 @@ impl CertifyError {
                 SolverError::Unbounded { .. }
                     | SolverError::TooLargeForExact { .. }
                     | SolverError::Inaccurate { .. }
+                    | SolverError::NotConverged { .. }
             ))
         )
     }

@@ -56,7 +56,7 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(error) if is_broken_pipe(&error) => ExitCode::SUCCESS,
         Err(error) => {
-            eprintln!("error: {error:#}");
+            eprintln!("error: {}", describe(&error));
             if cli::interrupt::received() {
                 ExitCode::from(cli::interrupt::INTERRUPTED)
             } else {
@@ -66,9 +66,52 @@ fn main() -> ExitCode {
     }
 }
 
+/// The error and its causes, each cause once: a cause whose message is
+/// already part of the text (an error whose message embeds its source,
+/// thiserror's `#[from]` with `{0}`) is not repeated.
+fn describe(error: &anyhow::Error) -> String {
+    let mut text = error.to_string();
+    for cause in error.chain().skip(1) {
+        let cause = cause.to_string();
+        if !text.contains(&cause) {
+            text.push_str(": ");
+            text.push_str(&cause);
+        }
+    }
+    text
+}
+
 /// Whether the error is stdout's reader having gone away (`| head`).
 fn is_broken_pipe(error: &anyhow::Error) -> bool {
     error
         .downcast_ref::<std::io::Error>()
         .is_some_and(|e| e.kind() == std::io::ErrorKind::BrokenPipe)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[derive(Debug, thiserror::Error)]
+    #[error("the inner cause")]
+    struct Inner;
+
+    #[derive(Debug, thiserror::Error)]
+    #[error("embedding: {0}")]
+    struct Embedding(#[from] Inner);
+
+    #[derive(Debug, thiserror::Error)]
+    #[error("not embedding")]
+    struct Wrapping(#[source] Inner);
+
+    #[test]
+    fn each_cause_is_printed_once() {
+        let embedded = anyhow::Error::from(Embedding(Inner)).context("reading a.drn");
+        assert_eq!(
+            describe(&embedded),
+            "reading a.drn: embedding: the inner cause"
+        );
+        let wrapped = anyhow::Error::from(Wrapping(Inner));
+        assert_eq!(describe(&wrapped), "not embedding: the inner cause");
+    }
 }

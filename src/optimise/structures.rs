@@ -123,7 +123,14 @@ pub fn candidate_structures(
         let clock = Instant::now();
         let (found, note) = match source {
             StructureSource::Full => (vec![start.clone()], format!("the {} structure", start.name)),
-            StructureSource::Informed => informed(game, dra, &start, settings)?,
+            // The informed optimum out of the solver's reach (method.md
+            // section 8) leaves the other sources to carry the run.
+            StructureSource::Informed => match informed(game, dra, &start, settings) {
+                Err(error) if error.is_numerical() => {
+                    (Vec::new(), format!("no informed structure: {error}"))
+                }
+                found => found?,
+            },
             StructureSource::Sat => synthesised(game, (dra, negated), &start, settings, belief)?,
             StructureSource::Paper => pruned(game, dra, &start, settings)?,
         };

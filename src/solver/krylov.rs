@@ -149,6 +149,12 @@ impl KrylovSolver {
         &self.system.pattern
     }
 
+    /// Allows each solve from now on `max_iterations` BiCGSTAB iterations
+    /// ([`super::LinearSolver`] where no LU can take over a slow solve).
+    pub fn allow_iterations(&mut self, max_iterations: usize) {
+        self.system.max_iterations = max_iterations;
+    }
+
     /// The values of `A` as of the last factorisation.
     pub fn values(&self) -> &[f64] {
         &self.system.values

@@ -50,12 +50,33 @@ impl LuSolver {
     /// Symbolic analysis (fill-reducing ordering, elimination structure) of
     /// `pattern`; solves are accepted when their residual is at most `tolerance`.
     pub fn new(pattern: SparsePattern, tolerance: f64) -> Result<Self, SolverError> {
+        let lu = Self::analyse(&pattern, tolerance)?;
+        Ok(Self::with_analysis(pattern, lu, tolerance))
+    }
+
+    /// The checks of `pattern` and `tolerance` and the symbolic analysis of
+    /// [`Self::new`], the pattern borrowed: where the analysis refuses the
+    /// LU ([`SolverError::LuTooLarge`]), the caller keeps the pattern for
+    /// another solver.
+    pub(crate) fn analyse(
+        pattern: &SparsePattern,
+        tolerance: f64,
+    ) -> Result<MultifrontalLu, SolverError> {
         super::SolverSettings::with_tolerance(tolerance).check()?;
         pattern.check()?;
-        let lu = MultifrontalLu::new(&pattern)?;
+        MultifrontalLu::new(pattern)
+    }
+
+    /// The solver of `pattern` with its symbolic analysis `lu`
+    /// ([`Self::analyse`]).
+    pub(crate) fn with_analysis(
+        pattern: SparsePattern,
+        lu: MultifrontalLu,
+        tolerance: f64,
+    ) -> Self {
         let values = vec![0.0; pattern.nnz()];
         let n = pattern.n;
-        Ok(Self {
+        Self {
             forward: Workspace::new(pattern.n),
             transposed: Workspace::new(pattern.n),
             system: System {
@@ -67,7 +88,7 @@ impl LuSolver {
                 factorised: false,
                 tolerance,
             },
-        })
+        }
     }
 
     /// The pattern of `A`.

@@ -164,6 +164,21 @@ pub enum SolverError {
     /// Memory for the factorisation could not be allocated.
     #[error("out of memory in the sparse LU factorisation")]
     OutOfMemory,
+    /// The sparse LU's symbolic analysis found a dense front whose entries
+    /// 32-bit indices cannot address (more than 2^32, about 34 GB of
+    /// doubles): the factorisation is out of reach, BiCGSTAB is not.
+    #[error(
+        "a sparse LU of these {unknowns} unknowns needs a dense front of {front} x {front} \
+         entries (beyond 32-bit indices, about {gigabytes:.0} GB); the iterative solver \
+         (`krylov`) needs no factorisation",
+        gigabytes = (*front as f64).powi(2) * 8.0 / 1e9
+    )]
+    LuTooLarge {
+        /// The unknowns of the system.
+        unknowns: usize,
+        /// The rows (and columns) of the largest front.
+        front: usize,
+    },
     /// The pattern or values have inconsistent sizes or unsorted columns.
     #[error("malformed sparse matrix: {0}")]
     Malformed(String),
@@ -651,6 +666,9 @@ pub struct LinearSolver {
     /// The LU analysed to predict that cost, kept for the fall-back.
     spare_lu: Option<Box<LuSolver>>,
     krylov_budget: usize,
+    /// [`SolverSettings::max_iterations`]: BiCGSTAB's budget where no LU
+    /// can take over.
+    max_iterations: usize,
     /// Whether [`Self::factorize_and_solve`] solves during the LU's
     /// factorisation (see there).
     solve_while_factorising: bool,
@@ -757,44 +775,67 @@ impl LinearSolver {
         let mut reason = initial_reason(settings, n);
         let mut lu_cost = lu_cost_in_iterations(pattern.nnz());
         let mut spare_lu = None;
+        // Whether an LU of this pattern can be built at all.
+        let mut lu_possible = true;
         let backend = match settings.method_for(n) {
             SolverMethod::Krylov => Backend::Krylov(Box::new(KrylovSolver::new(
                 pattern,
                 &krylov_settings(settings, n, lu_cost),
             )?)),
-            _ => {
-                let lu = Box::new(LuSolver::new(pattern, settings.tolerance)?);
-                let flops = lu.factorisation_flops();
-                let predicted = lu_iterations_from_flops(flops, lu.pattern());
-                if auto && predicted > TRIAL_WORTH_ITERATIONS {
-                    lu_cost = predicted;
+            _ => match LuSolver::analyse(&pattern, settings.tolerance) {
+                Err(SolverError::LuTooLarge { front, .. }) if auto => {
                     reason = format!(
-                        "auto: krylov, {n} unknowns: an LU of {flops:.1e} flops costs about                          {predicted:.0} BiCGSTAB iterations; a trial decides"
+                        "auto: krylov, {n} unknowns: an LU needs a dense front of {front} x \
+                         {front} entries, beyond 32-bit indices"
                     );
-                    let krylov = KrylovSolver::new(
-                        lu.pattern().clone(),
+                    lu_cost = f64::INFINITY;
+                    lu_possible = false;
+                    Backend::Krylov(Box::new(KrylovSolver::new(
+                        pattern,
                         &krylov_settings(settings, n, lu_cost),
-                    )?;
-                    spare_lu = Some(lu);
-                    Backend::Krylov(Box::new(krylov))
-                } else {
-                    Backend::Lu(lu)
+                    )?))
                 }
-            }
+                analysis => {
+                    let lu = Box::new(LuSolver::with_analysis(
+                        pattern,
+                        analysis?,
+                        settings.tolerance,
+                    ));
+                    let flops = lu.factorisation_flops();
+                    let predicted = lu_iterations_from_flops(flops, lu.pattern());
+                    if auto && predicted > TRIAL_WORTH_ITERATIONS {
+                        lu_cost = predicted;
+                        reason = format!(
+                            "auto: krylov, {n} unknowns: an LU of {flops:.1e} flops costs \
+                             about {predicted:.0} BiCGSTAB iterations; a trial decides"
+                        );
+                        let krylov = KrylovSolver::new(
+                            lu.pattern().clone(),
+                            &krylov_settings(settings, n, lu_cost),
+                        )?;
+                        spare_lu = Some(lu);
+                        Backend::Krylov(Box::new(krylov))
+                    } else {
+                        Backend::Lu(lu)
+                    }
+                }
+            },
         };
         let krylov_budget = krylov_settings(settings, n, lu_cost).max_iterations;
         let probe_pending = auto
+            && lu_possible
             && matches!(backend, Backend::Krylov(_))
             && (spare_lu.is_some() || n <= settings.lu_switch_limit);
         Ok(Self {
             backend,
             reason,
             probe_pending,
-            fall_back_to_lu: auto,
+            fall_back_to_lu: auto && lu_possible,
             lu_cost,
             spare_lu,
             solve_while_factorising: n <= SOLVE_WHILE_FACTORISING_UNKNOWNS,
             krylov_budget,
+            max_iterations: settings.max_iterations,
             tolerance: settings.tolerance,
             exact_limit: settings.exact_limit,
             exits: vec![0.0; n],
@@ -881,12 +922,17 @@ impl LinearSolver {
                 factorised
             }
             Backend::Krylov(krylov) => match krylov.factorize_with(&mut self.exits, fill) {
-                Err(SolverError::Singular(_)) if self.fall_back_to_lu => {
+                Err(SolverError::Singular(pivot)) if self.fall_back_to_lu => {
                     self.reason = format!(
                         "auto: lu, ILU(0) met a zero pivot (before: {})",
                         self.reason
                     );
-                    self.fall_back()
+                    self.fall_back()?;
+                    match self.backend {
+                        Backend::Lu(_) => Ok(()),
+                        // No LU could be built: the zero pivot stands.
+                        Backend::Krylov(_) => Err(SolverError::Singular(pivot)),
+                    }
                 }
                 factorised => factorised,
             },
@@ -1516,31 +1562,52 @@ impl LinearSolver {
             }
     }
 
-    /// Replaces BiCGSTAB by an LU of the matrix it last took, once and for all.
+    /// Replaces BiCGSTAB by an LU of the matrix it last took, once and for
+    /// all; where no LU can be built ([`SolverError::LuTooLarge`]),
+    /// BiCGSTAB stays and the caller's solve goes on with it.
     fn fall_back(&mut self) -> Result<(), SolverError> {
         self.fall_back_to_lu = false;
-        if let Backend::Krylov(krylov) = &self.backend {
-            if !self.reason.starts_with("auto: lu") {
-                self.reason = format!(
-                    "auto: lu, BiCGSTAB did not converge within its budget of {} iterations \
-                     (before: {})",
-                    self.krylov_budget, self.reason
-                );
-            }
-            let values = krylov.values().to_vec();
-            let lu = match self.spare_lu.take() {
-                Some(analysed) => analysed,
-                None => Box::new(LuSolver::new(krylov.pattern().clone(), self.tolerance)?),
-            };
-            // BiCGSTAB's memory is freed before the numeric LU needs its own.
-            self.backend = Backend::Lu(lu);
-            let exits = self.exits.clone();
-            self.factorize_with(|own, own_exits| {
-                own.copy_from_slice(&values);
-                own_exits.copy_from_slice(&exits);
-            })?;
+        let Backend::Krylov(krylov) = &self.backend else {
+            return Ok(());
+        };
+        let slow = format!(
+            "BiCGSTAB did not converge within its budget of {} iterations (before: {})",
+            self.krylov_budget, self.reason
+        );
+        let values = krylov.values().to_vec();
+        let lu = match self.spare_lu.take() {
+            Some(analysed) => analysed,
+            None => match LuSolver::new(krylov.pattern().clone(), self.tolerance) {
+                Ok(lu) => Box::new(lu),
+                // No LU to fall back to: BiCGSTAB goes on from where it is,
+                // with every iteration the settings allow.
+                Err(SolverError::LuTooLarge { front, .. }) => {
+                    if !self.reason.starts_with("auto: lu") {
+                        self.reason = format!(
+                            "auto: krylov, up to {} iterations: {slow}, and an LU needs a \
+                             dense front of {front} x {front} entries, beyond 32-bit indices",
+                            self.max_iterations
+                        );
+                    }
+                    self.krylov_budget = self.max_iterations;
+                    if let Backend::Krylov(krylov) = &mut self.backend {
+                        krylov.allow_iterations(self.max_iterations);
+                    }
+                    return Ok(());
+                }
+                Err(error) => return Err(error),
+            },
+        };
+        if !self.reason.starts_with("auto: lu") {
+            self.reason = format!("auto: lu, {slow}");
         }
-        Ok(())
+        // BiCGSTAB's memory is freed before the numeric LU needs its own.
+        self.backend = Backend::Lu(lu);
+        let exits = self.exits.clone();
+        self.factorize_with(|own, own_exits| {
+            own.copy_from_slice(&values);
+            own_exits.copy_from_slice(&exits);
+        })
     }
 }
 

@@ -721,11 +721,31 @@ impl Structure {
                 }
             }
         }
+        structure.check_front_sizes(u32::MAX as usize)?;
         structure.permutation = order.permutation;
         structure.link_children()?;
         structure.order_for_the_stack();
         structure.assemble_map(pattern)?;
         Ok(structure)
+    }
+
+    /// Refuses fronts of more than `largest` entries
+    /// ([`SolverError::LuTooLarge`]): the positions in a front are stored
+    /// as `u32`, so `largest` is `u32::MAX`.
+    fn check_front_sizes(&self, largest: usize) -> Result<(), SolverError> {
+        let front = self
+            .supernodes
+            .iter()
+            .map(|node| node.columns() + node.rows.len())
+            .max()
+            .unwrap_or(0);
+        match front.checked_mul(front) {
+            Some(entries) if entries <= largest => Ok(()),
+            _ => Err(SolverError::LuTooLarge {
+                unknowns: self.n,
+                front,
+            }),
+        }
     }
 
     /// Appends the supernode of columns `begin..end` with the rows `below`.
@@ -996,6 +1016,35 @@ fn to_u32(value: usize) -> Result<u32, SolverError> {
 mod tests {
     use super::super::test_systems::{grid_walk, random_chain, tridiagonal};
     use super::*;
+
+    #[test]
+    fn fronts_beyond_the_index_limit_are_refused_by_size() {
+        let (pattern, _) = grid_walk(12);
+        let structure = Structure::analyse(&pattern).unwrap();
+        let front = structure
+            .supernodes
+            .iter()
+            .map(|node| node.columns() + node.rows.len())
+            .max()
+            .unwrap();
+        assert!(structure.check_front_sizes(front * front).is_ok());
+        assert_eq!(
+            structure.check_front_sizes(front * front - 1),
+            Err(SolverError::LuTooLarge {
+                unknowns: 144,
+                front
+            })
+        );
+        let message = SolverError::LuTooLarge {
+            unknowns: 520_190,
+            front: 70_000,
+        }
+        .to_string();
+        assert!(
+            message.contains("70000 x 70000") && message.contains("39 GB"),
+            "{message}"
+        );
+    }
 
     /// The row sums of a matrix given with its diagonal.
     fn exits(pattern: &SparsePattern, values: &[f64]) -> Vec<f64> {
