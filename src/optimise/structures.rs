@@ -60,6 +60,18 @@ impl StructureSource {
             Self::Paper => "paper",
         }
     }
+
+    /// What the source's search does, in words (the progress line's).
+    pub fn search(self) -> &'static str {
+        match self {
+            Self::Full => "the full support",
+            Self::Informed => {
+                "the informed support (the optimum of the defender that sees the state)"
+            }
+            Self::Sat => "support synthesis by SAT",
+            Self::Paper => "Algorithm 1's pruning",
+        }
+    }
 }
 
 /// What one source contributed.
@@ -101,12 +113,13 @@ pub struct Candidates {
 /// when it came from files). `negated`, an automaton for !phi, is needed
 /// by the `sat` source (which certifies what it finds); `belief` is the
 /// run's belief bound of `game` for the automaton `dra` of phi.
+/// `announce` hears each source as its search begins.
 pub fn candidate_structures(
     game: &Posg,
     (dra, negated): (&Dra, Option<&Dra>),
     start: Structure,
-    settings: &Settings,
-    belief: &BeliefBoundOnce<'_>,
+    (settings, belief): (&Settings, &BeliefBoundOnce<'_>),
+    announce: &dyn Fn(StructureSource),
 ) -> Result<Candidates, OptimiseError> {
     debug_assert!(belief.is_of(game, dra), "the belief bound of another game");
     let mut candidates = Candidates {
@@ -120,6 +133,7 @@ pub fn candidate_structures(
         if !wanted {
             continue;
         }
+        announce(source);
         let clock = Instant::now();
         let (found, note) = match source {
             StructureSource::Full => (vec![start.clone()], format!("the {} structure", start.name)),

@@ -255,6 +255,9 @@ pub enum Step {
         /// The job's own size (a grown run optimises every size up to it).
         final_nodes: usize,
     },
+    /// One source's search for structures begins (after
+    /// [`Step::Supports`]).
+    Source(StructureSource),
     /// Certifying the best defender of a size (method.md section 6).
     Certifying {
         /// The size whose best defender is certified.
@@ -578,8 +581,14 @@ fn run_size(job: Job, watch: &impl Watch, final_nodes: usize) -> Result<Outcome,
         defender_nodes,
         final_nodes,
     });
-    let candidates =
-        optimise::candidate_structures(game, (phi, not_phi), start, settings, &belief)?;
+    let announce = |source| watch.step(&Step::Source(source));
+    let candidates = optimise::candidate_structures(
+        game,
+        (phi, not_phi),
+        start,
+        (settings, &belief),
+        &announce,
+    )?;
     let count = candidates.structures.len();
     let records: Vec<Arc<Mutex<Vec<IterationRecord>>>> =
         (0..count).map(|_| Arc::default()).collect();

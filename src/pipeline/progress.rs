@@ -202,6 +202,9 @@ impl Progress {
                 board.structures.clear();
                 board.step = Some("gathering the supports".into());
             }
+            Step::Source(source) => {
+                board.step = Some(format!("gathering the supports: {}", source.search()));
+            }
             Step::Certifying { .. } => {
                 board.step = Some("certifying the best defender".into());
             }
