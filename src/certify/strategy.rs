@@ -160,9 +160,10 @@ impl StrategyFile {
         self.automaton.letters_of(game, &at.key("automaton"))?;
         let player = self.player.player(game);
         let mut seen: FxHashMap<(usize, usize, usize), usize> = FxHashMap::default();
+        let states = game.state_indices();
         for (i, rule) in self.rules.iter().enumerate() {
             let here = at.key("rules").index(i);
-            let (s, _) = self.resolve(rule, game, player, &here)?;
+            let (s, _) = self.resolve(rule, &states, player, &here)?;
             check_value(rule.free_player_value, &here.key("free_player_value"))?;
             if let Some(first) = seen.insert((s, rule.automaton_state, rule.node), i) {
                 return Err(here.error(format!(
@@ -175,14 +176,15 @@ impl StrategyFile {
     }
 
     /// A rule's game state and action as indices, checked.
+    /// `states` is the game's [`Posg::state_indices`].
     fn resolve(
         &self,
         rule: &StrategyRule,
-        game: &Posg,
+        states: &FxHashMap<&str, usize>,
         player: &Player,
         at: &Located,
     ) -> Result<(usize, usize), ModelError> {
-        let s = game.state_index(&rule.state).ok_or_else(|| {
+        let &s = states.get(rule.state.as_str()).ok_or_else(|| {
             at.key("state")
                 .error(format!("unknown state `{}`", rule.state))
         })?;
@@ -234,9 +236,10 @@ impl StrategyFile {
             .letters_of(game, &at)
             .map_err(|e| e.to_string())?;
         let mut action_at: FxHashMap<(usize, usize), (usize, &StrategyRule)> = FxHashMap::default();
+        let states = game.state_indices();
         for rule in &self.rules {
             let (s, u) = self
-                .resolve(rule, game, player, &at)
+                .resolve(rule, &states, player, &at)
                 .map_err(|e| e.to_string())?;
             match action_at.insert((s, rule.automaton_state), (u, rule)) {
                 Some((other, first)) if other != u => {

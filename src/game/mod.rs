@@ -248,9 +248,18 @@ impl Posg {
         &self.states
     }
 
-    /// The index of the state named `name`.
+    /// The index of the state named `name` (a scan of the names: to look
+    /// up many, [`Self::state_indices`]).
     pub fn state_index(&self, name: &str) -> Option<StateId> {
         self.states.iter().position(|s| s == name)
+    }
+
+    /// Each state's index by its name.
+    pub fn state_indices(&self) -> rustc_hash::FxHashMap<&str, StateId> {
+        (self.states.iter())
+            .enumerate()
+            .map(|(s, name)| (name.as_str(), s))
+            .collect()
     }
 
     /// The initial distribution over states, positive entries only.

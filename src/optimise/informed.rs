@@ -87,10 +87,11 @@ fn observation_votes(game: &Posg, rules: &[StrategyRule]) -> Result<Vec<Vec<f64>
         .enumerate()
         .map(|(u, name)| (name.as_str(), u))
         .collect();
+    let state_index = game.state_indices();
     let mut votes = vec![vec![0.0; defender.num_actions()]; defender.num_observations()];
     for rule in rules.iter().filter(|r| r.free_player_value > 0.0) {
-        let (Some(s), Some(&u)) = (
-            game.state_index(&rule.state),
+        let (Some(&s), Some(&u)) = (
+            state_index.get(rule.state.as_str()),
             action_index.get(rule.action.as_str()),
         ) else {
             return Err(OptimiseError::Settings {
