@@ -56,7 +56,7 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(error) if is_broken_pipe(&error) => ExitCode::SUCCESS,
         Err(error) => {
-            eprintln!("error: {}", describe(&error));
+            eprintln!("error: {}", posg_fsc::output::error_message(error.as_ref()));
             if cli::interrupt::received() {
                 ExitCode::from(cli::interrupt::INTERRUPTED)
             } else {
@@ -64,21 +64,6 @@ fn main() -> ExitCode {
             }
         }
     }
-}
-
-/// The error and its causes, each cause once: a cause whose message is
-/// already part of the text (an error whose message embeds its source,
-/// thiserror's `#[from]` with `{0}`) is not repeated.
-fn describe(error: &anyhow::Error) -> String {
-    let mut text = error.to_string();
-    for cause in error.chain().skip(1) {
-        let cause = cause.to_string();
-        if !text.contains(&cause) {
-            text.push_str(": ");
-            text.push_str(&cause);
-        }
-    }
-    text
 }
 
 /// Whether the error is stdout's reader having gone away (`| head`).
@@ -90,7 +75,7 @@ fn is_broken_pipe(error: &anyhow::Error) -> bool {
 
 #[cfg(test)]
 mod tests {
-    use super::*;
+    use posg_fsc::output::error_message;
 
     #[derive(Debug, thiserror::Error)]
     #[error("the inner cause")]
@@ -108,10 +93,13 @@ mod tests {
     fn each_cause_is_printed_once() {
         let embedded = anyhow::Error::from(Embedding(Inner)).context("reading a.drn");
         assert_eq!(
-            describe(&embedded),
+            error_message(embedded.as_ref()),
             "reading a.drn: embedding: the inner cause"
         );
         let wrapped = anyhow::Error::from(Wrapping(Inner));
-        assert_eq!(describe(&wrapped), "not embedding: the inner cause");
+        assert_eq!(
+            error_message(wrapped.as_ref()),
+            "not embedding: the inner cause"
+        );
     }
 }

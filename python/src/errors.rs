@@ -1,6 +1,7 @@
 //! The Python exceptions of `posg_fsc` and the conversion of every library
 //! error into one of them, with the message the command line prints
-//! (`anyhow`'s `{:#}`: the error and its causes, joined by `: `).
+//! ([`posg_fsc::output::error_message`]: the error and its causes, each
+//! once, joined by `: `).
 //!
 //! ```text
 //! posg_fsc.Error                  every error of the library
@@ -122,7 +123,7 @@ where
     E: Classify + std::error::Error + Send + Sync + 'static,
 {
     let kind = error.kind();
-    raise(kind, format!("{:#}", anyhow::Error::new(error)))
+    raise(kind, posg_fsc::output::error_message(&error))
 }
 
 /// Runs `work` without the GIL; its error becomes the exception of its

@@ -12,7 +12,9 @@
 //! * [`OutputDirectory`]: the directory a command writes its results into,
 //!   atomically, under a lock, never mixing old and new results;
 //! * [`sweep`]: the rows of `sweep.csv`, one per size pair;
-//! * [`counted`]: a count and its noun, as reports print them.
+//! * [`counted`]: a count and its noun, as reports print them;
+//! * [`error_message`]: an error and its causes, as the CLI and Python
+//!   report them.
 
 mod directory;
 pub mod dot;
@@ -48,6 +50,22 @@ pub fn counted(count: usize, noun: &str) -> String {
     } else {
         format!("{count} {noun}s")
     }
+}
+
+/// An error and its causes on one line, each cause once: a cause whose
+/// message is already part of the text (an error whose message embeds its
+/// source, thiserror's `#[from]` with `{0}`) is not repeated. The CLI
+/// prints it after `error: `; Python raises it.
+pub fn error_message(error: &(dyn std::error::Error + 'static)) -> String {
+    let mut text = error.to_string();
+    for cause in std::iter::successors(error.source(), |e| e.source()) {
+        let cause = cause.to_string();
+        if !text.contains(&cause) {
+            text.push_str(": ");
+            text.push_str(&cause);
+        }
+    }
+    text
 }
 
 /// Writes one CSV row per [`IterationRecord`]: `iteration, seconds, value,
