@@ -307,7 +307,18 @@ pub fn upper_value_or_trivial(
     dra_phi: &Dra,
     adversary: &Fsc,
 ) -> Result<f64, CertifyError> {
-    match upper_bound(game, dra_phi, adversary) {
+    upper_value_or_trivial_within(game, dra_phi, adversary, &SolverSettings::default())
+}
+
+/// [`upper_value_or_trivial`] with the policy evaluations solved by
+/// `settings` ([`upper_bound_within`]).
+pub fn upper_value_or_trivial_within(
+    game: &Posg,
+    dra_phi: &Dra,
+    adversary: &Fsc,
+    settings: &SolverSettings,
+) -> Result<f64, CertifyError> {
+    match upper_bound_within(game, dra_phi, adversary, settings) {
         Ok(bound) => Ok(bound.value),
         Err(error) if error.is_numerical() => Ok(1.0),
         Err(error) => Err(error),

@@ -8,10 +8,23 @@ use posg_fsc::certify::{Qualitative, lower_bound};
 use posg_fsc::controller::{Choice, Fsc, Role};
 use posg_fsc::game::Posg;
 use posg_fsc::game::file::from_json_str;
-use posg_fsc::synthesis::{Confirmation, Engine, Mode, Settings, Synthesis, synthesise};
+use posg_fsc::synthesis::{Confirmation, Engine, Mode, Settings, Synthesis, SynthesisError};
+use posg_fsc::value::SolverSettings;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde_json::{Map, Value, json};
+
+/// [`posg_fsc::synthesis::synthesise`] with the default linear solver.
+fn synthesise(
+    game: &Posg,
+    phi: &Dra,
+    not_phi: &Dra,
+    nodes: usize,
+    settings: &Settings,
+) -> Result<Synthesis, SynthesisError> {
+    let solver = SolverSettings::default();
+    posg_fsc::synthesis::synthesise(game, phi, not_phi, nodes, settings, &solver)
+}
 
 /// The single-pair formulas of the issue.
 const ONE_PAIR: [&str; 5] = ["G !b", "GF a & G !b", "FG a", "!b U a", "G (a | c) & GF a"];

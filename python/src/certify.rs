@@ -157,7 +157,14 @@ pub fn support<'py>(
         .as_ref()
         .expect("the negation was asked for");
     let found = compute(py, || {
-        synthesis::synthesise(posg, &objective.phi, not_phi, nodes, &settings)
+        synthesis::synthesise(
+            posg,
+            &objective.phi,
+            not_phi,
+            nodes,
+            &settings,
+            &SolverSettings::default(),
+        )
     })?;
     let report = PyDict::new(py);
     report.set_item("found", found.defender.is_some())?;

@@ -244,7 +244,7 @@ fn synthesis_story(game: &Posg, dra: &Dra, negated: &Dra, out: &mut String) -> a
             mode,
             ..synthesis::Settings::default()
         };
-        synthesise(game, dra, negated, 2, &settings)
+        synthesise(game, dra, negated, 2, &settings, &SolverSettings::default())
     };
     let almost_sure = run(Mode::AlmostSure)?;
     let positive = run(Mode::Positive)?;

@@ -13,6 +13,7 @@ use clap::Args;
 use posg_fsc::controller;
 use posg_fsc::output::{OutputDirectory, write_file};
 use posg_fsc::synthesis::{self, Confirmation, Mode, SatStatistics, Settings, Synthesis};
+use posg_fsc::value::SolverSettings;
 use serde::Serialize;
 
 use super::common::{self, ObjectiveArgs, Provenance};
@@ -105,7 +106,14 @@ pub fn run(args: SupportArgs) -> anyhow::Result<()> {
             .map_err(|e| anyhow::anyhow!("{e}"))
             .with_context(|| format!("writing {}", path.display()))?;
     }
-    let result = synthesis::synthesise(&game, &dra, &negated, args.def_nodes, &settings)?;
+    let result = synthesis::synthesise(
+        &game,
+        &dra,
+        &negated,
+        args.def_nodes,
+        &settings,
+        &SolverSettings::default(),
+    )?;
     if let Some(defender) = &result.defender {
         let path = out.join("defender.fsc.json");
         controller::file::write(&path, defender, &game)?;

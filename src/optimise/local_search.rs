@@ -43,7 +43,7 @@ use crate::certify::{
 };
 use crate::controller::{Choice, Fsc, Role, Support};
 use crate::game::{AdversaryAction, DefenderAction, Posg};
-use crate::optimise::Cancel;
+use crate::optimise::{Cancel, Certifier};
 use crate::solver::SolverSettings;
 
 /// A move counts as an improvement only when the bound rises by more
@@ -279,6 +279,9 @@ struct Search<'a> {
     /// the search keys.
     steps: DefenderSteps<'a>,
     not_phi: &'a Dra,
+    /// The run's linear solver, which the search's rankings and proofs
+    /// refine ([`ranking_settings`], [`proving_settings`]).
+    solver: SolverSettings,
     universe: &'a Fsc,
     support: Support,
     effort: Effort<'a>,
@@ -297,15 +300,20 @@ impl<'a> Search<'a> {
     /// pairs, each climb with `effort`, nothing evaluated yet.
     #[cfg(test)]
     fn new(game: &'a Posg, not_phi: &'a Dra, universe: &'a Fsc, effort: Effort<'a>) -> Self {
-        Self::sharing(game, not_phi, universe, effort, &SearchMemo::default())
+        let solver = SolverSettings::default();
+        Self::sharing(
+            (game, not_phi, solver),
+            universe,
+            effort,
+            &SearchMemo::default(),
+        )
     }
 
     /// The search over the defenders whose blocks play `universe`'s pairs,
     /// each climb with `effort`, knowing what the searches sharing `memo`
-    /// evaluated.
+    /// evaluated, its bounds solved by `solver`.
     fn sharing(
-        game: &'a Posg,
-        not_phi: &'a Dra,
+        (game, not_phi, solver): (&'a Posg, &'a Dra, SolverSettings),
         universe: &'a Fsc,
         effort: Effort<'a>,
         memo: &SearchMemo,
@@ -314,6 +322,7 @@ impl<'a> Search<'a> {
             game,
             steps: DefenderSteps::new(game),
             not_phi,
+            solver,
             universe,
             support: Support::of(universe),
             effort,
@@ -398,7 +407,12 @@ impl<'a> Landscape<'a> {
     /// moves are judged, and a judgment reports a failure that is not
     /// numerical); not counted as the climb's work.
     fn refuter(&self, defender: &Fsc) -> Option<Refuter<'_>> {
-        let Search { game, not_phi, .. } = *self.search;
+        let Search {
+            game,
+            not_phi,
+            solver,
+            ..
+        } = *self.search;
         if !self.search.pass_over_refuted {
             return None;
         }
@@ -407,7 +421,7 @@ impl<'a> Landscape<'a> {
             Some((solved, analysis)) if solved == key => {
                 Some(Refuter::from_analysis(game, not_phi, analysis))
             }
-            _ => Refuter::new(game, not_phi, defender, &ranking_settings()).ok(),
+            _ => Refuter::new(game, not_phi, defender, &ranking_settings(&solver)).ok(),
         }
     }
 
@@ -416,8 +430,13 @@ impl<'a> Landscape<'a> {
     /// ([`ranked_lower_bound`]); a product that could not be proved
     /// counts as large as the game, with every block met.
     fn evaluate(&self, key: &EvaluationKey, defender: &Fsc) -> Result<Judged, CertifyError> {
-        let Search { game, not_phi, .. } = *self.search;
-        match ranked_lower_bound(game, not_phi, defender, &ranking_settings()) {
+        let Search {
+            game,
+            not_phi,
+            solver,
+            ..
+        } = *self.search;
+        match ranked_lower_bound(game, not_phi, defender, &ranking_settings(&solver)) {
             Ok(ranked) => {
                 let judged = Judged {
                     bound: ranked.value,
@@ -484,8 +503,11 @@ impl<'a> Landscape<'a> {
     ) -> Result<Vec<(f64, usize, Vec<Choice>)>, CertifyError> {
         self.evaluated.set(self.evaluated.get() + 1);
         let search = self.search;
-        let mut gradients =
-            LowerBoundGradients::new(search.game, search.not_phi, ranking_settings());
+        let mut gradients = LowerBoundGradients::new(
+            search.game,
+            search.not_phi,
+            ranking_settings(&search.solver),
+        );
         let gradient = gradients.at_over(current, &search.support);
         self.spent
             .set(self.spent.get().saturating_add(gradients.work() as usize));
@@ -545,20 +567,20 @@ impl<'a> Landscape<'a> {
 /// rational solve and without the optimality certificate, since a climb
 /// only ranks its candidates; the search's end point is proved with
 /// [`proving_settings`], and certified in full afterwards as a candidate.
-fn ranking_settings() -> SolverSettings {
+fn ranking_settings(solver: &SolverSettings) -> SolverSettings {
     SolverSettings {
         prove_optimum: false,
-        ..proving_settings()
+        ..proving_settings(solver)
     }
 }
 
-/// The solver settings of the bound the search returns: proved, but
-/// without the exact rational solve (the trivial 0 where double and
-/// extended precision cannot prove it).
-fn proving_settings() -> SolverSettings {
+/// The solver settings of the bound the search returns: `solver`'s,
+/// proved, but without the exact rational solve (the trivial 0 where
+/// double and extended precision cannot prove it).
+fn proving_settings(solver: &SolverSettings) -> SolverSettings {
     SolverSettings {
         exact_limit: 0,
-        ..SolverSettings::default()
+        ..*solver
     }
 }
 
@@ -877,8 +899,7 @@ const MIN_KICKED_BLOCKS: usize = 2;
 /// the search is reproducible for a seed unless a deadline cuts it; what
 /// the searches sharing `memo` evaluated costs it no solve.
 pub fn climb_with_restarts(
-    game: &Posg,
-    not_phi: &Dra,
+    certifier: Certifier<'_>,
     starts: &[Fsc],
     restarts: usize,
     rng: &mut ChaCha8Rng,
@@ -888,9 +909,15 @@ pub fn climb_with_restarts(
     let start = starts
         .first()
         .expect("a search climbs from at least one start");
+    let Certifier {
+        game,
+        not_phi,
+        solver,
+        ..
+    } = certifier;
     let universe = Fsc::uniform_enabled(Role::Defender, start.num_nodes(), game.defender());
     let mut rounds = Rounds {
-        search: Search::sharing(game, not_phi, &universe, effort, memo),
+        search: Search::sharing((game, not_phi, solver), &universe, effort, memo),
         best: None,
         spent: 0,
     };
@@ -918,7 +945,7 @@ pub fn climb_with_restarts(
     }
     let best = rounds.best.expect("the search climbs from the start");
     Ok(Climbed {
-        bound: proved_bound(game, not_phi, &best.defender)?,
+        bound: proved_bound(game, not_phi, &best.defender, &solver)?,
         defender: best.defender,
     })
 }
@@ -996,8 +1023,13 @@ fn kicked(fsc: &Fsc, in_use: &[bool], universe: &Fsc, rng: &mut ChaCha8Rng) -> F
 
 /// The certified lower bound of `defender` with [`proving_settings`], or
 /// the trivial 0 where it cannot be proved so.
-fn proved_bound(game: &Posg, not_phi: &Dra, defender: &Fsc) -> Result<f64, CertifyError> {
-    lower_value_or_trivial_within(game, not_phi, defender, &proving_settings())
+fn proved_bound(
+    game: &Posg,
+    not_phi: &Dra,
+    defender: &Fsc,
+    solver: &SolverSettings,
+) -> Result<f64, CertifyError> {
+    lower_value_or_trivial_within(game, not_phi, defender, &proving_settings(solver))
 }
 
 /// `shape` (nodes, initial distribution) with each block `(g, o)` playing
@@ -1145,6 +1177,17 @@ mod tests {
         Automata::from_ltl(formula).unwrap().not_phi.unwrap()
     }
 
+    /// What a search certifies with: `game`, `not_phi` (also in the place
+    /// of phi, which the search does not use) and the default solver.
+    fn certifier<'a>(game: &'a Posg, not_phi: &'a Dra) -> Certifier<'a> {
+        Certifier {
+            game,
+            phi: not_phi,
+            not_phi,
+            solver: SolverSettings::default(),
+        }
+    }
+
     /// Every block on its first enabled pair (next node 0): node 0 only is
     /// in use, and every node plays the same actions.
     fn first_pairs(game: &Posg, nodes: usize) -> Fsc {
@@ -1212,8 +1255,7 @@ mod tests {
         for restarts in [0, 2] {
             let mut rng = ChaCha8Rng::seed_from_u64(1);
             let searched = climb_with_restarts(
-                &game,
-                &not_phi,
+                certifier(&game, &not_phi),
                 std::slice::from_ref(&start),
                 restarts,
                 &mut rng,
@@ -1309,7 +1351,7 @@ mod tests {
     #[test]
     fn no_move_in_a_block_the_adversary_does_not_meet_raises_the_bound() {
         let (game, universe, not_phi) = attacker_one_defender(2);
-        let settings = ranking_settings();
+        let settings = ranking_settings(&SolverSettings::default());
         let judged = |fsc: &Fsc| ranked_lower_bound(&game, &not_phi, fsc, &settings).unwrap();
         let (mut unmet_moves, mut raised_where_met) = (0, 0);
         let uniform_in_use = blocks_in_use(&game, &universe);
@@ -1372,7 +1414,13 @@ mod tests {
         .unwrap();
         let not_phi = not_phi("G !bad");
         let defender = Fsc::uniform_enabled(Role::Defender, 1, game.defender());
-        let ranked = ranked_lower_bound(&game, &not_phi, &defender, &ranking_settings()).unwrap();
+        let ranked = ranked_lower_bound(
+            &game,
+            &not_phi,
+            &defender,
+            &ranking_settings(&SolverSettings::default()),
+        )
+        .unwrap();
         assert!((ranked.value - 0.1).abs() < 1e-12, "{}", ranked.value);
         let state = |name: &str| game.states().iter().position(|s| s == name).unwrap();
         let met_at = |name: &str| -> Vec<bool> {
@@ -1463,8 +1511,7 @@ mod tests {
         let search = |start: &Fsc, memo: &SearchMemo| {
             let mut rng = ChaCha8Rng::seed_from_u64(5);
             climb_with_restarts(
-                &game,
-                &not_phi,
+                certifier(&game, &not_phi),
                 std::slice::from_ref(start),
                 3,
                 &mut rng,
@@ -1502,8 +1549,7 @@ mod tests {
         let search = || {
             let mut rng = ChaCha8Rng::seed_from_u64(5);
             climb_with_restarts(
-                &game,
-                &not_phi,
+                certifier(&game, &not_phi),
                 std::slice::from_ref(&start),
                 3,
                 &mut rng,
@@ -1538,8 +1584,7 @@ mod tests {
         let restarted = || {
             let mut rng = ChaCha8Rng::seed_from_u64(5);
             climb_with_restarts(
-                &game,
-                &not_phi,
+                certifier(&game, &not_phi),
                 std::slice::from_ref(&start),
                 3,
                 &mut rng,

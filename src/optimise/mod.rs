@@ -90,7 +90,6 @@ use thiserror::Error;
 
 use crate::automaton::Dra;
 use crate::certify::belief::{BeliefBound, BeliefBoundOnce, check_below_belief};
-use crate::certify::{lower_value_or_trivial, upper_value_or_trivial};
 use crate::controller::{Fsc, Role};
 use crate::game::{ModelError, Posg};
 use crate::prune::PruneError;
@@ -621,6 +620,7 @@ impl<'a> StructuresRun<'a> {
             game: self.game,
             phi: self.dra,
             not_phi,
+            solver: self.settings.solver_settings(),
         })
     }
 
@@ -717,9 +717,7 @@ impl<'a> StructuresRun<'a> {
         // explored it and it is lower.
         let clock_ceiling = Instant::now();
         let informed = match (method, certifier) {
-            (Method::Ascent, Some(c)) => {
-                Some(upper_value_or_trivial(game, c.phi, &structure.adversary)?)
-            }
+            (Method::Ascent, Some(c)) => Some(c.upper_or_trivial(&structure.adversary)?),
             _ => None,
         };
         let ceiling = informed.map(|u| self.belief_before.map_or(u, |b| b.min(u)));
@@ -937,10 +935,10 @@ fn search_supports(
     structure: &Structure,
     run: &StructuresRun<'_>,
 ) -> Result<Option<local_search::Climbed>, OptimiseError> {
-    let (game, settings) = (run.game, run.settings);
+    let settings = run.settings;
     let from = structure.warm.as_ref().unwrap_or(&structure.defender);
-    let upper = upper_value_or_trivial(game, certifier.phi, &structure.adversary)?;
-    let lower = lower_value_or_trivial(game, certifier.not_phi, from)?;
+    let upper = certifier.upper_or_trivial(&structure.adversary)?;
+    let lower = certifier.lower_or_trivial(from)?;
     if settings.gap_closed(lower, upper) {
         return Ok(None);
     }
@@ -953,8 +951,7 @@ fn search_supports(
     let mut rng = ChaCha8Rng::seed_from_u64(settings.seed);
     rng.set_stream(run.search_stream);
     Ok(Some(local_search::climb_with_restarts(
-        game,
-        certifier.not_phi,
+        certifier,
         &starts,
         settings.local_search_restarts,
         &mut rng,
@@ -1232,8 +1229,7 @@ fn finalise(
             if let Some(c) = search.take().filter(|_| open) {
                 let climbing = Instant::now();
                 let found = local_search::climb_with_restarts(
-                    game,
-                    c.not_phi,
+                    c,
                     std::slice::from_ref(&chosen.defender),
                     restarts,
                     &mut run.rng,
@@ -1263,24 +1259,23 @@ fn finalise(
         phases.best_responses += clock.elapsed().as_secs_f64();
         if let (true, Some(c)) = (responded, certifier) {
             let clock = Instant::now();
-            let upper = upper_value_or_trivial(game, c.phi, &chosen.adversary)?;
+            let upper = c.upper_or_trivial(&chosen.adversary)?;
             optimiser::tighten(&mut chosen.upper_bound, upper);
             phases.certification += clock.elapsed().as_secs_f64();
         }
     }
     if let (Method::Ascent, Some(c)) = (method, certifier) {
         let clock = Instant::now();
-        chosen.certified_lower =
-            match crate::certify::lower_bound(game, c.not_phi, &chosen.defender) {
-                Ok(bound) => {
-                    if let Some(belief) = &chosen.belief_bound {
-                        check_below_belief(&bound, belief)?;
-                    }
-                    Some(bound.value)
+        chosen.certified_lower = match c.lower(&chosen.defender) {
+            Ok(bound) => {
+                if let Some(belief) = &chosen.belief_bound {
+                    check_below_belief(&bound, belief)?;
                 }
-                Err(error) if error.is_numerical() => None,
-                Err(error) => return Err(error.into()),
-            };
+                Some(bound.value)
+            }
+            Err(error) if error.is_numerical() => None,
+            Err(error) => return Err(error.into()),
+        };
         phases.certification += clock.elapsed().as_secs_f64();
     }
     Ok(chosen)
@@ -1348,7 +1343,8 @@ impl Judge<'_> {
     ) -> Result<Option<Scored>, OptimiseError> {
         let scored = match (self.method, self.certifier) {
             (Method::Ascent, _) => self.value(candidate).map(|v| (v, None)),
-            (Method::MaxMin, Some(c)) => lower_value_or_trivial(self.game, c.not_phi, candidate)
+            (Method::MaxMin, Some(c)) => c
+                .lower_or_trivial(candidate)
                 .map(|v| (v, None))
                 .map_err(OptimiseError::from),
             (Method::MaxMin, None) => self

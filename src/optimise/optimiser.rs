@@ -71,8 +71,10 @@ use super::stopping::{STALL_MAGNITUDE_FLOOR, budget_spent, stalled, window_ends}
 use super::{Cancel, Method, OptimiseError, Settings, Status};
 use crate::automaton::Dra;
 use crate::certify::gradient::LowerBoundGradients;
+use crate::certify::{self, CertifyError};
 use crate::controller::Fsc;
 use crate::game::Posg;
+use crate::solver::SolverSettings;
 use check::{Check, SuffixAverage};
 
 /// The driver of an optimisation run on one structure: the method (which
@@ -180,7 +182,9 @@ pub struct RunOutcome {
 }
 
 /// What the best-response checks certify with (method.md section 6): the
-/// game and deterministic automata for phi and !phi.
+/// game, deterministic automata for phi and !phi, and the run's linear
+/// solver (so a chain beyond the LU's reach is certified by the method the
+/// run was given).
 #[derive(Debug, Clone, Copy)]
 pub struct Certifier<'a> {
     /// The game.
@@ -189,6 +193,27 @@ pub struct Certifier<'a> {
     pub phi: &'a Dra,
     /// An automaton for !phi (for the defender's certified lower bound).
     pub not_phi: &'a Dra,
+    /// How the policy evaluations of the bounds are solved.
+    pub solver: SolverSettings,
+}
+
+impl Certifier<'_> {
+    /// The certified lower bound of `defender`, or the trivial 0 where it
+    /// cannot be proved ([`certify::lower_value_or_trivial_within`]).
+    pub fn lower_or_trivial(&self, defender: &Fsc) -> Result<f64, CertifyError> {
+        certify::lower_value_or_trivial_within(self.game, self.not_phi, defender, &self.solver)
+    }
+
+    /// The game upper bound of `adversary`, or the trivial 1 where it
+    /// cannot be proved ([`certify::upper_value_or_trivial_within`]).
+    pub fn upper_or_trivial(&self, adversary: &Fsc) -> Result<f64, CertifyError> {
+        certify::upper_value_or_trivial_within(self.game, self.phi, adversary, &self.solver)
+    }
+
+    /// The certified lower bound of `defender` ([`certify::lower_bound_within`]).
+    pub fn lower(&self, defender: &Fsc) -> Result<certify::Bound, CertifyError> {
+        certify::lower_bound_within(self.game, self.not_phi, defender, &self.solver)
+    }
 }
 
 /// A max-min run in progress ([`Optimiser::begin`]), between the solver's

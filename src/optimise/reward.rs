@@ -418,7 +418,14 @@ fn reward_structure(
     };
     let nodes = crate::output::counted(size, "node");
     let (target, not_target) = (objective.target, objective.not_target);
-    let found = match synthesise(game, target, not_target, size, &almost_sure) {
+    let found = match synthesise(
+        game,
+        target,
+        not_target,
+        size,
+        &almost_sure,
+        &settings.solver_settings(),
+    ) {
         Ok(found) => found,
         Err(SynthesisError::TimeBudget { calls, seconds }) => {
             return Ok(Err(format!(

@@ -249,7 +249,14 @@ fn synthesised(
             time_budget: settings.synthesis.time_budget * share,
             ..settings.synthesis.clone()
         };
-        match synthesis::synthesise(game, dra, negated, nodes, &mode_settings) {
+        match synthesis::synthesise(
+            game,
+            dra,
+            negated,
+            nodes,
+            &mode_settings,
+            &settings.solver_settings(),
+        ) {
             Ok(found) => match found.defender.clone() {
                 Some(defender) => {
                     reasons.push(format!(

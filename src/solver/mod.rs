@@ -35,6 +35,7 @@
 //! [`SolverError::TooLargeForExact`]).
 
 pub mod bound;
+mod column_counts;
 pub mod exact;
 mod ilu;
 mod krylov;

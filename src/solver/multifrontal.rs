@@ -41,6 +41,11 @@ use faer::{Accum, MatMut, Par, Side};
 use super::ordering::{ClassOrder, fill_reducing_order};
 use super::{SolverError, SparsePattern};
 
+/// The most rows of a front: the positions in a front are stored as `u32`,
+/// so a front holds at most `u32::MAX` entries (65,535 squared is below it,
+/// 65,536 squared is not). Such a front alone is 34 GB of doubles.
+const LARGEST_FRONT: usize = 65_535;
+
 /// Fronts with at least this many rows use faer's parallel dense kernels.
 const PARALLEL_FRONT_ROWS: usize = 512;
 
@@ -684,7 +689,7 @@ fn gth_unblocked(mut a: MatMut<'_, f64>, beyond: &mut [f64]) -> Result<(), usize
 impl Structure {
     fn analyse(pattern: &SparsePattern) -> Result<Self, SolverError> {
         let n = pattern.n;
-        let order = fill_reducing_order(pattern)?;
+        let order = fill_reducing_order(pattern, LARGEST_FRONT)?;
         let symbolic = cholesky_structure(&order)?;
         let mut structure = Self {
             n,
@@ -721,7 +726,7 @@ impl Structure {
                 }
             }
         }
-        structure.check_front_sizes(u32::MAX as usize)?;
+        structure.check_front_sizes(LARGEST_FRONT)?;
         structure.permutation = order.permutation;
         structure.link_children()?;
         structure.order_for_the_stack();
@@ -729,22 +734,22 @@ impl Structure {
         Ok(structure)
     }
 
-    /// Refuses fronts of more than `largest` entries
-    /// ([`SolverError::LuTooLarge`]): the positions in a front are stored
-    /// as `u32`, so `largest` is `u32::MAX`.
-    fn check_front_sizes(&self, largest: usize) -> Result<(), SolverError> {
+    /// Refuses fronts of more than `largest_front` rows
+    /// ([`SolverError::LuTooLarge`]; [`LARGEST_FRONT`] in an analysis).
+    fn check_front_sizes(&self, largest_front: usize) -> Result<(), SolverError> {
         let front = self
             .supernodes
             .iter()
             .map(|node| node.columns() + node.rows.len())
             .max()
             .unwrap_or(0);
-        match front.checked_mul(front) {
-            Some(entries) if entries <= largest => Ok(()),
-            _ => Err(SolverError::LuTooLarge {
+        if front <= largest_front {
+            Ok(())
+        } else {
+            Err(SolverError::LuTooLarge {
                 unknowns: self.n,
                 front,
-            }),
+            })
         }
     }
 
@@ -1027,9 +1032,9 @@ mod tests {
             .map(|node| node.columns() + node.rows.len())
             .max()
             .unwrap();
-        assert!(structure.check_front_sizes(front * front).is_ok());
+        assert!(structure.check_front_sizes(front).is_ok());
         assert_eq!(
-            structure.check_front_sizes(front * front - 1),
+            structure.check_front_sizes(front - 1),
             Err(SolverError::LuTooLarge {
                 unknowns: 144,
                 front

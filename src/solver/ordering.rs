@@ -21,11 +21,9 @@
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::sparse::SymbolicSparseColMatRef;
 use faer::sparse::linalg::amd;
-use faer::sparse::linalg::cholesky::simplicial::{
-    prefactorize_symbolic_cholesky, prefactorize_symbolic_cholesky_scratch,
-};
 use rustc_hash::FxHashMap;
 
+use super::column_counts::column_counts;
 use super::{SolverError, SparsePattern};
 
 /// The pattern of `A + A^T` with the diagonal: for each vertex its closed
@@ -84,38 +82,31 @@ impl SymmetricPattern {
         (offsets, indices)
     }
 
-    /// The multiplications of a Cholesky factorisation in `order`
-    /// (`order[new] = old`): the sum of the squared column counts of the
-    /// factor, which faer computes from the elimination tree.
-    fn elimination_cost(&self, order: &[usize]) -> f64 {
+    /// The cost of a Cholesky factorisation in `order` (`order[new] =
+    /// old`), from the column counts of the factor
+    /// ([`column_counts`], near-linear in the graph's size).
+    fn elimination(&self, order: &[usize]) -> Elimination {
         let n = self.len();
         let mut inverse = vec![0; n];
         for (new, &old) in order.iter().enumerate() {
             inverse[old] = new;
         }
-        let mut offsets = Vec::with_capacity(n + 1);
-        offsets.push(0);
-        let mut indices = Vec::with_capacity(self.indices.len() / 2 + n);
-        for (column, &old) in order.iter().enumerate() {
-            let start = indices.len();
-            indices.extend(
-                self.neighbours(old)
-                    .iter()
-                    .map(|&w| inverse[w])
-                    .filter(|&row| row <= column),
-            );
-            indices[start..].sort_unstable();
-            offsets.push(indices.len());
+        let mut permuted = Self {
+            offsets: Vec::with_capacity(n + 1),
+            indices: Vec::with_capacity(self.indices.len()),
+        };
+        permuted.offsets.push(0);
+        for &old in order {
+            permuted
+                .indices
+                .extend(self.neighbours(old).iter().map(|&w| inverse[w]));
+            permuted.offsets.push(permuted.indices.len());
         }
-        let upper = SymbolicSparseColMatRef::new_checked(n, n, &offsets, None, &indices);
-        let mut etree = vec![0isize; n];
-        let mut counts = vec![0usize; n];
-        let mut buffer = MemBuffer::new(prefactorize_symbolic_cholesky_scratch::<usize>(
-            n,
-            indices.len(),
-        ));
-        prefactorize_symbolic_cholesky(&mut etree, &mut counts, upper, MemStack::new(&mut buffer));
-        counts.iter().map(|&c| (c as f64).powi(2)).sum()
+        let counts = column_counts(n, |j| permuted.neighbours(j));
+        Elimination {
+            multiplications: counts.iter().map(|&c| (c as f64).powi(2)).sum(),
+            largest_column: counts.iter().copied().max().unwrap_or(0),
+        }
     }
 
     /// The graph with one vertex per class, adjacent when their members
@@ -205,6 +196,14 @@ fn indistinguishable_classes(pattern: &SparsePattern) -> (Vec<usize>, Classes, S
 /// of a local search's time on 500-state products).
 const DISSECTION_MIN_VERTICES: usize = 8192;
 
+/// What eliminating a graph in some order costs.
+struct Elimination {
+    /// The multiplications: the sum of the squared column counts.
+    multiplications: f64,
+    /// The largest column count of the factor (with the diagonal).
+    largest_column: usize,
+}
+
 /// The fill-reducing order of `A + A^T` for the pattern of `A`:
 /// approximate minimum degree or nested dissection, both computed on
 /// the quotient graph of indistinguishable vertices, whichever
@@ -212,15 +211,33 @@ const DISSECTION_MIN_VERTICES: usize = 8192;
 /// their sizes: a proxy when the classes are of equal size, as with
 /// uniform controllers); minimum degree alone below
 /// [`DISSECTION_MIN_VERTICES`] classes.
-pub(crate) fn fill_reducing_order(pattern: &SparsePattern) -> Result<ClassOrder, SolverError> {
+///
+/// Nested dissection, near-linear, comes first: where its factor has a
+/// column of more than `largest_front` classes, each at least one row of
+/// a front, the LU is refused ([`SolverError::LuTooLarge`]) before minimum
+/// degree runs. Minimum degree's own cost grows with the fill it makes:
+/// on PAYNT's drone-2-8-1 (500,094 unknowns, at most 17 neighbours each)
+/// it ran for minutes to find a front of 72,740 rows, beyond 32-bit
+/// indices all the same.
+pub(crate) fn fill_reducing_order(
+    pattern: &SparsePattern,
+    largest_front: usize,
+) -> Result<ClassOrder, SolverError> {
     let (class_of, members, neighbourhoods) = indistinguishable_classes(pattern);
     let quotient = neighbourhoods.quotient(&class_of);
-    let by_degree = amd_order(&quotient)?;
     let classes = if quotient.len() < DISSECTION_MIN_VERTICES {
-        by_degree
+        amd_order(&quotient)?
     } else {
         let by_dissection = nested_dissection(&quotient)?;
-        if quotient.elimination_cost(&by_dissection) < quotient.elimination_cost(&by_degree) {
+        let dissected = quotient.elimination(&by_dissection);
+        if dissected.largest_column > largest_front {
+            return Err(SolverError::LuTooLarge {
+                unknowns: pattern.n,
+                front: dissected.largest_column,
+            });
+        }
+        let by_degree = amd_order(&quotient)?;
+        if dissected.multiplications < quotient.elimination(&by_degree).multiplications {
             by_dissection
         } else {
             by_degree
@@ -551,7 +568,9 @@ mod tests {
         assert_eq!(classes.members(class_of[0]), [0, 2]);
         assert_eq!(neighbourhoods.neighbours(class_of[2]), [0, 1, 2]);
         assert_eq!(neighbourhoods.neighbours(class_of[3]), [1, 3]);
-        let order = fill_reducing_order(&pattern).unwrap().permutation;
+        let order = fill_reducing_order(&pattern, usize::MAX)
+            .unwrap()
+            .permutation;
         let position = |v: usize| order.iter().position(|&o| o == v).unwrap();
         assert_eq!(position(0).abs_diff(position(2)), 1);
     }
@@ -560,7 +579,9 @@ mod tests {
     fn the_order_is_a_permutation() {
         for seed in 0..5 {
             let (pattern, _) = random_chain(300, 3, 0.05, seed);
-            let mut order = fill_reducing_order(&pattern).unwrap().permutation;
+            let mut order = fill_reducing_order(&pattern, usize::MAX)
+                .unwrap()
+                .permutation;
             order.sort_unstable();
             assert!(order.iter().enumerate().all(|(i, &o)| i == o));
         }
@@ -570,6 +591,25 @@ mod tests {
         let mut sorted = order.to_vec();
         sorted.sort_unstable();
         sorted.len() == n && sorted.iter().enumerate().all(|(i, &o)| i == o)
+    }
+
+    /// On a graph large enough for nested dissection, a factor with a
+    /// column beyond the front limit is refused before minimum degree runs,
+    /// with the column's size; within the limit the order is returned.
+    #[test]
+    fn a_front_beyond_the_limit_is_refused_from_the_dissection() {
+        let (pattern, _) = grid_walk(100);
+        let refused = fill_reducing_order(&pattern, 50);
+        assert!(
+            matches!(
+                refused,
+                Err(SolverError::LuTooLarge { unknowns: 10_000, front }) if front > 50
+            ),
+            "{:?}",
+            refused.err()
+        );
+        let order = fill_reducing_order(&pattern, 10_000).unwrap().permutation;
+        assert!(is_permutation(&order, 10_000));
     }
 
     #[test]
@@ -592,17 +632,19 @@ mod tests {
     }
 
     #[test]
-    fn the_elimination_cost_of_a_path_is_counted_by_hand() {
+    fn the_elimination_of_a_path_is_counted_by_hand() {
         // In natural order every column of the factor of a path has 2
         // entries but the last: 4 (n - 1) + 1. Eliminating the middle
         // vertex 2 first joins its neighbours 1 and 3 (one fill edge):
         // columns {2, 1, 3}, {0, 1}, {1, 3}, {3, 4}, {4}.
         let (pattern, _) = tridiagonal(5, 0.4);
         let graph = SymmetricPattern::of(&pattern);
-        assert_eq!(graph.elimination_cost(&[0, 1, 2, 3, 4]), 17.0);
+        let natural = graph.elimination(&[0, 1, 2, 3, 4]);
+        assert_eq!((natural.multiplications, natural.largest_column), (17.0, 2));
+        let middle_first = graph.elimination(&[2, 0, 1, 3, 4]);
         assert_eq!(
-            graph.elimination_cost(&[2, 0, 1, 3, 4]),
-            9.0 + 4.0 + 4.0 + 4.0 + 1.0
+            (middle_first.multiplications, middle_first.largest_column),
+            (9.0 + 4.0 + 4.0 + 4.0 + 1.0, 3)
         );
     }
 }

@@ -109,9 +109,10 @@ use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use crate::automaton::{Dra, RabinPair};
-use crate::certify::{CertifyError, Qualitative, lower_bound};
+use crate::certify::{CertifyError, Qualitative, lower_bound_within};
 use crate::controller::{Choice, Fsc, Role};
 use crate::game::{ModelError, Posg};
+use crate::solver::SolverSettings;
 
 use cnf::{Answer, Cnf, FALSE, Lit, Solver};
 use encoding::{Claim, Context};
@@ -363,13 +364,15 @@ impl Synthesis {
 /// Decides whether some `defender_nodes`-node support wins in
 /// `settings.mode` against the certification adversary, for the objective
 /// given by `dra` and `dra_not_phi` (deterministic automata for phi and
-/// !phi), and returns it maximised and certified (module documentation).
+/// !phi), and returns it maximised and certified (module documentation),
+/// the certificate's policy evaluations solved by `linear_solver`.
 pub fn synthesise(
     game: &Posg,
     dra: &Dra,
     dra_not_phi: &Dra,
     defender_nodes: usize,
     settings: &Settings,
+    linear_solver: &SolverSettings,
 ) -> Result<Synthesis, SynthesisError> {
     settings.validate()?;
     check_nodes(defender_nodes)?;
@@ -440,7 +443,12 @@ pub fn synthesise(
     let mut confirm_seconds = 0.0;
     if let Some(support) = &support {
         let defender = defender_on(game, defender_nodes, &vars, support)?;
-        synthesis.certified_lower = Some(certify(game, dra_not_phi, &defender, settings.mode)?);
+        synthesis.certified_lower = Some(certify(
+            game,
+            dra_not_phi,
+            &defender,
+            (settings.mode, linear_solver),
+        )?);
         if settings.engine == Engine::Lazy && settings.confirm_certificate {
             let start = Instant::now();
             synthesis.confirmation = confirm::confirm(
@@ -484,15 +492,15 @@ pub fn synthesise(
     Ok(synthesis)
 }
 
-/// The certified lower bound of `defender`, which must be positive (or
-/// exactly 1 in almost-sure mode).
+/// The certified lower bound of `defender` (solved by `solver`), which
+/// must be positive (or exactly 1 in almost-sure mode).
 fn certify(
     game: &Posg,
     dra_not_phi: &Dra,
     defender: &Fsc,
-    mode: Mode,
+    (mode, solver): (Mode, &SolverSettings),
 ) -> Result<f64, SynthesisError> {
-    let bound = lower_bound(game, dra_not_phi, defender)?;
+    let bound = lower_bound_within(game, dra_not_phi, defender, solver)?;
     let agrees = match mode {
         Mode::Positive => bound.qualitative.is_positive(),
         Mode::AlmostSure => bound.qualitative == Qualitative::One,

@@ -45,7 +45,6 @@ use super::super::solver::{Iterate, PlayState};
 use super::{
     Bookkeeping, Incumbent, Method, OptimiseError, Optimiser, PhaseSeconds, RunOutcome, Settings,
 };
-use crate::certify::{lower_value_or_trivial, upper_value_or_trivial};
 use crate::value::ValueError;
 
 /// The share of `max_work` one guarantee ascent may spend (in the product
@@ -339,7 +338,7 @@ impl Optimiser<'_> {
         };
         let clock = Instant::now();
         let adversary = self.objective.adversary().controller(adversary)?;
-        let upper = upper_value_or_trivial(certifier.game, certifier.phi, &adversary)?;
+        let upper = certifier.upper_or_trivial(&adversary)?;
         tighten(upper_bound, upper);
         phases.certification += clock.elapsed().as_secs_f64();
         Ok(())
@@ -473,7 +472,7 @@ impl Optimiser<'_> {
             }
             _ if !books.rounding_schedule.due(books.checks) => return Ok(false),
             _ => {
-                let lower = lower_value_or_trivial(certifier.game, certifier.not_phi, &rounded)?;
+                let lower = certifier.lower_or_trivial(&rounded)?;
                 let competitive = books.best.as_ref().is_none_or(|best| lower >= best.score());
                 books.rounding_schedule.after(books.checks, competitive);
                 books.last_rounding = Some((rounded, lower));
