@@ -151,13 +151,14 @@ impl Mdp {
         &self.entries[self.entry_offsets[action]..self.entry_offsets[action + 1]]
     }
 
-    fn global_actions(&self, s: usize) -> std::ops::Range<usize> {
+    /// The global indices of the actions of state `s`.
+    pub(crate) fn global_actions(&self, s: usize) -> std::ops::Range<usize> {
         self.action_offsets[s]..self.action_offsets[s + 1]
     }
 
     /// For every state, the `(predecessor, local action)` pairs whose
     /// distribution reaches it.
-    fn predecessors(&self) -> Predecessors {
+    pub(crate) fn predecessors(&self) -> Predecessors {
         let n = self.num_states();
         let mut offsets = vec![0usize; n + 1];
         for &(t, _) in &self.entries {
@@ -181,14 +182,14 @@ impl Mdp {
 }
 
 /// The reverse graph of an MDP, remembering the action of each edge.
-struct Predecessors {
+pub(crate) struct Predecessors {
     offsets: Vec<usize>,
     sources: Vec<(usize, usize)>,
 }
 
 impl Predecessors {
     /// The `(s, a)` with `P(t | s, a) > 0`.
-    fn of(&self, t: usize) -> &[(usize, usize)] {
+    pub(crate) fn of(&self, t: usize) -> &[(usize, usize)] {
         &self.sources[self.offsets[t]..self.offsets[t + 1]]
     }
 }
