@@ -9,7 +9,7 @@ mod common;
 use std::process::Command;
 
 use posg_fsc::automaton::Dra;
-use posg_fsc::certify::belief::BeliefBoundOnce;
+use posg_fsc::certify::belief::UpperBoundsOnce;
 use posg_fsc::certify::lower_bound;
 use posg_fsc::controller::{Choice, Fsc, Role, Support};
 use posg_fsc::game::Posg;
@@ -409,7 +409,7 @@ fn a_warm_started_sweep_is_monotone_in_the_defenders_size() {
         if let Some(smaller) = &previous {
             start = warm_started(start, &smaller.defender, false).unwrap();
         }
-        let belief = BeliefBoundOnce::new(&g, &phi, settings.solver_settings());
+        let belief = UpperBoundsOnce::new(&g, &phi, settings.solver_settings());
         let mut solution = posg_fsc::optimise::optimise_structures(
             &g,
             (&phi, Some(&not_phi)),
@@ -533,7 +533,7 @@ fn the_structures_of_a_run_search_one_after_another_alike() {
         &settings,
         |index, _| Box::new(Searches(both.0.clone(), index)),
         &Cancel::new(),
-        &BeliefBoundOnce::new(&g, &phi, settings.solver_settings()),
+        &UpperBoundsOnce::new(&g, &phi, settings.solver_settings()),
     )
     .unwrap();
     let alone = alone.0.lock().unwrap().clone();
@@ -560,7 +560,7 @@ fn first_values(g: &Posg, phi: &Dra, structure: &Structure, settings: &Settings)
         }
     }
     let seen = Arc::new(Mutex::new(Vec::new()));
-    let belief = BeliefBoundOnce::new(g, phi, settings.solver_settings());
+    let belief = UpperBoundsOnce::new(g, phi, settings.solver_settings());
     posg_fsc::optimise::optimise_structures(
         g,
         (phi, None),

@@ -29,7 +29,7 @@
 //! fixed point, whatever the rounding.
 
 use std::hash::{Hash, Hasher};
-use std::sync::OnceLock;
+use std::sync::{Mutex, MutexGuard, OnceLock, PoisonError};
 
 use indexmap::{Equivalent, IndexSet};
 use num_bigint::BigUint;
@@ -136,39 +136,49 @@ pub fn belief_upper_bound(
     }))
 }
 
-/// The belief bound of one game and automaton for `phi`, with the default
-/// budget, computed when first asked for and then kept: a `solve` run
-/// asks for it in the SAT source and for each structure's upper bound
-/// (method.md section 6), and the exploration is most of a small POMDP's
-/// run (3,008 beliefs, 4 ms on a 2-core EPYC, on PRISM's grid-avoid-4-0).
-pub struct BeliefBoundOnce<'a> {
+/// The upper bounds a `solve` run asks for more than once, of one game
+/// and automaton for `phi`, each computed when first asked for and then
+/// kept:
+/// * the belief bound with the default budget: a run asks for it in the
+///   SAT source and for each structure's upper bound (method.md section
+///   6), and the exploration is most of a small POMDP's run (3,008
+///   beliefs, 4 ms on a 2-core EPYC, on PRISM's grid-avoid-4-0);
+/// * the game upper bound of an adversary ([`super::upper_bound_within`],
+///   the defender that sees the state): the informed source projects its
+///   strategy and a single player's race starts below its value, on every
+///   structure alike (on PAYNT's drone-2-8-1, 500,094 unknowns, one such
+///   MDP took three minutes, and it was solved three times).
+pub struct UpperBoundsOnce<'a> {
     game: &'a Posg,
     dra_phi: &'a Dra,
     settings: SolverSettings,
-    /// The bound, once computed (`None` inside: there is none).
+    /// The belief bound, once computed (`None` inside: there is none).
     found: OnceLock<Option<BeliefBound>>,
+    /// The game upper bounds computed so far, with their adversaries.
+    informed: Mutex<Vec<(Fsc, Bound)>>,
 }
 
-impl<'a> BeliefBoundOnce<'a> {
-    /// The belief bound of `game` for `phi` (automaton `dra_phi`), solved
-    /// with `settings`, not computed yet.
+impl<'a> UpperBoundsOnce<'a> {
+    /// The bounds of `game` for `phi` (automaton `dra_phi`), solved with
+    /// `settings`, none computed yet.
     pub fn new(game: &'a Posg, dra_phi: &'a Dra, settings: SolverSettings) -> Self {
         Self {
             game,
             dra_phi,
             settings,
             found: OnceLock::new(),
+            informed: Mutex::new(Vec::new()),
         }
     }
 
-    /// Whether this is the bound of `game` for the automaton `dra_phi`
+    /// Whether these are the bounds of `game` for the automaton `dra_phi`
     /// (the same objects).
     pub fn is_of(&self, game: &Posg, dra_phi: &Dra) -> bool {
         std::ptr::eq(self.game, game) && std::ptr::eq(self.dra_phi, dra_phi)
     }
 
-    /// The bound if it has been computed (`Some(None)`: there is none),
-    /// without computing it.
+    /// The belief bound if it has been computed (`Some(None)`: there is
+    /// none), without computing it.
     pub fn known(&self) -> Option<Option<BeliefBound>> {
         self.found.get().copied()
     }
@@ -190,6 +200,43 @@ impl<'a> BeliefBoundOnce<'a> {
         )?;
         Ok(*self.found.get_or_init(|| bound))
     }
+
+    /// The game upper bound of `adversary` ([`super::upper_bound_within`]
+    /// with these settings), computed on the first call for an equal
+    /// adversary and kept; an error is returned, not kept. As for
+    /// [`Self::get`], no lock is held while it is computed.
+    pub fn informed(&self, adversary: &Fsc) -> Result<Bound, CertifyError> {
+        if let Some(bound) = self.informed_known(adversary) {
+            return Ok(bound);
+        }
+        let bound = super::upper_bound_within(self.game, self.dra_phi, adversary, &self.settings)?;
+        let mut kept = lock(&self.informed);
+        if !kept.iter().any(|(known, _)| known == adversary) {
+            kept.push((adversary.clone(), bound.clone()));
+        }
+        Ok(bound)
+    }
+
+    /// [`Self::informed`]'s value, or the trivial bound 1 where the
+    /// product mixes too slowly ([`super::upper_value_or_trivial_within`]).
+    pub fn informed_or_trivial(&self, adversary: &Fsc) -> Result<f64, CertifyError> {
+        match self.informed(adversary) {
+            Ok(bound) => Ok(bound.value),
+            Err(error) if error.is_numerical() => Ok(1.0),
+            Err(error) => Err(error),
+        }
+    }
+
+    fn informed_known(&self, adversary: &Fsc) -> Option<Bound> {
+        let kept = lock(&self.informed);
+        (kept.iter().find(|(known, _)| known == adversary)).map(|(_, bound)| bound.clone())
+    }
+}
+
+/// The guarded memo, also after a thread panicked holding it (the memo
+/// holds finished bounds only).
+fn lock<T>(memo: &Mutex<T>) -> MutexGuard<'_, T> {
+    memo.lock().unwrap_or_else(PoisonError::into_inner)
 }
 
 /// The belief bound of `game` for `phi` with the default budget, checked
@@ -1118,7 +1165,7 @@ mod tests {
         let game = coin();
         let dra = phi("F goal");
         let alone = bound(&game, "F goal", &BeliefBudget::default());
-        let once = BeliefBoundOnce::new(&game, &dra, SolverSettings::default());
+        let once = UpperBoundsOnce::new(&game, &dra, SolverSettings::default());
         assert_eq!(once.known(), None, "not computed before asked");
         let asked: Vec<_> = std::thread::scope(|scope| {
             let threads: Vec<_> = (0..3).map(|_| scope.spawn(|| once.get())).collect();
@@ -1129,7 +1176,7 @@ mod tests {
         }
         assert_eq!(once.known(), Some(Some(alone)));
         let grid = crate::game::grid::GridSpec::default().build().unwrap();
-        let none = BeliefBoundOnce::new(&grid, &dra, SolverSettings::default());
+        let none = UpperBoundsOnce::new(&grid, &dra, SolverSettings::default());
         assert_eq!(none.get().unwrap(), None);
         assert_eq!(none.known(), Some(None));
         assert!(once.is_of(&game, &dra) && !none.is_of(&game, &dra));

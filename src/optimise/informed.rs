@@ -25,9 +25,9 @@
 
 use rustc_hash::FxHashMap;
 
-use super::{OptimiseError, Settings, Structure};
-use crate::automaton::Dra;
-use crate::certify::{self, StrategyRule};
+use super::{OptimiseError, Structure};
+use crate::certify::StrategyRule;
+use crate::certify::belief::UpperBoundsOnce;
 use crate::controller::{Choice, Fsc};
 use crate::game::Posg;
 
@@ -47,12 +47,10 @@ pub const INFORMED_NODE_MIX: f64 = 0.05;
 /// all (its value is 0). Returns the structures and a note.
 pub(crate) fn informed(
     game: &Posg,
-    dra: &Dra,
     start: &Structure,
-    settings: &Settings,
+    bounds: &UpperBoundsOnce<'_>,
 ) -> Result<(Vec<Structure>, String), OptimiseError> {
-    let bound =
-        certify::upper_bound_within(game, dra, &start.adversary, &settings.solver_settings())?;
+    let bound = bounds.informed(&start.adversary)?;
     if bound.value <= 0.0 {
         return Ok((
             Vec::new(),

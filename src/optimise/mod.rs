@@ -89,7 +89,7 @@ use serde::Serialize;
 use thiserror::Error;
 
 use crate::automaton::Dra;
-use crate::certify::belief::{BeliefBound, BeliefBoundOnce, check_below_belief};
+use crate::certify::belief::{BeliefBound, UpperBoundsOnce, check_below_belief};
 use crate::controller::{Fsc, Role};
 use crate::game::{ModelError, Posg};
 use crate::prune::PruneError;
@@ -448,7 +448,7 @@ pub fn optimise_structures<F>(
     settings: &Settings,
     observer: F,
     cancel: &Cancel,
-    belief: &BeliefBoundOnce<'_>,
+    belief: &UpperBoundsOnce<'_>,
 ) -> Result<Solution, OptimiseError>
 where
     F: Fn(usize, &Structure) -> Box<dyn Observer + Send> + Sync,
@@ -533,7 +533,7 @@ pub fn optimise_structure(
     cancel: &Cancel,
 ) -> Result<StructureOutcome, OptimiseError> {
     settings.validate()?;
-    let belief = BeliefBoundOnce::new(game, dra, settings.solver_settings());
+    let belief = UpperBoundsOnce::new(game, dra, settings.solver_settings());
     let run = StructuresRun::new(
         (game, dra, negated),
         (settings, cancel),
@@ -565,7 +565,7 @@ struct StructuresRun<'a> {
     started: Instant,
     memo: local_search::SearchMemo,
     search_stream: u64,
-    belief: &'a BeliefBoundOnce<'a>,
+    belief: &'a UpperBoundsOnce<'a>,
     belief_before: Option<f64>,
 }
 
@@ -585,7 +585,7 @@ impl<'a> StructuresRun<'a> {
         (game, dra, negated): (&'a Posg, &'a Dra, Option<&'a Dra>),
         (settings, cancel): (&'a Settings, &'a Cancel),
         search_stream: u64,
-        belief: &'a BeliefBoundOnce<'a>,
+        belief: &'a UpperBoundsOnce<'a>,
     ) -> Self {
         debug_assert!(belief.is_of(game, dra), "the belief bound of another game");
         Self {
@@ -717,7 +717,9 @@ impl<'a> StructuresRun<'a> {
         // explored it and it is lower.
         let clock_ceiling = Instant::now();
         let informed = match (method, certifier) {
-            (Method::Ascent, Some(c)) => Some(c.upper_or_trivial(&structure.adversary)?),
+            (Method::Ascent, Some(_)) => {
+                Some(self.belief.informed_or_trivial(&structure.adversary)?)
+            }
             _ => None,
         };
         let ceiling = informed.map(|u| self.belief_before.map_or(u, |b| b.min(u)));
@@ -1147,7 +1149,7 @@ fn finalise(
         Method,
         Instant,
         &local_search::SearchMemo,
-        &BeliefBoundOnce<'_>,
+        &UpperBoundsOnce<'_>,
         &Cancel,
     ),
     phases: &mut PhaseSeconds,

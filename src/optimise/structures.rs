@@ -26,7 +26,7 @@ use super::informed::informed;
 use super::{OptimiseError, Settings, Structure, StructureOutcome};
 use crate::automaton::Dra;
 use crate::certify::almost_sure_win_possible;
-use crate::certify::belief::BeliefBoundOnce;
+use crate::certify::belief::UpperBoundsOnce;
 use crate::controller::{Fsc, Support};
 use crate::game::Posg;
 use crate::prune::{PruneSettings, prune};
@@ -111,17 +111,18 @@ pub struct Candidates {
 /// The structures of the sources in `settings.structures`, starting from
 /// `start` (the full structure or the user's controllers, always kept
 /// when it came from files). `negated`, an automaton for !phi, is needed
-/// by the `sat` source (which certifies what it finds); `belief` is the
-/// run's belief bound of `game` for the automaton `dra` of phi.
+/// by the `sat` source (which certifies what it finds); `bounds` are the
+/// run's upper bounds of `game` for the automaton `dra` of phi (the SAT
+/// source's belief bound, the informed source's game upper bound).
 /// `announce` hears each source as its search begins.
 pub fn candidate_structures(
     game: &Posg,
     (dra, negated): (&Dra, Option<&Dra>),
     start: Structure,
-    (settings, belief): (&Settings, &BeliefBoundOnce<'_>),
+    (settings, bounds): (&Settings, &UpperBoundsOnce<'_>),
     announce: &dyn Fn(StructureSource),
 ) -> Result<Candidates, OptimiseError> {
-    debug_assert!(belief.is_of(game, dra), "the belief bound of another game");
+    debug_assert!(bounds.is_of(game, dra), "the bounds of another game");
     let mut candidates = Candidates {
         structures: Vec::new(),
         notes: Vec::new(),
@@ -139,13 +140,13 @@ pub fn candidate_structures(
             StructureSource::Full => (vec![start.clone()], format!("the {} structure", start.name)),
             // The informed optimum out of the solver's reach (method.md
             // section 8) leaves the other sources to carry the run.
-            StructureSource::Informed => match informed(game, dra, &start, settings) {
+            StructureSource::Informed => match informed(game, &start, bounds) {
                 Err(error) if error.is_numerical() => {
                     (Vec::new(), format!("no informed structure: {error}"))
                 }
                 found => found?,
             },
-            StructureSource::Sat => synthesised(game, (dra, negated), &start, settings, belief)?,
+            StructureSource::Sat => synthesised(game, (dra, negated), &start, settings, bounds)?,
             StructureSource::Paper => pruned(game, dra, &start, settings)?,
         };
         let mut note = SourceNote {
@@ -211,7 +212,7 @@ fn synthesised(
     (dra, negated): (&Dra, Option<&Dra>),
     start: &Structure,
     settings: &Settings,
-    belief: &BeliefBoundOnce<'_>,
+    belief: &UpperBoundsOnce<'_>,
 ) -> Result<(Vec<Structure>, String), OptimiseError> {
     let Some(negated) = negated else {
         return Ok((

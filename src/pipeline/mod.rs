@@ -43,7 +43,7 @@ use serde::Serialize;
 use thiserror::Error;
 
 use crate::automaton::Dra;
-use crate::certify::belief::BeliefBoundOnce;
+use crate::certify::belief::UpperBoundsOnce;
 use crate::certify::{self, Bracket, CertifyError};
 use crate::controller::Fsc;
 use crate::game::{ModelError, Posg};
@@ -575,7 +575,7 @@ fn run_size(job: Job, watch: &impl Watch, final_nodes: usize) -> Result<Outcome,
         cancel,
     } = job;
     let (phi, not_phi) = (&automata.phi, automata.not_phi.as_ref());
-    let belief = BeliefBoundOnce::new(game, phi, settings.solver_settings());
+    let belief = UpperBoundsOnce::new(game, phi, settings.solver_settings());
     let defender_nodes = start.defender.num_nodes();
     watch.step(&Step::Supports {
         defender_nodes,
