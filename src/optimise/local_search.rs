@@ -860,6 +860,30 @@ fn certain(pair: &Choice) -> Choice {
     }
 }
 
+/// The restarts of a round that `restarts` climbs of `work` each can pay
+/// for, where every climb judges at least two defenders
+/// ([`Landscape::exhausted`]) whose products are about as large as the start's
+/// (`start_states`, asked for only where it matters): all of them unless
+/// two judgments of the start's product cost more than `work`, then one
+/// per two such judgments of the round's budget `restarts * work`, at least
+/// one. On PAYNT's drone-2-8-1 (a 500,094-state product, each judgment
+/// tens of seconds) the 16 restarts of two structures ran for more than
+/// ten minutes after the race.
+fn affordable_restarts(
+    restarts: usize,
+    work: usize,
+    start_states: impl FnOnce() -> Result<usize, CertifyError>,
+) -> Result<usize, CertifyError> {
+    if restarts <= 1 {
+        return Ok(restarts);
+    }
+    let per_climb = start_states()?.saturating_mul(2);
+    if per_climb <= work {
+        return Ok(restarts);
+    }
+    Ok((restarts.saturating_mul(work) / per_climb).clamp(1, restarts))
+}
+
 /// The most rounds of restarts [`climb_with_restarts`] runs.
 const MAX_RESTART_ROUNDS: usize = 4;
 
@@ -916,6 +940,9 @@ pub fn climb_with_restarts(
         ..
     } = certifier;
     let universe = Fsc::uniform_enabled(Role::Defender, start.num_nodes(), game.defender());
+    let restarts = affordable_restarts(restarts, effort.work, || {
+        product_states(game, not_phi, start, Role::Defender)
+    })?;
     let mut rounds = Rounds {
         search: Search::sharing((game, not_phi, solver), &universe, effort, memo),
         best: None,
@@ -1265,6 +1292,26 @@ mod tests {
             .unwrap();
             assert!((searched.bound - 1.0).abs() < 1e-9, "{}", searched.bound);
         }
+    }
+
+    /// Every restart is paid for on small products; on a product whose two
+    /// judgments cost more than a climb's work, one restart per two such
+    /// judgments of the round's budget, at least one, and the product is
+    /// not counted where one restart or none is asked for.
+    #[test]
+    fn restarts_are_cut_to_what_the_budget_pays_for_on_large_products() {
+        let count = |states: usize| move || Ok::<_, CertifyError>(states);
+        assert_eq!(affordable_restarts(16, 120_000, count(4_000)).unwrap(), 16);
+        assert_eq!(affordable_restarts(16, 120_000, count(60_000)).unwrap(), 16);
+        assert_eq!(affordable_restarts(16, 120_000, count(60_001)).unwrap(), 15);
+        assert_eq!(affordable_restarts(16, 120_000, count(500_094)).unwrap(), 1);
+        assert_eq!(
+            affordable_restarts(16, 120_000, count(10_000_000)).unwrap(),
+            1
+        );
+        let never = || -> Result<usize, CertifyError> { panic!("counted") };
+        assert_eq!(affordable_restarts(1, 120_000, never).unwrap(), 1);
+        assert_eq!(affordable_restarts(0, 120_000, never).unwrap(), 0);
     }
 
     /// Defenders that differ only in blocks out of use share their memo
