@@ -201,7 +201,9 @@ pub struct Settings {
     pub local_search: bool,
     /// How many random memoryless starts the local search climbs from
     /// besides the best candidate, per round (in parallel; seeded from
-    /// `seed`; up to 4 rounds where climbs end early); 0 also turns its
+    /// `seed`; up to 4 rounds where climbs end early; fewer where two
+    /// evaluations of the start's product cost more than
+    /// `local_search_work`, docs/method.md section 6); 0 also turns its
     /// kicks off.
     #[cfg_attr(feature = "cli", arg(long, default_value_t = Settings::default().local_search_restarts))]
     pub local_search_restarts: usize,
