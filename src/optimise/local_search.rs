@@ -860,21 +860,28 @@ fn certain(pair: &Choice) -> Choice {
     }
 }
 
-/// How many of a round's `climbs` climbs of `work` each the round can pay
+/// The restarts of a round that `restarts` climbs of `work` each can pay
 /// for, where every climb judges at least two defenders
-/// ([`Landscape::exhausted`]) whose products are about as large as the
-/// start's (`start_states`): all of them unless two judgments of the
-/// start's product cost more than `work`, then one per two such judgments
-/// of the round's budget `climbs * work`, at least one. Applied to the
-/// restarts and the kicks of a round alike: on PAYNT's drone-2-8-1 (a
-/// 500,094-state product, each judgment tens of seconds) the 16 restarts
-/// of two structures ran for more than ten minutes after the race.
-fn affordable_climbs(climbs: usize, work: usize, start_states: usize) -> usize {
-    let per_climb = start_states.saturating_mul(2);
-    if per_climb <= work {
-        return climbs;
+/// ([`Landscape::exhausted`]) whose products are about as large as the start's
+/// (`start_states`, asked for only where it matters): all of them unless
+/// two judgments of the start's product cost more than `work`, then one
+/// per two such judgments of the round's budget `restarts * work`, at least
+/// one. On PAYNT's drone-2-8-1 (a 500,094-state product, each judgment
+/// tens of seconds) the 16 restarts of two structures ran for more than
+/// ten minutes after the race.
+fn affordable_restarts(
+    restarts: usize,
+    work: usize,
+    start_states: impl FnOnce() -> Result<usize, CertifyError>,
+) -> Result<usize, CertifyError> {
+    if restarts <= 1 {
+        return Ok(restarts);
     }
-    (climbs.saturating_mul(work) / per_climb).max(1).min(climbs)
+    let per_climb = start_states()?.saturating_mul(2);
+    if per_climb <= work {
+        return Ok(restarts);
+    }
+    Ok((restarts.saturating_mul(work) / per_climb).clamp(1, restarts))
 }
 
 /// The most rounds of restarts [`climb_with_restarts`] runs.
@@ -933,13 +940,9 @@ pub fn climb_with_restarts(
         ..
     } = certifier;
     let universe = Fsc::uniform_enabled(Role::Defender, start.num_nodes(), game.defender());
-    // Without restarts there are no kicks either: nothing to pay for.
-    let start_states = match restarts {
-        0 => 0,
-        _ => product_states(game, not_phi, start, Role::Defender)?,
-    };
-    let restarts = affordable_climbs(restarts, effort.work, start_states);
-    let kicks_per_round = affordable_climbs(KICKS_PER_ROUND, effort.work, start_states);
+    let restarts = affordable_restarts(restarts, effort.work, || {
+        product_states(game, not_phi, start, Role::Defender)
+    })?;
     let mut rounds = Rounds {
         search: Search::sharing((game, not_phi, solver), &universe, effort, memo),
         best: None,
@@ -962,7 +965,7 @@ pub fn climb_with_restarts(
             break;
         };
         let in_use = rounds.search.steps.blocks_in_use(&best.defender);
-        let kicks = draws(kicks_per_round, rng, |stream| {
+        let kicks = draws(KICKS_PER_ROUND, rng, |stream| {
             kicked(&best.defender, &in_use, &universe, stream)
         });
         rounds.climb_from(kicks)?;
@@ -1291,20 +1294,24 @@ mod tests {
         }
     }
 
-    /// Every climb is paid for on small products; on a product whose two
-    /// judgments cost more than a climb's work, one climb per two such
-    /// judgments of the round's budget, at least one (none of none).
+    /// Every restart is paid for on small products; on a product whose two
+    /// judgments cost more than a climb's work, one restart per two such
+    /// judgments of the round's budget, at least one, and the product is
+    /// not counted where one restart or none is asked for.
     #[test]
-    fn climbs_are_cut_to_what_the_budget_pays_for_on_large_products() {
-        assert_eq!(affordable_climbs(16, 120_000, 4_000), 16);
-        assert_eq!(affordable_climbs(16, 120_000, 60_000), 16);
-        assert_eq!(affordable_climbs(16, 120_000, 60_001), 15);
-        assert_eq!(affordable_climbs(16, 120_000, 500_094), 1);
-        assert_eq!(affordable_climbs(4, 120_000, 500_094), 1);
-        assert_eq!(affordable_climbs(4, 120_000, 200_000), 1);
-        assert_eq!(affordable_climbs(4, 120_000, 100_000), 2);
-        assert_eq!(affordable_climbs(16, 120_000, 10_000_000), 1);
-        assert_eq!(affordable_climbs(0, 120_000, 500_094), 0);
+    fn restarts_are_cut_to_what_the_budget_pays_for_on_large_products() {
+        let count = |states: usize| move || Ok::<_, CertifyError>(states);
+        assert_eq!(affordable_restarts(16, 120_000, count(4_000)).unwrap(), 16);
+        assert_eq!(affordable_restarts(16, 120_000, count(60_000)).unwrap(), 16);
+        assert_eq!(affordable_restarts(16, 120_000, count(60_001)).unwrap(), 15);
+        assert_eq!(affordable_restarts(16, 120_000, count(500_094)).unwrap(), 1);
+        assert_eq!(
+            affordable_restarts(16, 120_000, count(10_000_000)).unwrap(),
+            1
+        );
+        let never = || -> Result<usize, CertifyError> { panic!("counted") };
+        assert_eq!(affordable_restarts(1, 120_000, never).unwrap(), 1);
+        assert_eq!(affordable_restarts(0, 120_000, never).unwrap(), 0);
     }
 
     /// Defenders that differ only in blocks out of use share their memo
