@@ -293,34 +293,33 @@ pub fn lower_value_or_trivial_within(
     defender: &Fsc,
     settings: &SolverSettings,
 ) -> Result<f64, CertifyError> {
-    match lower_bound_within(game, dra_not_phi, defender, settings) {
-        Ok(bound) => Ok(bound.value),
-        Err(error) if error.is_numerical() => Ok(0.0),
-        Err(error) => Err(error),
-    }
+    value_or_trivial(
+        lower_bound_within(game, dra_not_phi, defender, settings),
+        0.0,
+    )
 }
 
-/// [`upper_bound`]'s value, or the trivial bound 1 when the product mixes
-/// too slowly (as [`lower_value_or_trivial`]).
-pub fn upper_value_or_trivial(
-    game: &Posg,
-    dra_phi: &Dra,
-    adversary: &Fsc,
-) -> Result<f64, CertifyError> {
-    upper_value_or_trivial_within(game, dra_phi, adversary, &SolverSettings::default())
-}
-
-/// [`upper_value_or_trivial`] with the policy evaluations solved by
-/// `settings` ([`upper_bound_within`]).
+/// [`upper_bound_within`]'s value, or the trivial bound 1 when the
+/// product mixes too slowly (as [`lower_value_or_trivial`]).
 pub fn upper_value_or_trivial_within(
     game: &Posg,
     dra_phi: &Dra,
     adversary: &Fsc,
     settings: &SolverSettings,
 ) -> Result<f64, CertifyError> {
-    match upper_bound_within(game, dra_phi, adversary, settings) {
+    value_or_trivial(upper_bound_within(game, dra_phi, adversary, settings), 1.0)
+}
+
+/// A bound's value, or `trivial` (0 below, 1 above) where numerical
+/// trouble kept it from being proved ([`CertifyError::is_numerical`]);
+/// other errors pass through.
+pub(crate) fn value_or_trivial(
+    bound: Result<Bound, CertifyError>,
+    trivial: f64,
+) -> Result<f64, CertifyError> {
+    match bound {
         Ok(bound) => Ok(bound.value),
-        Err(error) if error.is_numerical() => Ok(1.0),
+        Err(error) if error.is_numerical() => Ok(trivial),
         Err(error) => Err(error),
     }
 }

@@ -220,11 +220,7 @@ impl<'a> UpperBoundsOnce<'a> {
     /// [`Self::informed`]'s value, or the trivial bound 1 where the
     /// product mixes too slowly ([`super::upper_value_or_trivial_within`]).
     pub fn informed_or_trivial(&self, adversary: &Fsc) -> Result<f64, CertifyError> {
-        match self.informed(adversary) {
-            Ok(bound) => Ok(bound.value),
-            Err(error) if error.is_numerical() => Ok(1.0),
-            Err(error) => Err(error),
-        }
+        super::value_or_trivial(self.informed(adversary), 1.0)
     }
 
     fn informed_known(&self, adversary: &Fsc) -> Option<Bound> {

@@ -447,7 +447,8 @@ pub fn synthesise(
             game,
             dra_not_phi,
             &defender,
-            (settings.mode, linear_solver),
+            settings.mode,
+            linear_solver,
         )?);
         if settings.engine == Engine::Lazy && settings.confirm_certificate {
             let start = Instant::now();
@@ -498,7 +499,8 @@ fn certify(
     game: &Posg,
     dra_not_phi: &Dra,
     defender: &Fsc,
-    (mode, solver): (Mode, &SolverSettings),
+    mode: Mode,
+    solver: &SolverSettings,
 ) -> Result<f64, SynthesisError> {
     let bound = lower_bound_within(game, dra_not_phi, defender, solver)?;
     let agrees = match mode {
